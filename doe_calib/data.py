@@ -1,0 +1,118 @@
+"""Plain containers for what is measured: configurations and marker readings.
+
+Everything here is in SI units (m, rad, N, N·m); conversion to the files'
+units (mm, deg) happens in :mod:`doe_calib.io`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Names of the per-configuration environment variables, in the order of the
+#: model's ``env`` input. Temperature is in °C (NaN when not measured).
+ENV_FIELDS = ("temperature",)
+
+
+@dataclass(frozen=True, eq=False)
+class Configurations:
+    """Robot configurations with their load cases (a design, or what was measured).
+
+    Attributes
+    ----------
+    pose : tuple of str, length M
+        Pose id of each configuration; one pose measured under two loads gives
+        two configurations with the same id and q.
+    q : ndarray, shape (M, N)
+        Joint positions, rad (revolute) or m (prismatic).
+    wrench : ndarray, shape (M, 6)
+        Force (N) and moment (N·m) applied at the flange origin, robot base frame.
+    env : ndarray, shape (M, len(ENV_FIELDS))
+        Environment variables (see :data:`ENV_FIELDS`).
+    """
+
+    pose: tuple
+    q: np.ndarray
+    wrench: np.ndarray
+    env: np.ndarray
+
+    @classmethod
+    def from_arrays(cls, q, wrench=None, env=None, pose=None) -> "Configurations":
+        """Build from arrays; missing wrench is zero, missing env is NaN, ids are 1..M."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        m = q.shape[0]
+        wrench = np.zeros((m, 6)) if wrench is None else np.asarray(wrench, float).reshape(m, 6)
+        env = np.full((m, len(ENV_FIELDS)), np.nan) if env is None else \
+            np.asarray(env, float).reshape(m, len(ENV_FIELDS))
+        pose = tuple(str(i + 1) for i in range(m)) if pose is None else tuple(map(str, pose))
+        return cls(pose, q, wrench, env)
+
+    def __len__(self) -> int:
+        return self.q.shape[0]
+
+    def subset(self, index) -> "Configurations":
+        """The configurations at ``index`` (array of ints or booleans)."""
+        index = np.asarray(index)
+        if index.dtype == bool:
+            index = np.flatnonzero(index)
+        return Configurations(tuple(self.pose[i] for i in index), self.q[index],
+                              self.wrench[index], self.env[index])
+
+
+@dataclass(frozen=True, eq=False)
+class Measurements:
+    """Marker readings: one row per observed marker (formats.md §3), in SI.
+
+    Attributes
+    ----------
+    configurations : Configurations
+        The M distinct (pose, wrench, environment) configurations, in order of
+        first appearance in the file (the measurement order).
+    config : ndarray of int, shape (K,)
+        Configuration of each reading.
+    marker : ndarray of int, shape (K,)
+        Marker of each reading (index into the tool's names).
+    xyz : ndarray, shape (K, 3)
+        Measured marker position in the measurement-device frame, metres.
+    sigma : ndarray, shape (K,)
+        Standard deviation of each coordinate of the reading, metres.
+    line : ndarray of int, shape (K,)
+        Source line of each reading (0 when not from a file).
+    source : str
+        The file, for messages.
+    dropped : tuple of str
+        One message per input row dropped on request (``skip_bad``); never
+        dropped silently.
+    """
+
+    configurations: Configurations
+    config: np.ndarray
+    marker: np.ndarray
+    xyz: np.ndarray
+    sigma: np.ndarray
+    line: np.ndarray
+    source: str = ""
+    dropped: tuple = ()
+
+    def __len__(self) -> int:
+        return self.config.shape[0]
+
+    @property
+    def n_coordinates(self) -> int:
+        """Number of scalar observations, 3K."""
+        return 3 * len(self)
+
+    def subset(self, rows) -> "Measurements":
+        """The readings at ``rows``, keeping only the configurations they use."""
+        rows = np.asarray(rows)
+        if rows.dtype == bool:
+            rows = np.flatnonzero(rows)
+        used, new_config = np.unique(self.config[rows], return_inverse=True)
+        return Measurements(self.configurations.subset(used), new_config, self.marker[rows],
+                            self.xyz[rows], self.sigma[rows], self.line[rows], self.source)
+
+    def split_by_pose(self, held_out_poses) -> tuple["Measurements", "Measurements"]:
+        """Split into (kept, held out) by pose id, for validation on unseen poses."""
+        held = set(map(str, held_out_poses))
+        is_held = np.array([self.configurations.pose[c] in held for c in self.config])
+        return self.subset(~is_held), self.subset(is_held)

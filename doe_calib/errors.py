@@ -1,0 +1,55 @@
+"""The toolkit's exceptions and warnings: one base class, a few named kinds.
+
+Errors are raised where bad input enters (with file, line and column when it
+comes from a file); warnings report numerical trouble in words a user can act
+on.
+"""
+from __future__ import annotations
+
+
+class DoeCalibError(Exception):
+    """Base class of every error raised by doe_calib."""
+
+
+class DataError(DoeCalibError):
+    """Bad input data: a measurement, tool, design or result file.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong and, where it helps, how to fix it.
+    path, line, column : optional
+        Where the problem is (1-based line; column name or 1-based number).
+    """
+
+    def __init__(self, message: str, path=None, line=None, column=None):
+        self.path, self.line, self.column = path, line, column
+        where = ""
+        if path is not None:
+            where = str(path)
+            if line is not None:
+                where += f", line {line}"
+            if column is not None:
+                where += f", column {column}"
+            where += ": "
+        super().__init__(where + message)
+
+
+class ModelError(DoeCalibError):
+    """A robot, tool or effect description that cannot make a model."""
+
+
+class SolverError(DoeCalibError):
+    """An estimation or design problem that could not be solved."""
+
+
+class IdentifiabilityWarning(UserWarning):
+    """Some parameters cannot be separated by the data and were fixed."""
+
+
+class ConditioningWarning(UserWarning):
+    """The observation matrix is close to rank deficient."""
+
+
+class ConvergenceWarning(UserWarning):
+    """An iterative solver stopped before it converged."""

@@ -1,0 +1,113 @@
+"""The measurement tool: named markers bolted to the flange (formats.md §2)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from .errors import DataError
+
+
+@dataclass(frozen=True)
+class Tool:
+    """Nominal marker positions in the flange frame.
+
+    Attributes
+    ----------
+    names : tuple of str
+        Marker names, in file order.
+    positions : tuple of tuple of 3 float
+        Nominal positions in the flange frame, metres (the file is in mm).
+    flange : str or None
+        Link the tool is bolted to, when the file names it.
+    source : str
+        File the tool was read from.
+    """
+
+    names: tuple
+    positions: tuple
+    flange: str | None = None
+    source: str = ""
+
+    @property
+    def n_markers(self) -> int:
+        return len(self.names)
+
+    @property
+    def position_array(self) -> np.ndarray:
+        """Nominal marker positions, shape (n, 3), metres."""
+        return np.array(self.positions, dtype=float).reshape(-1, 3)
+
+    def index(self, name: str) -> int:
+        """Position of marker ``name`` in :attr:`names`."""
+        return self.names.index(name)
+
+    def to_dict(self) -> dict:
+        """JSON-able form in the file's units (mm)."""
+        return {"flange": self.flange, "source": self.source,
+                "markers": {n: [1000.0 * v for v in p] for n, p in zip(self.names, self.positions)}}
+
+    @classmethod
+    def from_dict(cls, d: dict, source: str = "") -> "Tool":
+        names = tuple(d["markers"])
+        pos = tuple(tuple(float(v) / 1000.0 for v in d["markers"][n]) for n in names)
+        return cls(names, pos, d.get("flange"), d.get("source", source))
+
+    @classmethod
+    def from_markers(cls, markers_mm: dict, flange: str | None = None) -> "Tool":
+        """Build a tool from ``{name: [x, y, z]}`` in mm."""
+        return cls.from_dict({"flange": flange, "markers": markers_mm})
+
+    @classmethod
+    def from_yaml(cls, path) -> "Tool":
+        """Read a tool YAML file (formats.md §2); positions in mm.
+
+        Examples
+        --------
+        >>> from doe_calib import example
+        >>> Tool.from_yaml(example.TOOL_YAML).names
+        ('A', 'B', 'C')
+        """
+        path = Path(path)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise DataError(f"cannot read the tool file: {exc.strerror}", path) from exc
+        try:
+            node = yaml.compose(text)
+        except yaml.YAMLError as exc:
+            mark = getattr(exc, "problem_mark", None)
+            raise DataError(f"not valid YAML: {getattr(exc, 'problem', exc)}", path,
+                            mark.line + 1 if mark else None,
+                            mark.column + 1 if mark else None) from exc
+        if node is None or not isinstance(node, yaml.MappingNode):
+            raise DataError("expected a mapping with a 'markers' entry", path, 1, 1)
+        top = {k.value: v for k, v in node.value}
+        if "markers" not in top or not isinstance(top["markers"], yaml.MappingNode):
+            raise DataError("missing 'markers:' mapping of name: [x, y, z] in mm", path, 1, 1)
+        names, positions = [], []
+        for key, val in top["markers"].value:
+            where = (path, key.start_mark.line + 1, key.start_mark.column + 1)
+            if key.value in names:
+                raise DataError(f"marker {key.value!r} is defined twice", *where)
+            if not isinstance(val, yaml.SequenceNode) or len(val.value) != 3:
+                raise DataError(f"marker {key.value!r} needs [x, y, z] in mm", *where)
+            xyz = []
+            for item in val.value:
+                try:
+                    v = float(item.value)
+                except (TypeError, ValueError):
+                    v = float("nan")
+                if not np.isfinite(v):
+                    raise DataError(f"marker {key.value!r}: {item.value!r} is not a finite number",
+                                    path, item.start_mark.line + 1, item.start_mark.column + 1)
+                xyz.append(v / 1000.0)
+            names.append(key.value)
+            positions.append(tuple(xyz))
+        if len(names) < 3:
+            raise DataError(f"a tool needs at least 3 markers to fix the flange orientation; "
+                            f"found {len(names)}", path, top["markers"].start_mark.line + 1, 1)
+        flange = top["flange"].value if "flange" in top else None
+        return cls(tuple(names), tuple(positions), flange, str(path))
