@@ -1,0 +1,98 @@
+"""Numeric evaluation of a model's Functions for many configurations at once.
+
+Each Function is mapped over the M configurations with ``Function.map`` (one
+call, no Python loop over poses) and evaluated through CasADi's zero-copy
+buffers, so numpy arrays go in and out without DM conversion. Mapped
+Functions and their buffers are cached per (Function, M).
+"""
+from __future__ import annotations
+
+import os
+from collections import OrderedDict
+
+import casadi as ca
+import numpy as np
+
+_CACHE: OrderedDict = OrderedDict()
+_CACHE_SIZE = 64
+_THREADS = max(1, min(4, os.cpu_count() or 1))
+
+
+class _Batch:
+    """A Function mapped over M configurations, with preallocated numpy buffers."""
+
+    def __init__(self, function: ca.Function, m: int, shared: tuple):
+        # inputs q, w, env vary per configuration; p and the `shared` extra inputs do not
+        self.mapped = function.map(f"{function.name()}_map", "thread", m, list(shared), []) \
+            if m > 1 else function
+        self.m = m
+        self.args = [np.zeros(self.mapped.size_in(i)[::-1]) for i in range(self.mapped.n_in())]
+        self.res = [np.zeros(self.mapped.size_out(i)[::-1]) for i in range(self.mapped.n_out())]
+        self.shapes = [function.size_out(i) for i in range(function.n_out())]
+        self.buffer, self.call = self.mapped.buffer()
+        for i, a in enumerate(self.args):
+            self.buffer.set_arg(i, memoryview(a))
+        for i, r in enumerate(self.res):
+            self.buffer.set_res(i, memoryview(r))
+
+    def __call__(self, inputs) -> list:
+        # Column-major (k, M) buffers are the same memory as C-order (M, k) arrays.
+        for a, x in zip(self.args, inputs):
+            a[...] = np.asarray(x, float).reshape(a.shape)
+        self.call()
+        # Each output buffer holds M column-major (rows, cols) blocks side by side.
+        return [r.reshape(self.m, cols, rows).transpose(0, 2, 1).copy()
+                for r, (rows, cols) in zip(self.res, self.shapes)]
+
+
+def _batch(function: ca.Function, m: int, shared: tuple) -> _Batch:
+    key = (id(function), m, shared)
+    hit = _CACHE.get(key)
+    if hit is not None and hit[0] is function:
+        _CACHE.move_to_end(key)
+        return hit[1]
+    batch = _Batch(function, m, shared)
+    _CACHE[key] = (function, batch)
+    if len(_CACHE) > _CACHE_SIZE:
+        _CACHE.popitem(last=False)
+    return batch
+
+
+def evaluate(function: ca.Function, configurations, values, *extra):
+    """Evaluate a model Function at every configuration.
+
+    Parameters
+    ----------
+    function : casadi.Function
+        One of a :class:`~doe_calib.measurement.Model`'s Functions, with inputs
+        ``(q, w, env, p, *extra)``.
+    configurations : Configurations
+        M configurations (q in rad/m, wrench in N/N·m).
+    values : array_like, shape (P,)
+        Parameter values, SI.
+    *extra : array_like
+        Further inputs: 1-D arrays are shared by every configuration (e.g. a
+        point ``t``, m); 2-D arrays of shape (M, k) give one row per configuration.
+
+    Returns
+    -------
+    list of ndarray
+        One array per output, shape (M, rows, cols).
+    """
+    extra = [np.asarray(e, float) for e in extra]
+    shared = (3,) + tuple(4 + i for i, e in enumerate(extra) if e.ndim == 1)
+    inputs = [configurations.q, configurations.wrench, configurations.env, values, *extra]
+    return _batch(function, len(configurations), shared)(inputs)
+
+
+def marker_positions(model, values, configurations) -> np.ndarray:
+    """Marker positions in the tracker frame, shape (M, n, 3), metres."""
+    (x,) = evaluate(model.markers, configurations, values)
+    return x.reshape(len(configurations), model.tool.n_markers, 3)
+
+
+def observation_matrix(model, values, configurations):
+    """Marker positions (M, n, 3) m and observation matrix B = ∂x/∂p, shape (M, n, 3, P)."""
+    x, b = evaluate(model.observation, configurations, values)
+    m, n = len(configurations), model.tool.n_markers
+    return x.reshape(m, n, 3), b.reshape(m, n, 3, -1)

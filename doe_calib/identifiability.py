@@ -1,0 +1,113 @@
+"""Which parameters can the data separate? Rank analysis of the observation matrix.
+
+Columns are normalised (so units do not decide) and taken greedily in
+priority order (base and markers first, then the effects in model order),
+each orthogonalised against those already kept; a column whose remaining
+part is below ``tol`` of its length is not separable from the kept ones and
+its parameter is fixed. The explanation names the kept parameters that
+reproduce its effect.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+_BLOCK_ORDER = ("base", "markers")
+
+
+@dataclass(frozen=True)
+class Identifiability:
+    """Outcome of the rank analysis.
+
+    Attributes
+    ----------
+    rank : int
+        Number of separable free parameters.
+    dependent : tuple of (str, str)
+        ``(parameter name, explanation)`` for each parameter found not separable.
+    condition_number : float
+        Of the kept, column-normalised observation matrix.
+    weakest : tuple of str
+        The parameters that dominate the smallest singular vector.
+    """
+
+    rank: int
+    dependent: tuple
+    condition_number: float
+    weakest: tuple
+
+
+def priority_order(parameter_set, candidates) -> list[int]:
+    """Candidate indices ordered: base, markers, then blocks in model order."""
+    blocks = [p.block for p in parameter_set.parameters]
+    seen = list(_BLOCK_ORDER) + [b for b in dict.fromkeys(blocks) if b not in _BLOCK_ORDER]
+    return sorted(candidates, key=lambda i: (seen.index(blocks[i]), i))
+
+
+def analyse(b, parameter_set, candidates=None, tol: float = 1e-7) -> Identifiability:
+    """Find the free parameters the observation matrix cannot separate.
+
+    Parameters
+    ----------
+    b : ndarray, shape (rows, P)
+        Weighted observation matrix (rows divided by their σ).
+    parameter_set : ParameterSet
+    candidates : sequence of int, optional
+        Parameter indices to analyse; default: the free ones.
+    tol : float
+        Relative remaining length under which a column is dependent.
+    """
+    params = parameter_set.parameters
+    candidates = np.flatnonzero(parameter_set.free) if candidates is None else candidates
+    order = priority_order(parameter_set, list(candidates))
+    norms = np.linalg.norm(b, axis=0)
+    basis = np.zeros((b.shape[0], 0))
+    kept, dependent = [], []
+    blocks = {}
+    for i in order:
+        blocks.setdefault(params[i].block, []).append(i)
+    for block in blocks.values():
+        left = list(block)
+        while left:
+            rest = {i: _residual(b[:, i], basis) for i in left}
+            rel = {i: np.linalg.norm(r) / norms[i] if norms[i] > 0 else 0.0 for i, r in rest.items()}
+            best = max(left, key=lambda i: rel[i])
+            if rel[best] < tol:
+                break
+            basis = np.column_stack([basis, rest[best] / np.linalg.norm(rest[best])])
+            kept.append(best)
+            left.remove(best)
+        dependent += [(params[i].name, _explain(b, i, kept, params, norms)) for i in left]
+    cond, weakest = _conditioning(b, kept, norms, params)
+    return Identifiability(len(kept), tuple(dependent), cond, weakest)
+
+
+def _residual(col, basis):
+    if basis.shape[1] == 0:
+        return col.copy()
+    r = col - basis @ (basis.T @ col)
+    return r - basis @ (basis.T @ r)  # second pass for accuracy
+
+
+def _explain(b, i, kept, params, norms) -> str:
+    p = params[i]
+    if norms[i] == 0 or not kept:
+        return (f"{p.description} ({p.name}) has no effect on the measured markers in these "
+                f"configurations" + (" (no load was applied)" if p.unit in ("rad/(N·m)", "m/N")
+                                     else ""))
+    cols = b[:, kept] / norms[kept]
+    alpha, *_ = np.linalg.lstsq(cols, b[:, i] / norms[i], rcond=None)
+    share = np.abs(alpha) / np.abs(alpha).sum()
+    top = [kept[k] for k in np.argsort(-share)[:3] if share[k] > 0.05]
+    names = ", ".join(f"{params[k].description} ({params[k].name})" for k in top)
+    return f"{p.description} ({p.name}) is not separable from {names}"
+
+
+def _conditioning(b, kept, norms, params):
+    if not kept:
+        return 1.0, ()
+    cols = b[:, kept] / norms[kept]
+    _, s, vt = np.linalg.svd(cols, full_matrices=False)
+    weak = np.argsort(-np.abs(vt[-1]))[:3]
+    return float(s[0] / s[-1]), tuple(params[kept[k]].name for k in weak)

@@ -1,0 +1,93 @@
+"""Symbolic kinematic chain with effects: flange pose for (q, wrench, env, parameters).
+
+Construction only: everything here builds CasADi SX expressions; numeric
+evaluation lives in :mod:`doe_calib.evaluation`.
+
+The chain (robot base frame, SI units) is::
+
+    T_k = T_{k-1} · M_k · E_k(p) · X_k(q_k + Δq_k + θ_k),   T_f = T_N · M_f · E_f(p)
+
+with ``M_k`` the nominal placement, ``E_k`` the effects' placement
+corrections, ``Δq`` their joint corrections and ``θ = deflection(τ)``
+where ``τ = J_θᵀ F`` are the joint torques of the wrench ``F`` (applied at
+the flange origin, base frame), evaluated on the unloaded chain.
+"""
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from .effects.base import ChainSymbols
+from .rotations import axis_angle
+
+
+def _compose(a, b):
+    """(R, t) of a·b."""
+    return a[0] @ b[0], a[0] @ b[1] + a[1]
+
+
+def _constant(placement: np.ndarray):
+    return ca.SX(ca.DM(placement[:3, :3])), ca.SX(ca.DM(placement[:3, 3:]))
+
+
+def _placement(s: ChainSymbols, effects, k: int, nominal: np.ndarray):
+    frame = _constant(nominal)
+    for e in effects:
+        corr = e.placement(s, k)
+        if corr is not None:
+            frame = _compose(frame, (corr[0], ca.vertcat(*corr[1])))
+    return frame
+
+
+def _motion(joint, x):
+    axis = np.asarray(joint.axis, float).reshape(3, 1)
+    if joint.kind == "revolute":
+        return axis_angle(axis, x), ca.SX.zeros(3, 1)
+    return ca.SX.eye(3), ca.SX(ca.DM(axis)) * x
+
+
+def _forward(robot, placements, flange, x):
+    """Joint frames (before motion) and flange pose for joint coordinates x."""
+    frame = (ca.SX.eye(3), ca.SX.zeros(3, 1))
+    joints = []
+    for k, joint in enumerate(robot.joints):
+        frame = _compose(frame, placements[k])
+        joints.append(frame)
+        frame = _compose(frame, _motion(joint, x[k]))
+    return joints, _compose(frame, flange)
+
+
+def joint_torques(robot, joint_frames, flange_position, wrench) -> ca.SX:
+    """τ = J_θᵀ F: torques (N·m) or forces (N) in each joint from the flange wrench.
+
+    ``wrench`` is (fx, fy, fz, mx, my, mz) at the flange origin, base frame.
+    """
+    f, m = wrench[0:3], wrench[3:6]
+    tau = []
+    for joint, (rot, origin) in zip(robot.joints, joint_frames):
+        axis = rot @ ca.DM(np.asarray(joint.axis, float).reshape(3, 1))
+        if joint.kind == "revolute":
+            tau.append(ca.dot(ca.cross(axis, flange_position - origin), f) + ca.dot(axis, m))
+        else:
+            tau.append(ca.dot(axis, f))
+    return ca.vertcat(*tau)
+
+
+def flange_pose(s: ChainSymbols, effects, wrench: ca.SX):
+    """Flange pose ``(R, t)`` in the robot base frame, SX, including every effect."""
+    robot = s.robot
+    n = robot.n_joints
+    placements = [_placement(s, effects, k, j.placement_matrix) for k, j in enumerate(robot.joints)]
+    flange = _placement(s, effects, n, np.array(robot.flange_placement, float).reshape(4, 4))
+    x = s.q
+    for e in effects:
+        dq = e.joint_correction(s)
+        if dq is not None:
+            x = x + dq
+    deflecting = [e for e in effects if e.uses_torque]
+    if deflecting:
+        joints, (_, p_f) = _forward(robot, placements, flange, x)
+        tau = joint_torques(robot, joints, p_f, wrench)
+        for e in deflecting:
+            x = x + e.deflection(s, tau)
+    return _forward(robot, placements, flange, x)[1]
