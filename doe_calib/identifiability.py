@@ -1,10 +1,11 @@
 """Which parameters can the data separate? Rank analysis of the observation matrix.
 
-Columns are normalised (so units do not decide) and taken greedily in
-priority order (base and markers first, then the effects in model order),
-each orthogonalised against those already kept; a column whose remaining
-part is below ``tol`` of its length is not separable from the kept ones and
-its parameter is fixed. The explanation names the kept parameters that
+Columns are taken in priority order (base and markers first, then the
+effects in model order, each in parameter order) and orthogonalised against
+those already kept; a column whose remaining part is below ``tol`` of its
+length (a unit-free test) is not separable from the kept ones and its
+parameter is fixed. The order makes the choice predictable: a parameter is
+fixed when parameters listed before it already produce its effect. The explanation names the kept parameters that
 reproduce its effect.
 """
 from __future__ import annotations
@@ -64,21 +65,14 @@ def analyse(b, parameter_set, candidates=None, tol: float = 1e-7) -> Identifiabi
     norms = np.linalg.norm(b, axis=0)
     basis = np.zeros((b.shape[0], 0))
     kept, dependent = [], []
-    blocks = {}
     for i in order:
-        blocks.setdefault(params[i].block, []).append(i)
-    for block in blocks.values():
-        left = list(block)
-        while left:
-            rest = {i: _residual(b[:, i], basis) for i in left}
-            rel = {i: np.linalg.norm(r) / norms[i] if norms[i] > 0 else 0.0 for i, r in rest.items()}
-            best = max(left, key=lambda i: rel[i])
-            if rel[best] < tol:
-                break
-            basis = np.column_stack([basis, rest[best] / np.linalg.norm(rest[best])])
-            kept.append(best)
-            left.remove(best)
-        dependent += [(params[i].name, _explain(b, i, kept, params, norms)) for i in left]
+        rest = _residual(b[:, i], basis)
+        if norms[i] > 0 and np.linalg.norm(rest) > tol * norms[i]:
+            basis = np.column_stack([basis, rest / np.linalg.norm(rest)])
+            kept.append(i)
+        else:
+            dependent.append(i)
+    dependent = [(params[i].name, _explain(b, i, kept, params, norms)) for i in dependent]
     cond, weakest = _conditioning(b, kept, norms, params)
     return Identifiability(len(kept), tuple(dependent), cond, weakest)
 

@@ -101,9 +101,8 @@ def prepare(model, measurements, params=None, register: bool = True):
         raise DataError("no readings to identify from", measurements.source or "<measurements>")
     if register and params.free[params.index("base")].all():
         params = register_base(model, measurements, params)
-    params, notes = fix_unidentifiable(model, measurements, params)
     check_counts(measurements, params)
-    return params, notes
+    return fix_unidentifiable(model, measurements, params)
 
 
 def residual_statistics(model, measurements, values) -> dict:

@@ -1,0 +1,38 @@
+"""Shared fixtures: the built-in 6R example, the 3-DOF study robot and a test chain."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from doe_calib import Robot, Tool, build_model, example
+
+DATA = Path(__file__).parent / "data"
+ODD_CHAIN_URDF = DATA / "odd_chain.urdf"
+
+
+@pytest.fixture(scope="session")
+def robot6():
+    return Robot.from_urdf(example.ROBOT_URDF)
+
+
+@pytest.fixture(scope="session")
+def tool6():
+    return Tool.from_yaml(example.TOOL_YAML)
+
+
+@pytest.fixture(scope="session")
+def model6(robot6, tool6):
+    """6R, every parameter block: base, markers, offsets, geometry, compliance."""
+    return build_model(robot6, tool6, "joint_offset+geometry+joint_compliance")
+
+
+@pytest.fixture(scope="session")
+def model_odd():
+    robot = Robot.from_urdf(ODD_CHAIN_URDF, flange="tip")
+    tool = Tool.from_markers({"A": [60, 0, 40], "B": [-30, 52, 40], "C": [-30, -52, 40]})
+    return build_model(robot, tool, "joint_offset+geometry+joint_compliance")
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(12345)

@@ -1,0 +1,81 @@
+"""Marker model and observation matrix: Jacobian against finite differences, geometry checks."""
+import numpy as np
+import pytest
+
+from doe_calib import Configurations, marker_positions, observation_matrix
+from doe_calib.simulate import random_configurations, random_truth
+
+
+def _central_differences(model, values, cfg, h):
+    cols = []
+    for i in range(len(values)):
+        hp, hm = values.copy(), values.copy()
+        hp[i] += h[i]
+        hm[i] -= h[i]
+        cols.append((marker_positions(model, hp, cfg) - marker_positions(model, hm, cfg)) / (2 * h[i]))
+    return np.stack(cols, axis=-1)
+
+
+@pytest.mark.parametrize("base_angle", [0.0, 2.5])  # identity tracker frame, and turned by 2.5 rad
+def test_observation_matrix_matches_finite_differences(model6, robot6, rng, base_angle):
+    truth = random_truth(model6, rng)
+    axis = rng.normal(size=3)
+    truth[model6.nominal().index("base")[3:]] = base_angle * axis / np.linalg.norm(axis)
+    q = random_configurations(robot6, 8, rng)
+    cfg = Configurations.from_arrays(q, wrench=rng.normal(size=(8, 6)) * ([2000.0] * 3 + [300.0] * 3))
+    x, b = observation_matrix(model6, truth, cfg)
+    assert np.allclose(x, marker_positions(model6, truth, cfg), atol=1e-14)
+    h = np.array([1e-6 if p.unit in ("m", "rad") else 1e-9 for p in model6.parameters])
+    fd = _central_differences(model6, truth, cfg, h)
+    scale = np.abs(b).max(axis=(0, 1, 2)) + 1e-300
+    assert np.max(np.abs(fd - b) / scale) < 1e-6
+
+
+def test_odd_chain_jacobian(model_odd, rng):
+    """Prismatic and unaligned joints, fixed joints in between."""
+    truth = random_truth(model_odd, rng)
+    q = random_configurations(model_odd.robot, 5, rng)
+    cfg = Configurations.from_arrays(q, wrench=rng.normal(size=(5, 6)) * 100)
+    _, b = observation_matrix(model_odd, truth, cfg)
+    h = np.array([1e-6 if p.unit in ("m", "rad") else 1e-9 for p in model_odd.parameters])
+    fd = _central_differences(model_odd, truth, cfg, h)
+    scale = np.abs(b).max(axis=(0, 1, 2)) + 1e-300
+    assert np.max(np.abs(fd - b) / scale) < 1e-6
+
+
+def test_markers_are_rigid_and_follow_the_tool(model6, robot6, rng):
+    """Marker distances equal the tool's, whatever the pose, load and tracker frame."""
+    truth = random_truth(model6, rng)
+    cfg = Configurations.from_arrays(random_configurations(robot6, 20, rng),
+                                     wrench=rng.normal(size=(20, 6)) * 500)
+    x = marker_positions(model6, truth, cfg)
+    u = truth[model6.nominal().index("markers")].reshape(-1, 3)
+    for a, b in [(0, 1), (1, 2), (0, 2)]:
+        assert np.allclose(np.linalg.norm(x[:, a] - x[:, b], axis=1), np.linalg.norm(u[a] - u[b]),
+                           atol=1e-12)
+
+
+def test_compliance_deflects_as_k_tau(robot6, tool6, rng):
+    """A pure moment about joint 6's axis turns joint 6 by k·m (small-deflection model)."""
+    from doe_calib import build_model
+
+    model = build_model(robot6, tool6, "joint_compliance")
+    p = model.nominal()
+    k6 = 2e-6
+    loaded = p.updated(k_a6=k6)
+    q = random_configurations(robot6, 1, rng)
+    from doe_calib.evaluation import evaluate
+
+    cfg0 = Configurations.from_arrays(q)
+    flange_rot, _ = evaluate(model.flange, cfg0, p.values)
+    axis6 = flange_rot[0] @ np.array([0.0, 0.0, -1.0])  # a6 axis is -x of link_6 = -z of tool0
+    moment = 500.0
+    cfg1 = Configurations.from_arrays(q, wrench=np.r_[0, 0, 0, moment * axis6])
+    x0 = marker_positions(model, loaded.values, cfg0)[0]
+    x1 = marker_positions(model, loaded.values, cfg1)[0]
+    rot_expected = k6 * moment
+    # markers turn about the a6 axis through the flange origin by k6·m
+    radius = np.linalg.norm(np.cross(axis6, x0 - evaluate(model.flange, cfg0, p.values)[1][0, :, 0]),
+                            axis=1)
+    assert np.allclose(np.linalg.norm(x1 - x0, axis=1), 2 * radius * np.sin(rot_expected / 2),
+                       rtol=1e-9)
