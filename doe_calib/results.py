@@ -168,3 +168,28 @@ class IdentificationResult:
         if d.get("format") != "doe_calib.identification":
             raise DataError("not a doe_calib identification result", path, 1, 1)
         return cls.from_dict(d)
+
+
+def save_parameters(path, params, model: str) -> None:
+    """Write a parameter set (display units) as JSON, e.g. the truth of a simulation."""
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump({"format": "doe_calib.parameters", "model": model,
+                   "parameters": params.to_list()}, fh, indent=1, ensure_ascii=False)
+
+
+def load_parameters(path, model) -> ParameterSet:
+    """Values of ``model``'s parameters from a parameters or result JSON file."""
+    from .errors import DataError
+
+    try:
+        with open(path, encoding="utf-8") as fh:
+            d = json.load(fh)
+    except json.JSONDecodeError as exc:
+        raise DataError(f"not valid JSON: {exc.msg}", path, exc.lineno, exc.colno) from exc
+    except OSError as exc:
+        raise DataError(f"cannot read the parameter file: {exc.strerror}", path) from exc
+    try:
+        return model.nominal().from_list(d["parameters"])
+    except (KeyError, TypeError) as exc:
+        raise DataError(f"does not hold the parameters of model {model.spec!r}: {exc}",
+                        path) from exc

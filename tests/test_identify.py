@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from doe_calib import (Configurations, DataError, IdentifiabilityWarning, build_model, identify,
-                       marker_positions, predict_covariance, simulate)
+                       marker_positions, point_covariance, predict_covariance, simulate)
+from doe_calib.evaluation import evaluate
 from doe_calib import Tool, example
 from doe_calib.identify import fix_unidentifiable, register_base
 from doe_calib.loads import unloaded_and_loaded
@@ -100,18 +101,26 @@ def test_monte_carlo_matches_predicted_covariance(robot6, tool6):
     cfg = _loaded_design(robot6, 12, rng)
     truth = _identifiable_truth(model, cfg, rng)
     sigma = 2e-5
-    predicted = predict_covariance(model, truth, cfg, sigma).std()[truth.free]
-    draws = []
+    prediction = predict_covariance(model, truth, cfg, sigma)
+    predicted = prediction.std()[truth.free]
+    # TCP 200 mm in front of the flange at 5 unseen loaded configurations, robot frame
+    tcp = np.array([0.0, 0.0, 0.2])
+    unseen = _loaded_design(robot6, 5, rng)
+    tcp_cov = point_covariance(model, truth, prediction.covariance, unseen, tcp)
+    draws, tcps = [], []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for _ in range(MC_REPETITIONS):
             res = identify(model, simulate(model, truth, cfg, sigma, rng), truth, register=False)
             draws.append(res.parameters.values[truth.free])
+            tcps.append(evaluate(model.point_robot, unseen, res.parameters.values, tcp)[0])
     draws = np.array(draws)
     ratio = draws.std(axis=0) / predicted
     assert np.all(np.abs(ratio - 1) < 0.10), ratio
     bias = (draws.mean(axis=0) - truth.values[truth.free]) / predicted
     assert np.all(np.abs(bias) < 4 / np.sqrt(len(draws)) * 1.5)
+    tcp_ratio = np.array(tcps)[..., 0].std(axis=0) / np.sqrt(np.einsum("mii->mi", tcp_cov))
+    assert np.all(np.abs(tcp_ratio - 1) < 0.10), tcp_ratio
 
 
 def test_estimators_agree_and_pose_is_less_precise(model6, loaded_design):
