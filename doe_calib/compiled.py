@@ -31,6 +31,8 @@ from pathlib import Path
 
 import casadi as ca
 
+from .errors import CompilationWarning
+
 log = logging.getLogger(__name__)
 
 #: Compiler flags. -O1 runs within a few per cent of -O2/-O3 on these
@@ -38,10 +40,6 @@ log = logging.getLogger(__name__)
 #: used (it would change the results).
 FLAGS = ("-O1", "-fPIC", "-shared")
 _SUFFIX = {"darwin": ".dylib", "win32": ".dll"}.get(sys.platform, ".so")
-
-
-class CompilationWarning(UserWarning):
-    """A Function could not be compiled; the slower CasADi virtual machine is used."""
 
 
 def cache_dir() -> Path:
@@ -152,6 +150,7 @@ def compile_functions(functions, flags=FLAGS) -> list:
             except RuntimeError:
                 log.info("cached library %s could not be loaded; compiling it again", path)
         pending.append((i, f, source, path))
+    start = time.perf_counter()
     for i, f, path, error in _build_all(pending, compiler, flags):
         if error is not None:
             _fail(f, error)
@@ -160,11 +159,14 @@ def compile_functions(functions, flags=FLAGS) -> list:
             out[i] = _load(f, path)
         except RuntimeError as err:
             _fail(f, f"the compiled library could not be loaded ({_first_line(err)})")
+    if pending:
+        log.info("compiled %d function(s) in %.1f s (%s)", len(pending),
+                 time.perf_counter() - start, ", ".join(f.name() for _, f, _, _ in pending))
     return out
 
 
 def _build_all(pending, compiler, flags):
-    """Compile every pending source, at most one process per CPU; yield (i, f, path, error)."""
+    """Compile every pending source, one process per CPU at most; list of (i, f, path, error)."""
     if not pending:
         return []
     results = []
@@ -178,12 +180,17 @@ def _build_all(pending, compiler, flags):
     with work as tmp:
         queue = list(pending)
         running = []
-        while queue or running:
-            while queue and len(running) < jobs:
-                i, f, source, path = queue.pop(0)
-                running.append(_start(i, f, source, path, compiler, flags, Path(tmp)))
-            job = running.pop(0)
-            results.append(_finish(*job))
+        try:
+            while queue or running:
+                while queue and len(running) < jobs:
+                    i, f, source, path = queue.pop(0)
+                    running.append(_start(i, f, source, path, compiler, flags, Path(tmp)))
+                results.append(_finish(*running.pop(0)))
+        finally:  # interrupted: stop the compilers still running
+            for job in running:
+                if not isinstance(job[4], OSError):
+                    job[4].kill()
+                    job[4].wait()
     return results
 
 

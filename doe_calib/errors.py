@@ -53,3 +53,7 @@ class ConditioningWarning(UserWarning):
 
 class ConvergenceWarning(UserWarning):
     """An iterative solver stopped before it converged."""
+
+
+class CompilationWarning(UserWarning):
+    """A Function could not be compiled; the slower CasADi virtual machine is used."""

@@ -1,13 +1,13 @@
 """Numeric evaluation of a model's Functions for many configurations at once.
 
 Each Function is mapped over the M configurations with ``Function.map`` (one
-call, no Python loop over poses) and evaluated through CasADi's zero-copy
+call, no Python loop over poses; "serial": CasADi's "thread" map starts a
+thread per pose, which costs more than the work, see benchmarks/) and evaluated through CasADi's zero-copy
 buffers, so numpy arrays go in and out without DM conversion. Mapped
 Functions and their buffers are cached per (Function, M).
 """
 from __future__ import annotations
 
-import os
 from collections import OrderedDict
 
 import casadi as ca
@@ -15,7 +15,6 @@ import numpy as np
 
 _CACHE: OrderedDict = OrderedDict()
 _CACHE_SIZE = 64
-_THREADS = max(1, min(4, os.cpu_count() or 1))
 
 
 class _Batch:
@@ -23,7 +22,7 @@ class _Batch:
 
     def __init__(self, function: ca.Function, m: int, shared: tuple):
         # inputs q, w, env vary per configuration; p and the `shared` extra inputs do not
-        self.mapped = function.map(f"{function.name()}_map", "thread", m, list(shared), []) \
+        self.mapped = function.map(f"{function.name()}_map", "serial", m, list(shared), []) \
             if m > 1 else function
         self.m = m
         self.args = [np.zeros(self.mapped.size_in(i)[::-1]) for i in range(self.mapped.n_in())]

@@ -72,7 +72,8 @@ def analyse(b, parameter_set, candidates=None, tol: float = 1e-7) -> Identifiabi
             kept.append(i)
         else:
             dependent.append(i)
-    dependent = [(params[i].name, _explain(b, i, kept, params, norms)) for i in dependent]
+    dependent = list(zip([params[i].name for i in dependent],
+                         _explain(b, dependent, kept, params, norms)))
     cond, weakest = _conditioning(b, kept, norms, params)
     return Identifiability(len(kept), tuple(dependent), cond, weakest)
 
@@ -84,18 +85,28 @@ def _residual(col, basis):
     return r - basis @ (basis.T @ r)  # second pass for accuracy
 
 
-def _explain(b, i, kept, params, norms) -> str:
-    p = params[i]
-    if norms[i] == 0 or not kept:
-        return (f"{p.description} ({p.name}) has no effect on the measured markers in these "
-                f"configurations" + (" (no load was applied)" if p.unit in ("rad/(N·m)", "m/N")
-                                     else ""))
-    cols = b[:, kept] / norms[kept]
-    alpha, *_ = np.linalg.lstsq(cols, b[:, i] / norms[i], rcond=None)
-    share = np.abs(alpha) / np.abs(alpha).sum()
-    top = [kept[k] for k in np.argsort(-share)[:3] if share[k] > 0.05]
-    names = ", ".join(f"{params[k].description} ({params[k].name})" for k in top)
-    return f"{p.description} ({p.name}) is not separable from {names}"
+def _explain(b, dependent, kept, params, norms) -> list[str]:
+    """Words for each dependent column: which kept parameters reproduce its effect."""
+    if not dependent:
+        return []
+    alpha = np.zeros((len(kept), len(dependent)))
+    if kept:
+        cols = b[:, kept] / norms[kept]
+        rhs = b[:, dependent] / np.where(norms[dependent] > 0, norms[dependent], 1.0)
+        alpha, *_ = np.linalg.lstsq(cols, rhs, rcond=None)
+    out = []
+    for k, i in enumerate(dependent):
+        p = params[i]
+        if norms[i] == 0 or not kept:
+            no_load = " (no load was applied)" if p.unit in ("rad/(N·m)", "m/N") else ""
+            out.append(f"{p.description} ({p.name}) has no effect on the measured markers in "
+                       f"these configurations{no_load}")
+            continue
+        share = np.abs(alpha[:, k]) / np.abs(alpha[:, k]).sum()
+        top = [kept[j] for j in np.argsort(-share)[:3] if share[j] > 0.05]
+        names = ", ".join(f"{params[j].description} ({params[j].name})" for j in top)
+        out.append(f"{p.description} ({p.name}) is not separable from {names}")
+    return out
 
 
 def _conditioning(b, kept, norms, params):
