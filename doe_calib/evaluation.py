@@ -2,7 +2,8 @@
 
 Each Function is mapped over the M configurations with ``Function.map`` (one
 call, no Python loop over poses; "serial": CasADi's "thread" map starts a
-thread per pose, which costs more than the work, see benchmarks/) and evaluated through CasADi's zero-copy
+thread per pose, which costs more than the work, see benchmarks/) and
+evaluated through CasADi's zero-copy
 buffers, so numpy arrays go in and out without DM conversion. Mapped
 Functions and their buffers are cached per (Function, M).
 """

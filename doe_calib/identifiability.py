@@ -5,7 +5,8 @@ effects in model order, each in parameter order) and orthogonalised against
 those already kept; a column whose remaining part is below ``tol`` of its
 length (a unit-free test) is not separable from the kept ones and its
 parameter is fixed. The order makes the choice predictable: a parameter is
-fixed when parameters listed before it already produce its effect. The explanation names the kept parameters that
+fixed when parameters listed before it already produce its effect. The
+explanation names the kept parameters that
 reproduce its effect.
 """
 from __future__ import annotations

@@ -135,12 +135,14 @@ def build_model(robot, tool, model: str | tuple = DEFAULT_MODEL, compile: bool =
     x_r = pos_f + rot_f @ t
     ins, in_names = [q, w, env, p], ["q", "w", "env", "p"]
     markers = ca.Function("markers", ins, [x], in_names, ["x"])
-    observation = ca.Function("observation", ins, [x, ca.densify(ca.jacobian(x, p))], in_names, ["x", "B"])
-    point = ca.Function("point", ins + [t], [x_t, ca.densify(ca.jacobian(x_t, p))], in_names + ["t"],
-                        ["x", "J"])
+    observation = ca.Function("observation", ins, [x, ca.densify(ca.jacobian(x, p))], in_names,
+                              ["x", "B"])
+    point = ca.Function("point", ins + [t], [x_t, ca.densify(ca.jacobian(x_t, p))],
+                        in_names + ["t"], ["x", "J"])
     point_robot = ca.Function("point_robot", ins + [t], [x_r, ca.densify(ca.jacobian(x_r, p))],
                               in_names + ["t"], ["x", "J"])
-    flange = ca.Function("flange", ins, [ca.densify(rot_b @ rot_f), ca.densify(in_tracker(pos_f))], in_names, ["R", "t"])
+    flange = ca.Function("flange", ins, [ca.densify(rot_b @ rot_f), ca.densify(in_tracker(pos_f))],
+                         in_names, ["R", "t"])
     if compile:
         from .compiled import compile_functions
         markers, observation, point, point_robot = compile_functions(

@@ -88,7 +88,8 @@ class IdentificationResult:
     def summary(self) -> str:
         """A text table of the parameters and the fit statistics."""
         p = self.parameters
-        lines = [f"Identification ({self.estimator} estimator), model: {self.model or '(base + markers)'}",
+        model = self.model or "(base + markers)"
+        lines = [f"Identification ({self.estimator} estimator), model: {model}",
                  f"robot {self.robot.name} ({self.robot.n_joints} joints), "
                  f"{self.tool.n_markers} markers, {self.n_observations} observations",
                  f"residual RMS {self.residuals['rms_mm']:.4f} mm, max 3-D "
@@ -97,10 +98,11 @@ class IdentificationResult:
                  f"{self.convergence['message']}", "",
                  f"{'parameter':<22}{'value':>14}{'± std':>12}  {'unit':<12}{'nominal':>12}"]
         std = self.std()
-        for par, v, s, free, why in zip(p.parameters, p.values, std, p.free, p.fixed_reason):
+        for par, v, s, free in zip(p.parameters, p.values, std, p.free):
             k = par.display_factor
             err = f"{s * k:12.4g}" if free else f"{'fixed':>12}"
-            lines.append(f"{par.name:<22}{v * k:14.6g}{err}  {par.display_unit:<12}{par.nominal * k:12.6g}")
+            lines.append(f"{par.name:<22}{v * k:14.6g}{err}  {par.display_unit:<12}"
+                         f"{par.nominal * k:12.6g}")
         fixed = [(n, w) for n, f, w in zip(p.names, p.free, p.fixed_reason) if not f]
         if fixed:
             lines += ["", f"{len(fixed)} parameters fixed:"]

@@ -126,7 +126,8 @@ class Robot:
         joints = tuple(Joint(j["name"], j["kind"], tuple(j["axis"]), tuple(j["placement"]),
                              -np.inf if j["lower"] is None else j["lower"],
                              np.inf if j["upper"] is None else j["upper"]) for j in d["joints"])
-        return cls(d["name"], joints, d["flange"], tuple(d["flange_placement"]), d.get("source", ""))
+        return cls(d["name"], joints, d["flange"], tuple(d["flange_placement"]),
+                   d.get("source", ""))
 
     @classmethod
     def from_urdf(cls, path, flange: str | None = None) -> "Robot":

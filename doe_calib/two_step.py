@@ -37,7 +37,7 @@ def identify_two_step(model, measurements, params=None, max_iterations: int = 50
     values = params.values.copy()
     moved = np.inf
     history = []
-    for it in range(1, max_iterations + 1):
+    for _ in range(max_iterations):
         moved = 0.0
         for cols in steps:
             if not cols.any():

@@ -137,7 +137,7 @@ def test_estimators_agree_and_pose_is_less_precise(model6, loaded_design):
 
 
 def test_pose_estimator_is_never_more_precise(model6, loaded_design):
-    """With the same unknowns (markers known), Gauss–Markov: point std ≤ pose std, each parameter."""
+    """Same unknowns (markers known): by Gauss–Markov, point std ≤ pose std for each parameter."""
     rng = np.random.default_rng(9)
     truth = _identifiable_truth(model6, loaded_design, rng)
     known = ~truth.free

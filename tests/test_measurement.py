@@ -12,7 +12,8 @@ def _central_differences(model, values, cfg, h):
         hp, hm = values.copy(), values.copy()
         hp[i] += h[i]
         hm[i] -= h[i]
-        cols.append((marker_positions(model, hp, cfg) - marker_positions(model, hm, cfg)) / (2 * h[i]))
+        diff = marker_positions(model, hp, cfg) - marker_positions(model, hm, cfg)
+        cols.append(diff / (2 * h[i]))
     return np.stack(cols, axis=-1)
 
 
@@ -22,7 +23,8 @@ def test_observation_matrix_matches_finite_differences(model6, robot6, rng, base
     axis = rng.normal(size=3)
     truth[model6.nominal().index("base")[3:]] = base_angle * axis / np.linalg.norm(axis)
     q = random_configurations(robot6, 8, rng)
-    cfg = Configurations.from_arrays(q, wrench=rng.normal(size=(8, 6)) * ([2000.0] * 3 + [300.0] * 3))
+    wrench = rng.normal(size=(8, 6)) * ([2000.0] * 3 + [300.0] * 3)
+    cfg = Configurations.from_arrays(q, wrench=wrench)
     x, b = observation_matrix(model6, truth, cfg)
     assert np.allclose(x, marker_positions(model6, truth, cfg), atol=1e-14)
     h = np.array([1e-6 if p.unit in ("m", "rad") else 1e-9 for p in model6.parameters])
@@ -75,7 +77,7 @@ def test_compliance_deflects_as_k_tau(robot6, tool6, rng):
     x1 = marker_positions(model, loaded.values, cfg1)[0]
     rot_expected = k6 * moment
     # markers turn about the a6 axis through the flange origin by k6·m
-    radius = np.linalg.norm(np.cross(axis6, x0 - evaluate(model.flange, cfg0, p.values)[1][0, :, 0]),
-                            axis=1)
+    origin = evaluate(model.flange, cfg0, p.values)[1][0, :, 0]
+    radius = np.linalg.norm(np.cross(axis6, x0 - origin), axis=1)
     assert np.allclose(np.linalg.norm(x1 - x0, axis=1), 2 * radius * np.sin(rot_expected / 2),
                        rtol=1e-9)

@@ -1,4 +1,7 @@
-"""``geometry``: errors of every joint placement and of the flange (3 translations + 3 rotations)."""
+"""``geometry``: errors of every joint placement and of the flange.
+
+Three translations and three rotations per frame.
+"""
 from __future__ import annotations
 
 from ..parameters import Parameter
