@@ -1,0 +1,280 @@
+"""Reading and writing the users' files: measurement CSV and design CSV (formats.md §3, §4).
+
+Files are in controller and tracker units (deg, mm, N, N·m, °C); everything
+returned is SI. Every problem raises :class:`~doe_calib.errors.DataError`
+naming the file, the physical line and the column; with ``skip_bad`` a bad
+row is dropped instead and reported in ``Measurements.dropped``.
+"""
+from __future__ import annotations
+
+import csv
+import io as _io
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .data import ENV_FIELDS, Configurations, Measurements
+from .errors import DataError
+
+WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
+XYZ = ("x", "y", "z")
+_Q_TOL = 1e-9  # file units: rows of one pose agree on q to this
+
+
+@dataclass
+class _Table:
+    """Header and rows of a CSV file, each row with its physical line number."""
+
+    path: str
+    columns: list
+    rows: list  # (line, fields)
+
+    def col(self, name: str) -> str:
+        return f"'{name}' ({self.columns.index(name) + 1})"
+
+
+def _read_table(path) -> _Table:
+    path = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise DataError(f"cannot read the file: {exc.strerror}", path) from exc
+    except UnicodeDecodeError as exc:
+        raise DataError(f"not UTF-8 text ({exc.reason})", path) from exc
+    header, rows = None, []
+    for number, line in enumerate(text.splitlines(), start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        fields = [f.strip() for f in next(csv.reader([line]))]
+        if header is None:
+            header = (number, fields)
+        else:
+            rows.append((number, fields))
+    if header is None:
+        raise DataError("the file is empty: expected a header row", path, 1)
+    line, columns = header
+    for i, c in enumerate(columns):
+        if not c:
+            raise DataError("empty column name in the header", path, line, i + 1)
+        if columns.index(c) != i:
+            raise DataError(f"column {c!r} appears twice in the header", path, line, i + 1)
+    if not rows:
+        raise DataError("the file has a header but no data rows", path, line)
+    return _Table(path, columns, rows)
+
+
+def _check_columns(table: _Table, required, optional, line):
+    missing = [c for c in required if c not in table.columns]
+    if missing:
+        raise DataError(f"missing column(s) {', '.join(missing)}; the header must hold "
+                        f"{', '.join(required)}", table.path, line, 1)
+    known = set(required) | set(optional)
+    for i, c in enumerate(table.columns):
+        if c not in known:
+            raise DataError(f"unknown column {c!r}; accepted columns: "
+                            f"{', '.join(list(required) + list(optional))}", table.path, line,
+                            f"'{c}' ({i + 1})")
+
+
+def _number(table, line, fields, name, default=None) -> float:
+    if name not in table.columns:
+        return default
+    text = fields[table.columns.index(name)]
+    if text == "" and default is not None:
+        return default
+    try:
+        value = float(text)
+    except ValueError:
+        raise DataError(f"{text!r} is not a number", table.path, line, table.col(name)) from None
+    if not np.isfinite(value):
+        raise DataError(f"{text!r} is not a finite number", table.path, line, table.col(name))
+    return value
+
+
+def _joint_columns(robot) -> list[str]:
+    return [f"q{k + 1}" for k in range(robot.n_joints)]
+
+
+def _joints(table, line, fields, robot) -> np.ndarray:
+    """q of one row in SI, checked against the limits."""
+    q = np.empty(robot.n_joints)
+    for k, (name, joint) in enumerate(zip(_joint_columns(robot), robot.joints)):
+        shown = _number(table, line, fields, name)
+        q[k] = shown / joint.display_factor
+        if not joint.lower - 1e-12 <= q[k] <= joint.upper + 1e-12:
+            lo, hi = joint.lower * joint.display_factor, joint.upper * joint.display_factor
+            raise DataError(f"{shown:g} {joint.display_unit} is outside the limits of joint "
+                            f"{joint.name} [{lo:g}, {hi:g}] {joint.display_unit}", table.path,
+                            line, table.col(name))
+    return q
+
+
+def _parse_rows(table, robot, row_parser, skip_bad):
+    """Apply ``row_parser`` to every row; drop and report bad rows if asked."""
+    parsed, dropped = [], []
+    for line, fields in table.rows:
+        try:
+            if len(fields) != len(table.columns):
+                raise DataError(f"{len(fields)} fields where the header has "
+                                f"{len(table.columns)}", table.path, line)
+            parsed.append((line, row_parser(line, fields)))
+        except DataError as exc:
+            if not skip_bad:
+                raise
+            dropped.append(str(exc))
+    if not parsed:
+        raise DataError("no valid data rows", table.path)
+    return parsed, dropped
+
+
+def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad: bool = False,
+                      require_xyz: bool = True) -> Measurements:
+    """Read a measurement CSV (formats.md §3).
+
+    Parameters
+    ----------
+    path : path-like
+    robot : Robot
+        Gives N (columns q1..qN, deg or mm) and the joint limits.
+    tool : Tool
+        Gives the marker names.
+    sigma_mm : float, optional
+        σ (mm) of rows without a ``sigma`` value.
+    skip_bad : bool
+        Drop bad rows, reporting each in ``dropped``, instead of raising.
+    require_xyz : bool
+        False to accept files without x, y, z (positions are then NaN).
+
+    Returns
+    -------
+    Measurements
+        In SI; configurations keyed by (pose, wrench, temperature) in order
+        of first appearance.
+    """
+    table = _read_table(path)
+    header_line = table.rows[0][0] - 1
+    qcols = _joint_columns(robot)
+    required = ["pose", *qcols, "marker", *(XYZ if require_xyz else ())]
+    optional = [*WRENCH, "temperature", "sigma", *(() if require_xyz else XYZ)]
+    _check_columns(table, required, optional, header_line)
+    if "sigma" not in table.columns and sigma_mm is None:
+        raise DataError("no 'sigma' column and no σ given: pass --sigma MM", table.path,
+                        header_line)
+    if sigma_mm is not None and not sigma_mm > 0:
+        raise DataError(f"σ must be positive, got {sigma_mm} mm", table.path)
+    first_q, seen = {}, {}
+
+    def row(line, fields):
+        pose = fields[table.columns.index("pose")]
+        marker = fields[table.columns.index("marker")]
+        if not pose:
+            raise DataError("empty pose id", table.path, line, table.col("pose"))
+        if marker not in tool.names:
+            raise DataError(f"marker {marker!r} is not in the tool file (markers: "
+                            f"{', '.join(tool.names)})", table.path, line, table.col("marker"))
+        q = _joints(table, line, fields, robot)
+        shown = q * robot.display_factors
+        if pose in first_q:
+            ref_line, ref = first_q[pose]
+            bad = np.flatnonzero(np.abs(shown - ref) > _Q_TOL)
+            if bad.size:
+                raise DataError(f"pose {pose!r} has q{bad[0] + 1} = {shown[bad[0]]:g} here but "
+                                f"{ref[bad[0]]:g} on line {ref_line}; all rows of a pose share q",
+                                table.path, line, table.col(qcols[bad[0]]))
+        wrench = np.array([_number(table, line, fields, c, 0.0) for c in WRENCH])
+        temp = _number(table, line, fields, "temperature", np.nan)
+        sigma = _number(table, line, fields, "sigma", sigma_mm)
+        if sigma is None or not sigma > 0:
+            raise DataError(f"σ must be positive, got {sigma}", table.path, line,
+                            table.col("sigma"))
+        xyz = np.array([_number(table, line, fields, c, np.nan if not require_xyz else None)
+                        for c in XYZ]) / 1000.0
+        key = (pose, tuple(wrench), temp if np.isfinite(temp) else None)
+        if (key, marker) in seen:
+            raise DataError(f"marker {marker!r} is read twice in pose {pose!r} under the same "
+                            f"load (first on line {seen[key, marker]})", table.path, line,
+                            table.col("marker"))
+        seen[key, marker] = line
+        first_q.setdefault(pose, (line, shown))
+        return key, q, wrench, temp, tool.index(marker), xyz, sigma / 1000.0
+
+    parsed, dropped = _parse_rows(table, robot, row, skip_bad)
+    keys, config = {}, []
+    for _, (key, q, wrench, temp, *_rest) in parsed:
+        config.append(keys.setdefault(key, len(keys)))
+    first = {}
+    for (_, (key, q, wrench, temp, *_r)) in parsed:
+        first.setdefault(key, (q, wrench, temp))
+    ordered = sorted(first, key=keys.get)
+    cfg = Configurations(tuple(k[0] for k in ordered), np.array([first[k][0] for k in ordered]),
+                         np.array([first[k][1] for k in ordered]),
+                         np.array([[first[k][2]] for k in ordered]).reshape(-1, len(ENV_FIELDS)))
+    return Measurements(cfg, np.array(config), np.array([p[4] for _, p in parsed]),
+                        np.array([p[5] for _, p in parsed]), np.array([p[6] for _, p in parsed]),
+                        np.array([line for line, _ in parsed]), table.path, tuple(dropped))
+
+
+def read_design(path, robot) -> Configurations:
+    """Read a design CSV (formats.md §4): pose, q1..qN (deg/mm), optional wrench, temperature."""
+    table = _read_table(path)
+    header_line = table.rows[0][0] - 1
+    _check_columns(table, ["pose", *_joint_columns(robot)], [*WRENCH, "temperature"],
+                   header_line)
+
+    def row(line, fields):
+        pose = fields[table.columns.index("pose")]
+        if not pose:
+            raise DataError("empty pose id", table.path, line, table.col("pose"))
+        return (pose, _joints(table, line, fields, robot),
+                [_number(table, line, fields, c, 0.0) for c in WRENCH],
+                _number(table, line, fields, "temperature", np.nan))
+
+    parsed, _ = _parse_rows(table, robot, row, False)
+    rows = [p for _, p in parsed]
+    return Configurations.from_arrays([r[1] for r in rows], [r[2] for r in rows],
+                                      [[r[3]] for r in rows], [r[0] for r in rows])
+
+
+def _configuration_fields(cfg, c, robot) -> list[str]:
+    q = cfg.q[c] * robot.display_factors
+    return [cfg.pose[c], *map(repr, map(float, q)), *map(repr, map(float, cfg.wrench[c]))]
+
+
+def _write(path, comment, header, rows):
+    buf = _io.StringIO()
+    buf.write(f"# {comment}\n")
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(header)
+    writer.writerows(rows)
+    Path(path).write_text(buf.getvalue(), encoding="utf-8")
+
+
+def write_measurements(path, measurements, robot, tool) -> None:
+    """Write readings as a measurement CSV (deg/mm, mm, N, N·m), exactly re-readable."""
+    cfg = measurements.configurations
+    with_temp = bool(np.isfinite(cfg.env[:, 0]).any())
+    header = ["pose", *_joint_columns(robot), *WRENCH, "marker", *XYZ,
+              *(["temperature"] if with_temp else []), "sigma"]
+    rows = []
+    for c, j, xyz, s in zip(measurements.config, measurements.marker, measurements.xyz,
+                            measurements.sigma):
+        temp = [repr(float(cfg.env[c, 0])) if np.isfinite(cfg.env[c, 0]) else ""]
+        rows.append([*_configuration_fields(cfg, c, robot), tool.names[j],
+                     *map(repr, map(float, xyz * 1000.0)), *(temp if with_temp else []),
+                     repr(float(s * 1000.0))])
+    _write(path, "doe_calib measurements: q in deg (mm for prismatic joints), x/y/z and sigma "
+                 "in mm, forces in N, moments in N·m, temperature in °C", header, rows)
+
+
+def write_design(path, configurations, robot) -> None:
+    """Write configurations as a design CSV (formats.md §4)."""
+    with_temp = bool(np.isfinite(configurations.env[:, 0]).any())
+    header = ["pose", *_joint_columns(robot), *WRENCH, *(["temperature"] if with_temp else [])]
+    rows = []
+    for c in range(len(configurations)):
+        t = configurations.env[c, 0]
+        rows.append(_configuration_fields(configurations, c, robot)
+                    + ([repr(float(t)) if np.isfinite(t) else ""] if with_temp else []))
+    _write(path, "doe_calib design: q in deg (mm for prismatic joints), forces in N, moments "
+                 "in N·m", header, rows)
