@@ -200,16 +200,14 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
         return key, q, wrench, temp, tool.index(marker), xyz, sigma / 1000.0
 
     parsed, dropped = _parse_rows(table, robot, row, skip_bad)
-    keys, config = {}, []
-    for _, (key, q, wrench, temp, *_rest) in parsed:
-        config.append(keys.setdefault(key, len(keys)))
-    first = {}
-    for (_, (key, q, wrench, temp, *_r)) in parsed:
-        first.setdefault(key, (q, wrench, temp))
-    ordered = sorted(first, key=keys.get)
-    cfg = Configurations(tuple(k[0] for k in ordered), np.array([first[k][0] for k in ordered]),
-                         np.array([first[k][1] for k in ordered]),
-                         np.array([[first[k][2]] for k in ordered]).reshape(-1, len(ENV_FIELDS)))
+    first, index, config = {}, {}, []  # configuration key → (q, wrench, temperature)
+    for _, (key, q, wrench, temp, *_) in parsed:
+        first.setdefault(key, (q, wrench, [temp]))
+        config.append(index.setdefault(key, len(index)))
+    values = list(first.values())
+    cfg = Configurations(tuple(k[0] for k in first), np.array([v[0] for v in values]),
+                         np.array([v[1] for v in values]),
+                         np.array([v[2] for v in values]).reshape(-1, len(ENV_FIELDS)))
     return Measurements(cfg, np.array(config), np.array([p[4] for _, p in parsed]),
                         np.array([p[5] for _, p in parsed]), np.array([p[6] for _, p in parsed]),
                         np.array([line for line, _ in parsed]), table.path, tuple(dropped))
