@@ -1,0 +1,1 @@
+"""Studies: thin scripts that call the public API and write to results/."""
