@@ -116,3 +116,22 @@ class Measurements:
         held = set(map(str, held_out_poses))
         is_held = np.array([self.configurations.pose[c] in held for c in self.config])
         return self.subset(~is_held), self.subset(is_held)
+
+
+def concatenate(parts) -> Measurements:
+    """Join several Measurements (e.g. sessions) into one, in the given order."""
+    parts = list(parts)
+    offsets = np.cumsum([0] + [len(p.configurations) for p in parts[:-1]])
+    cfgs = [p.configurations for p in parts]
+    configurations = Configurations(sum((c.pose for c in cfgs), ()),
+                                    np.concatenate([c.q for c in cfgs]),
+                                    np.concatenate([c.wrench for c in cfgs]),
+                                    np.concatenate([c.env for c in cfgs]))
+    return Measurements(configurations,
+                        np.concatenate([p.config + o for p, o in zip(parts, offsets)]),
+                        np.concatenate([p.marker for p in parts]),
+                        np.concatenate([p.xyz for p in parts]),
+                        np.concatenate([p.sigma for p in parts]),
+                        np.concatenate([p.line for p in parts]),
+                        "; ".join(dict.fromkeys(p.source for p in parts)),
+                        sum((p.dropped for p in parts), ()))

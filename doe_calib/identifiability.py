@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 _BLOCK_ORDER = ("base", "markers")
+_NO_EFFECT = 1e-9
 
 
 @dataclass(frozen=True)
@@ -59,11 +60,17 @@ def analyse(b, parameter_set, candidates=None, tol: float = 1e-7) -> Identifiabi
         Parameter indices to analyse; default: the free ones.
     tol : float
         Relative remaining length under which a column is dependent.
+
+    A column whose effect at the parameter's typical size (``‖b_i‖·scale_i``)
+    is below ``1e-9`` of the largest such effect is treated as having no
+    effect at all (it holds only rounding errors).
     """
     params = parameter_set.parameters
     candidates = np.flatnonzero(parameter_set.free) if candidates is None else candidates
     order = priority_order(parameter_set, list(candidates))
     norms = np.linalg.norm(b, axis=0)
+    effect = norms * parameter_set.scales
+    norms = np.where(effect > _NO_EFFECT * effect[list(candidates)].max(initial=0.0), norms, 0.0)
     basis = np.zeros((b.shape[0], 0))
     kept, dependent = [], []
     for i in order:

@@ -171,3 +171,25 @@ def test_held_out_prediction_reaches_true_model_accuracy(model6, robot6):
     rms_model = np.sqrt(np.mean((measured - predicted) ** 2))
     rms_truth = np.sqrt(np.mean((measured - ideal) ** 2))
     assert rms_model < 1.2 * rms_truth
+
+
+def test_rounding_only_column_is_not_identifiable(robot6, tool6):
+    """A load along joint 6's axis gives it no torque: k_a6's column is rounding noise only."""
+    model = build_model(robot6, tool6, "joint_compliance")
+    rng = np.random.default_rng(8)
+    q = random_configurations(robot6, 15, rng)
+    from doe_calib.evaluation import evaluate
+
+    rot, _ = evaluate(model.flange, Configurations.from_arrays(q), model.nominal().values)
+    axis6 = rot[:, :, 2]  # tool0 z is the a6 axis direction (up to sign)
+    w = np.zeros((30, 6))
+    # force along the a6 axis through the flange origin (on that axis), plus rounding-level
+    # moments: k_a6's column holds only rounding noise
+    w[1::2, :3] = 3000.0 * axis6
+    w[1::2, 3:] = 1e-10 * rng.normal(size=(15, 3))
+    cfg = Configurations.from_arrays(np.repeat(q, 2, axis=0), w, pose=np.repeat(np.arange(15), 2))
+    meas = simulate(model, model.nominal().updated(k_a2=5e-7), cfg, 1e-5, rng)
+    with pytest.warns(IdentifiabilityWarning):
+        res = identify(model, meas)
+    assert not res.parameters.free[res.parameters.index("k_a6")[0]]
+    assert "no effect" in dict(zip(res.parameters.names, res.parameters.fixed_reason))["k_a6"]

@@ -82,3 +82,16 @@ def test_subset_by_pose_keeps_configurations(robot6, tool6):
     kept, held = meas.split_by_pose(["2", "5"])
     assert isinstance(held, Measurements) and len(held) == 6 and len(kept) == 12
     assert set(held.configurations.pose) == {"2", "5"}
+
+
+def test_concatenate_sessions(robot6, tool6):
+    from doe_calib.data import concatenate
+
+    model = build_model(robot6, tool6, "joint_offset")
+    rng = np.random.default_rng(2)
+    a, b = (simulate(model, model.nominal(), Configurations.from_arrays(
+        random_configurations(robot6, k, rng)), 1e-5, rng) for k in (3, 4))
+    both = concatenate([a, b])
+    assert len(both) == len(a) + len(b) and len(both.configurations) == 7
+    assert np.array_equal(both.configurations.q[both.config[len(a):]],
+                          b.configurations.q[b.config])
