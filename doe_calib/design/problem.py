@@ -1,0 +1,58 @@
+"""The design problem in numbers: per-candidate information blocks of the free parameters."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..data import Configurations
+from ..evaluation import observation_matrix
+from ..identifiability import analyse
+from ..loads import hanging_mass_wrench
+
+
+@dataclass(frozen=True)
+class LoadCase:
+    """A mass hung on the flange: kg, centre of mass in the flange frame (m)."""
+
+    mass: float
+    com: tuple
+
+    def spec(self) -> str:
+        return f"{self.mass:g}@" + ",".join(f"{1000 * c:g}" for c in self.com)
+
+
+def load_configurations(model, values, q, loads) -> Configurations:
+    """Each pose unloaded, then under each load case: (len(loads) + 1)·M configurations."""
+    q = np.atleast_2d(q)
+    m, n_cases = q.shape[0], len(loads) + 1
+    w = np.zeros((m, n_cases, 6))
+    for c, load in enumerate(loads, start=1):
+        w[:, c] = hanging_mass_wrench(model, values, q, load.mass, load.com)
+    pose = np.repeat([str(i + 1) for i in range(m)], n_cases)
+    return Configurations.from_arrays(np.repeat(q, n_cases, axis=0), w.reshape(-1, 6), pose=pose)
+
+
+def blocks_for(model, params, q, loads, sigma: float) -> np.ndarray:
+    """Scaled, σ-weighted observation blocks of the free parameters, shape (K, r, F).
+
+    ``r = (len(loads) + 1) · 3n`` rows per pose; columns are ``∂x/∂p_i · scale_i / σ``.
+    """
+    cfg = load_configurations(model, params.values, q, loads)
+    _, b = observation_matrix(model, params.values, cfg)
+    k = np.atleast_2d(q).shape[0]
+    scale = params.scales[params.free]
+    return (b[..., params.free] * scale / sigma).reshape(k, -1, int(params.free.sum()))
+
+
+def design_parameters(model, params, q, loads, sample: int = 400, rng=None):
+    """The parameter set with what no candidate pose can identify fixed (with reasons)."""
+    rng = np.random.default_rng(0) if rng is None else rng
+    q = np.atleast_2d(q)
+    pick = rng.choice(len(q), size=min(sample, len(q)), replace=False)
+    cfg = load_configurations(model, params.values, q[pick], loads)
+    _, b = observation_matrix(model, params.values, cfg)
+    ident = analyse(b.reshape(-1, b.shape[-1]), params)
+    for name, why in ident.dependent:
+        params = params.fixed([name], why + " (over the candidate poses)")
+    return params
