@@ -31,6 +31,8 @@ EXAMPLES = {
                 "--load 250@0,0,200 --sigma 0.02 --seed 1 --out meas.csv --truth-out truth.json",
     "study": "doe-calib study table1 --out results",
     "demo": "doe-calib demo",
+    "design": "doe-calib design --robot kr270.urdf --tool tool.yaml --poses 15 "
+              "--model joint_offset+geometry+joint_compliance --load 250@0,0,200 --out design.json",
 }
 
 
@@ -133,6 +135,31 @@ def cmd_simulate(args):
         print(f"written: {args.truth_out} (the true parameters)")
 
 
+def cmd_design(args):
+    from .design import LoadCase
+    from .design.optimal import optimal_design
+    from .io import write_design
+
+    robot, tool = _load_robot_tool(args)
+    model = build_model(robot, tool, args.model)
+    loads = [LoadCase(*parse_load(text)) for text in args.load or []]
+    progress = None
+    if sys.stderr.isatty():
+        def progress(it, gap):
+            print(f"\rrelaxation: iteration {it}, duality gap {gap:.3g}", end="", file=sys.stderr,
+                  flush=True)
+    result = optimal_design(model, args.poses, loads, candidates=args.candidates,
+                            sigma=args.sigma / 1000.0, rng=np.random.default_rng(args.seed),
+                            progress=progress)
+    if progress:
+        print(file=sys.stderr)
+    result.to_json(args.out)
+    csv_path = Path(args.out).with_suffix(".csv")
+    write_design(csv_path, result.configurations, robot)
+    print(result.summary())
+    print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
+
+
 def cmd_study(args):
     if args.name == "table1":
         from studies import table1
@@ -201,6 +228,16 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--seed", type=int, help="random seed")
     c.add_argument("--out", required=True, help="measurement CSV to write")
     c.add_argument("--truth-out", help="JSON to write the true parameters to")
+
+    c = command("design", cmd_design, "choose D-optimal measurement poses (joint limits, loads)")
+    robot_args(c)
+    c.add_argument("--poses", type=int, default=15, help="number of poses N")
+    c.add_argument("--load", action="append", help="MASS_KG@X,Y,Z: each pose is also measured "
+                                                   "with this mass hung on (mm, flange frame)")
+    c.add_argument("--candidates", type=int, default=20000, help="random candidate poses")
+    c.add_argument("--sigma", type=float, default=0.02, help="tracker σ per coordinate, mm")
+    c.add_argument("--seed", type=int, help="random seed")
+    c.add_argument("--out", required=True, help="design JSON to write (CSV written beside it)")
 
     c = command("study", cmd_study, "run a study and write its results")
     c.add_argument("name", choices=["table1"])

@@ -59,3 +59,24 @@ def test_design_information_is_the_covariance_prediction(problem):
     scale = params.scales[params.free]
     m = information(blocks[idx], np.ones(len(idx)))
     assert np.allclose(np.linalg.inv(m), cov / np.outer(scale, scale), rtol=1e-6)
+
+
+def test_design_command_writes_json_and_csv(tmp_path):
+    from doe_calib import Robot, example
+    from doe_calib.cli import main
+    from doe_calib.design.result import DesignResult
+    from doe_calib.io import read_design
+
+    out = tmp_path / "design.json"
+    assert main(["design", "--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+                 "--model", "joint_offset", "--poses", "6", "--load", "250@0,0,200",
+                 "--candidates", "300", "--seed", "3", "--out", str(out)]) == 0
+    design = DesignResult.from_json(out)
+    assert len(design.poses()) == 6 and all(len(p["wrenches"]) == 2 for p in design.poses())
+    assert 0 < design.efficiency <= 1
+    robot = Robot.from_urdf(example.ROBOT_URDF)
+    cfg = read_design(out.with_suffix(".csv"), robot)  # limits checked on reading
+    assert np.allclose(cfg.q, design.configurations.q, atol=1e-12)
+    assert np.all((cfg.q >= robot.lower) & (cfg.q <= robot.upper))
+    loaded = cfg.wrench[1::2]
+    assert np.allclose(loaded[:, 2], -250.0 * 9.80665)

@@ -3,9 +3,10 @@
 This package holds the numerical core (issue 4, first part): per-candidate
 information blocks (:mod:`.problem`), criteria (:mod:`.criteria`), the convex
 relaxation with its certified bound (:mod:`.relaxation`) and the exact
-N-pose exchange (:mod:`.exchange`). Constraints beyond joint limits, the
-continuous IPOPT refinement, the ``doe-calib design`` command and exports
-are not written yet.
+N-pose exchange (:mod:`.exchange`), the pipeline (:mod:`.optimal`) behind
+``doe-calib design`` and its result (:mod:`.result`). Constraints beyond joint
+limits, the A/E/task criteria in the pipeline, the continuous IPOPT
+refinement and the exports are not written yet.
 """
 from .criteria import CRITERIA, d_efficiency, evaluate_criterion, log_det
 from .exchange import exact_d_design

@@ -1,0 +1,117 @@
+"""A design: chosen poses with their load cases, what they promise, and its JSON form."""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..data import Configurations
+from ..errors import DataError
+from ..robot import Robot
+from ..tool import Tool
+
+FORMAT = "doe_calib.design"
+
+
+@dataclass(frozen=True, eq=False)
+class DesignResult:
+    """N poses to measure, each under its load cases.
+
+    Attributes
+    ----------
+    robot, tool : Robot, Tool
+    model : str
+        Effects the design is for.
+    configurations : Configurations
+        Every (pose, load case) to measure, poses in measuring order.
+    criterion : str
+        ``D``, ``A``, ``E`` or ``task``.
+    value : float
+        Criterion of the design (scaled parameters).
+    bound : float
+        Certified upper bound of the criterion over designs of the same size.
+    efficiency : float
+        D-efficiency against the bound, (det M / det M_bound)^(1/p).
+    predicted_std : dict
+        Parameter name → (std in display units, unit).
+    constraints : dict
+        The constraints the poses satisfy, as used.
+    notes : tuple of str
+        Comparisons and remarks, in words.
+    """
+
+    robot: Robot
+    tool: Tool
+    model: str
+    configurations: Configurations
+    criterion: str
+    value: float
+    bound: float
+    efficiency: float
+    predicted_std: dict
+    constraints: dict
+    notes: tuple = field(default=())
+
+    def poses(self) -> list[dict]:
+        """One entry per pose: id, q in deg (mm for prismatic joints) and its wrenches."""
+        out, index = [], {}
+        cfg = self.configurations
+        for c, pose in enumerate(cfg.pose):
+            if pose not in index:
+                index[pose] = len(out)
+                out.append({"pose": pose,
+                            "q_deg": (cfg.q[c] * self.robot.display_factors).tolist(),
+                            "wrenches": []})
+            out[index[pose]]["wrenches"].append(cfg.wrench[c].tolist())
+        return out
+
+    def summary(self) -> str:
+        lines = [f"Design of {len(self.poses())} poses ({len(self.configurations)} measurements) "
+                 f"for model {self.model}, criterion {self.criterion}",
+                 f"criterion {self.value:.6g}, certified bound {self.bound:.6g}, "
+                 f"D-efficiency {self.efficiency:.3f}", *self.notes, "",
+                 f"{'parameter':<22}{'predicted std':>14}  unit"]
+        lines += [f"{n:<22}{s:14.4g}  {u}" for n, (s, u) in self.predicted_std.items()]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        return {"format": FORMAT, "model": self.model, "criterion": self.criterion,
+                "value": self.value, "bound": self.bound, "efficiency": self.efficiency,
+                "poses": self.poses(),
+                "predicted_std": [{"name": n, "std": s, "unit": u}
+                                  for n, (s, u) in self.predicted_std.items()],
+                "constraints": self.constraints, "notes": list(self.notes),
+                "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
+
+    def to_json(self, path=None) -> str:
+        text = json.dumps(self.to_dict(), indent=1, ensure_ascii=False)
+        if path is not None:
+            with open(path, "w", encoding="utf-8") as fh:
+                fh.write(text)
+        return text
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "DesignResult":
+        robot = Robot.from_dict(d["robot"])
+        rows = [(p["pose"], p["q_deg"], w) for p in d["poses"] for w in p["wrenches"]]
+        cfg = Configurations.from_arrays(np.array([r[1] for r in rows]) / robot.display_factors,
+                                         np.array([r[2] for r in rows]),
+                                         pose=[r[0] for r in rows])
+        return cls(robot, Tool.from_dict(d["tool"]), d["model"], cfg, d["criterion"],
+                   float(d["value"]), float(d["bound"]), float(d["efficiency"]),
+                   {r["name"]: (r["std"], r["unit"]) for r in d["predicted_std"]},
+                   d.get("constraints", {}), tuple(d.get("notes", ())))
+
+    @classmethod
+    def from_json(cls, path) -> "DesignResult":
+        try:
+            with open(path, encoding="utf-8") as fh:
+                d = json.load(fh)
+        except json.JSONDecodeError as exc:
+            raise DataError(f"not valid JSON: {exc.msg}", path, exc.lineno, exc.colno) from exc
+        except OSError as exc:
+            raise DataError(f"cannot read the design file: {exc.strerror}", path) from exc
+        if d.get("format") != FORMAT:
+            raise DataError("not a doe_calib design file", path, 1, 1)
+        return cls.from_dict(d)
