@@ -10,10 +10,10 @@ import logging
 import os
 from pathlib import Path
 
-from . import compile_cost, identification, monte_carlo, observation, scaling
+from . import compile_cost, design, identification, monte_carlo, observation, scaling
 
 BENCHMARKS = {"observation": observation, "identification": identification,
-              "monte_carlo": monte_carlo, "scaling": scaling}
+              "monte_carlo": monte_carlo, "scaling": scaling, "design": design}
 
 
 def _figure(x: float) -> str:

@@ -10,10 +10,9 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import lru_cache
 
-import casadi as ca
 import numpy as np
 
-from doe_calib import Configurations, Robot, Tool, build_model, evaluation, example
+from doe_calib import Configurations, Robot, Tool, build_model, example
 from doe_calib.simulate import random_configurations
 
 #: The full 6R model of every 6R benchmark: all parameter blocks.
@@ -120,34 +119,3 @@ def quiet():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         yield
-
-
-@contextmanager
-def map_parallelization(mode: str | None):
-    """Record (and, unless ``mode`` is None, override) how ``evaluation`` maps Functions.
-
-    A what-if for the benchmarks only: ``doe_calib.evaluation`` asks
-    ``Function.map`` for a parallelization; inside this context it gets
-    ``mode`` instead. Yields the set of modes the library asked for.
-    """
-    original = ca.Function.map
-    asked = set()
-
-    def patched(self, *args):
-        args = list(args)
-        if len(args) >= 2 and isinstance(args[0], str) and isinstance(args[1], str):
-            asked.add(args[1])
-            if mode is not None:
-                args[1] = mode
-        return original(self, *args)
-
-    cache = getattr(evaluation, "_CACHE", None)
-    if cache is not None:
-        cache.clear()
-    ca.Function.map = patched
-    try:
-        yield asked
-    finally:
-        ca.Function.map = original
-        if cache is not None:
-            cache.clear()

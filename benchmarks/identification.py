@@ -14,7 +14,7 @@ import numpy as np
 from doe_calib import identify, simulate
 from doe_calib.simulate import random_truth
 
-from ._common import Row, Section, loaded_design, map_parallelization, models, quiet
+from ._common import Row, Section, loaded_design, models, quiet
 
 TARGET_S = 0.2
 SIGMA = 2e-5
@@ -30,11 +30,11 @@ def campaigns(robot, model, n_runs: int, n_poses: int = 60, seed: int = 60):
     return out
 
 
-def median_identification(model, data, estimator: str, mode=None):
+def median_identification(model, data, estimator: str):
     """Median seconds of ``identify`` over the data sets (after an untimed warm-up),
-    the median number of Jacobian evaluations, whether all converged, and the map mode."""
+    the median number of Jacobian evaluations, and whether all converged."""
     times, evals, converged = [], [], True
-    with quiet(), map_parallelization(mode) as asked:
+    with quiet():
         identify(model, data[0], estimator=estimator)
         for meas in data:
             t0 = time.perf_counter()
@@ -42,7 +42,7 @@ def median_identification(model, data, estimator: str, mode=None):
             times.append(time.perf_counter() - t0)
             evals.append(res.convergence["iterations"])
             converged &= bool(res.convergence["converged"])
-    return statistics.median(times), statistics.median(evals), converged, "/".join(sorted(asked))
+    return statistics.median(times), statistics.median(evals), converged
 
 
 def run(quick: bool = False) -> Section:
@@ -51,24 +51,19 @@ def run(quick: bool = False) -> Section:
     rows, figures = [], {}
     for estimator in ("point", "two-step"):
         for tag, model in (("SX virtual machine", ms.vm6), ("compiled", ms.compiled6)):
-            for mode in (None, "serial"):
-                s, it, ok, asked = median_identification(model, data, estimator, mode)
-                figures[estimator, tag, mode] = s
-                how = f"map '{asked}'" if mode is None else "map 'serial' (what-if)"
-                note = f"{it:g} iterations" + ("" if ok else "; NOT all converged")
-                rows.append((f"{estimator}, {tag}, {how}", s, note))
-    ref = figures["point", "compiled", "serial"]
+            s, it, ok = median_identification(model, data, estimator)
+            figures[estimator, tag] = s
+            note = f"{it:g} iterations" + ("" if ok else "; NOT all converged")
+            rows.append((f"{estimator}, {tag}", s, note))
+    ref = figures["point", "compiled"]
     out = tuple(Row(case, s, "s", s / ref, note) for case, s, note in rows)
-    as_is, serial = figures["point", "compiled", None], figures["point", "compiled", "serial"]
     verdict = {True: "met", False: "NOT met"}
+    vm = figures["point", "SX virtual machine"]
     notes = (
         f"median of {len(data)} campaigns: 60 poses × 2 loads (0 and 2500 N / 300 N·m) × 3 "
         f"markers = 360 coordinates, {ms.vm6.n_parameters} parameters (some fixed as "
         f"unidentifiable), σ = {SIGMA * 1e3:g} mm, random tracker frame.",
-        f"target < {TARGET_S:g} s for the point estimator, compiled: "
-        f"{verdict[as_is < TARGET_S]} as the library maps today ({as_is:.3f} s), "
-        f"{verdict[serial < TARGET_S]} with a serial map ({serial:.3f} s); virtual machine "
-        f"as is: {figures['point', 'SX virtual machine', None]:.3f} s.",
+        f"target < {TARGET_S:g} s for the point estimator: compiled {verdict[ref < TARGET_S]} "
+        f"({ref:.3f} s); virtual machine {verdict[vm < TARGET_S]} ({vm:.3f} s).",
     )
-    return Section("(b) 6R identification, 60 poses × 2 loads", out,
-                   "point, compiled, map 'serial'", notes)
+    return Section("(b) 6R identification, 60 poses × 2 loads", out, "point, compiled", notes)

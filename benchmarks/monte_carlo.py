@@ -12,7 +12,7 @@ import numpy as np
 
 from doe_calib import Configurations, identify, simulate
 
-from ._common import Row, Section, map_parallelization, models, quiet
+from ._common import Row, Section, models, quiet
 
 NAMES = ["g_q2_tz", "g_q3_tx", "g_flange_tx", "dq_q1", "dq_q2", "dq_q3"]
 SIGMA = 1e-5
@@ -26,18 +26,18 @@ def _problem(model):
     return p0, truth, cfg
 
 
-def rate(model, estimator: str, n_reps: int, mode=None):
-    """Identifications per second over ``n_reps`` replications, and the map mode used."""
+def rate(model, estimator: str, n_reps: int):
+    """Identifications per second over ``n_reps`` replications."""
     p0, truth, cfg = _problem(model)
     rng = np.random.default_rng(21)
     data = [simulate(model, truth, cfg, SIGMA, rng) for _ in range(n_reps)]
-    with quiet(), map_parallelization(mode) as asked:
+    with quiet():
         identify(model, data[0], p0, estimator=estimator)
         t0 = time.perf_counter()
         for meas in data:
             identify(model, meas, p0, estimator=estimator)
         seconds = time.perf_counter() - t0
-    return n_reps / seconds, "/".join(sorted(asked))
+    return n_reps / seconds
 
 
 def run(quick: bool = False) -> Section:
@@ -46,17 +46,14 @@ def run(quick: bool = False) -> Section:
     rows, figures = [], {}
     for estimator in ("point", "pose"):
         for tag, model in (("SX virtual machine", ms.vm3), ("compiled", ms.compiled3)):
-            for mode in (None, "serial"):
-                r, asked = rate(model, estimator, n_reps, mode)
-                figures[estimator, tag, mode] = r
-                how = f"map '{asked}'" if mode is None else "map 'serial' (what-if)"
-                rows.append((f"{estimator}, {tag}, {how}", r))
-    ref = figures["point", "compiled", "serial"]
+            r = rate(model, estimator, n_reps)
+            figures[estimator, tag] = r
+            rows.append((f"{estimator}, {tag}", r))
+    ref = figures["point", "compiled"]
     out = tuple(Row(case, r, "identifications/s", r / ref) for case, r in rows)
     notes = (f"{n_reps} replications per row; 3 configurations × 3 markers, "
              f"{len(NAMES)} free parameters, σ = {SIGMA * 1e3:g} mm.",
              "the pose estimator's flange-pose error function is built from the SX flange "
              "function and is not compiled; only its start-up (registration, rank analysis) "
              "uses the compiled functions.")
-    return Section("(c) Monte Carlo, 3-DOF robot (Table I size)", out,
-                   "point, compiled, map 'serial'", notes)
+    return Section("(c) Monte Carlo, 3-DOF robot (Table I size)", out, "point, compiled", notes)

@@ -14,15 +14,14 @@ import numpy as np
 from doe_calib import Configurations, observation_matrix
 from doe_calib.simulate import random_configurations, random_truth
 
-from ._common import Row, Section, map_parallelization, median_seconds, models
+from ._common import Row, Section, median_seconds, models
 
 TARGET_US = 10.0
 
 
-def _per_pose_us(model, values, cfg, repeats, mode):
-    with map_parallelization(mode) as asked:
-        seconds = median_seconds(lambda: observation_matrix(model, values, cfg), repeats)
-    return seconds / len(cfg) * 1e6, "/".join(sorted(asked))
+def _per_pose_us(model, values, cfg, repeats):
+    seconds = median_seconds(lambda: observation_matrix(model, values, cfg), repeats)
+    return seconds / len(cfg) * 1e6
 
 
 def _pinocchio_us(robot_urdf, q, repeats):
@@ -53,33 +52,22 @@ def run(quick: bool = False, n_poses: int = 1000) -> Section:
     repeats = 3 if quick else 15
     _, b_vm = observation_matrix(ms.vm6, values, cfg)
     _, b_c = observation_matrix(ms.compiled6, values, cfg)
-    rows, figures = [], {}
-    for tag, model in (("SX virtual machine", ms.vm6), ("compiled", ms.compiled6)):
-        us, asked = _per_pose_us(model, values, cfg, repeats, None)
-        figures[tag, "library"] = us
-        rows.append((f"{tag}, observation_matrix() as is (map '{asked}')", us))
-        us, _ = _per_pose_us(model, values, cfg, repeats, "serial")
-        figures[tag, "serial"] = us
-        rows.append((f"{tag}, observation_matrix() with map 'serial' (what-if)", us))
-    pin_us = _pinocchio_us(example.ROBOT_URDF, q, repeats)
-    rows.append(("Pinocchio FK + 6×6 frame Jacobian, Python loop (scale only)", pin_us))
-    ref = figures["compiled", "serial"]
-    out = tuple(Row(case, us, "µs/pose", us / ref) for case, us in rows)
-    as_is, serial = figures["compiled", "library"], figures["compiled", "serial"]
-    verdict = {True: "met", False: "NOT met"}
+    figures = {tag: _per_pose_us(model, values, cfg, repeats)
+               for tag, model in (("SX virtual machine", ms.vm6), ("compiled", ms.compiled6))}
+    figures["Pinocchio FK + 6×6 frame Jacobian, Python loop (scale only)"] = \
+        _pinocchio_us(example.ROBOT_URDF, q, repeats)
+    ref = figures["compiled"]
+    out = tuple(Row(case, us, "µs/pose", us / ref) for case, us in figures.items())
+    pin_us = figures["Pinocchio FK + 6×6 frame Jacobian, Python loop (scale only)"]
+    verdict = "met" if ref <= TARGET_US else "NOT met"
     notes = (
         f"{n_poses} random poses with random wrenches; B is 9×{b_vm.shape[-1]} per pose; "
         f"compiled and virtual machine agree to {np.abs(b_vm - b_c).max():.1e}.",
-        f"virtual machine / compiled: {figures['SX virtual machine', 'library'] / as_is:.1f}× "
-        f"as the library maps today, "
-        f"{figures['SX virtual machine', 'serial'] / serial:.1f}× with a serial map.",
-        f"compiled / Pinocchio: {min(as_is, serial) / pin_us:.1f}× (Pinocchio computes far "
-        f"less: a 6×6 Jacobian in q, no parameters, no compliance).",
-        f"target ≤ {TARGET_US:g} µs/pose compiled: {verdict[serial <= TARGET_US]} with a "
-        f"serial map ({serial:.1f} µs/pose); {verdict[as_is <= TARGET_US]} as the library "
-        f"maps today ({as_is:.1f} µs/pose)"
+        f"virtual machine / compiled: {figures['SX virtual machine'] / ref:.1f}×; "
+        f"compiled / Pinocchio: {ref / pin_us:.1f}× (Pinocchio computes far less: a 6×6 "
+        f"Jacobian in q, no parameters, no compliance).",
+        f"target ≤ {TARGET_US:g} µs/pose compiled: {verdict} ({ref:.1f} µs/pose)"
         + ("; no C compiler, so these figures are the virtual machine's" if not ms.compiled
            else ""),
     )
-    return Section("(a) observation matrix per pose, 6R full model", out,
-                   "compiled, map 'serial'", notes)
+    return Section("(a) observation matrix per pose, 6R full model", out, "compiled", notes)
