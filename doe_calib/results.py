@@ -1,11 +1,12 @@
 """Identification results: a plain, immutable object with ``summary()`` and a JSON round-trip."""
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import DataError
+from .jsonfile import read_json, write_json
 from .parameters import ParameterSet
 from .robot import Robot
 from .tool import Tool
@@ -137,11 +138,7 @@ class IdentificationResult:
 
     def to_json(self, path=None) -> str:
         """JSON text; also written to ``path`` when given."""
-        text = json.dumps(self.to_dict(), indent=1, ensure_ascii=False)
-        if path is not None:
-            with open(path, "w", encoding="utf-8") as fh:
-                fh.write(text)
-        return text
+        return write_json(self.to_dict(), path)
 
     @classmethod
     def from_dict(cls, d: dict) -> "IdentificationResult":
@@ -158,38 +155,19 @@ class IdentificationResult:
     @classmethod
     def from_json(cls, path) -> "IdentificationResult":
         """Read a result file written by :meth:`to_json`."""
-        from .errors import DataError
-
-        try:
-            with open(path, encoding="utf-8") as fh:
-                d = json.load(fh)
-        except json.JSONDecodeError as exc:
-            raise DataError(f"not valid JSON: {exc.msg}", path, exc.lineno, exc.colno) from exc
-        except OSError as exc:
-            raise DataError(f"cannot read the result file: {exc.strerror}", path) from exc
-        if d.get("format") != "doe_calib.identification":
-            raise DataError("not a doe_calib identification result", path, 1, 1)
-        return cls.from_dict(d)
+        return cls.from_dict(read_json(path, "doe_calib.identification",
+                                       "doe_calib identification result"))
 
 
 def save_parameters(path, params, model: str) -> None:
     """Write a parameter set (display units) as JSON, e.g. the truth of a simulation."""
-    with open(path, "w", encoding="utf-8") as fh:
-        json.dump({"format": "doe_calib.parameters", "model": model,
-                   "parameters": params.to_list()}, fh, indent=1, ensure_ascii=False)
+    write_json({"format": "doe_calib.parameters", "model": model,
+                "parameters": params.to_list()}, path)
 
 
 def load_parameters(path, model) -> ParameterSet:
     """Values of ``model``'s parameters from a parameters or result JSON file."""
-    from .errors import DataError
-
-    try:
-        with open(path, encoding="utf-8") as fh:
-            d = json.load(fh)
-    except json.JSONDecodeError as exc:
-        raise DataError(f"not valid JSON: {exc.msg}", path, exc.lineno, exc.colno) from exc
-    except OSError as exc:
-        raise DataError(f"cannot read the parameter file: {exc.strerror}", path) from exc
+    d = read_json(path, what="parameter file")
     try:
         return model.nominal().from_list(d["parameters"])
     except (KeyError, TypeError) as exc:

@@ -1,13 +1,12 @@
 """A design: chosen poses with their load cases, what they promise, and its JSON form."""
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..data import Configurations
-from ..errors import DataError
+from ..jsonfile import read_json, write_json
 from ..robot import Robot
 from ..tool import Tool
 
@@ -85,11 +84,8 @@ class DesignResult:
                 "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
 
     def to_json(self, path=None) -> str:
-        text = json.dumps(self.to_dict(), indent=1, ensure_ascii=False)
-        if path is not None:
-            with open(path, "w", encoding="utf-8") as fh:
-                fh.write(text)
-        return text
+        """JSON text; also written to ``path`` when given."""
+        return write_json(self.to_dict(), path)
 
     @classmethod
     def from_dict(cls, d: dict) -> "DesignResult":
@@ -105,13 +101,5 @@ class DesignResult:
 
     @classmethod
     def from_json(cls, path) -> "DesignResult":
-        try:
-            with open(path, encoding="utf-8") as fh:
-                d = json.load(fh)
-        except json.JSONDecodeError as exc:
-            raise DataError(f"not valid JSON: {exc.msg}", path, exc.lineno, exc.colno) from exc
-        except OSError as exc:
-            raise DataError(f"cannot read the design file: {exc.strerror}", path) from exc
-        if d.get("format") != FORMAT:
-            raise DataError("not a doe_calib design file", path, 1, 1)
-        return cls.from_dict(d)
+        """Read a design file written by :meth:`to_json`."""
+        return cls.from_dict(read_json(path, FORMAT, "doe_calib design file"))
