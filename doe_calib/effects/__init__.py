@@ -6,8 +6,10 @@ are always part of a model and are not effects.
 """
 from __future__ import annotations
 
+import re
+
 from ..errors import ModelError
-from .base import ChainSymbols, Effect
+from .base import ChainSymbols, Effect, joint_index
 from .geometry import Geometry
 from .joint_compliance import JointCompliance
 from .joint_offset import JointOffset
@@ -22,6 +24,57 @@ REGISTRY = {
 DEFAULT_MODEL = "joint_offset+geometry+joint_compliance"
 
 
+_WORD = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\((.*)\))?\s*$")
+
+
+def _value(text: str):
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
+def parse_effect(word: str, spec: str = ""):
+    """One effect from its model-string word, e.g. ``cyclic(j3,harmonics=2)``."""
+    match = _WORD.match(word)
+    if not match:
+        raise ModelError(f"cannot read effect {word!r} in model {spec or word!r}: write "
+                         f"name or name(arguments), e.g. cyclic(j3)")
+    name, inside = match.group(1), match.group(2)
+    if name not in REGISTRY:
+        raise ModelError(f"unknown effect {name!r} in model {spec or word!r}; known effects: "
+                         f"{', '.join(REGISTRY)}")
+    args, options = [], {}
+    for item in (a.strip() for a in (inside or "").split(",")):
+        if not item:
+            continue
+        key, eq, val = item.partition("=")
+        if eq:
+            options[key.strip()] = _value(val.strip())
+        else:
+            args.append(item)
+    try:
+        return REGISTRY[name](*args, **options)
+    except TypeError as exc:
+        raise ModelError(f"effect {word.strip()!r} in model {spec or word!r}: wrong arguments "
+                         f"({exc}); see {name}'s documentation") from None
+
+
+def _split(spec: str) -> list:
+    """Split at '+' outside parentheses."""
+    words, depth, cur = [], 0, ""
+    for ch in spec:
+        depth += (ch == "(") - (ch == ")")
+        if ch == "+" and depth == 0:
+            words.append(cur)
+            cur = ""
+        else:
+            cur += ch
+    return [w for w in words + [cur] if w.strip()]
+
+
 def parse_model(spec: str) -> tuple:
     """Effects named by a model string, in the string's order.
 
@@ -31,16 +84,13 @@ def parse_model(spec: str) -> tuple:
     ['joint_offset', 'joint_compliance']
     """
     effects = []
-    for word in (w.strip() for w in spec.split("+")):
-        if not word:
-            continue
-        if word not in REGISTRY:
-            raise ModelError(f"unknown effect {word!r} in model {spec!r}; known effects: "
-                             f"{', '.join(REGISTRY)}")
-        if any(e.name == word for e in effects):
-            raise ModelError(f"effect {word!r} appears twice in model {spec!r}")
-        effects.append(REGISTRY[word]())
+    for word in _split(spec):
+        effect = parse_effect(word, spec)
+        if any(e.spec() == effect.spec() for e in effects):
+            raise ModelError(f"effect {effect.spec()!r} appears twice in model {spec!r}")
+        effects.append(effect)
     return tuple(effects)
 
 
-__all__ = ["ChainSymbols", "Effect", "REGISTRY", "DEFAULT_MODEL", "parse_model"]
+__all__ = ["ChainSymbols", "Effect", "REGISTRY", "DEFAULT_MODEL", "joint_index", "parse_effect",
+           "parse_model"]

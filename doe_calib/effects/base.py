@@ -13,12 +13,19 @@ to the kinematic chain (see :mod:`doe_calib.kinematics`):
 Each returns ``None`` when the effect has nothing to say there. Adding an
 effect is a new module with a subclass of :class:`Effect` and one line in
 :mod:`doe_calib.effects` (the registry).
+
+An effect may take arguments, written in the model string as
+``name(arg, key=value)``, e.g. ``cyclic(j3, harmonics=2)``: they are the
+subclass's constructor arguments. A joint is named ``jK`` (K = 1 … N along
+the chain) or by its URDF name; :func:`joint_index` resolves it.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import casadi as ca
+
+from ..errors import ModelError
 
 
 @dataclass(frozen=True)
@@ -42,11 +49,32 @@ class ChainSymbols:
     p: dict
 
 
+def joint_index(robot, joint) -> int:
+    """Index (0-based, along the chain) of a joint given as ``jK`` (1-based), K, or its name."""
+    names = [j.name for j in robot.joints]
+    text = str(joint)
+    if text in names:
+        return names.index(text)
+    digits = text[1:] if text[:1] in "jJ" else text
+    if digits.isdigit() and 1 <= int(digits) <= len(names):
+        return int(digits) - 1
+    raise ModelError(f"no joint {text!r} in robot {robot.name!r}: use j1 … j{len(names)} "
+                     f"or one of {', '.join(names)}")
+
+
 class Effect:
-    """Base class: no parameters and no correction. Subclasses override."""
+    """Base class: no parameters and no correction. Subclasses override.
+
+    A subclass with arguments passes them on, ``super().__init__(joint, harmonics=h)``,
+    so that :meth:`spec` writes them back into the model string.
+    """
 
     #: Name used in ``--model`` strings, e.g. ``joint_offset``.
     name = ""
+
+    def __init__(self, *args, **options):
+        self._args = tuple(str(a) for a in args)
+        self._options = {k: v for k, v in options.items()}
 
     def parameters(self, robot) -> list:
         """The effect's parameters (list of :class:`~doe_calib.parameters.Parameter`)."""
@@ -70,5 +98,7 @@ class Effect:
         return type(self).deflection is not Effect.deflection
 
     def spec(self) -> str:
-        """The effect as written in a ``--model`` string."""
-        return self.name
+        """The effect as written in a ``--model`` string, e.g. ``cyclic(j3,harmonics=2)``."""
+        words = list(getattr(self, "_args", ())) + \
+            [f"{k}={v}" for k, v in getattr(self, "_options", {}).items()]
+        return f"{self.name}({','.join(words)})" if words else self.name

@@ -1,0 +1,57 @@
+"""What several commands share: robot/tool arguments, number and load parsing, warnings."""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+from ..effects import DEFAULT_MODEL
+from ..errors import DoeCalibError
+from ..robot import Robot
+from ..tool import Tool
+
+
+def robot_arguments(c, model: bool = True):
+    """Add ``--robot``, ``--flange``, ``--tool`` (and ``--model``) to a subparser."""
+    c.add_argument("--robot", required=True, help="URDF file of the nominal robot")
+    c.add_argument("--flange", help="flange link (default: the tool file's, else the "
+                                    "chain's last link)")
+    c.add_argument("--tool", required=True, help="tool YAML with marker positions (mm)")
+    if model:
+        c.add_argument("--model", default=DEFAULT_MODEL,
+                       help=f"effects joined by '+' (default {DEFAULT_MODEL})")
+
+
+def load_robot_tool(args):
+    """The Robot and Tool named by ``--robot``, ``--tool`` and ``--flange``."""
+    tool = Tool.from_yaml(args.tool)
+    robot = Robot.from_urdf(args.robot, flange=args.flange or tool.flange)
+    return robot, tool
+
+
+def parse_floats(text: str, n: int, what: str) -> np.ndarray:
+    """``n`` comma-separated numbers, or a clear error naming ``what``."""
+    try:
+        vals = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise DoeCalibError(f"{what}: expected {n} comma-separated numbers, got {text!r}") from None
+    if len(vals) != n:
+        raise DoeCalibError(f"{what}: expected {n} comma-separated numbers, got {len(vals)}")
+    return vals
+
+
+def parse_load(text: str):
+    """``MASS_KG@X,Y,Z`` (centre of mass in mm, flange frame) → (kg, m)."""
+    mass, _, where = text.partition("@")
+    try:
+        kg = float(mass)
+    except ValueError:
+        raise DoeCalibError(f"--load {text!r}: expected MASS_KG@X,Y,Z, e.g. 250@0,0,200") from None
+    com = parse_floats(where or "0,0,0", 3, "--load centre of mass (mm)") / 1000.0
+    return kg, com
+
+
+def report_warnings(caught):
+    """Print recorded warnings to stderr, one line each."""
+    for w in caught:
+        print(f"warning: {w.message}", file=sys.stderr)

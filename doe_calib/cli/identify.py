@@ -1,0 +1,50 @@
+"""``doe-calib identify``: parameters from a measurement CSV."""
+from __future__ import annotations
+
+import json
+import sys
+import warnings
+
+from ..identify import ESTIMATORS, identify
+from ..io import read_measurements
+from ..measurement import build_model
+from .common import load_robot_tool, report_warnings, robot_arguments
+
+HELP = "identify parameters from a measurement CSV"
+EXAMPLE = ("doe-calib identify --robot kr270.urdf --tool tool.yaml --data meas.csv "
+           "--model joint_offset+geometry+joint_compliance --sigma 0.02 --out result.json")
+
+
+def add_arguments(c):
+    robot_arguments(c)
+    c.add_argument("--data", required=True, help="measurement CSV (formats.md §3)")
+    c.add_argument("--estimator", choices=ESTIMATORS, default="point")
+    c.add_argument("--sigma", type=float, help="tracker σ per coordinate, mm, for rows "
+                                               "without a sigma column")
+    c.add_argument("--fix", help="comma-separated parameters or blocks to hold at nominal")
+    c.add_argument("--free", help="comma-separated parameters or blocks to estimate")
+    c.add_argument("--normalisation", type=float, help="pose estimator only: m per rad")
+    c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")
+    c.add_argument("--out", required=True, help="result JSON to write")
+    c.add_argument("--json", action="store_true", help="print the result as JSON")
+
+
+def run(args):
+    robot, tool = load_robot_tool(args)
+    model = build_model(robot, tool, args.model)
+    meas = read_measurements(args.data, robot, tool, sigma_mm=args.sigma, skip_bad=args.skip_bad)
+    for msg in meas.dropped:
+        print(f"dropped: {msg}", file=sys.stderr)
+    params = model.nominal()
+    if args.fix:
+        params = params.fixed(args.fix.split(","))
+    if args.free:
+        params = params.freed(args.free.split(","))
+    options = {"normalisation": args.normalisation} if args.estimator == "pose" else {}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = identify(model, meas, params, estimator=args.estimator, **options)
+    report_warnings(caught)
+    result.to_json(args.out)
+    print(json.dumps(result.to_dict(), indent=1) if args.json else result.summary())
+    print(f"\nwritten: {args.out}", file=sys.stderr)

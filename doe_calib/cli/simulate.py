@@ -1,0 +1,61 @@
+"""``doe-calib simulate``: a simulated measurement campaign as a measurement CSV."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..data import Configurations
+from ..io import read_design, write_measurements
+from ..loads import unloaded_and_loaded
+from ..measurement import build_model
+from ..results import load_parameters, save_parameters
+from ..simulate import random_configurations, random_truth, simulate
+from .common import load_robot_tool, parse_floats, parse_load, robot_arguments
+
+HELP = "simulate a measurement campaign"
+EXAMPLE = ("doe-calib simulate --robot kr270.urdf --tool tool.yaml --poses 40 "
+           "--load 250@0,0,200 --sigma 0.02 --seed 1 --out meas.csv --truth-out truth.json")
+
+
+def add_arguments(c):
+    robot_arguments(c)
+    c.add_argument("--design", help="design CSV of poses and loads (else random poses)")
+    c.add_argument("--poses", type=int, default=30, help="random poses when no design")
+    c.add_argument("--load", help="MASS_KG@X,Y,Z: measure each pose unloaded and with this "
+                                  "mass (centre of mass in mm, flange frame)")
+    c.add_argument("--sigma", type=float, default=0.02, help="noise σ per coordinate, mm")
+    c.add_argument("--truth", help="JSON with the true parameters (else random errors)")
+    c.add_argument("--tracker", help="tracker placement X,Y,Z,RX,RY,RZ (mm, rotation vector "
+                                     "in deg) when errors are random")
+    c.add_argument("--seed", type=int, help="random seed")
+    c.add_argument("--out", required=True, help="measurement CSV to write")
+    c.add_argument("--truth-out", help="JSON to write the true parameters to")
+
+
+def run(args):
+    robot, tool = load_robot_tool(args)
+    model = build_model(robot, tool, args.model)
+    rng = np.random.default_rng(args.seed)
+    if args.truth:
+        truth = load_parameters(args.truth, model)
+    else:
+        base = None
+        if args.tracker:
+            t = parse_floats(args.tracker, 6, "--tracker (mm, deg)")
+            base = np.r_[t[:3] / 1000.0, np.radians(t[3:])]
+        truth = model.nominal().with_values(random_truth(model, rng, base=base))
+    if args.design:
+        cfg = read_design(args.design, robot)
+    else:
+        q = random_configurations(robot, args.poses, rng)
+        if args.load:
+            kg, com = parse_load(args.load)
+            cfg = unloaded_and_loaded(model, truth.values, q, kg, com)
+        else:
+            cfg = Configurations.from_arrays(q)
+    meas = simulate(model, truth, cfg, args.sigma / 1000.0, rng, source=args.out)
+    write_measurements(args.out, meas, robot, tool)
+    print(f"written: {args.out} ({len(meas)} readings, {len(cfg)} configurations, "
+          f"σ = {args.sigma} mm)")
+    if args.truth_out:
+        save_parameters(args.truth_out, truth, model.spec)
+        print(f"written: {args.truth_out} (the true parameters)")
