@@ -92,6 +92,20 @@ class Effect:
         """Additive joint deflection (N, 1) from joint torques ``tau`` (N·m or N), or None."""
         return None
 
+    @classmethod
+    def candidates(cls, robot) -> list:
+        """The instances model diagnosis tries when this effect is missing.
+
+        One instance for a whole-robot effect (the default); per-joint effects
+        return one per joint they can sit on, e.g. ``[Cyclic("j1"), …]``.
+        """
+        return [cls()]
+
+    @property
+    def joint(self):
+        """The joint selector the effect sits on (e.g. ``"j3"``), or None for a whole-robot one."""
+        return None
+
     @property
     def uses_torque(self) -> bool:
         """Whether :meth:`deflection` is implemented (the chain then computes torques)."""
