@@ -4,7 +4,7 @@ from __future__ import annotations
 import importlib
 
 #: Study name → module in the ``studies`` package (each has ``main(argv)``).
-STUDIES = {"table1": "studies.table1"}
+STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__main__"}
 
 HELP = "run a study and write its results"
 EXAMPLE = "doe-calib study table1 --out results"
