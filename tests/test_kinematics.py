@@ -62,11 +62,11 @@ def test_chain_reads_joint_kinds_and_limits():
 
 
 def test_tiago_arm_chain_matches_pinocchio(rng):
-    """A real robot description, when example-robot-data is installed."""
-    erd = pytest.importorskip("example_robot_data")
-    urdf = Path(erd.getModelPath("tiago_description/robots/tiago.urdf")) / \
-        "tiago_description/robots/tiago.urdf"
-    if not urdf.is_file():
-        pytest.skip("TIAGo URDF not found in example-robot-data")
+    """A real robot description (example-robot-data, a test dependency)."""
+    from studies.tiago_mocap import tiago_urdf
+
+    urdf = tiago_urdf()
+    if urdf is None:
+        pytest.skip("TIAGo URDF not available: pip install example-robot-data")
     robot = Robot.from_urdf(urdf, flange="arm_7_link")
     assert robot.joint_names[0] == "torso_lift_joint" and robot.n_joints == 8
