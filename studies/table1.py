@@ -13,13 +13,16 @@ from __future__ import annotations
 import argparse
 import json
 import warnings
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
 from doe_calib import Configurations, Robot, Tool, build_model, example, identify, simulate
 from doe_calib.covariance import predict_covariance
+from doe_calib.parallel import run_tasks, task_seeds
 from doe_calib.pose_estimator import default_normalisation, predict_pose_covariance
+from doe_calib.progress import Progress
 
 NAMES = ("dl1", "dl2", "dl3", "dq1", "dq2", "dq3")
 OURS = ("g_q2_tz", "g_q3_tx", "g_flange_tx", "dq_q1", "dq_q2", "dq_q3")
@@ -53,10 +56,20 @@ def predicted_std(model, truth, cfg, lam):
     return pose * TO_UNIT, point * TO_UNIT
 
 
-def monte_carlo(model, truth, cfg, reps, rng, lam, progress=None, approaches=("pose", "point")):
-    """Estimates of the six parameters (mm, mdeg) over ``reps`` noisy repetitions."""
+_CHUNK = 50  # Monte-Carlo repetitions per parallel task
+
+
+@lru_cache(maxsize=1)
+def _cached_setup():
+    return setup()
+
+
+def _monte_carlo_chunk(task):
+    """One parallel task: ``reps`` repetitions with their own seed → estimates per approach."""
+    q, reps, seed, lam, approaches = task
+    model, truth = _cached_setup()
+    cfg, rng, free = Configurations.from_arrays(q), np.random.default_rng(seed), truth.free
     est = {a: np.empty((reps, 6)) for a in approaches}
-    free = truth.free
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for k in range(reps):
@@ -65,13 +78,31 @@ def monte_carlo(model, truth, cfg, reps, rng, lam, progress=None, approaches=("p
                 opts = {"normalisation": lam} if a == "pose" else {}
                 res = identify(model, meas, truth, estimator=a, register=False, **opts)
                 est[a][k] = res.parameters.values[free] * TO_UNIT
-            if progress:
-                progress(k + 1, reps)
     return est
 
 
-def run(out_dir="results", repetitions=1000, spread_sets=20, seed=2024, progress=None) -> dict:
-    """The whole study; writes table1.json, table1.md and table1.png to ``out_dir``."""
+def monte_carlo(cfg, reps, seed, lam, approaches=("pose", "point"), scheduler=None, workers=None,
+                progress=None):
+    """Estimates of the six parameters (mm, mdeg) over ``reps`` noisy repetitions.
+
+    The repetitions run in chunks of :data:`_CHUNK`, each with its own seed,
+    through :func:`doe_calib.parallel.run_tasks` (local processes, or a Dask
+    cluster at ``scheduler``): the figures do not depend on the engine.
+    """
+    sizes = [min(_CHUNK, reps - i) for i in range(0, reps, _CHUNK)]
+    tasks = [(cfg.q, n, s, lam, approaches) for n, s in zip(sizes, task_seeds(seed, len(sizes)))]
+    chunks = run_tasks(_monte_carlo_chunk, tasks, scheduler, workers,
+                       progress and (lambda done, total: progress(sum(sizes[:done]), reps)))
+    return {a: np.concatenate([c[a] for c in chunks]) for a in approaches}
+
+
+def run(out_dir="results", repetitions=1000, spread_sets=20, seed=2024, progress=None,
+        scheduler=None, workers=None) -> dict:
+    """The whole study; writes table1.json, table1.md and table1.png to ``out_dir``.
+
+    ``scheduler`` (a Dask address) or ``workers`` (local processes) run the
+    Monte Carlo in parallel (:mod:`doe_calib.parallel`).
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
@@ -80,7 +111,8 @@ def run(out_dir="results", repetitions=1000, spread_sets=20, seed=2024, progress
     lam0 = default_normalisation(markers)
     cfg = random_configurations(rng)
     true_si = truth.values[truth.free] * TO_UNIT
-    est = monte_carlo(model, truth, cfg, repetitions, rng, lam0, progress)
+    parallel = {"scheduler": scheduler, "workers": workers}
+    est = monte_carlo(cfg, repetitions, seed, lam0, progress=progress, **parallel)
     pred_pose, pred_point = predicted_std(model, truth, cfg, lam0)
     rows = []
     for i, name in enumerate(NAMES):
@@ -95,14 +127,14 @@ def run(out_dir="results", repetitions=1000, spread_sets=20, seed=2024, progress
                      "paper": dict(zip(("std_pose", "std_point", "improvement"), PAPER[name]))})
     sweep = []
     mc_at = {float(SWEEP[0]), float(SWEEP[7]), float(SWEEP[-1])}
-    for lam in SWEEP:
+    for j, lam in enumerate(SWEEP):
         pp, pt = predicted_std(model, truth, cfg, lam)
         entry = {"normalisation_m_per_rad": float(lam),
                  "std_pose": dict(zip(NAMES, pp.tolist())),
                  "improvement": dict(zip(NAMES, (pp / pt).tolist()))}
         if float(lam) in mc_at:
-            mc = monte_carlo(model, truth, cfg, max(repetitions // 5, 50), rng, lam,
-                             approaches=("pose",))["pose"].std(axis=0, ddof=1)
+            mc = monte_carlo(cfg, max(repetitions // 5, 50), seed + 1 + j, lam,
+                             approaches=("pose",), **parallel)["pose"].std(axis=0, ddof=1)
             entry["std_pose_monte_carlo"] = dict(zip(NAMES, mc.tolist()))
         sweep.append(entry)
     spread = []
@@ -218,22 +250,14 @@ def main(argv=None):
     ap.add_argument("--repetitions", type=int, default=1000)
     ap.add_argument("--sets", type=int, default=20)
     ap.add_argument("--seed", type=int, default=2024)
+    ap.add_argument("--scheduler", help="Dask scheduler address (default: local processes)")
+    ap.add_argument("--workers", type=int, help="local worker processes (default: all CPUs)")
     args = ap.parse_args(argv)
-    result = run(args.out, args.repetitions, args.sets, args.seed, progress=_progress())
+    bar = Progress(args.repetitions, "Monte Carlo")
+    result = run(args.out, args.repetitions, args.sets, args.seed, progress=bar,
+                 scheduler=args.scheduler, workers=args.workers)
+    bar.close()
     print(format_markdown(result))
-
-
-def _progress():
-    import sys
-
-    if not sys.stderr.isatty():
-        return None
-
-    def show(done, total):
-        bar = "#" * int(30 * done / total)
-        print(f"\rMonte Carlo {done}/{total} [{bar:<30}]", end="" if done < total else "\n",
-              file=sys.stderr, flush=True)
-    return show
 
 
 if __name__ == "__main__":

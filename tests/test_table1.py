@@ -8,7 +8,7 @@ from studies import table1
 
 def test_table1_small_run(tmp_path):
     reps = 150
-    result = table1.run(tmp_path, repetitions=reps, spread_sets=3, seed=7)
+    result = table1.run(tmp_path, repetitions=reps, spread_sets=3, seed=7, workers=2)
     # std of a std estimate from n draws is ~1/sqrt(2n) (5.8 % here): 25 % is > 4 of those
     for r in result["parameters"]:
         assert abs(r["std_pose"] / r["predicted_std_pose"] - 1) < 0.25, r
