@@ -10,10 +10,10 @@ import logging
 import os
 from pathlib import Path
 
-from . import compile_cost, design, identification, monte_carlo, observation, scaling
+from .isolated import isolated
 
-BENCHMARKS = {"observation": observation, "identification": identification,
-              "monte_carlo": monte_carlo, "scaling": scaling, "design": design}
+#: Benchmark modules (each has ``run(quick) -> Section``), in the order they run.
+BENCHMARKS = ("observation", "identification", "monte_carlo", "scaling", "design")
 
 
 def _figure(x: float) -> str:
@@ -52,9 +52,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
     chosen = args.only or list(BENCHMARKS)
-    sections = [compile_cost.run(args.quick)]
-    for name in chosen:
-        sections.append(BENCHMARKS[name].run(args.quick))
+    sections = [isolated(name, args.quick) for name in ["compile_cost"] + chosen]
     text = markdown(sections, args.quick)
     print(text)
     os.makedirs(args.output.parent, exist_ok=True)
