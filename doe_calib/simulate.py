@@ -72,7 +72,7 @@ def random_truth(model, rng=None, length: float = 1e-3, angle: float = 1e-3,
         size = {"m": length, "rad": angle, "rad/(N·m)": compliance, "m/N": compliance}[p.unit]
         if p.block == "markers":
             size = marker
-        if p.block == "joint_compliance":
+        if p.unit in ("rad/(N·m)", "m/N"):  # compliances are positive
             v[i] = size * rng.uniform(0.2, 1.0)
         else:
             v[i] += size * rng.standard_normal()

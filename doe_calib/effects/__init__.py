@@ -10,6 +10,7 @@ import re
 
 from ..errors import ModelError
 from .base import ChainSymbols, Effect, joint_index
+from .compliance_by_angle import ComplianceByAngle
 from .geometry import Geometry
 from .joint_compliance import JointCompliance
 from .joint_offset import JointOffset
@@ -19,6 +20,7 @@ REGISTRY = {
     "joint_offset": JointOffset,
     "geometry": Geometry,
     "joint_compliance": JointCompliance,
+    "compliance_by_angle": ComplianceByAngle,
 }
 
 DEFAULT_MODEL = "joint_offset+geometry+joint_compliance"
