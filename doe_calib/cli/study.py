@@ -4,7 +4,8 @@ from __future__ import annotations
 import importlib
 
 #: Study name → module in the ``studies`` package (each has ``main(argv)``).
-STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__main__"}
+STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__main__",
+           "table2": "studies.table2.__main__"}
 
 HELP = "run a study and write its results"
 EXAMPLE = "doe-calib study table1 --out results [--scheduler tcp://host:8786]"
