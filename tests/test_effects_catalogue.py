@@ -21,7 +21,7 @@ def _design(model, m, rng):
 
 
 def test_binned_compliance_is_the_constant_compliance_of_its_bin(robot6, tool6, rng):
-    """Independent truth: within one bin the effect is joint_compliance with k_a2 = χ of that bin."""
+    """Independent truth: within one bin the effect is joint_compliance with k_a2 = χ of its bin."""
     binned = build_model(robot6, tool6, BINNED + "+joint_compliance")
     plain = build_model(robot6, tool6, "joint_compliance")
     cfg = _design(binned, 30, rng)

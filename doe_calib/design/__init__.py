@@ -1,18 +1,24 @@
 """Experiment design: choose the measurement poses that make the parameters most precise.
 
-This package holds the numerical core (issue 4, first part): per-candidate
-information blocks (:mod:`.problem`), criteria (:mod:`.criteria`), the convex
-relaxation with its certified bound (:mod:`.relaxation`) and the exact
-N-pose exchange (:mod:`.exchange`), the pipeline (:mod:`.optimal`) behind
-``doe-calib design`` and its result (:mod:`.result`). Constraints beyond joint
-limits, the A/E/task criteria in the pipeline, the continuous IPOPT
-refinement and the exports are not written yet.
+Per-candidate information blocks (:mod:`.problem`), criteria D, A, E and
+task (:mod:`.criteria`), the constraints on a pose (:mod:`.constraints`,
+read from a file by :mod:`.constraint_file`, evaluated by
+:mod:`.feasibility` on candidates drawn by :mod:`.candidates`), the convex
+relaxation with its certified bound (:mod:`.relaxation`), the exact N-pose
+exchange (:mod:`.exchange`, :mod:`.updates`), the continuous IPOPT
+refinement (:mod:`.refine`, on the expressions of :mod:`.symbolic`), and the
+pipeline (:mod:`.optimal`) behind ``doe-calib design`` with its result
+(:mod:`.result`).
 """
-from .criteria import CRITERIA, d_efficiency, evaluate_criterion, log_det
-from .exchange import exact_d_design
-from .problem import LoadCase, blocks_for, design_parameters, load_configurations
-from .relaxation import Relaxation, information, relax_d, variances
+from .constraint_file import read_constraints
+from .constraints import Box, Coverage, DesignConstraints, LineOfSight
+from .criteria import CRITERIA, d_efficiency, efficiency, evaluate_criterion, log_det
+from .exchange import exact_d_design, exact_design
+from .problem import LoadCase, blocks_for, design_parameters, load_configurations, task_matrix
+from .relaxation import Relaxation, equivalence_ratio, information, relax, relax_d, variances
 
-__all__ = ["CRITERIA", "d_efficiency", "evaluate_criterion", "log_det", "exact_d_design",
-           "LoadCase", "blocks_for", "design_parameters", "load_configurations", "Relaxation",
-           "information", "relax_d", "variances"]
+__all__ = ["read_constraints", "Box", "Coverage", "DesignConstraints", "LineOfSight", "CRITERIA",
+           "d_efficiency", "efficiency", "evaluate_criterion", "log_det", "exact_d_design",
+           "exact_design", "LoadCase", "blocks_for", "design_parameters", "load_configurations",
+           "task_matrix", "Relaxation", "equivalence_ratio", "information", "relax", "relax_d",
+           "variances"]

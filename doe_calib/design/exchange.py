@@ -1,64 +1,121 @@
-"""Exact N-pose designs from candidates: rounding of the relaxation, then Fedorov exchange."""
+"""Exact N-pose designs from candidates: rounding of the relaxation, then Fedorov exchange.
+
+Coverage (at least K distinct bins of one joint among the chosen poses) is
+first repaired, then kept: an exchange that would break it is refused.
+"""
 from __future__ import annotations
 
 import numpy as np
 
-from .relaxation import variances
+from ..errors import SolverError
+from .criteria import evaluate_criterion, sensitivity
+from .relaxation import information, traces
+from .updates import added_values, regularised
 
-_RIDGE = 1e-10
-
-
-def _log_det(m):
-    sign, v = np.linalg.slogdet(m)
-    return v if sign > 0 else -np.inf
+_PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
 
 
-def _gains(blocks, m):
-    """log det(M + B_jᵀB_j) − log det M for every candidate block (M regularised)."""
-    p = m.shape[0]
-    chol = np.linalg.cholesky(m + _RIDGE * np.trace(m) / p * np.eye(p))
-    x = np.linalg.solve(chol, blocks.transpose(0, 2, 1).reshape(-1, p).T)
-    x = x.T.reshape(blocks.shape[0], blocks.shape[1], p)
-    g = np.einsum("kri,ksi->krs", x, x) + np.eye(blocks.shape[1])
-    return np.linalg.slogdet(g)[1]
+def _pool(blocks, weights, criterion, task, size, bins):
+    """Candidates worth searching: the largest weights, then sensitivities, and each bin's best."""
+    h, _ = sensitivity(criterion, regularised(information(blocks, weights)), task)
+    order = np.lexsort((-traces(blocks, h), -weights))
+    pool = order[:size]
+    if bins is not None:
+        ranked = bins[order]
+        best = [order[ranked == b][:_PER_BIN] for b in np.unique(bins[bins >= 0])]
+        pool = np.concatenate([pool, *best])
+        pool = pool[np.sort(np.unique(pool, return_index=True)[1])]
+    return order, pool
 
 
-def exact_d_design(blocks: np.ndarray, n: int, weights: np.ndarray | None = None,
-                   pool: int = 2000, max_sweeps: int = 50) -> np.ndarray:
-    """Indices of n candidates with (locally) maximal log det Σ B_iᵀB_i.
+def _cover(blocks, chosen, pool, bins, min_bins, criterion, task):
+    """Swap poses into missing bins (best pair first) until ``min_bins`` bins are used."""
+    chosen = list(chosen)
+    while len(set(bins[chosen]) - {-1}) < min_bins:
+        used = bins[chosen]
+        counts = {b: int((used == b).sum()) for b in set(used)}
+        new = pool[(bins[pool] >= 0) & ~np.isin(bins[pool], used)]
+        slots = [s for s, b in enumerate(used) if b < 0 or counts[b] > 1]
+        if new.size == 0 or not slots:
+            raise SolverError(f"cannot cover {min_bins} bins with {len(chosen)} poses: only "
+                              f"{len(set(bins[pool]) - {-1})} bins hold candidates")
+        m = information(blocks[chosen], np.ones(len(chosen)))
+        best = (-np.inf, None, None)
+        for s in slots:
+            b = blocks[chosen[s]]
+            values = added_values(criterion, m - b.T @ b, blocks[new], task)
+            j = int(np.argmax(values))
+            if values[j] > best[0]:
+                best = (values[j], s, int(new[j]))
+        chosen[best[1]] = best[2]
+    return chosen
+
+
+def _allowed(bins, chosen, slot, candidates, min_bins):
+    """Which candidates may replace ``chosen[slot]`` without dropping below ``min_bins`` bins."""
+    used = bins[chosen]
+    rest = np.delete(used, slot)
+    after = len(set(rest) - {-1}) + (~np.isin(bins[candidates], rest) & (bins[candidates] >= 0))
+    return after >= min_bins
+
+
+def exact_design(blocks: np.ndarray, n: int, criterion: str = "D",
+                 weights: np.ndarray | None = None, task: np.ndarray | None = None,
+                 bins: np.ndarray | None = None, min_bins: int = 0, pool: int = 2000,
+                 max_sweeps: int = 50) -> np.ndarray:
+    """Indices of n distinct candidates with a (locally) maximal criterion of Σ B_iᵀB_i.
 
     Parameters
     ----------
     blocks : ndarray, shape (K, r, p)
     n : int
         Number of poses.
+    criterion : {"D", "A", "E", "task"}
     weights : ndarray, shape (K,), optional
         Relaxation weights: the start is their n largest; the exchange
         searches the ``pool`` candidates with the largest weights and
-        variance functions.
+        sensitivities.
+    task : ndarray, shape (rows, p), optional
+        For the task criterion.
+    bins : ndarray of int, shape (K,), optional
+        Coverage bin of every candidate (−1: in none).
+    min_bins : int
+        Distinct bins the n poses must use.
+
+    Examples
+    --------
+    >>> blocks = np.random.default_rng(1).normal(size=(50, 2, 3))
+    >>> len(set(exact_design(blocks, 4, "A").tolist()))
+    4
     """
-    k, _, p = blocks.shape
-    if weights is None:
-        weights = np.full(k, 1.0 / k)
-    m_relax = np.einsum("k,kri,krj->ij", weights, blocks, blocks)
-    score = variances(blocks, m_relax + _RIDGE * np.trace(m_relax) / p * np.eye(p))
-    order = np.lexsort((-score, -weights))
-    candidates = order[:min(pool, k)]
+    k = blocks.shape[0]
+    weights = np.full(k, 1.0 / k) if weights is None else weights
+    order, candidates = _pool(blocks, weights, criterion, task, min(pool, k), bins)
     chosen = [int(c) for c in order[:n]]
-    m = np.einsum("kri,krj->ij", blocks[chosen], blocks[chosen])
-    current = _log_det(m)
+    if bins is not None and min_bins > 0:
+        chosen = _cover(blocks, chosen, candidates, bins, min_bins, criterion, task)
+    m = information(blocks[chosen], np.ones(n))
+    current = evaluate_criterion(criterion, m, task)
     for _ in range(max_sweeps):
         improved = False
         for slot in range(n):
             i = chosen[slot]
             m_minus = m - blocks[i].T @ blocks[i]
-            gains = _gains(blocks[candidates], m_minus)
-            gains[np.isin(candidates, chosen) & (candidates != i)] = -np.inf  # distinct poses
-            j = int(candidates[np.argmax(gains)])
+            values = added_values(criterion, m_minus, blocks[candidates], task)
+            values[np.isin(candidates, chosen) & (candidates != i)] = -np.inf  # distinct poses
+            if bins is not None and min_bins > 0:
+                values[~_allowed(bins, chosen, slot, candidates, min_bins)] = -np.inf
+            j = int(candidates[np.argmax(values)])
             m_new = m_minus + blocks[j].T @ blocks[j]
-            value = _log_det(m_new)
+            value = evaluate_criterion(criterion, m_new, task)
             if j != i and value > current + 1e-10 * max(1.0, abs(current)):
                 chosen[slot], m, current, improved = j, m_new, value, True
         if not improved:
             break
     return np.array(chosen)
+
+
+def exact_d_design(blocks: np.ndarray, n: int, weights: np.ndarray | None = None,
+                   pool: int = 2000, max_sweeps: int = 50) -> np.ndarray:
+    """D-optimal :func:`exact_design` (kept for callers of the first design release)."""
+    return exact_design(blocks, n, "D", weights, pool=pool, max_sweeps=max_sweeps)

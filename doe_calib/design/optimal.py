@@ -1,21 +1,56 @@
-"""The design pipeline: candidates → relaxation (bound) → exact N-pose exchange → result."""
+"""The design pipeline: feasible candidates → relaxation (bound) → exact exchange →
+continuous refinement → bound recomputed with the refined poses → result.
+"""
 from __future__ import annotations
+
+import logging
+import time
 
 import numpy as np
 
-from ..simulate import random_configurations
-from .criteria import log_det
-from .exchange import exact_d_design
-from .problem import blocks_for, design_parameters, load_configurations
-from .relaxation import information, relax_d
+from ..errors import SolverError
+from .candidates import feasible_candidates
+from .constraints import DesignConstraints
+from .criteria import CRITERIA, check, efficiency, evaluate_criterion, log_det
+from .exchange import exact_design
+from .feasibility import build_feasibility
+from .problem import blocks_for, design_parameters, load_configurations, task_matrix
+from .refine import refine as refine_poses
+from .relaxation import equivalence_ratio, information, relax
 from .result import DesignResult
 
+log = logging.getLogger(__name__)
+
 _RANDOM_DESIGNS = 100
+_STATISTIC = {"D": "max_i tr(M⁻¹ M_i)", "A": "max_i tr(M⁻² M_i) / tr(M⁻¹)",
+              "E": "max_i tr(G M_i) / λ_min(M), G = M^-(k+1) / tr M^-(k+1)",
+              "task": "max_i tr(M⁻¹TᵀTM⁻¹ M_i) / tr(T M⁻¹ Tᵀ)"}
+
+
+class _Stages:
+    """Reports each stage to ``progress(stage, note)`` and logs its duration."""
+
+    def __init__(self, progress):
+        self.progress, self.name, self.start = progress, None, time.perf_counter()
+
+    def __call__(self, name: str, note: str = "") -> None:
+        now = time.perf_counter()
+        if self.name is not None and name != self.name:
+            log.info("design stage %s: %.2f s", self.name, now - self.start)
+        if name != self.name:
+            self.name, self.start = name, now
+        if self.progress is not None:
+            self.progress(name, note)
+
+    def iterations(self, name):
+        return lambda it, gap: self(name, f"iteration {it}, gap {gap:.3g}")
 
 
 def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma: float = 2e-5,
-                   margin: float = 0.02, params=None, rng=None, progress=None) -> DesignResult:
-    """D-optimal N-pose design for ``model`` from random candidates within the joint limits.
+                   criterion: str = "D", task=None, task_point=(0.0, 0.0, 0.0),
+                   constraints: DesignConstraints | None = None, refine: bool = True,
+                   params=None, rng=None, progress=None) -> DesignResult:
+    """Optimal N-pose design for ``model`` under constraints.
 
     Parameters
     ----------
@@ -24,41 +59,94 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         Poses to measure; each is measured unloaded and under every load case.
     loads : sequence of LoadCase
     candidates : int
-        Candidate poses drawn uniformly inside the joint limits.
+        Feasible candidate poses, drawn uniformly inside the joint bounds.
     sigma : float
-        Tracker σ per coordinate, m (scales the predicted std only).
-    margin : float
-        Fraction of each joint range kept clear at both ends.
+        Tracker σ per coordinate, m.
+    criterion : {"D", "A", "E", "task"}
+    task : Configurations, optional
+        Task poses and their loads (wrenches), for the task criterion.
+    task_point : array_like, shape (3,)
+        The task point in the flange frame, m (default the flange origin).
+    constraints : DesignConstraints, optional
+        Default: the URDF joint limits with a 1 deg (mm) margin.
+    refine : bool
+        Run the continuous IPOPT refinement.
     params : ParameterSet, optional
         Expected values (default nominal); parameters no candidate can
         identify are fixed.
+    progress : callable(stage, note), optional
     """
+    check(criterion, task)
     rng = np.random.default_rng() if rng is None else rng
     params = model.nominal() if params is None else params
-    q = random_configurations(model.robot, candidates, rng, margin=margin)
-    params = design_parameters(model, params, q, loads, rng=rng)
-    blocks = blocks_for(model, params, q, loads, sigma)
-    relaxed = relax_d(blocks, progress=progress)
-    chosen = exact_d_design(blocks, n_poses, relaxed.weights)
-    m = information(blocks[chosen], np.ones(n_poses))
+    constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints
+    stage = _Stages(progress)
+    stage("candidates", f"drawing {candidates} feasible poses")
+    feasibility = build_feasibility(model, params.values, constraints, loads)
+    cands = feasible_candidates(feasibility, model.robot, candidates, rng)
+    if len(cands.q) < n_poses:
+        raise SolverError(f"only {len(cands.q)} feasible candidates for {n_poses} poses")
+    params = design_parameters(model, params, cands.q, loads, rng=rng)
+    t = None if task is None else task_matrix(model, params, task, task_point)
+    stage("information", f"{len(cands.q)} candidates")
+    blocks = blocks_for(model, params, cands.q, loads, sigma)
+    relaxed = relax(blocks, criterion, t, progress=stage.iterations("relaxation"))
+    stage("exchange", f"{n_poses} poses")
+    cov = constraints.coverage
+    chosen = exact_design(blocks, n_poses, criterion, relaxed.weights, t,
+                          None if cov is None else cov.bins(cands.q),
+                          0 if cov is None else cov.min_bins)
+    q, refinement = cands.q[chosen], None
+    if refine:
+        stage("refinement", f"IPOPT on {q.size} joint angles")
+        refinement = refine_poses(model, params, loads, sigma, q, feasibility, criterion, t)
+        q = refinement.q
+        if refinement.accepted:
+            stage("bound", "relaxation with the refined poses as candidates")
+            blocks = np.concatenate([blocks, blocks_for(model, params, q, loads, sigma)])
+            relaxed = relax(blocks, criterion, t, start=np.r_[relaxed.weights, np.zeros(n_poses)],
+                            progress=stage.iterations("bound"))
+    design = blocks_for(model, params, q, loads, sigma)
+    m = information(design, np.ones(n_poses))
+    value, bound = evaluate_criterion(criterion, m, t), relaxed.bound(n_poses)
     p = m.shape[0]
-    value, bound = log_det(m), relaxed.bound(n_poses)
+    efficiencies = {criterion: efficiency(criterion, value, bound, p)}
+    if criterion != "D":
+        stage("bound", "D relaxation for the D-efficiency")
+        efficiencies["D"] = efficiency("D", log_det(m), relax(blocks).bound(n_poses), p)
+    stage("report")
+    criteria = {c: evaluate_criterion(c, m, t) for c in CRITERIA if c != "task" or t is not None}
+    ratio = equivalence_ratio(blocks, m / n_poses, criterion, t)
+    target = p if criterion == "D" else 1.0
+    equivalence = {"criterion": criterion, "statistic": _STATISTIC[criterion], "target": target,
+                   "relaxation": target * relaxed.ratio, "design": target * ratio,
+                   "design_efficiency_at_least": 1.0 / ratio}
+    randoms = [log_det(information(blocks[rng.choice(len(cands.q), n_poses, replace=False)],
+                                   np.ones(n_poses))) for _ in range(_RANDOM_DESIGNS)]
+    equivalent = n_poses * np.exp((log_det(m) - np.median(randoms)) / p)
     scale = params.scales[params.free]
     std = np.sqrt(np.diag(np.linalg.inv(m))) * scale
     free = [par for par, f in zip(params.parameters, params.free) if f]
-    randoms = [log_det(information(blocks[rng.choice(len(blocks), n_poses, replace=False)],
-                                   np.ones(n_poses))) for _ in range(_RANDOM_DESIGNS)]
-    equivalent = n_poses * np.exp((value - np.median(randoms)) / p)
-    cfg = load_configurations(model, params.values, q[chosen], loads)
-    notes = (f"{n_poses} optimal poses are as precise (D criterion) as {equivalent:.0f} random "
-             f"ones (median of {_RANDOM_DESIGNS} random designs of {n_poses} poses)",
-             f"relaxation over {candidates} candidates: gap {relaxed.gap:.2g} after "
-             f"{relaxed.iterations} iterations; {p} parameters designed for, "
-             f"{int((~params.free).sum())} fixed as not identifiable by any candidate")
-    constraints = {"joint_limits_deg_or_mm": [[lo * f, hi * f] for lo, hi, f in zip(
-        model.robot.lower, model.robot.upper, model.robot.display_factors)],
-        "margin_fraction": margin, "loads": [ld.spec() for ld in loads]}
-    return DesignResult(model.robot, model.tool, model.spec, cfg, "D", value, bound,
-                        float(np.exp((value - bound) / p)),
+    notes = [f"{n_poses} optimal poses are as precise (D criterion) as {equivalent:.0f} random "
+             f"ones (median of {_RANDOM_DESIGNS} random designs of {n_poses} feasible poses)",
+             f"relaxation over {len(blocks)} candidates: equivalence ratio {relaxed.ratio:.4g} "
+             f"after {relaxed.iterations} iterations; {p} parameters designed for, "
+             f"{int((~params.free).sum())} fixed as not identifiable by any candidate"]
+    if t is not None:
+        notes.append(f"task: predicted RMS position std at the {len(task)} task poses "
+                     f"{1000 * np.sqrt(-criteria['task'] / len(task)):.4g} mm "
+                     f"(σ = {1000 * sigma:g} mm)")
+    coverage = {}
+    if cov is not None:
+        used = cov.used(q)
+        coverage = {"joint": model.robot.joints[cov.joint].name, "bins_used": used,
+                    "min_bins": cov.min_bins, "met": len(used) >= cov.min_bins}
+    used_constraints = constraints.to_dict(model.robot, model.tool)
+    used_constraints["loads"] = [ld.spec() for ld in loads]
+    cfg = load_configurations(model, params.values, q, loads)
+    return DesignResult(model.robot, model.tool, model.spec, cfg, criterion, value, bound,
+                        efficiencies[criterion],
                         {par.name: (float(s * par.display_factor), par.display_unit)
-                         for par, s in zip(free, std)}, constraints, notes)
+                         for par, s in zip(free, std)}, used_constraints, tuple(notes),
+                        efficiencies, criteria, equivalence, cands.to_dict(),
+                        {} if refinement is None else refinement.to_dict(), coverage)

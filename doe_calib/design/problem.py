@@ -6,9 +6,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data import Configurations
-from ..evaluation import observation_matrix
+from ..evaluation import evaluate, observation_matrix
 from ..identifiability import analyse
 from ..loads import hanging_mass_wrench
+from .batch import chunks
 
 
 @dataclass(frozen=True)
@@ -36,13 +37,30 @@ def load_configurations(model, values, q, loads) -> Configurations:
 def blocks_for(model, params, q, loads, sigma: float) -> np.ndarray:
     """Scaled, σ-weighted observation blocks of the free parameters, shape (K, r, F).
 
-    ``r = (len(loads) + 1) · 3n`` rows per pose; columns are ``∂x/∂p_i · scale_i / σ``.
+    ``r = (len(loads) + 1) · 3n`` rows per pose; columns are ``∂x/∂p_i · scale_i / σ``
+    (``sigma`` in m). Evaluated in chunks of :data:`.batch.CHUNK` poses.
     """
-    cfg = load_configurations(model, params.values, q, loads)
-    _, b = observation_matrix(model, params.values, cfg)
-    k = np.atleast_2d(q).shape[0]
+    q = np.atleast_2d(q)
     scale = params.scales[params.free]
-    return (b[..., params.free] * scale / sigma).reshape(k, -1, int(params.free.sum()))
+    f = int(params.free.sum())
+    out = np.empty((len(q), (len(loads) + 1) * 3 * model.tool.n_markers, f))
+    for rows, index in chunks(len(q)):
+        cfg = load_configurations(model, params.values, q[index], loads)
+        _, b = observation_matrix(model, params.values, cfg)
+        block = (b[..., params.free] * scale / sigma).reshape(len(index), -1, f)
+        out[rows] = block[: rows.stop - rows.start]
+    return out
+
+
+def task_matrix(model, params, configurations, point=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """T: Jacobian of a flange point at the task configurations w.r.t. the scaled free parameters.
+
+    Rows are x, y, z (m, robot base frame) of ``point`` (flange frame, m) at
+    each task configuration under its wrench; shape (3M, F). The predicted
+    position covariance of a design with scaled information M is T M⁻¹ Tᵀ (m²).
+    """
+    _, jac = evaluate(model.point_robot, configurations, params.values, np.asarray(point, float))
+    return (jac[..., params.free] * params.scales[params.free]).reshape(-1, int(params.free.sum()))
 
 
 def design_parameters(model, params, q, loads, sample: int = 400, rng=None):

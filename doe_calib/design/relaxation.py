@@ -1,20 +1,33 @@
 """Convex relaxation of the exact design: weights on candidates, and a certified bound.
 
-For the D criterion a first-order method is used (multiplicative updates
-with vertex-direction steps), which handles tens of thousands of candidates;
-its optimum is certified by the equivalence theorem: with weights w summing
-to 1 and M(w) = Σ w_i M_i, for every design ξ
+A first-order method handles tens of thousands of candidates for every
+criterion: multiplicative updates ``w_i ← w_i ψ_i^λ`` with the sensitivities
+ψ_i of :mod:`.criteria` (E through its smooth surrogate; λ = 1 for D, 1/2
+for A and task, 1/(k+1) for E), each followed by a vertex-direction step
+towards the most sensitive candidate (closed form for D, a line search
+otherwise) and, for D, Harman–Pronzato pruning; on a working set grown by
+the candidates that violate the equivalence theorem. The optimum is
+certified by the equivalence theorem (:func:`.criteria.sensitivity`): with
+normalised weights w and ratio = c · max_i ψ_i over *every* candidate, no
+design over the candidates does better than ``ratio`` times Φ(M(w)); for D,
 
-    log det M(ξ) ≤ log det M(w) + max_i tr(M(w)⁻¹ M_i) − p,
+    log det M_N ≤ p log N + log det M(w) + p log(max_i d_i / p)
 
-so an exact N-pose design drawn from the candidates satisfies
-``log det M_N ≤ p log N + log det M(w) + gap``. A and E use cvxpy.
+for every exact N-pose design drawn from the candidates.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import minimize_scalar
+
+from .criteria import E_ORDER, bound_value, check, evaluate_criterion, sensitivity, smooth_value
+#: Exponent λ of the multiplicative step w_i ← w_i ψ_i^λ: the values known to increase
+#: the criterion monotonically (Yu 2010: 1/(1 − q) for Φ_q, q = 0 for D, −1 for A and
+#: task, −k for the E surrogate).
+_POWER = {"D": 1.0, "A": 0.5, "task": 0.5, "E": 1.0 / (E_ORDER + 1)}
+_CHUNK = 4096  # candidates per step when sweeping all of them (bounds memory)
 
 
 @dataclass(frozen=True, eq=False)
@@ -23,33 +36,59 @@ class Relaxation:
 
     Attributes
     ----------
+    criterion : str
     weights : ndarray, shape (K,)
         Sum to 1.
-    log_det : float
-        log det M(w) of the normalised information (D criterion).
-    gap : float
-        max_i d_i − p ≥ 0, the duality gap of log det.
+    value : float
+        Criterion of the normalised information M(w) (log det M(w) for D).
+    ratio : float
+        c · max_i ψ_i ≥ 1 over every candidate: no design beats Φ(M(w)) by more.
     iterations : int
     p : int
         Number of parameters.
     """
 
+    criterion: str
     weights: np.ndarray
-    log_det: float
-    gap: float
+    value: float
+    ratio: float
     iterations: int
     p: int
 
+    @property
+    def gap(self) -> float:
+        """p (ratio − 1): for D the duality gap max_i d_i − p."""
+        return self.p * (self.ratio - 1.0)
+
     def bound(self, n: int) -> float:
-        """Upper bound on log det of any exact n-candidate design's information."""
-        return self.p * np.log(n) + self.log_det + self.gap
+        """Upper bound on the criterion of any exact n-candidate design."""
+        return bound_value(self.criterion, self.value, self.ratio, n, self.p)
 
 
 def variances(blocks: np.ndarray, m: np.ndarray) -> np.ndarray:
     """d_i = tr(M⁻¹ M_i) = tr(B_i M⁻¹ B_iᵀ) for candidate blocks B_i (K, r, p)."""
+    return traces(blocks, np.linalg.inv(m))
+
+
+def traces(blocks: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """tr(H B_iᵀB_i) for every candidate block B_i (K, r, p), in chunks; shape (K,)."""
     k, r, p = blocks.shape
-    flat = blocks.reshape(k * r, p)
-    return np.einsum("ij,ij->i", flat @ np.linalg.inv(m), flat).reshape(k, r).sum(axis=1)
+    out = np.empty(k)
+    for s in range(0, k, _CHUNK):
+        flat = blocks[s:s + _CHUNK].reshape(-1, p)
+        out[s:s + _CHUNK] = np.einsum("ij,ij->i", flat @ h, flat).reshape(-1, r).sum(axis=1)
+    return out
+
+
+def equivalence_ratio(blocks: np.ndarray, m: np.ndarray, criterion: str = "D",
+                      task: np.ndarray | None = None) -> float:
+    """c · max_i ψ_i over every candidate at the normalised information M (≥ 1 at the optimum).
+
+    No design over the candidates has an information function Φ above
+    ratio · Φ(M) (:func:`.criteria.sensitivity`); for D, ratio = max_i d_i / p.
+    """
+    h, c = sensitivity(criterion, m, task)
+    return float(c * traces(blocks, h).max())
 
 
 def information(blocks: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -64,77 +103,115 @@ def _removal_threshold(gap: float, p: int) -> float:
     return p * (1 + gap / 2 - np.sqrt(gap * (4 + gap - 4 / p)) / 2)
 
 
-def _multiplicative(blocks, w, tol, max_iterations, progress, done):
-    """Multiplicative + vertex-direction iterations on one candidate set, pruned as it goes.
+def _step(criterion, task, m, m_j, d_j):
+    """Best step α towards candidate j: closed form for D, a line search otherwise."""
+    if criterion == "D":
+        p = m.shape[0]
+        return (d_j - p) / (p * (d_j - 1.0))
+    res = minimize_scalar(lambda a: -smooth_value(criterion, (1 - a) * m + a * m_j, task),
+                          bounds=(0.0, 0.5), method="bounded", options={"xatol": 1e-4})
+    return float(res.x)
+
+
+def _solve_working_set(mi, w, criterion, task, tol, max_iterations, progress, done):
+    """Multiplicative iterations on one candidate set (``mi``: (S, p²) information).
 
     Returns (indices kept, their weights, iterations used).
     """
-    p = blocks.shape[2]
-    active = np.arange(len(blocks))
+    p = int(round(np.sqrt(mi.shape[1])))
+    active = np.arange(len(mi))
     it = 0
     for it in range(1, max_iterations + 1):
-        b = blocks[active]
-        d = variances(b, information(b, w))
-        gap = float(d.max() - p)
-        if progress is not None and (done + it) % 20 == 0:
+        h, _ = sensitivity(criterion, (w @ mi).reshape(p, p), task)
+        psi = mi @ h.ravel()
+        gap = float(psi.max() - 1.0)
+        if progress is not None and (done + it) % 50 == 0:
             progress(done + it, gap)
-        if gap < tol * p:
+        if gap < tol:
             break
-        keep = d >= _removal_threshold(gap, p)
-        if not keep.all():
-            active, w, d = active[keep], w[keep], d[keep]
-            w = w / w.sum()
-        w = w * d / p  # multiplicative step: Σ w_i d_i = p keeps Σ w = 1
-        j = int(np.argmax(d))  # vertex-direction step toward the most informative candidate
-        alpha = (d[j] - p) / (p * (d[j] - 1.0))
+        if criterion == "D":
+            keep = p * psi >= _removal_threshold(p * gap, p)
+            if not keep.all():
+                active, mi, w, psi = active[keep], mi[keep], w[keep], psi[keep]
+                w = w / w.sum()
+        w = w * psi ** _POWER[criterion]
+        w /= w.sum()
+        j = int(np.argmax(psi))  # vertex-direction step toward the most informative candidate
+        alpha = _step(criterion, task, (w @ mi).reshape(p, p), mi[j].reshape(p, p), p * psi[j])
         if 0 < alpha < 1:
             w *= 1 - alpha
             w[j] += alpha
-        w /= w.sum()
     return active, w, it
 
 
-def relax_d(blocks: np.ndarray, tol: float = 2e-3, max_iterations: int = 20000,
-            working_set: int = 1500, progress=None) -> Relaxation:
-    """D-optimal approximate design over candidates.
+def relax(blocks: np.ndarray, criterion: str = "D", task: np.ndarray | None = None,
+          tol: float = 2e-3, max_iterations: int = 20000, working_set: int = 1500,
+          start: np.ndarray | None = None, progress=None) -> Relaxation:
+    """Optimal approximate design over candidates for any criterion of :mod:`.criteria`.
 
-    Multiplicative updates with a vertex-direction (Fedorov–Wynn) step each
-    iteration, pruned by the Harman–Pronzato rule (candidates that can be in
-    no D-optimal design are dropped as the gap closes), on a working set:
-    the ``working_set`` candidates with the largest variance function under
-    uniform weights, solved to tolerance, then every candidate that violates
-    the equivalence theorem is added and the solve repeated. The gap — and
-    so the certified bound — is always computed over every candidate.
+    The ``working_set`` candidates with the largest sensitivity under the
+    start weights are solved to tolerance, then every candidate that
+    violates the equivalence theorem is added and the solve repeated. The
+    ratio — and so the certified bound — is always computed over every
+    candidate.
 
     Parameters
     ----------
     blocks : ndarray, shape (K, r, p)
         Per-candidate (scaled, σ-weighted) observation blocks.
+    criterion : {"D", "A", "E", "task"}
+    task : ndarray, shape (rows, p), optional
+        Task Jacobians (scaled), for the task criterion.
     tol : float
-        Stop when the duality gap max_i d_i − p is below ``tol · p``.
+        Stop when max_i ψ_i − 1 is below ``tol`` (for D: max_i d_i − p < tol·p).
     working_set : int
         Candidates solved on at once.
+    start : ndarray, shape (K,), optional
+        Start weights (e.g. a previous relaxation's, zero for new
+        candidates); default uniform.
     progress : callable(iteration, gap), optional
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> rel = relax(rng.normal(size=(200, 3, 4)))
+    >>> bool(rel.ratio >= 1.0 and abs(rel.weights.sum() - 1) < 1e-12)
+    True
     """
+    check(criterion, task)
     k, _, p = blocks.shape
-    d_all = variances(blocks, information(blocks, np.full(k, 1.0 / k)))
-    work = np.argsort(-d_all)[:working_set]
-    w = np.full(len(work), 1.0 / len(work))
+    w_all = np.full(k, 1.0 / k) if start is None else np.asarray(start, float) / np.sum(start)
+    h, c = sensitivity(criterion, information(blocks, w_all), task)
+    psi_all = traces(blocks, h)
+    support = np.flatnonzero(w_all > 0) if start is not None else np.array([], int)
+    work = np.union1d(support, np.argsort(-psi_all)[:working_set])
+    w = w_all[work] if start is not None else np.full(len(work), 1.0 / len(work))
+    w = np.where(w > 0, w, 0.1 / len(work))
+    w /= w.sum()
     iterations = 0
     while True:
-        kept, w, used = _multiplicative(blocks[work], w, tol, max_iterations - iterations,
-                                        progress, iterations)
+        mi = np.einsum("kri,krj->kij", blocks[work], blocks[work]).reshape(len(work), -1)
+        kept, w, used = _solve_working_set(mi, w, criterion, task, tol,
+                                           max_iterations - iterations, progress, iterations)
         iterations += used
         work = work[kept]
         m = information(blocks[work], w)
-        d_all = variances(blocks, m)
-        violators = np.setdiff1d(np.flatnonzero(d_all > p * (1 + tol)), work)
+        h, c = sensitivity(criterion, m, task)
+        psi_all = traces(blocks, h)
+        violators = np.setdiff1d(np.flatnonzero(psi_all > 1 + tol), work)
         if violators.size == 0 or iterations >= max_iterations:
             break
-        add = violators[np.argsort(-d_all[violators])][:working_set]
+        add = violators[np.argsort(-psi_all[violators])][:working_set]
         work = np.concatenate([work, add])
         w = np.concatenate([w * 0.9, np.full(add.size, 0.1 / add.size)])
     weights = np.zeros(k)
     weights[work] = w
-    _, ld = np.linalg.slogdet(m)
-    return Relaxation(weights, float(ld), max(float(d_all.max() - p), 0.0), iterations, p)
+    return Relaxation(criterion, weights, evaluate_criterion(criterion, m, task),
+                      max(float(c * psi_all.max()), 1.0), iterations, p)
+
+
+def relax_d(blocks: np.ndarray, tol: float = 2e-3, max_iterations: int = 20000,
+            working_set: int = 1500, progress=None) -> Relaxation:
+    """D-optimal approximate design over candidates (:func:`relax` with ``criterion="D"``)."""
+    return relax(blocks, "D", tol=tol, max_iterations=max_iterations, working_set=working_set,
+                 progress=progress)

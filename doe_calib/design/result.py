@@ -27,17 +27,34 @@ class DesignResult:
     criterion : str
         ``D``, ``A``, ``E`` or ``task``.
     value : float
-        Criterion of the design (scaled parameters).
+        Criterion of the design (scaled parameters): log det M, −tr M⁻¹,
+        λ_min(M) or −tr(T M⁻¹ Tᵀ) (m²).
     bound : float
-        Certified upper bound of the criterion over designs of the same size.
+        Certified upper bound of the criterion over designs of the same size
+        from the candidates (and the refined poses).
     efficiency : float
-        D-efficiency against the bound, (det M / det M_bound)^(1/p).
+        Efficiency against the bound in the criterion's own terms
+        (:func:`.criteria.efficiency`; D: (det M / det M_bound)^(1/p)).
     predicted_std : dict
         Parameter name → (std in display units, unit).
     constraints : dict
-        The constraints the poses satisfy, as used.
+        The constraints the poses satisfy, as used (file units) with the loads.
     notes : tuple of str
         Comparisons and remarks, in words.
+    efficiencies : dict
+        Criterion → efficiency against that criterion's certified bound
+        (the design's criterion, and D).
+    criteria : dict
+        Criterion → value of the design (D, A, E, and task when given).
+    equivalence : dict
+        The equivalence-theorem check: the statistic, its target, its value
+        at the relaxation (certifies the bound) and at the design.
+    candidates : dict
+        Poses drawn, kept, and removed by each constraint.
+    refinement : dict
+        The continuous refinement's outcome (empty when not run).
+    coverage : dict
+        Bins used by the poses and how many were asked for (empty when none).
     """
 
     robot: Robot
@@ -51,6 +68,12 @@ class DesignResult:
     predicted_std: dict
     constraints: dict
     notes: tuple = field(default=())
+    efficiencies: dict = field(default_factory=dict)
+    criteria: dict = field(default_factory=dict)
+    equivalence: dict = field(default_factory=dict)
+    candidates: dict = field(default_factory=dict)
+    refinement: dict = field(default_factory=dict)
+    coverage: dict = field(default_factory=dict)
 
     def poses(self) -> list[dict]:
         """One entry per pose: id, q in deg (mm for prismatic joints) and its wrenches."""
@@ -69,8 +92,32 @@ class DesignResult:
         lines = [f"Design of {len(self.poses())} poses ({len(self.configurations)} measurements) "
                  f"for model {self.model}, criterion {self.criterion}",
                  f"criterion {self.value:.6g}, certified bound {self.bound:.6g}, "
-                 f"D-efficiency {self.efficiency:.3f}", *self.notes, "",
-                 f"{'parameter':<22}{'predicted std':>14}  unit"]
+                 f"{self.criterion}-efficiency {self.efficiency:.3f}"]
+        if self.efficiencies:
+            lines.append("efficiency against each certified bound: " + ", ".join(
+                f"{k} {v:.3f}" for k, v in self.efficiencies.items()))
+        if self.criteria:
+            lines.append("criteria: " + ", ".join(f"{k} {v:.6g}" for k, v in self.criteria.items()))
+        if self.equivalence:
+            e = self.equivalence
+            lines.append(f"equivalence theorem: {e['statistic']} = {e['relaxation']:.4g} at the "
+                         f"relaxation, {e['design']:.4g} at the design (target {e['target']:g}; "
+                         f"design efficiency against the approximate optimum ≥ "
+                         f"{e['design_efficiency_at_least']:.3f})")
+        if self.candidates:
+            c = self.candidates
+            lines.append(f"candidates: {c['kept']} kept of {c['drawn']} drawn" + "".join(
+                f"; {k} removed {v}" for k, v in c["removed"].items()))
+        if self.refinement:
+            r = self.refinement
+            lines.append(f"refinement: {'kept' if r['accepted'] else 'not kept'}, "
+                         f"{r['start_value']:.6g} → {r['value']:.6g} in {r['iterations']} "
+                         f"IPOPT iterations ({r['status']})")
+        if self.coverage:
+            c = self.coverage
+            lines.append(f"coverage of joint {c['joint']}: bins {c['bins_used']} used, "
+                         f"{c['min_bins']} required: {'met' if c['met'] else 'NOT met'}")
+        lines += [*self.notes, "", f"{'parameter':<22}{'predicted std':>14}  unit"]
         lines += [f"{n:<22}{s:14.4g}  {u}" for n, (s, u) in self.predicted_std.items()]
         return "\n".join(lines)
 
@@ -81,6 +128,9 @@ class DesignResult:
                 "predicted_std": [{"name": n, "std": s, "unit": u}
                                   for n, (s, u) in self.predicted_std.items()],
                 "constraints": self.constraints, "notes": list(self.notes),
+                "efficiencies": self.efficiencies, "criteria": self.criteria,
+                "equivalence": self.equivalence, "candidates": self.candidates,
+                "refinement": self.refinement, "coverage": self.coverage,
                 "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
 
     def to_json(self, path=None) -> str:
@@ -97,7 +147,9 @@ class DesignResult:
         return cls(robot, Tool.from_dict(d["tool"]), d["model"], cfg, d["criterion"],
                    float(d["value"]), float(d["bound"]), float(d["efficiency"]),
                    {r["name"]: (r["std"], r["unit"]) for r in d["predicted_std"]},
-                   d.get("constraints", {}), tuple(d.get("notes", ())))
+                   d.get("constraints", {}), tuple(d.get("notes", ())),
+                   *(d.get(k, {}) for k in ("efficiencies", "criteria", "equivalence",
+                                            "candidates", "refinement", "coverage")))
 
     @classmethod
     def from_json(cls, path) -> "DesignResult":

@@ -1,0 +1,87 @@
+"""Design quantities as CasADi expressions of the joint angles, for the refinement and the checks.
+
+Built from the model's own Functions (``point_robot``, ``observation``)
+called on SX symbols, so the expressions are the model that identifies.
+Positions are in the robot base frame, unloaded (the deflection under a
+load, a fraction of a millimetre, is neglected for placing things).
+"""
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from ..data import ENV_FIELDS
+from ..loads import GRAVITY
+from ..measurement import build_model
+from .criteria import E_ORDER, check
+
+_ENV = ca.DM(np.full(len(ENV_FIELDS), np.nan))
+
+
+def symbolic_model(model):
+    """The model itself, or, when its Functions are compiled (no derivatives), an SX rebuild."""
+    if model.point_robot.is_a("SXFunction", True) and model.observation.is_a("SXFunction", True):
+        return model
+    return build_model(model.robot, model.tool, model.effects)
+
+
+def flange_frame(model, values, q):
+    """Flange rotation R (3×3) and origin o (3) in the robot base frame as SX of q (rad/m)."""
+    zero = ca.DM.zeros(6)
+    o = model.point_robot(q, zero, _ENV, values, ca.DM.zeros(3))[0]
+    axes = [model.point_robot(q, zero, _ENV, values, ca.DM(e))[0] - o for e in np.eye(3)]
+    return ca.horzcat(*axes), o
+
+
+def hanging_wrench(rotation, load) -> ca.SX:
+    """Wrench (N, N·m) at the flange origin, base frame, of ``load`` on a flange turned by R."""
+    f = ca.DM([0.0, 0.0, -load.mass * GRAVITY])
+    return ca.vertcat(f, ca.cross(rotation @ ca.DM(load.com), f))
+
+
+def pose_information(model, params, loads, sigma: float) -> ca.Function:
+    """``pose_information(q) -> M``: one pose's scaled information (as :func:`.problem.blocks_for`).
+
+    M = Σ_c B̃_cᵀB̃_c over the unloaded case and every load case c, with
+    B̃ = ∂x/∂p_free · scale / σ and the load's wrench a function of q through
+    the flange rotation; shape (F, F), per unit σ² (``sigma`` in m).
+    """
+    model = symbolic_model(model)
+    q = ca.SX.sym("q", model.robot.n_joints)
+    values = ca.DM(params.values)
+    rotation, _ = flange_frame(model, values, q)
+    free = np.flatnonzero(params.free).tolist()
+    weight = ca.DM(params.scales[params.free] / sigma)
+    rows = []
+    for w in [ca.DM.zeros(6)] + [hanging_wrench(rotation, load) for load in loads]:
+        b = model.observation(q, w, _ENV, values)[1]
+        rows.append(b[:, free] @ ca.diag(weight))
+    bt = ca.vertcat(*rows)
+    return ca.Function("pose_information", [q], [bt.T @ bt], ["q"], ["M"])
+
+
+def log_criterion(name: str, p: int, task: np.ndarray | None = None,
+                  reference: float = 1.0) -> ca.Function:
+    """``log_criterion(M) -> log Φ(M)`` for the information function Φ of :mod:`.criteria`.
+
+    log det M / p (D), −log tr M⁻¹ (A), −log tr(T M⁻¹ Tᵀ) (task) and, for
+    E, the smooth −(1/k) log tr M^-k, k = :data:`.criteria.E_ORDER`, computed
+    on M / ``reference`` (pass about λ_min so the powers stay near 1).
+    """
+    check(name, task)
+    m = ca.SX.sym("M", p, p)
+    r = ca.chol(m)  # RᵀR = M
+    if name == "D":
+        out = 2.0 * ca.sum1(ca.log(ca.diag(r))) / p
+    else:
+        r_inv = ca.solve(r, ca.SX.eye(p))  # M⁻¹ = R⁻¹R⁻ᵀ
+        if name == "A":
+            out = -ca.log(ca.sumsqr(r_inv))
+        elif name == "task":
+            out = -ca.log(ca.sumsqr(ca.DM(task) @ r_inv))
+        else:
+            x = reference * (r_inv @ r_inv.T)
+            for _ in range(int(np.log2(E_ORDER))):
+                x = x @ x
+            out = np.log(reference) - ca.log(ca.trace(x)) / E_ORDER
+    return ca.Function("log_criterion", [m], [out], ["M"], ["log_phi"])
