@@ -14,6 +14,8 @@ the flange origin, base frame), evaluated on the unloaded chain.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 
@@ -75,6 +77,7 @@ def joint_torques(robot, joint_frames, flange_position, wrench) -> ca.SX:
 
 def flange_pose(s: ChainSymbols, effects, wrench: ca.SX):
     """Flange pose ``(R, t)`` in the robot base frame, SX, including every effect."""
+    s = replace(s, wrench=wrench)
     robot = s.robot
     n = robot.n_joints
     placements = [_placement(s, effects, k, j.placement_matrix) for k, j in enumerate(robot.joints)]
@@ -91,3 +94,12 @@ def flange_pose(s: ChainSymbols, effects, wrench: ca.SX):
         for e in deflecting:
             x = x + e.deflection(s, tau)
     return _forward(robot, placements, flange, x)[1]
+
+
+def nominal_torque_function(robot) -> ca.Function:
+    """``tau(q, w)``: joint torques τ = J_θᵀ F (N·m or N) of the flange wrench, nominal chain."""
+    q, w = ca.SX.sym("q", robot.n_joints), ca.SX.sym("w", 6)
+    placements = [_constant(j.placement_matrix) for j in robot.joints]
+    flange = _constant(np.array(robot.flange_placement, float).reshape(4, 4))
+    joints, (_, p_f) = _forward(robot, placements, flange, q)
+    return ca.Function("tau", [q, w], [joint_torques(robot, joints, p_f, w)], ["q", "w"], ["tau"])

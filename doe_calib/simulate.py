@@ -60,6 +60,8 @@ def random_truth(model, rng=None, length: float = 1e-3, angle: float = 1e-3,
                  compliance: float = 1e-6, marker: float = 2e-3, base=None):
     """A plausible true parameter vector: nominal plus random errors of the given sizes (SI).
 
+    Parameters of other units (scale factors, 1/K) and link compliances
+    take their parameter's scale as size.
     ``base`` (6: m, rad rotation vector) places the tracker; default a random
     placement a few metres away at any angle.
     """
@@ -69,7 +71,10 @@ def random_truth(model, rng=None, length: float = 1e-3, angle: float = 1e-3,
     for i, p in enumerate(params.parameters):
         if p.block == "base":
             continue
-        size = {"m": length, "rad": angle, "rad/(N·m)": compliance, "m/N": compliance}[p.unit]
+        size = {"m": length, "rad": angle, "rad/(N·m)": compliance, "m/N": compliance}.get(
+            p.unit, p.scale)
+        if p.block == "link_compliance":
+            size = p.scale
         if p.block == "markers":
             size = marker
         if p.unit in ("rad/(N·m)", "m/N"):  # compliances are positive

@@ -9,11 +9,16 @@ from __future__ import annotations
 import re
 
 from ..errors import ModelError
+from .backlash import Backlash
 from .base import ChainSymbols, Effect, joint_index
 from .compliance_by_angle import ComplianceByAngle
+from .cyclic import Cyclic
+from .gear_ratio import GearRatio
 from .geometry import Geometry
 from .joint_compliance import JointCompliance
 from .joint_offset import JointOffset
+from .link_compliance import LinkCompliance
+from .thermal import Thermal
 
 #: Effect name → class. Adding an effect: one module, one line here.
 REGISTRY = {
@@ -21,6 +26,11 @@ REGISTRY = {
     "geometry": Geometry,
     "joint_compliance": JointCompliance,
     "compliance_by_angle": ComplianceByAngle,
+    "gear_ratio": GearRatio,
+    "cyclic": Cyclic,
+    "backlash": Backlash,
+    "thermal": Thermal,
+    "link_compliance": LinkCompliance,
 }
 
 DEFAULT_MODEL = "joint_offset+geometry+joint_compliance"

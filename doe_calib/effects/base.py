@@ -41,12 +41,16 @@ class ChainSymbols:
         Environment variables (:data:`doe_calib.data.ENV_FIELDS`).
     p : dict of str to casadi.SX
         Every model parameter by name (SI).
+    wrench : casadi.SX, shape (6, 1), or None
+        The applied wrench (N, N·m) at the flange origin, base frame; set by
+        :func:`~doe_calib.kinematics.flange_pose`.
     """
 
     robot: object
     q: ca.SX
     env: ca.SX
     p: dict
+    wrench: ca.SX | None = None
 
 
 def joint_index(robot, joint) -> int:
