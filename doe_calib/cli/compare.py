@@ -1,0 +1,49 @@
+"""``doe-calib compare``: parameter std and task accuracy of designs and results, side by side."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..compare import compare, load_source, plot_std
+from ..io import read_design
+from .common import parse_floats
+
+HELP = "compare designs and identification results: std per parameter, task-point accuracy"
+EXAMPLE = ("doe-calib compare d15.json d30.json result.json --task task.csv "
+           "--task-point 0,0,250 --sigma 0.02 --out table.md --plot bars.png")
+
+
+def add_arguments(c):
+    c.add_argument("files", nargs="+", help="design JSON and/or identification result JSON files")
+    c.add_argument("--task", help="design-format CSV of task poses (deg/mm, N, N·m)")
+    c.add_argument("--task-point", default="0,0,0",
+                   help="X,Y,Z of the task point in the flange frame, mm (default the flange)")
+    c.add_argument("--sigma", type=float, help="tracker σ per coordinate, mm: designs are "
+                   "predicted with it (default 0.02), results rescaled to it (default: their own)")
+    c.add_argument("--out", help="write the tables (Markdown) to this file")
+    c.add_argument("--plot", help="write a bar plot of the std per parameter (PNG)")
+    c.add_argument("--json", action="store_true", help="print JSON instead of the tables")
+
+
+def _labels(files) -> list[str]:
+    """File stems, or whole paths where stems collide."""
+    stems = [Path(f).stem for f in files]
+    return [s if stems.count(s) == 1 else str(f) for s, f in zip(stems, files)]
+
+
+def run(args):
+    sources = [load_source(f) for f in args.files]
+    task = read_design(args.task, sources[0].robot) if args.task else None
+    result = compare(sources, _labels(args.files),
+                     None if args.sigma is None else args.sigma / 1000.0, task,
+                     parse_floats(args.task_point, 3, "--task-point") / 1000.0)
+    print(result.to_json() if args.json else result.summary())
+    written = []
+    if args.out:
+        Path(args.out).write_text(result.summary() + "\n", encoding="utf-8")
+        written.append(args.out)
+    if args.plot:
+        plot_std(result, args.plot)
+        written.append(args.plot)
+    if written:
+        print(f"written: {', '.join(written)}", file=sys.stderr)

@@ -1,0 +1,101 @@
+"""Robot programs that visit a design's poses: KUKA KRL, ABB RAPID, URScript, and the design CSV.
+
+Every format visits each pose once per load case, in the design's measuring
+order, stops for the operator where the load changes and waits for the
+measurement at each pose (:class:`.program.Settings`). Joint limits are
+checked again before anything is written.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from ..errors import DataError
+from ..io import write_design
+from . import krl, rapid, urscript
+from .program import Move, Settings, check_limits, moves
+
+
+@dataclass(frozen=True)
+class Format:
+    """An export format: its file suffixes and how its text is made.
+
+    ``render(design, visits, settings)`` returns suffix → file text; None
+    for the design CSV, written by :func:`doe_calib.io.write_design`.
+    """
+
+    description: str
+    suffixes: tuple
+    render: Callable | None
+
+
+#: Format name → Format.
+FORMATS = {
+    "krl": Format("KUKA KRL .src/.dat", krl.SUFFIXES, krl.render),
+    "rapid": Format("ABB RAPID module", rapid.SUFFIXES, rapid.render),
+    "urscript": Format("Universal Robots URScript", urscript.SUFFIXES, urscript.render),
+    "csv": Format("design CSV (formats.md section 4)", (".csv",), None),
+}
+
+
+def _stem(out, name: str) -> tuple[Path, str]:
+    """Directory + file stem and program name: a path with a suffix names the file."""
+    out = Path(out)
+    if out.suffix:
+        return out.with_suffix(""), out.stem
+    return out / name, name
+
+
+def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float = 3.0,
+                  handshake: int | None = None) -> list[Path]:
+    """Write ``design`` as a robot program (or design CSV); return the files written.
+
+    Parameters
+    ----------
+    design : DesignResult
+    fmt : {"krl", "rapid", "urscript", "csv"}
+    out : path-like
+        A directory (created if needed; files are ``name`` + suffix) or a file
+        path, whose stem is then the program name (KRL needs file and program
+        names to match).
+    name : str
+        Program name when ``out`` is a directory.
+    dwell : float
+        Seconds to wait at each pose.
+    handshake : int, optional
+        Digital I/O number of the measurement handshake (see
+        :class:`.program.Settings`); None waits ``dwell`` only.
+
+    Raises
+    ------
+    DataError
+        A pose outside the robot's joint limits (naming pose, joint, limit),
+        or a bad program name.
+    ModelError
+        A robot the format cannot drive (KRL, RAPID, URScript: 6 axes).
+
+    Examples
+    --------
+    >>> export_design(design, "krl", "programs/", name="calib")  # doctest: +SKIP
+    [PosixPath('programs/calib.src'), PosixPath('programs/calib.dat')]
+    """
+    if fmt not in FORMATS:
+        raise DataError(f"unknown export format {fmt!r}; formats: {', '.join(FORMATS)}")
+    if not dwell >= 0:
+        raise DataError(f"dwell must be 0 s or more, got {dwell}")
+    stem, name = _stem(out, name)
+    form = FORMATS[fmt]
+    if form.render is None:
+        check_limits(design)
+        stem.parent.mkdir(parents=True, exist_ok=True)
+        write_design(stem.with_suffix(".csv"), design.configurations, design.robot)
+        return [stem.with_suffix(".csv")]
+    texts = form.render(design, moves(design), Settings(name, dwell, handshake))
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    paths = [stem.with_suffix(s) for s in form.suffixes]
+    for path in paths:
+        path.write_text(texts[path.suffix], encoding="ascii")
+    return paths
+
+__all__ = ["FORMATS", "Format", "Move", "Settings", "export_design", "moves"]

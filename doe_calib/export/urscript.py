@@ -1,0 +1,56 @@
+"""Universal Robots URScript: ``def <name>():`` with one ``movej`` per visit.
+
+Joint positions are in rad (URScript's unit), written to 1e-10 rad. Before a
+visit whose load differs from the previous one a blocking ``popup`` tells the
+operator which load to hang. At each pose ``sleep(dwell)`` and, with a
+handshake n, standard digital output n is set, the program waits for
+standard digital input n, resets the output and waits for the input to drop.
+Only 6 revolute joints are supported.
+"""
+from __future__ import annotations
+
+from ..errors import ModelError
+from .program import ascii_text, check_name, load_changes
+
+SUFFIXES = (".script",)
+MAX_NAME = 32
+ACCELERATION = 0.5  # rad/s²
+VELOCITY = 0.3      # rad/s
+
+
+def check_robot(robot) -> None:
+    """URScript programs drive the 6 revolute joints of a UR arm."""
+    if robot.n_joints != 6 or any(j.kind != "revolute" for j in robot.joints):
+        raise ModelError(f"URScript export needs 6 revolute joints; {robot.name} has "
+                         f"{robot.n_joints} joints of kinds "
+                         f"{', '.join(j.kind for j in robot.joints)}")
+
+
+def _wait(settings) -> list[str]:
+    lines = [f"  sleep({settings.dwell:g})"]
+    n = settings.handshake
+    if n is not None:
+        lines += [f"  set_standard_digital_out({n}, True)",
+                  f"  while not get_standard_digital_in({n}):", "    sync()", "  end",
+                  f"  set_standard_digital_out({n}, False)",
+                  f"  while get_standard_digital_in({n}):", "    sync()", "  end"]
+    return lines
+
+
+def render(design, visits, settings) -> dict:
+    """Text of the ``.script`` file, keyed by suffix."""
+    check_robot(design.robot)
+    name = check_name(settings.name, MAX_NAME)
+    n_poses = len({m.index for m in visits})
+    out = [f"def {name}():",
+           f"  # doe_calib measurement program: {n_poses} poses, {len(visits)} measurements",
+           "  # " + ascii_text(f"model {design.model}, criterion {design.criterion}; "
+                              f"joints in rad")]
+    for m, change in zip(visits, load_changes(visits)):
+        out += ["", f"  # {m.comment()}"]
+        if change:
+            out.append(f'  popup("{m.instruction()}", title="doe_calib", blocking=True)')
+        q = ", ".join(f"{v:.10f}" for v in m.q_si)
+        out += [f"  movej([{q}], a={ACCELERATION:g}, v={VELOCITY:g})", *_wait(settings)]
+    out += ["end", ""]
+    return {".script": "\n".join(out)}
