@@ -9,7 +9,7 @@ import argparse
 import sys
 
 from ..errors import DoeCalibError
-from . import demo, design, identify, predict, simulate, study
+from . import compare, demo, design, diagnose, export, identify, predict, refine, simulate, study
 
 #: Command name → module, in the order ``--help`` lists them.
 COMMANDS = {
@@ -17,8 +17,12 @@ COMMANDS = {
     "simulate": simulate,
     "identify": identify,
     "predict": predict,
+    "diagnose": diagnose,
+    "refine": refine,
     "design": design,
     "study": study,
+    "export": export,
+    "compare": compare,
 }
 
 

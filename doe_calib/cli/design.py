@@ -38,6 +38,7 @@ def add_arguments(c):
     c.add_argument("--sigma", type=float, default=0.02, help="tracker σ per coordinate, mm")
     c.add_argument("--seed", type=int, help="random seed")
     c.add_argument("--out", required=True, help="design JSON to write (CSV written beside it)")
+    c.add_argument("--report", metavar="FILE.html", help="also write an HTML report")
 
 
 def _progress():
@@ -71,3 +72,7 @@ def run(args):
     write_design(csv_path, result.configurations, robot)
     print(result.summary())
     print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
+    if args.report:
+        from ..report import design_report
+        design_report(result, args.report)
+        print(f"report: {args.report}", file=sys.stderr)

@@ -27,6 +27,7 @@ def add_arguments(c):
     c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")
     c.add_argument("--out", required=True, help="result JSON to write")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
+    c.add_argument("--report", metavar="FILE.html", help="also write an HTML report")
 
 
 def run(args):
@@ -48,3 +49,7 @@ def run(args):
     result.to_json(args.out)
     print(json.dumps(result.to_dict(), indent=1) if args.json else result.summary())
     print(f"\nwritten: {args.out}", file=sys.stderr)
+    if args.report:
+        from ..report import identification_report
+        identification_report(result, model, meas, args.report)
+        print(f"report: {args.report}", file=sys.stderr)

@@ -1,0 +1,53 @@
+"""``doe-calib refine``: add the missing effects one at a time until the model is adequate."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from ..diagnosis.refine import refine
+from ..io import read_measurements
+from ..measurement import build_model
+from ..report.diagnosis_figures import error_falling
+from .common import robot_arguments
+from .diagnose import measurement_arguments, read_data
+
+HELP = "grow the model by the best significant effect until it is adequate; write the fit"
+EXAMPLE = ("doe-calib refine --robot kr270.urdf --tool tool.yaml --data meas.csv "
+           "--model joint_offset --sigma 0.03 --validation held_out.csv --out result.json")
+
+
+def add_arguments(c):
+    robot_arguments(c)
+    measurement_arguments(c)
+    c.add_argument("--validation", help="held-out measurement CSV: its RMS is shown per step")
+    c.add_argument("--max-steps", type=int, default=5, help="effects added at most (default 5)")
+    c.add_argument("--out", required=True, help="identification result JSON of the final model "
+                                                "(what predict takes)")
+    c.add_argument("--history", help="refinement steps JSON (default: beside --out)")
+    c.add_argument("--plot", help="PNG of the error at each step (default: beside --out)")
+    c.add_argument("--report", help="HTML report to write (self-contained)")
+    c.add_argument("--json", action="store_true", help="print the steps as JSON")
+
+
+def run(args):
+    model, meas = read_data(args)
+    val = None
+    if args.validation:
+        val = read_measurements(args.validation, model.robot, model.tool, sigma_mm=args.sigma)
+    print(f"refining from {model.spec or '(base + markers)'} on {len(meas)} readings…",
+          file=sys.stderr)
+    out = refine(model, meas, val, level=args.level, max_steps=args.max_steps,
+                 progress=lambda i, text: print(f"  step {i}: {text}", file=sys.stderr))
+    stem = str(Path(args.out).with_suffix(""))
+    history = args.history or stem + "_refine.json"
+    plot = args.plot or stem + "_refine.png"
+    out.fit.to_json(args.out)
+    out.to_json(history)
+    error_falling(out.steps, out.noise_floor_mm).savefig(plot, dpi=90)
+    if args.report:
+        from ..report import refine_report
+        final = build_model(model.robot, model.tool, out.fit.model)
+        print(f"report: {refine_report(out, final, meas, args.report)}", file=sys.stderr)
+    print(json.dumps(out.to_dict(), indent=1) if args.json else out.summary())
+    print(f"\nwritten: {args.out}, {history}, {plot}", file=sys.stderr)

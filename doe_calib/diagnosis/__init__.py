@@ -1,0 +1,12 @@
+"""Model diagnosis: where the model fails, which physical effect is missing, and adding it.
+
+>>> from doe_calib.diagnosis import diagnose   # doctest: +SKIP
+>>> print(diagnose(model, measurements).summary())   # doctest: +SKIP
+"""
+from .candidates import CandidateTest, candidate_effects, test_candidates
+from .cross_validation import cross_validated_rms, validation_rms
+from .engine import describe, diagnose
+from .result import DiagnosisResult
+
+__all__ = ["diagnose", "DiagnosisResult", "CandidateTest", "candidate_effects",
+           "test_candidates", "cross_validated_rms", "validation_rms", "describe"]

@@ -1,0 +1,151 @@
+"""Where the model fails: residuals per reading, the adequacy test, and poses outside the noise.
+
+All statistics use the weighted residuals ``r = (y − x(p̂)) / σ`` of every
+marker coordinate. Under an adequate model with the right σ,
+``Σ r² ~ χ²(3K − rank)``: a tiny p-value says the residual is larger than the
+noise can explain (a missing effect, or σ too optimistic).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from ..evaluation import marker_positions
+
+
+@dataclass(frozen=True, eq=False)
+class Residuals:
+    """Residuals of one fit.
+
+    Attributes
+    ----------
+    error : ndarray, shape (K, 3)
+        Measured minus modelled marker position, metres (tracker frame).
+    weighted : ndarray, shape (K, 3)
+        ``error / σ`` of each reading.
+    config : ndarray of int, shape (K,)
+        Configuration of each reading.
+    pose : tuple of str, length K
+        Pose id of each reading.
+    """
+
+    error: np.ndarray
+    weighted: np.ndarray
+    config: np.ndarray
+    pose: tuple
+
+    @property
+    def rms_mm(self) -> float:
+        """RMS of every coordinate's residual, mm."""
+        return float(np.sqrt(np.mean(self.error ** 2)) * 1e3)
+
+
+def residuals(model, measurements, values) -> Residuals:
+    """Residuals of ``measurements`` under ``model`` at parameter ``values`` (SI)."""
+    x = marker_positions(model, values, measurements.configurations)
+    e = measurements.xyz - x[measurements.config, measurements.marker]
+    pose = tuple(measurements.configurations.pose[c] for c in measurements.config)
+    return Residuals(e, e / measurements.sigma[:, None], measurements.config, pose)
+
+
+@dataclass(frozen=True)
+class Adequacy:
+    """The χ² test of the residual against the measurement noise.
+
+    Attributes
+    ----------
+    statistic : float
+        ``Σ r²`` of the weighted residuals.
+    dof : int
+        ``3K − rank``.
+    p_value : float
+        Probability of a statistic this large under an adequate model.
+    sigma_mm : float
+        The noise σ the test assumes, mm (given, or from repeated readings).
+    sigma_source : str
+        ``"given"`` or ``"repeated readings"``.
+    adequate : bool
+        ``p_value ≥ level``.
+    level : float
+    """
+
+    statistic: float
+    dof: int
+    p_value: float
+    sigma_mm: float
+    sigma_source: str
+    adequate: bool
+    level: float
+
+    @property
+    def sigma_hat_mm(self) -> float:
+        """A-posteriori σ̂ = σ·sqrt(Σr²/dof), mm."""
+        return self.sigma_mm * float(np.sqrt(self.statistic / max(self.dof, 1)))
+
+
+def repeatability_sigma(measurements):
+    """σ (m) pooled from readings repeated at the same configuration and marker, or None.
+
+    A configuration measured several times (same pose, load and marker)
+    shows the noise directly; the pooled within-group standard deviation of
+    the coordinates estimates σ free of any model error.
+    """
+    key = measurements.config * 1000 + measurements.marker
+    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+    repeated = counts[inverse] > 1
+    if repeated.sum() < 6:
+        return None
+    xyz, groups = measurements.xyz[repeated], inverse[repeated]
+    ss, dof = 0.0, 0
+    for g in np.unique(groups):
+        block = xyz[groups == g]
+        ss += float(((block - block.mean(axis=0)) ** 2).sum())
+        dof += 3 * (len(block) - 1)
+    return float(np.sqrt(ss / dof))
+
+
+def adequacy(res: Residuals, rank: int, sigma_mm: float, level: float = 0.01,
+             repeat_sigma_m=None) -> Adequacy:
+    """χ² test of the weighted residuals with ``rank`` fitted parameters.
+
+    When ``repeat_sigma_m`` (σ from repeated readings, m) is given, the
+    residuals are re-weighted with it instead of the a-priori σ.
+    """
+    w = res.weighted
+    source = "given"
+    if repeat_sigma_m is not None:
+        w = res.error / repeat_sigma_m
+        sigma_mm, source = repeat_sigma_m * 1e3, "repeated readings"
+    t = float((w ** 2).sum())
+    dof = int(w.size - rank)
+    p = float(stats.chi2.sf(t, dof)) if dof > 0 else float("nan")
+    return Adequacy(t, dof, p, float(sigma_mm), source, bool(p >= level), level)
+
+
+def flagged_poses(res: Residuals, dof_fraction: float, level: float = 1e-3) -> list[dict]:
+    """Poses whose residual is far outside the noise and the other poses (named, never dropped).
+
+    A pose's ``Σ r²`` over its readings is compared with χ² on its share of
+    the residual degrees of freedom (Bonferroni over the poses at ``level``),
+    and must also exceed 4× the median pose's χ²/dof: when the whole model
+    is off, only the poses that stand out are named.
+    """
+    ids = list(dict.fromkeys(res.pose))
+    pose = np.array(res.pose)
+    ratio = {}
+    for p in ids:
+        w = res.weighted[pose == p]
+        dof = max(w.size * dof_fraction, 1.0)
+        ratio[p] = (float((w ** 2).sum()), dof)
+    typical = float(np.median([t / d for t, d in ratio.values()]))
+    out = []
+    for p, (t, dof) in ratio.items():
+        pv = float(stats.chi2.sf(t, dof)) * len(ids)
+        if pv < level and t / dof > 4 * max(typical, 1.0):
+            out.append({"pose": p, "rms_mm": float(np.sqrt(np.mean(res.error[pose == p] ** 2))
+                                                   * 1e3),
+                        "chi2_per_dof": t / dof, "p_value": min(pv, 1.0)})
+    return sorted(out, key=lambda d: -d["chi2_per_dof"])
+

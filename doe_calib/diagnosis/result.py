@@ -1,0 +1,115 @@
+"""A diagnosis: is the model adequate, where does it fail, which effect is missing — in words."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..jsonfile import read_json, write_json
+from .candidates import CandidateTest
+from .variables import Follows
+
+FORMAT = "doe_calib.diagnosis"
+
+
+@dataclass(frozen=True, eq=False)
+class DiagnosisResult:
+    """What the residual of one fitted model says.
+
+    Attributes
+    ----------
+    model : str
+        The model diagnosed.
+    rms_mm : float
+        Fit residual RMS per coordinate, mm.
+    cv_rms_mm : float
+        Cross-validated (by pose) RMS, mm.
+    noise_floor_mm : float
+        The measurement σ per coordinate, mm (given, or from repeated readings).
+    adequate : bool
+        Residuals consistent with the noise (χ² test at ``level``).
+    chi2 : dict
+        ``statistic``, ``dof``, ``p_value``, ``sigma_source``, ``sigma_hat_mm``.
+    candidates : tuple of CandidateTest
+        Best first: significant ones by cross-validated RMS, then by statistic.
+    follows : tuple of Follows
+        Variables the residual size follows, strongest first.
+    flagged : tuple of dict
+        Poses far outside the noise (kept in the fit, only named).
+    level : float
+        Significance level of the adequacy test and of proposing an effect.
+    verdict : str
+        The conclusion in plain words.
+    """
+
+    model: str
+    rms_mm: float
+    cv_rms_mm: float
+    noise_floor_mm: float
+    adequate: bool
+    chi2: dict
+    candidates: tuple
+    follows: tuple
+    flagged: tuple
+    level: float
+    verdict: str
+    n_observations: int = 0
+    notes: tuple = field(default=())
+
+    @property
+    def significant(self) -> list[CandidateTest]:
+        """Candidates significant at ``level`` (Bonferroni-adjusted), best first."""
+        return [c for c in self.candidates if c.p_value < self.level]
+
+    @property
+    def best(self):
+        """The best significant candidate, or None."""
+        s = self.significant
+        return s[0] if s else None
+
+    def summary(self, top: int = 8) -> str:
+        """The verdict, the adequacy test, the ranked candidates and what the residual follows."""
+        c = self.chi2
+        lines = [f"Diagnosis of model {self.model or '(base + markers)'}",
+                 f"residual RMS {self.rms_mm:.4f} mm, cross-validated {self.cv_rms_mm:.4f} mm, "
+                 f"noise floor {self.noise_floor_mm:.4f} mm (σ {c['sigma_source']})",
+                 f"χ² = {c['statistic']:.1f} on {c['dof']} dof (p = {c['p_value']:.3g}): "
+                 + ("adequate" if self.adequate else "NOT adequate")
+                 + f"; σ̂ = {c['sigma_hat_mm']:.4f} mm", "", self.verdict, "",
+                 f"{'candidate':<34}{'F':>10}{'p (adj.)':>11}{'explains':>10}{'CV RMS mm':>11}"]
+        for t in self.candidates[:top]:
+            cv = f"{t.cv_rms_mm:11.4f}" if t.cv_rms_mm is not None else f"{'–':>11}"
+            lines.append(f"{t.spec:<34}{t.statistic:10.3g}{t.p_value:11.2g}"
+                         f"{100 * t.explained_fraction:9.1f}%{cv}")
+        if len(self.candidates) > top:
+            lines.append(f"… and {len(self.candidates) - top} more (JSON)")
+        if self.follows:
+            lines += ["", "Residual size follows (adjusted R²): " + ", ".join(
+                f"{f.variable} {f.r2:.2f}" for f in self.follows[:5])]
+        if self.flagged:
+            lines += ["", f"{len(self.flagged)} poses far outside the noise (kept): " + ", ".join(
+                f"{p['pose']} ({p['rms_mm']:.3f} mm)" for p in self.flagged[:10])]
+        lines += [f"note: {n}" for n in self.notes]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        return {"format": FORMAT, "model": self.model, "rms_mm": self.rms_mm,
+                "cv_rms_mm": self.cv_rms_mm, "noise_floor_mm": self.noise_floor_mm,
+                "adequate": self.adequate, "chi2": self.chi2, "level": self.level,
+                "verdict": self.verdict, "n_observations": self.n_observations,
+                "candidates": [t.to_dict() for t in self.candidates],
+                "follows": [f.to_dict() for f in self.follows],
+                "flagged_poses": list(self.flagged), "notes": list(self.notes)}
+
+    def to_json(self, path=None) -> str:
+        return write_json(self.to_dict(), path)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "DiagnosisResult":
+        return cls(d["model"], d["rms_mm"], d["cv_rms_mm"], d["noise_floor_mm"], d["adequate"],
+                   d["chi2"], tuple(CandidateTest.from_dict(t) for t in d["candidates"]),
+                   tuple(Follows(**f) for f in d["follows"]), tuple(d["flagged_poses"]),
+                   d["level"], d["verdict"], d.get("n_observations", 0),
+                   tuple(d.get("notes", ())))
+
+    @classmethod
+    def from_json(cls, path) -> "DiagnosisResult":
+        return cls.from_dict(read_json(path, FORMAT, "doe_calib diagnosis"))

@@ -1,0 +1,94 @@
+"""What the residual follows: the variables of each configuration and a smooth-fit test.
+
+The variables are the joint angles (deg; mm for prismatic joints), the
+applied wrench components (N, N·m), the joint torques they cause (N·m), the
+temperature (°C, when measured) and the order of measurement. For each, the
+size of the residual at each configuration (mean of r² over its readings) is
+fitted by a smooth function of the variable (angles: sin/cos of one and two
+times the angle plus a line; others: a cubic); the adjusted R² says how much
+of the residual's variation that variable alone explains.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kinematics import nominal_torque_function
+
+
+@dataclass(frozen=True)
+class Follows:
+    """How strongly the residual size follows one variable."""
+
+    variable: str
+    unit: str
+    r2: float
+    direction: str
+
+    def to_dict(self) -> dict:
+        return {"variable": self.variable, "unit": self.unit, "r2": self.r2,
+                "direction": self.direction}
+
+
+def configuration_variables(robot, configurations) -> dict:
+    """Variable name → (values per configuration, unit, is_angle)."""
+    out = {}
+    revolute = [j.kind == "revolute" for j in robot.joints]
+    for k, j in enumerate(robot.joints):
+        factor = np.degrees(1.0) if revolute[k] else 1e3
+        out[f"q{k + 1} ({j.name})"] = (configurations.q[:, k] * factor,
+                                       "deg" if revolute[k] else "mm", revolute[k])
+    w = configurations.wrench
+    if np.any(w != 0):
+        for i, name in enumerate(("fx", "fy", "fz", "mx", "my", "mz")):
+            if np.ptp(w[:, i]) > 0:
+                out[name] = (w[:, i], "N" if i < 3 else "N·m", False)
+        tau_f = nominal_torque_function(robot).map(len(configurations))
+        tau = np.array(tau_f(configurations.q.T, w.T)).T
+        for k, j in enumerate(robot.joints):
+            if np.ptp(tau[:, k]) > 0:
+                out[f"tau{k + 1} ({j.name})"] = (tau[:, k], "N·m" if revolute[k] else "N", False)
+    t = configurations.env[:, 0]
+    if np.all(np.isfinite(t)) and np.ptp(t) > 0:
+        out["temperature"] = (t, "°C", False)
+    out["measurement order"] = (np.arange(len(configurations), dtype=float), "", False)
+    return out
+
+
+def _basis(v: np.ndarray, is_angle: bool) -> np.ndarray:
+    if is_angle:
+        a = np.radians(v)
+        return np.column_stack([np.ones_like(a), a, np.sin(a), np.cos(a), np.sin(2 * a),
+                                np.cos(2 * a)])
+    z = (v - v.mean()) / (v.std() or 1.0)
+    return np.column_stack([np.ones_like(z), z, z ** 2, z ** 3])
+
+
+def follows(size: np.ndarray, variables: dict) -> list[Follows]:
+    """Adjusted R² of the per-configuration residual size against each variable, best first.
+
+    Parameters
+    ----------
+    size : ndarray, shape (M,)
+        Mean squared weighted residual of each configuration.
+    variables : dict
+        From :func:`configuration_variables`.
+    """
+    m = len(size)
+    y = size - size.mean()
+    tot = float(y @ y)
+    out = []
+    for name, (v, unit, is_angle) in variables.items():
+        x = _basis(np.asarray(v, float), is_angle)
+        k = np.linalg.matrix_rank(x)
+        if tot == 0 or m <= k + 1:
+            continue
+        fit = x @ np.linalg.lstsq(x, size, rcond=None)[0]
+        r2 = 1 - float(((size - fit) ** 2).sum()) / tot
+        adjusted = 1 - (1 - r2) * (m - 1) / (m - k)
+        rho = np.corrcoef(v, size)[0, 1] if np.ptp(v) > 0 else 0.0
+        direction = ("grows with" if rho > 0.3 else "falls with" if rho < -0.3
+                     else "varies with")
+        out.append(Follows(name, unit, float(adjusted), direction))
+    return sorted(out, key=lambda f: -f.r2)

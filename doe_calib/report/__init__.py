@@ -1,0 +1,18 @@
+"""Self-contained HTML reports (figures embedded as PNG, no external resources).
+
+:func:`identification_report` shows an identification's parameters,
+correlations and residuals; :func:`design_report` a design's poses, their
+geometry, the constraints met, the efficiency against the bound and the
+predicted standard deviations; :func:`diagnosis_report` and
+:func:`refine_report` the verdict, the ranked candidate effects and the error
+falling step by step; :func:`write_report` writes any sections
+built with :mod:`.html`. Reporting code formats and plots; it computes
+nothing the library does not already provide.
+"""
+from .design import design_report
+from .diagnosis import diagnosis_report, refine_report
+from .html import write_report
+from .identification import identification_report
+
+__all__ = ["identification_report", "design_report", "diagnosis_report", "refine_report",
+           "write_report"]

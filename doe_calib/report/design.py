@@ -1,0 +1,142 @@
+"""The design report: chosen poses, where they put the markers, what they promise, as HTML."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..evaluation import evaluate, marker_positions
+from ..measurement import build_model
+from . import figures
+from .html import figure, paragraph, preformatted, section, table, write_report
+
+
+def _text(value) -> str:
+    """A constraint value in words: numbers to 6 digits, lists joined, None as "—"."""
+    if value is None or value == "" or value == {} or value == []:
+        return "—"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_text(v) for v in value) + "]"
+    return str(value)
+
+
+def flatten(d: dict, prefix: str = "") -> list[list]:
+    """Rows ``[key path, value]`` of a nested dict (keys joined with " / ")."""
+    rows = []
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict) and v:
+            rows += flatten(v, key + " / ")
+        elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+            for i, x in enumerate(v):
+                rows += flatten(x, f"{key} / {i + 1} / ")
+        else:
+            rows.append([key, _text(v)])
+    return rows
+
+
+def pose_geometry(design):
+    """Flange and marker positions of each pose on the design's nominal model, mm.
+
+    The first configuration of each pose (unloaded) is used; the nominal base
+    is the identity, so positions are in the robot base frame.
+
+    Returns
+    -------
+    flange : ndarray, shape (M, 3)
+    markers : ndarray, shape (M, n, 3)
+    """
+    model = build_model(design.robot, design.tool, design.model)
+    values = model.nominal().values
+    cfg = design.configurations
+    first = sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())
+    sub = cfg.subset(np.array(first, int))
+    _, t = evaluate(model.flange, sub, values)
+    return t.reshape(len(sub), 3) * 1000.0, marker_positions(model, values, sub) * 1000.0
+
+
+def _pose_rows(design):
+    rows = []
+    for p in design.poses():
+        loads = "; ".join("(" + ", ".join(f"{v:.4g}" for v in w) + ")"
+                          for w in p["wrenches"] if any(w)) or "unloaded only"
+        rows.append([p["pose"], *[float(v) for v in p["q_deg"]], len(p["wrenches"]), loads])
+    return rows
+
+
+def design_report(design, path, dpi: int = 90):
+    """Write an HTML report of a measurement design.
+
+    Parameters
+    ----------
+    design : DesignResult
+    path : str or Path
+        HTML file to write; self-contained (figures embedded as PNG).
+    dpi : int
+        Resolution of the figures.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Examples
+    --------
+    >>> design_report(DesignResult.from_json("design.json"), "design.html")  # doctest: +SKIP
+    """
+    robot, png = design.robot, figures.to_png
+    units = [j.display_unit for j in robot.joints]
+    sections = [section(
+        "Chosen poses", "Joint positions in deg (mm for prismatic joints), in measuring "
+        "order; each pose is measured unloaded and under every load case, whose wrench "
+        "at the flange (f_x, f_y, f_z in N; m_x, m_y, m_z in N·m, robot base frame) is listed.",
+        table(["pose", *[f"{j.name} ({u})" for j, u in zip(robot.joints, units)],
+               "measurements", "load wrenches"], _pose_rows(design), 5))]
+    q = np.array([p["q_deg"] for p in design.poses()], float)
+    k = robot.display_factors
+    sections.append(section("Joint positions", figure(
+        png(figures.joint_angle_chart(robot.joint_names, q, robot.lower * k, robot.upper * k,
+                                      units), dpi),
+        "joint positions of the chosen poses with the joint limits shaded",
+        "Joint positions of the chosen poses; grey: URDF joint limits.")))
+    flange, markers = pose_geometry(design)
+    los = design.constraints.get("line_of_sight") or {}
+    tracker = los.get("tracker")
+    sections.append(section("Poses in space", figure(
+        png(figures.poses_3d(flange, markers, design.tool.names, tracker), dpi),
+        "3-D view of flange and marker positions of each pose",
+        "Flange (numbered by pose) and markers on the nominal model, robot base frame (mm)"
+        + ("; red: the tracker." if tracker is not None else "."))))
+    met = [table(["constraint", "value"], flatten(design.constraints))]
+    if design.candidates:
+        met += ["Candidate poses drawn and removed by each constraint:",
+                table(["candidates", "value"], flatten(design.candidates))]
+    if design.coverage:
+        met.append(table(["coverage", "value"], flatten(design.coverage)))
+    sections.append(section("Constraints met", *met))
+    eff = [["criterion", design.criterion], ["value", design.value],
+           ["certified bound", design.bound], ["efficiency", design.efficiency]]
+    eff += [[f"efficiency ({c})", v] for c, v in design.efficiencies.items()]
+    eff += [[f"criterion {c}", v] for c, v in design.criteria.items()]
+    blocks = [table(["quantity", "value"], eff)]
+    if design.equivalence:
+        blocks += ["Equivalence-theorem check (the statistic is at most its target at the "
+                   "approximate optimum):", table(["equivalence", "value"],
+                                                  flatten(design.equivalence))]
+    if design.refinement:
+        blocks.append(table(["refinement", "value"], flatten(design.refinement)))
+    sections.append(section("Efficiency against the bound", *blocks))
+    names = list(design.predicted_std)
+    std = [float(design.predicted_std[n][0]) for n in names]
+    std_units = [design.predicted_std[n][1] for n in names]
+    sections.append(section(
+        "Predicted standard deviations",
+        table(["parameter", "predicted std", "unit"],
+              [[n, s, u] for n, s, u in zip(names, std, std_units)], 4),
+        figure(png(figures.std_bars(names, std, std_units), dpi),
+               "predicted standard deviation of each parameter, log scale",
+               "Predicted std of each designed-for parameter (display units, log scale).")))
+    sections.append(section("Notes", *([paragraph(n) for n in design.notes] or ["None."])))
+    sections.append(section("Summary", preformatted(design.summary())))
+    title = f"Measurement design for {robot.name}: {design.model}, {design.criterion} criterion"
+    return write_report(path, title, sections)

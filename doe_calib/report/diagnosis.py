@@ -1,0 +1,74 @@
+"""Diagnosis and refinement reports: the verdict in words, ranked effects, the error falling."""
+from __future__ import annotations
+
+from . import figures
+from .diagnosis_figures import candidate_bars, error_falling
+from .html import figure, paragraph, preformatted, section, table, write_report
+from .identification import reading_columns, residual_norms_mm
+
+
+def _png(fig, dpi):
+    return figures.to_png(fig, dpi)
+
+
+def _candidates_table(diagnosis, top: int = 15):
+    rows = [[c.spec, "" if c.joint is None else c.joint, c.rank, c.statistic, c.p_value,
+             100 * c.explained_fraction, "–" if c.cv_rms_mm is None else c.cv_rms_mm]
+            for c in diagnosis.candidates[:top]]
+    return table(["effect", "joint", "columns", "F", "p (Bonferroni)", "explains (%)",
+                  "CV RMS (mm)"], rows, 4)
+
+
+def diagnosis_sections(diagnosis, model, measurements, fit, dpi: int = 90) -> list:
+    """The sections of one diagnosis: verdict, adequacy, ranked effects, residual plots."""
+    c = diagnosis.chi2
+    out = [section("Verdict", paragraph(diagnosis.verdict), table(
+        ["model", "fit RMS (mm)", "CV RMS (mm)", "noise floor (mm)", "χ²", "dof", "p",
+         "adequate"],
+        [[diagnosis.model, diagnosis.rms_mm, diagnosis.cv_rms_mm, diagnosis.noise_floor_mm,
+          c["statistic"], c["dof"], c["p_value"], "yes" if diagnosis.adequate else "no"]], 4))]
+    out.append(section("Which effect is missing", _candidates_table(diagnosis), figure(
+        _png(candidate_bars(diagnosis), dpi), "share of the residual each candidate explains",
+        "Share of the remaining residual (after projecting out what the model already "
+        "absorbs) each candidate effect explains; green ones are significant.")))
+    norms = residual_norms_mm(model, measurements, fit.parameters.values)
+    follow = ", ".join(f"{f.variable} (adjusted R² {f.r2:.2f})" for f in diagnosis.follows[:5])
+    out.append(section("Where the model fails", paragraph(
+        f"The residual size follows: {follow or 'nothing in particular'}."), figure(
+        _png(figures.residual_scatter(norms, reading_columns(model, measurements)), dpi),
+        "residual of each reading against every variable",
+        "3-D residual norm (mm) of each reading against the joint positions, loads, joint "
+        "torques, temperature and measurement order.")))
+    if diagnosis.flagged:
+        out.append(section("Poses far outside the noise (kept in the fit)", table(
+            ["pose", "RMS (mm)", "χ²/dof", "p"],
+            [[p["pose"], p["rms_mm"], p["chi2_per_dof"], p["p_value"]]
+             for p in diagnosis.flagged], 4)))
+    return out
+
+
+def diagnosis_report(diagnosis, model, measurements, fit, path, dpi: int = 90):
+    """Write the HTML report of one diagnosis (see :func:`doe_calib.diagnosis.diagnose`)."""
+    sections = diagnosis_sections(diagnosis, model, measurements, fit, dpi)
+    sections.append(section("Summary", preformatted(diagnosis.summary())))
+    return write_report(path, f"Diagnosis of {diagnosis.model}", sections)
+
+
+def refine_report(result, model, measurements, path, dpi: int = 90):
+    """Write the HTML report of a refinement: the error at each step, then the final diagnosis.
+
+    ``model`` is the final model (``result.fit`` is its identification).
+    """
+    steps = result.steps
+    rows = [[i, s.model, s.rms_mm, s.cv_rms_mm,
+             "–" if s.validation_rms_mm is None else s.validation_rms_mm,
+             "yes" if s.adequate else "no", s.reason] for i, s in enumerate(steps)]
+    sections = [section("The error falls step by step", figure(
+        _png(error_falling(steps, result.noise_floor_mm), dpi),
+        "fit, cross-validated and validation RMS at each step",
+        "RMS per coordinate (mm) after each added effect; dashed: the noise floor."), table(
+        ["step", "model", "fit RMS (mm)", "CV RMS (mm)", "validation RMS (mm)", "adequate",
+         "why"], rows, 4), paragraph(f"Stopped: {result.stopped}"))]
+    sections += diagnosis_sections(result.diagnosis, model, measurements, result.fit, dpi)
+    sections.append(section("Final identification", preformatted(result.fit.summary())))
+    return write_report(path, f"Refinement to {result.fit.model}", sections)

@@ -1,0 +1,191 @@
+"""Report figures (matplotlib, Agg canvas, no pyplot state): arrays in, Figures out.
+
+Every function takes what it plots, already in display units (mm, deg, N,
+N·m), and returns a :class:`matplotlib.figure.Figure`; :func:`to_png` turns
+one into PNG bytes. Nothing here computes model quantities.
+"""
+from __future__ import annotations
+
+import io
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+
+def _figure(width: float, height: float) -> Figure:
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def to_png(fig: Figure, dpi: int = 90) -> bytes:
+    """PNG bytes of ``fig`` at ``dpi`` dots per inch."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    return buf.getvalue()
+
+
+def correlation_heatmap(names, correlation) -> Figure:
+    """Heat map of a correlation matrix.
+
+    Parameters
+    ----------
+    names : sequence of str, length F
+        Free parameter names.
+    correlation : array_like, shape (F, F)
+        Correlations in [−1, 1].
+    """
+    c = np.asarray(correlation, float)
+    f = len(names)
+    size = min(max(4.0, 0.18 * f + 2.0), 16.0)
+    fig = _figure(size + 1.0, size)
+    ax = fig.add_subplot()
+    im = ax.imshow(c, cmap="RdBu_r", vmin=-1.0, vmax=1.0, interpolation="nearest")
+    font = max(4.0, min(9.0, 300.0 / max(f, 1)))
+    ax.set_xticks(range(f), names, rotation=90, fontsize=font)
+    ax.set_yticks(range(f), names, fontsize=font)
+    fig.colorbar(im, ax=ax, shrink=0.8, label="correlation")
+    ax.set_title("correlation of the free parameters")
+    return fig
+
+
+def residual_scatter(norm_mm, columns, ncols: int = 4) -> Figure:
+    """A grid of scatter plots: residual norm (mm) of each reading against each variable.
+
+    Parameters
+    ----------
+    norm_mm : array_like, shape (K,)
+        3-D residual norm of each reading, mm.
+    columns : sequence of (str, array_like of shape (K,))
+        Axis label (with unit) and the value of the variable at each reading.
+    ncols : int
+        Plots per row.
+    """
+    norm_mm = np.asarray(norm_mm, float)
+    n = len(columns)
+    nrows = max(1, -(-n // ncols))
+    fig = _figure(3.0 * ncols, 2.4 * nrows)
+    axes = fig.subplots(nrows, ncols, squeeze=False, sharey=True)
+    for ax, (label, x) in zip(axes.flat, columns):
+        ax.scatter(np.asarray(x, float), norm_mm, s=6, alpha=0.6, color="tab:blue")
+        ax.set_xlabel(label, fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("|residual| (mm)", fontsize=8)
+    for ax in list(axes.flat)[n:]:
+        ax.set_visible(False)
+    return fig
+
+
+def residual_bars(stats: dict, what: str) -> Figure:
+    """RMS (per coordinate) and max 3-D residual per group, mm, as bars.
+
+    Parameters
+    ----------
+    stats : dict
+        Group name → ``{"rms_mm": float, "max_3d_mm": float, ...}`` (as in
+        :func:`doe_calib.identify.residual_statistics`).
+    what : str
+        What the groups are, e.g. ``marker`` or ``pose``.
+    """
+    names = list(stats)
+    x = np.arange(len(names))
+    fig = _figure(min(max(4.0, 0.3 * len(names) + 2.0), 16.0), 3.2)
+    ax = fig.add_subplot()
+    ax.bar(x - 0.2, [stats[k]["rms_mm"] for k in names], 0.4, label="RMS per coordinate")
+    ax.bar(x + 0.2, [stats[k]["max_3d_mm"] for k in names], 0.4, label="max 3-D")
+    ax.set_xticks(x, names, rotation=90 if len(names) > 12 else 0, fontsize=7)
+    ax.set_xlabel(what)
+    ax.set_ylabel("residual (mm)")
+    ax.legend(fontsize=8)
+    return fig
+
+
+def joint_angle_chart(joint_names, q, lower, upper, units) -> Figure:
+    """Joint positions of the chosen poses, one marker set per joint, limits shaded.
+
+    Parameters
+    ----------
+    joint_names : sequence of str, length N
+    q : array_like, shape (M, N)
+        Joint positions of the M poses, deg (mm for prismatic joints).
+    lower, upper : array_like, shape (N,)
+        Joint limits in the same units; non-finite values are not shaded.
+    units : sequence of str, length N
+    """
+    q = np.atleast_2d(np.asarray(q, float))
+    m, n = q.shape
+    fig = _figure(max(5.0, 1.2 * n + 2.0), 4.0)
+    ax = fig.add_subplot()
+    for k in range(n):
+        if np.isfinite(lower[k]) and np.isfinite(upper[k]):
+            ax.fill_between([k - 0.4, k + 0.4], lower[k], upper[k], color="0.88",
+                            label="joint limits" if k == 0 else None)
+        offset = np.linspace(-0.25, 0.25, m) if m > 1 else np.zeros(1)
+        ax.plot(k + offset, q[:, k], "o", ms=4, label=f"{joint_names[k]} ({units[k]})")
+    ax.set_xticks(range(n), joint_names)
+    ax.set_ylabel("joint position (deg; mm for prismatic joints)")
+    ax.set_xlabel("joint (poses in measuring order, left to right)")
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    return fig
+
+
+def poses_3d(flange_mm, markers_mm, marker_names, tracker_mm=None) -> Figure:
+    """3-D view of the flange and the markers at each pose, robot base frame, mm.
+
+    Parameters
+    ----------
+    flange_mm : array_like, shape (M, 3)
+        Flange origin at each pose.
+    markers_mm : array_like, shape (M, n, 3)
+        Marker positions at each pose.
+    marker_names : sequence of str, length n
+    tracker_mm : array_like, shape (3,), optional
+        Tracker position, drawn when given.
+    """
+    f = np.asarray(flange_mm, float)
+    x = np.asarray(markers_mm, float)
+    fig = _figure(7.0, 6.0)
+    ax = fig.add_subplot(projection="3d")
+    ax.scatter(0, 0, 0, marker="s", s=50, color="k", label="robot base")
+    ax.scatter(*f.T, s=25, color="tab:blue", label="flange")
+    for i, p in enumerate(f):
+        ax.text(*p, str(i + 1), fontsize=7)
+    for j, name in enumerate(marker_names):
+        ax.scatter(*x[:, j].T, s=8, label=f"marker {name}")
+    for p, pts in zip(f, x):
+        for pt in pts:
+            ax.plot(*np.column_stack([p, pt]), color="0.6", lw=0.6)
+    if tracker_mm is not None:
+        ax.scatter(*np.asarray(tracker_mm, float), marker="^", s=80, color="tab:red",
+                   label="tracker")
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_zlabel("z (mm)")
+    ax.set_aspect("equal")
+    ax.legend(fontsize=7, loc="upper left")
+    return fig
+
+
+def std_bars(names, std, units, title: str = "predicted standard deviation") -> Figure:
+    """Standard deviation of each parameter as bars on a log scale.
+
+    Parameters
+    ----------
+    names : sequence of str, length P
+    std : array_like, shape (P,)
+        Standard deviations in display units (mm, deg, µrad/(N·m)).
+    units : sequence of str, length P
+        Unit of each, shown in the tick label.
+    """
+    s = np.asarray(std, float)
+    fig = _figure(min(max(5.0, 0.22 * len(s) + 2.0), 16.0), 3.8)
+    ax = fig.add_subplot()
+    ax.bar(range(len(s)), np.where(s > 0, s, np.nan), color="tab:green")
+    ax.set_yscale("log")
+    ax.set_xticks(range(len(s)), [f"{n} [{u}]" for n, u in zip(names, units)], rotation=90,
+                  fontsize=max(4.0, min(8.0, 400.0 / max(len(s), 1))))
+    ax.set_ylabel("std (unit in brackets)")
+    ax.set_title(title)
+    return fig

@@ -1,0 +1,122 @@
+"""The identification report: parameters, correlations and residuals of one fit, as HTML."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..diagnosis.variables import configuration_variables
+from ..identify import weighted_residual
+from . import figures
+from .html import figure, paragraph, preformatted, section, table, write_report
+
+def parameter_rows(result) -> list[list]:
+    """One row per parameter: name, unit, nominal, value, std (a priori, a posteriori), status.
+
+    Values in display units (mm, deg, µrad/(N·m)); fixed parameters show why.
+    """
+    p = result.parameters
+    std, post = result.std(), result.std(a_posteriori=True)
+    rows = []
+    for par, v, s, sp, free, why in zip(p.parameters, p.values, std, post, p.free,
+                                         p.fixed_reason):
+        k = par.display_factor
+        rows.append([par.name, par.display_unit, par.nominal * k, v * k,
+                     s * k if free else "—", sp * k if free else "—",
+                     "free" if free else f"fixed: {why or 'by request'}"])
+    return rows
+
+
+def reading_columns(model, measurements) -> list[tuple]:
+    """Variables to plot the residuals against, one value per reading (display units).
+
+    Returns
+    -------
+    list of (str, ndarray of shape (K,))
+        Every joint position (deg/mm), every wrench component that varies
+        (N, N·m), the joint torques of the applied wrench (N·m), the
+        temperature (°C) if measured, and the measurement order
+        (:func:`doe_calib.diagnosis.variables.configuration_variables`).
+    """
+    c = measurements.config
+    variables = configuration_variables(model.robot, measurements.configurations)
+    return [(f"{name} ({unit})" if unit else name, v[c]) for name, (v, unit, _) in
+            variables.items()]
+
+
+def residual_norms_mm(model, measurements, values) -> np.ndarray:
+    """3-D residual norm of each reading, shape (K,), mm, from the library's weighted residual."""
+    r, _ = weighted_residual(model, measurements, values, jacobian=False)
+    return np.linalg.norm(r.reshape(-1, 3), axis=1) * measurements.sigma * 1000.0
+
+
+def _stats_table(stats: dict, what: str):
+    return table([what, "readings", "RMS per coordinate (mm)", "max 3-D (mm)"],
+                 [[k, s["n"], s["rms_mm"], s["max_3d_mm"]] for k, s in stats.items()], 4)
+
+
+def identification_report(result, model, measurements, path, dpi: int = 90):
+    """Write an HTML report of an identification.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+    model : Model
+        The model ``result`` was identified with (same parameters).
+    measurements : Measurements
+        The readings it was identified from (SI).
+    path : str or Path
+        HTML file to write; self-contained (figures embedded as PNG).
+    dpi : int
+        Resolution of the figures.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Examples
+    --------
+    >>> identification_report(result, model, meas, "report.html")  # doctest: +SKIP
+    """
+    res, p = result.residuals, result.parameters
+    png = figures.to_png
+    fit = table(["quantity", "value"], [
+        ["estimator", result.estimator], ["model", result.model or "(base + markers)"],
+        ["readings", len(measurements)], ["observations 3K", result.n_observations],
+        ["free parameters", int(p.free.sum())], ["fixed parameters", int((~p.free).sum())],
+        ["residual RMS per coordinate (mm)", res["rms_mm"]],
+        ["max 3-D residual (mm)", res["max_3d_mm"]], ["σ a priori (mm)", result.sigma_mm],
+        ["σ̂ a posteriori (mm)", result.sigma_ratio * result.sigma_mm],
+        ["converged", str(result.convergence.get("converged"))],
+        ["solver", result.convergence.get("message", "")]], 5)
+    sections = [section("Fit", fit)]
+    sections.append(section(
+        "Parameters", "Display units; std a priori from the stated σ, a posteriori scaled "
+        "by σ̂/σ. Fixed parameters were held at the value shown, for the reason given.",
+        table(["parameter", "unit", "nominal", "value", "std", "std a posteriori", "status"],
+              parameter_rows(result))))
+    sections.append(section("Warnings", *([paragraph(w) for w in result.warnings]
+                                          or ["No numerical trouble was reported."])))
+    if result.free_names:
+        sections.append(section("Correlation", figure(
+            png(figures.correlation_heatmap(result.free_names, result.correlation()), dpi),
+            "correlation heat map of the free parameters",
+            "Correlation of the free parameters (a-priori covariance).")))
+    cols = reading_columns(model, measurements)
+    norms = residual_norms_mm(model, measurements, p.values)
+    sections.append(section("Residuals per reading", figure(
+        png(figures.residual_scatter(norms, cols), dpi),
+        "residual norm of each reading against joint positions, wrench, temperature and order",
+        "3-D residual norm (mm) of each reading against every joint position, the wrench "
+        "components and joint torques of the applied loads, the temperature when measured, "
+        "and the measuring order.")))
+    sections.append(section(
+        "Residuals per marker and per pose",
+        _stats_table(res["per_marker"], "marker"),
+        figure(png(figures.residual_bars(res["per_marker"], "marker"), dpi),
+               "residual RMS and maximum per marker", "Residual per marker (mm)."),
+        _stats_table(res["per_pose"], "pose"),
+        figure(png(figures.residual_bars(res["per_pose"], "pose"), dpi),
+               "residual RMS and maximum per pose", "Residual per pose (mm).")))
+    sections.append(section("Summary", preformatted(result.summary())))
+    title = f"Identification of {result.robot.name}: {result.model or 'base + markers'}"
+    return write_report(path, title, sections)
