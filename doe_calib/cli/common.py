@@ -6,13 +6,21 @@ import sys
 import numpy as np
 
 from ..effects import DEFAULT_MODEL
+from ..effects.user import load_effect_files
 from ..errors import DoeCalibError
 from ..robot import Robot
 from ..tool import Tool
 
 
+def effect_file_argument(c):
+    """Add ``--effect-file`` (repeatable): user effects a model or a result may name."""
+    c.add_argument("--effect-file", action="append", metavar="FILE.py",
+                   help="Python file declaring a user effect (doe_calib.effects.user); "
+                        "repeat for several")
+
+
 def robot_arguments(c, model: bool = True):
-    """Add ``--robot``, ``--flange``, ``--tool`` (and ``--model``) to a subparser."""
+    """Add ``--robot``, ``--flange``, ``--tool`` (and ``--model``, ``--effect-file``)."""
     c.add_argument("--robot", required=True, help="URDF file of the nominal robot")
     c.add_argument("--flange", help="flange link (default: the tool file's, else the "
                                     "chain's last link)")
@@ -20,10 +28,15 @@ def robot_arguments(c, model: bool = True):
     if model:
         c.add_argument("--model", default=DEFAULT_MODEL,
                        help=f"effects joined by '+' (default {DEFAULT_MODEL})")
+        effect_file_argument(c)
 
 
 def load_robot_tool(args):
-    """The Robot and Tool named by ``--robot``, ``--tool`` and ``--flange``."""
+    """The Robot and Tool named by ``--robot``, ``--tool`` and ``--flange``.
+
+    The ``--effect-file`` effects are registered first, so that ``--model`` may name them.
+    """
+    load_effect_files(getattr(args, "effect_file", None))
     tool = Tool.from_yaml(args.tool)
     robot = Robot.from_urdf(args.robot, flange=args.flange or tool.flange)
     return robot, tool

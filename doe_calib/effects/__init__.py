@@ -57,7 +57,8 @@ def parse_effect(word: str, spec: str = ""):
     name, inside = match.group(1), match.group(2)
     if name not in REGISTRY:
         raise ModelError(f"unknown effect {name!r} in model {spec or word!r}; known effects: "
-                         f"{', '.join(REGISTRY)}")
+                         f"{', '.join(REGISTRY)} (an effect of your own: load its file with "
+                         f"--effect-file)")
     args, options = [], {}
     for item in (a.strip() for a in (inside or "").split(",")):
         if not item:
