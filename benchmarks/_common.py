@@ -32,12 +32,16 @@ class Row:
 
 @dataclass(frozen=True)
 class Section:
-    """One benchmark's results: rows, what the ratios divide by, and notes in words."""
+    """One benchmark's results: rows, what the ratios divide by, notes in words,
+    optional further tables, each ``(caption, header, rows)`` of preformatted cells, and
+    whether it measures peak memory itself (else the runner notes its process's peak)."""
 
     title: str
     rows: tuple
     reference: str = ""
     notes: tuple = field(default_factory=tuple)
+    tables: tuple = field(default_factory=tuple)
+    measures_memory: bool = False
 
 
 @dataclass(frozen=True)

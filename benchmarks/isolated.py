@@ -13,6 +13,8 @@ def measured(name: str, quick: bool):
     """Run ``benchmarks.<name>`` in this process; its section with the peak memory noted."""
     logging.basicConfig(level=logging.WARNING)
     section = importlib.import_module(f"benchmarks.{name}").run(quick)
+    if section.measures_memory:
+        return section
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # Linux: KiB
     return replace(section, notes=section.notes + (
         f"peak memory of the process that ran this benchmark: {peak_mb:.0f} MB (resident set, "

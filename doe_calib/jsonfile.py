@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 from .errors import DataError
 
@@ -13,6 +14,28 @@ def write_json(data: dict, path=None) -> str:
         with open(path, "w", encoding="utf-8") as fh:
             fh.write(text)
     return text
+
+
+def _finite(data):
+    """``data`` with every non-finite float (NaN, ±inf) replaced by None."""
+    if isinstance(data, float):
+        return data if math.isfinite(data) else None
+    if isinstance(data, dict):
+        return {k: _finite(v) for k, v in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [_finite(v) for v in data]
+    return data
+
+
+def strict_json(data) -> str:
+    """Strict JSON text of ``data`` for other programs: NaN and ±inf become ``null``.
+
+    Examples
+    --------
+    >>> json.loads(strict_json({"p": float("nan"), "q": [1.5, float("-inf")]}))
+    {'p': None, 'q': [1.5, None]}
+    """
+    return json.dumps(_finite(data), indent=1, ensure_ascii=False, allow_nan=False)
 
 
 def read_json(path, kind: str | None = None, what: str = "file") -> dict:

@@ -134,3 +134,19 @@ def test_not_a_design_is_refused(tmp_path):
     bad = tmp_path / "x.json"
     bad.write_text('{"format": "something"}')
     assert main(["compare", str(bad)]) == 2
+
+
+def test_cli_writes_html_report(designs, model, task, tmp_path):
+    files = []
+    for d, name in zip(designs, ["six_poses", "twelve_poses"]):
+        d.to_json(tmp_path / f"{name}.json")
+        files.append(str(tmp_path / f"{name}.json"))
+    write_design(tmp_path / "task.csv", task, model.robot)
+    report = tmp_path / "compare.html"
+    assert main(["compare", *files, "--task", str(tmp_path / "task.csv"), "--sigma", "0.02",
+                 "--report", str(report)]) == 0
+    text = report.read_text(encoding="utf-8")
+    assert "six_poses" in text and "twelve_poses" in text
+    assert text.count('src="data:image/png;base64,') == 2  # std bars and task accuracy bars
+    assert "Predicted accuracy at the task poses" in text and "RMS" in text
+    assert "http://" not in text and "https://" not in text  # self-contained

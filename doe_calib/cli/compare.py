@@ -6,11 +6,13 @@ from pathlib import Path
 
 from ..compare import compare, load_source, plot_std
 from ..io import read_design
+from ..jsonfile import strict_json
 from .common import parse_floats
 
 HELP = "compare designs and identification results: std per parameter, task-point accuracy"
 EXAMPLE = ("doe-calib compare d15.json d30.json result.json --task task.csv "
-           "--task-point 0,0,250 --sigma 0.02 --out table.md --plot bars.png")
+           "--task-point 0,0,250 --sigma 0.02 --out table.md --plot bars.png "
+           "--report compare.html")
 
 
 def add_arguments(c):
@@ -22,6 +24,8 @@ def add_arguments(c):
                    "predicted with it (default 0.02), results rescaled to it (default: their own)")
     c.add_argument("--out", help="write the tables (Markdown) to this file")
     c.add_argument("--plot", help="write a bar plot of the std per parameter (PNG)")
+    c.add_argument("--report", metavar="FILE.html", help="also write an HTML report (tables "
+                   "and bar plots of the std per parameter and of the task accuracy)")
     c.add_argument("--json", action="store_true", help="print JSON instead of the tables")
 
 
@@ -37,7 +41,7 @@ def run(args):
     result = compare(sources, _labels(args.files),
                      None if args.sigma is None else args.sigma / 1000.0, task,
                      parse_floats(args.task_point, 3, "--task-point") / 1000.0)
-    print(result.to_json() if args.json else result.summary())
+    print(strict_json(result.to_dict()) if args.json else result.summary())
     written = []
     if args.out:
         Path(args.out).write_text(result.summary() + "\n", encoding="utf-8")
@@ -45,5 +49,8 @@ def run(args):
     if args.plot:
         plot_std(result, args.plot)
         written.append(args.plot)
+    if args.report:
+        from ..report import compare_report
+        written.append(str(compare_report(result, args.report)))
     if written:
         print(f"written: {', '.join(written)}", file=sys.stderr)

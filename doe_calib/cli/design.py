@@ -10,6 +10,7 @@ from ..errors import DoeCalibError
 from ..design import CRITERIA, LoadCase, read_constraints
 from ..design.optimal import optimal_design
 from ..io import read_design, write_design
+from ..jsonfile import strict_json
 from ..measurement import build_model
 from .common import load_robot_tool, parse_floats, parse_load, robot_arguments
 
@@ -39,6 +40,7 @@ def add_arguments(c):
     c.add_argument("--seed", type=int, help="random seed")
     c.add_argument("--out", required=True, help="design JSON to write (CSV written beside it)")
     c.add_argument("--report", metavar="FILE.html", help="also write an HTML report")
+    c.add_argument("--json", action="store_true", help="print the design as JSON")
 
 
 def _progress():
@@ -70,7 +72,7 @@ def run(args):
     result.to_json(args.out)
     csv_path = Path(args.out).with_suffix(".csv")
     write_design(csv_path, result.configurations, robot)
-    print(result.summary())
+    print(strict_json(result.to_dict()) if args.json else result.summary())
     print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
     if args.report:
         from ..report import design_report

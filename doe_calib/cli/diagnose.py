@@ -1,7 +1,6 @@
 """``doe-calib diagnose``: is the model adequate, where does it fail, which effect is missing."""
 from __future__ import annotations
 
-import json
 import sys
 import warnings
 from pathlib import Path
@@ -9,6 +8,7 @@ from pathlib import Path
 from ..diagnosis import diagnose
 from ..identify import identify
 from ..io import read_measurements
+from ..jsonfile import strict_json
 from ..measurement import build_model
 from .common import load_robot_tool, robot_arguments
 
@@ -78,5 +78,5 @@ def run(args):
     if args.report:
         from ..report import diagnosis_report
         print(f"report: {diagnosis_report(d, model, meas, fit, args.report)}", file=sys.stderr)
-    print(json.dumps(d.to_dict(), indent=1) if args.json else d.summary())
+    print(strict_json(d.to_dict()) if args.json else d.summary())
     print(f"\nwritten: {args.out}, {plot}", file=sys.stderr)

@@ -7,6 +7,7 @@ from pathlib import Path
 from ..design.result import DesignResult
 from ..errors import DataError
 from ..export import FORMATS, export_design
+from ..jsonfile import strict_json
 
 HELP = "write a design as a KUKA KRL, ABB RAPID or URScript program, or a design CSV"
 EXAMPLE = "doe-calib export design.json --format krl --out programs/ --name calib --handshake 5"
@@ -25,6 +26,8 @@ def add_arguments(c):
                    help="digital I/O number: set output N at the pose, wait for input N "
                         "(measured), reset; RAPID uses signals doCalibReady/diCalibDone. "
                         "Default: wait --dwell seconds only")
+    c.add_argument("--json", action="store_true", help="print the poses, measurements and "
+                                                       "files written as JSON")
 
 
 def run(args):
@@ -40,3 +43,7 @@ def run(args):
     n_poses = len(design.poses())
     print(f"{n_poses} poses, {len(design.configurations)} measurements", file=sys.stderr)
     print(f"written: {', '.join(map(str, paths))}", file=sys.stderr)
+    if args.json:
+        print(strict_json({"design": args.design, "format": args.format, "name": args.name,
+                          "poses": n_poses, "measurements": len(design.configurations),
+                          "files": [str(p) for p in paths]}))

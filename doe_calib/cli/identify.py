@@ -1,12 +1,12 @@
 """``doe-calib identify``: parameters from a measurement CSV."""
 from __future__ import annotations
 
-import json
 import sys
 import warnings
 
 from ..identify import ESTIMATORS, identify
 from ..io import read_measurements
+from ..jsonfile import strict_json
 from ..measurement import build_model
 from .common import load_robot_tool, report_warnings, robot_arguments
 
@@ -47,7 +47,7 @@ def run(args):
         result = identify(model, meas, params, estimator=args.estimator, **options)
     report_warnings(caught)
     result.to_json(args.out)
-    print(json.dumps(result.to_dict(), indent=1) if args.json else result.summary())
+    print(strict_json(result.to_dict()) if args.json else result.summary())
     print(f"\nwritten: {args.out}", file=sys.stderr)
     if args.report:
         from ..report import identification_report

@@ -8,8 +8,10 @@ import numpy as np
 
 from ..evaluation import marker_positions
 from ..io import read_measurements, write_measurements
+from ..jsonfile import strict_json
 from ..measurement import build_model
 from ..results import IdentificationResult
+from .common import effect_file_argument, load_effect_files
 
 HELP = "marker positions predicted by a result, for validation"
 EXAMPLE = "doe-calib predict --result result.json --data held_out.csv --out predicted.csv"
@@ -20,9 +22,13 @@ def add_arguments(c):
     c.add_argument("--data", required=True, help="measurement-format CSV of the poses "
                                                  "(x,y,z used for the error if present)")
     c.add_argument("--out", required=True, help="CSV to write with the model's x,y,z")
+    c.add_argument("--json", action="store_true", help="print the error figures as JSON "
+                                                       "(null when the data have no x,y,z)")
+    effect_file_argument(c)   # a result whose model names a user effect needs its file
 
 
 def run(args):
+    load_effect_files(args.effect_file)
     result = IdentificationResult.from_json(args.result)
     model = build_model(result.robot, result.tool, result.model)
     meas = read_measurements(args.data, result.robot, result.tool, sigma_mm=1.0,
@@ -30,9 +36,17 @@ def run(args):
     x = marker_positions(model, result.parameters.values, meas.configurations)
     predicted = x[meas.config, meas.marker]
     write_measurements(args.out, replace(meas, xyz=predicted), result.robot, result.tool)
+    error = None
     if np.all(np.isfinite(meas.xyz)):
         err = (meas.xyz - predicted) * 1000.0
         d = np.linalg.norm(err, axis=1)
-        print(f"{len(meas)} readings: RMS {np.sqrt(np.mean(err ** 2)):.4f} mm per coordinate, "
-              f"mean 3-D {d.mean():.4f} mm, max 3-D {d.max():.4f} mm (model {result.model})")
+        error = {"rms_mm": float(np.sqrt(np.mean(err ** 2))), "mean_3d_mm": float(d.mean()),
+                 "max_3d_mm": float(d.max())}
+    if args.json:
+        print(strict_json({"result": args.result, "model": result.model, "data": args.data,
+                          "readings": len(meas), "predicted": args.out, "error": error}))
+    elif error is not None:
+        print(f"{len(meas)} readings: RMS {error['rms_mm']:.4f} mm per coordinate, "
+              f"mean 3-D {error['mean_3d_mm']:.4f} mm, max 3-D {error['max_3d_mm']:.4f} mm "
+              f"(model {result.model})")
     print(f"written: {args.out}", file=sys.stderr)

@@ -1,12 +1,12 @@
 """``doe-calib refine``: add the missing effects one at a time until the model is adequate."""
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
 from ..diagnosis.refine import refine
 from ..io import read_measurements
+from ..jsonfile import strict_json
 from ..measurement import build_model
 from ..report.diagnosis_figures import error_falling
 from .common import robot_arguments
@@ -49,5 +49,5 @@ def run(args):
         from ..report import refine_report
         final = build_model(model.robot, model.tool, out.fit.model)
         print(f"report: {refine_report(out, final, meas, args.report)}", file=sys.stderr)
-    print(json.dumps(out.to_dict(), indent=1) if args.json else out.summary())
+    print(strict_json(out.to_dict()) if args.json else out.summary())
     print(f"\nwritten: {args.out}, {history}, {plot}", file=sys.stderr)

@@ -1,10 +1,13 @@
 """``doe-calib simulate``: a simulated measurement campaign as a measurement CSV."""
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
 from ..data import Configurations
 from ..io import read_design, write_measurements
+from ..jsonfile import strict_json
 from ..loads import unloaded_and_loaded
 from ..measurement import build_model
 from ..results import load_parameters, save_parameters
@@ -29,6 +32,8 @@ def add_arguments(c):
     c.add_argument("--seed", type=int, help="random seed")
     c.add_argument("--out", required=True, help="measurement CSV to write")
     c.add_argument("--truth-out", help="JSON to write the true parameters to")
+    c.add_argument("--json", action="store_true", help="print what was written as JSON "
+                                                       "(messages go to stderr)")
 
 
 def run(args):
@@ -54,8 +59,14 @@ def run(args):
             cfg = Configurations.from_arrays(q)
     meas = simulate(model, truth, cfg, args.sigma / 1000.0, rng, source=args.out)
     write_measurements(args.out, meas, robot, tool)
+    messages = sys.stderr if args.json else sys.stdout
     print(f"written: {args.out} ({len(meas)} readings, {len(cfg)} configurations, "
-          f"σ = {args.sigma} mm)")
+          f"σ = {args.sigma} mm)", file=messages)
     if args.truth_out:
         save_parameters(args.truth_out, truth, model.spec)
-        print(f"written: {args.truth_out} (the true parameters)")
+        print(f"written: {args.truth_out} (the true parameters)", file=messages)
+    if args.json:
+        print(strict_json({"measurements": args.out, "readings": len(meas),
+                          "configurations": len(cfg), "poses": len(set(cfg.pose)),
+                          "sigma_mm": args.sigma, "model": model.spec, "seed": args.seed,
+                          "truth": args.truth_out}))

@@ -2,10 +2,17 @@
 from __future__ import annotations
 
 import importlib
+import io
+import sys
+import time
+from contextlib import redirect_stdout
+from pathlib import Path
+
+from ..jsonfile import read_json, strict_json
 
 #: Study name → module in the ``studies`` package (each has ``main(argv)``).
 STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__main__",
-           "table2": "studies.table2.__main__"}
+           "table2": "studies.table2.__main__", "diagnosis": "studies.diagnosis.__main__"}
 
 HELP = "run a study and write its results"
 EXAMPLE = "doe-calib study table1 --out results [--scheduler tcp://host:8786]"
@@ -19,6 +26,20 @@ def add_arguments(c):
     c.add_argument("--scheduler", help="Dask scheduler address for Monte-Carlo studies "
                                        "(default: local processes)")
     c.add_argument("--workers", type=int, help="local worker processes (default: all CPUs)")
+    c.add_argument("--json", action="store_true", help="print the study's results JSON "
+                   "(OUT/NAME.json) instead of its tables, which go to stderr")
+
+
+class _Tee(io.StringIO):
+    """Keeps what is written and passes it on to ``stream``."""
+
+    def __init__(self, stream):
+        super().__init__()
+        self.stream = stream
+
+    def write(self, text):
+        self.stream.write(text)
+        return super().write(text)
 
 
 def run(args):
@@ -27,4 +48,16 @@ def run(args):
     for flag in ("repetitions", "scheduler", "workers"):
         if getattr(args, flag):
             argv += [f"--{flag}", str(getattr(args, flag))]
-    study.main(argv)
+    if not args.json:
+        study.main(argv)
+        return
+    started = time.time()
+    shown = _Tee(sys.stderr)
+    with redirect_stdout(shown):
+        study.main(argv)
+    path = Path(args.out) / f"{args.name}.json"
+    if path.exists() and path.stat().st_mtime >= started - 1.0:
+        print(strict_json(read_json(path, what="study result")))
+    else:  # the study skipped itself (e.g. missing data) and wrote no results
+        print(strict_json({"study": args.name, "skipped": True,
+                          "message": shown.getvalue().strip()}))

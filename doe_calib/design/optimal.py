@@ -90,6 +90,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     t = None if task is None else task_matrix(model, params, task, task_point)
     stage("information", f"{len(cands.q)} candidates")
     blocks = blocks_for(model, params, cands.q, loads, sigma)
+    stage("relaxation", f"{criterion} criterion over {len(blocks)} candidates")
     relaxed = relax(blocks, criterion, t, progress=stage.iterations("relaxation"))
     stage("exchange", f"{n_poses} poses")
     cov = constraints.coverage
@@ -123,12 +124,21 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
                    "design_efficiency_at_least": 1.0 / ratio}
     randoms = [log_det(information(blocks[rng.choice(len(cands.q), n_poses, replace=False)],
                                    np.ones(n_poses))) for _ in range(_RANDOM_DESIGNS)]
-    equivalent = n_poses * np.exp((log_det(m) - np.median(randoms)) / p)
+    singular = float(np.mean(~np.isfinite(randoms)))
+    if np.isfinite(np.median(randoms)):
+        equivalent = n_poses * np.exp((log_det(m) - np.median(randoms)) / p)
+        versus_random = (f"{n_poses} optimal poses are as precise (D criterion) as "
+                         f"{equivalent:.0f} random ones (median of {_RANDOM_DESIGNS} random "
+                         f"designs of {n_poses} feasible poses)")
+        if singular:
+            versus_random += f"; {singular:.0%} of those cannot identify every parameter"
+    else:
+        versus_random = (f"{singular:.0%} of {_RANDOM_DESIGNS} random designs of {n_poses} "
+                         f"feasible poses cannot identify every parameter; these {n_poses} can")
     scale = params.scales[params.free]
     std = np.sqrt(np.diag(np.linalg.inv(m))) * scale
     free = [par for par, f in zip(params.parameters, params.free) if f]
-    notes = [f"{n_poses} optimal poses are as precise (D criterion) as {equivalent:.0f} random "
-             f"ones (median of {_RANDOM_DESIGNS} random designs of {n_poses} feasible poses)",
+    notes = [versus_random,
              f"relaxation over {len(blocks)} candidates: equivalence ratio {relaxed.ratio:.4g} "
              f"after {relaxed.iterations} iterations; {p} parameters designed for, "
              f"{int((~params.free).sum())} fixed as not identifiable by any candidate"]

@@ -5,14 +5,17 @@ correlations and residuals; :func:`design_report` a design's poses, their
 geometry, the constraints met, the efficiency against the bound and the
 predicted standard deviations; :func:`diagnosis_report` and
 :func:`refine_report` the verdict, the ranked candidate effects and the error
-falling step by step; :func:`write_report` writes any sections
-built with :mod:`.html`. Reporting code formats and plots; it computes
-nothing the library does not already provide.
+falling step by step; :func:`compare_report` designs and results side by
+side; :func:`write_report` writes any sections built with :mod:`.html`.
+Reporting code formats and plots; it computes nothing
+the library does not already provide.
 """
-from .design import design_report
-from .diagnosis import diagnosis_report, refine_report
+from .compare import compare_report
+from .design import design_report, design_sections
+from .diagnosis import diagnosis_report, refine_report, refine_sections
 from .html import write_report
 from .identification import identification_report
 
 __all__ = ["identification_report", "design_report", "diagnosis_report", "refine_report",
+           "compare_report", "design_sections", "refine_sections",
            "write_report"]
