@@ -11,3 +11,6 @@ TOOL_YAML = str(_DATA / "kr270_tool.yaml")
 THREE_DOF_URDF = str(_DATA / "three_dof.urdf")
 #: Three-marker plate for the 3-DOF robot (mm).
 THREE_DOF_TOOL_YAML = str(_DATA / "three_dof_tool.yaml")
+#: The KR 270 example cell: floor, pedestal keep-out, tracker line of sight, load torques,
+#: A2 coverage (the constraints ``doe-calib demo`` designs under).
+CELL_YAML = str(_DATA / "kr270_cell.yaml")

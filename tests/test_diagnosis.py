@@ -62,6 +62,7 @@ def test_hidden_effect_ranks_first_and_adding_it_reaches_the_true_accuracy(
     assert not d.adequate
     best = d.candidates[0]
     assert best.effect == hidden.split("(")[0] and best.joint == joint, d.summary()
+    assert d.proposed == best.spec
     assert best.p_value < 0.01 and best.cv_rms_mm < d.cv_rms_mm
     grown = build_model(robot6, tool6, f"{start}+{best.spec}")
     got = validation_rms(grown, _fit(grown, train).parameters.values, valid)
@@ -85,9 +86,9 @@ def test_effect_outside_the_catalogue_is_named_by_the_variable_it_follows(robot6
     model = build_model(robot6, tool6, "joint_offset+joint_compliance")
     meas = _campaign(model, random_truth(model, rng), robot6, 40, rng, drift=0.002)
     d = diagnose(model, meas)
-    assert not d.adequate
+    assert not d.adequate and d.proposed is None
     assert d.follows[0].variable == "measurement order", d.summary()
-    assert "measurement order" in d.verdict
+    assert "measurement order" in d.verdict and "no catalogue effect explains" in d.verdict
 
 
 def test_refine_adds_the_missing_effects_until_adequate(robot6, tool6):

@@ -6,6 +6,7 @@ import warnings
 import numpy as np
 from scipy import stats
 
+from ..errors import DoeCalibError
 from ..identify import identify
 from .candidates import augmented, candidate_effects, test_candidates
 from .cross_validation import cross_validated_rms
@@ -29,7 +30,21 @@ def describe(candidate, robot) -> str:
     return _PHRASES.get(candidate.effect, f"effect {candidate.spec}").format(j=j)
 
 
-def _verdict(model, adequate_test, cv_rms, noise, tests, follow, flagged, level, n_obs):
+def _proposal(adequate_test, tests, level):
+    """The best significant candidate if it explains the residual, and the χ² p left after it.
+
+    It explains the residual when it accounts for at least half of it, or
+    when the model with it would pass the adequacy test.
+    """
+    best = next((t for t in tests if t.p_value < level), None)
+    remaining_p = 1.0 if best is None else float(stats.chi2.sf(
+        adequate_test.statistic * (1 - best.explained_fraction), adequate_test.dof - best.rank))
+    if best is not None and (best.explained_fraction >= 0.5 or remaining_p >= level):
+        return best, remaining_p
+    return None, remaining_p
+
+
+def _verdict(model, adequate_test, cv_rms, noise, tests, follow, flagged, level):
     sig = [t for t in tests if t.p_value < level]
     floor = f"noise floor {noise:.3g} mm"
     if adequate_test.adequate and not sig:
@@ -40,8 +55,10 @@ def _verdict(model, adequate_test, cv_rms, noise, tests, follow, flagged, level,
     if follow:
         top = follow[0]
         lead = f"Residuals follow {top.variable} (adjusted R² {top.r2:.2f}). "
-    if sig:
-        best = sig[0]
+    proposed, remaining_p = _proposal(adequate_test, tests, level)
+    best = sig[0] if sig else None
+    if proposed is not None:
+        best = proposed
         words = describe(best, model.robot)
         text = (f"{lead}{words[0].upper()}{words[1:]} explains "
                 f"{100 * best.explained_fraction:.0f} % of the remaining variance "
@@ -49,8 +66,7 @@ def _verdict(model, adequate_test, cv_rms, noise, tests, follow, flagged, level,
         if best.cv_rms_mm is not None:
             text += (f"; adding it ({best.spec}) moves the cross-validated RMS from "
                      f"{cv_rms:.3g} to {best.cv_rms_mm:.3g} mm ({floor})")
-        remaining = adequate_test.statistic * (1 - best.explained_fraction)
-        if stats.chi2.sf(remaining, adequate_test.dof - best.rank) < level:
+        if remaining_p < level:
             text += (". Even with it the residual would stay above the noise: look at the "
                      "variables below as well")
         if adequate_test.adequate:
@@ -58,9 +74,12 @@ def _verdict(model, adequate_test, cv_rms, noise, tests, follow, flagged, level,
         return text + "."
     names = ", ".join(f"{f.variable} (R² {f.r2:.2f})" for f in follow[:3]) or "no variable"
     where = ", ".join(p["pose"] for p in flagged[:5])
+    partly = "" if best is None else (
+        f" (the best, {best.spec}, is significant but explains only "
+        f"{100 * best.explained_fraction:.0f} % of it)")
     return (f"The model is NOT adequate (χ² p = {adequate_test.p_value:.2g}, residual "
             f"σ̂ = {adequate_test.sigma_hat_mm:.3g} mm against {floor}) and no catalogue effect "
-            f"explains it at the {level:.0%} level. The residual size follows {names}"
+            f"explains it{partly}. The residual size follows {names}"
             + (f"; the largest residuals are at poses {where}" if where else "")
             + ". Write a custom effect in those variables (--effect-file).")
 
@@ -109,6 +128,13 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
             progress(i, len(chosen), t.spec)
         effect = next(e for e in candidate_effects(model) if e.spec() == t.spec)
         big, bp = augmented(model, params, effect)
+        try:  # folds start from the grown model's own fit: what they hold fixed is then right
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                bp = identify(big, measurements, bp, register=False).parameters
+        except DoeCalibError:
+            scored[t.spec] = t.with_cv(float("nan"))
+            continue
         scored[t.spec] = t.with_cv(cross_validated_rms(big, measurements, bp, folds))
     ranked = sorted(scored.values(), key=lambda t: (np.nan_to_num(t.cv_rms_mm, nan=np.inf),
                                                      t.log10_p))
@@ -121,10 +147,10 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                  configuration_variables(model.robot, measurements.configurations).items()}
     follow = follows(size[used] / count[used], variables)
     flagged = flagged_poses(res, test.dof / res.weighted.size)
-    verdict = _verdict(model, test, cv, test.sigma_mm, ranked, follow, flagged, level,
-                       res.weighted.size)
+    verdict = _verdict(model, test, cv, test.sigma_mm, ranked, follow, flagged, level)
+    proposed, _ = _proposal(test, ranked, level)
     chi2 = {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
             "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm}
     return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, test.adequate, chi2,
                            tuple(ranked), tuple(follow), tuple(flagged), level, verdict,
-                           int(res.weighted.size))
+                           None if proposed is None else proposed.spec, int(res.weighted.size))

@@ -133,8 +133,8 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
             stopped = "the model is adequate and no further effect is significant"
             break
         if best is None:
-            stopped = ("no catalogue effect is significant although the model is not adequate: "
-                       + diag.verdict)
+            stopped = ("no catalogue effect explains the residual although the model is not "
+                       "adequate: " + diag.verdict)
             break
         if best.cv_rms_mm is None or best.cv_rms_mm > diag.cv_rms_mm * (1 - min_gain):
             stopped = (f"the best significant effect, {best.spec}, does not lower the "

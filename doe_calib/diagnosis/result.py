@@ -38,6 +38,10 @@ class DiagnosisResult:
         Significance level of the adequacy test and of proposing an effect.
     verdict : str
         The conclusion in plain words.
+    proposed : str or None
+        The effect to add (model-string form): the best significant candidate,
+        if it explains at least half of the residual or would make the model
+        adequate; None otherwise.
     """
 
     model: str
@@ -51,6 +55,7 @@ class DiagnosisResult:
     flagged: tuple
     level: float
     verdict: str
+    proposed: str | None = None
     n_observations: int = 0
     notes: tuple = field(default=())
 
@@ -61,9 +66,8 @@ class DiagnosisResult:
 
     @property
     def best(self):
-        """The best significant candidate, or None."""
-        s = self.significant
-        return s[0] if s else None
+        """The proposed candidate (see ``proposed``), or None."""
+        return next((c for c in self.candidates if c.spec == self.proposed), None)
 
     def summary(self, top: int = 8) -> str:
         """The verdict, the adequacy test, the ranked candidates and what the residual follows."""
@@ -94,7 +98,8 @@ class DiagnosisResult:
         return {"format": FORMAT, "model": self.model, "rms_mm": self.rms_mm,
                 "cv_rms_mm": self.cv_rms_mm, "noise_floor_mm": self.noise_floor_mm,
                 "adequate": self.adequate, "chi2": self.chi2, "level": self.level,
-                "verdict": self.verdict, "n_observations": self.n_observations,
+                "verdict": self.verdict, "proposed": self.proposed,
+                "n_observations": self.n_observations,
                 "candidates": [t.to_dict() for t in self.candidates],
                 "follows": [f.to_dict() for f in self.follows],
                 "flagged_poses": list(self.flagged), "notes": list(self.notes)}
@@ -107,7 +112,7 @@ class DiagnosisResult:
         return cls(d["model"], d["rms_mm"], d["cv_rms_mm"], d["noise_floor_mm"], d["adequate"],
                    d["chi2"], tuple(CandidateTest.from_dict(t) for t in d["candidates"]),
                    tuple(Follows(**f) for f in d["follows"]), tuple(d["flagged_poses"]),
-                   d["level"], d["verdict"], d.get("n_observations", 0),
+                   d["level"], d["verdict"], d.get("proposed"), d.get("n_observations", 0),
                    tuple(d.get("notes", ())))
 
     @classmethod

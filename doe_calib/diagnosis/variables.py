@@ -41,7 +41,8 @@ def configuration_variables(robot, configurations) -> dict:
                                        "deg" if revolute[k] else "mm", revolute[k])
     w = configurations.wrench
     if np.any(w != 0):
-        for i, name in enumerate(("fx", "fy", "fz", "mx", "my", "mz")):
+        for i, name in enumerate(("force fx", "force fy", "force fz", "moment mx", "moment my",
+                                  "moment mz")):
             if np.ptp(w[:, i]) > 0:
                 out[name] = (w[:, i], "N" if i < 3 else "N·m", False)
         tau_f = nominal_torque_function(robot).map(len(configurations))

@@ -11,7 +11,9 @@ from .html import figure, paragraph, preformatted, section, table, write_report
 
 def _text(value) -> str:
     """A constraint value in words: numbers to 6 digits, lists joined, None as "—"."""
-    if value is None or value == "" or value == {} or value == []:
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, (list, tuple, dict, str)) and len(value) == 0 or value is None:
         return "—"
     if isinstance(value, float):
         return f"{value:.6g}"
@@ -64,26 +66,8 @@ def _pose_rows(design):
     return rows
 
 
-def design_report(design, path, dpi: int = 90):
-    """Write an HTML report of a measurement design.
-
-    Parameters
-    ----------
-    design : DesignResult
-    path : str or Path
-        HTML file to write; self-contained (figures embedded as PNG).
-    dpi : int
-        Resolution of the figures.
-
-    Returns
-    -------
-    Path
-        The file written.
-
-    Examples
-    --------
-    >>> design_report(DesignResult.from_json("design.json"), "design.html")  # doctest: +SKIP
-    """
+def design_sections(design, dpi: int = 90) -> list:
+    """The report sections of a design: poses, joint chart, 3-D view, constraints, bound, std."""
     robot, png = design.robot, figures.to_png
     units = [j.display_unit for j in robot.joints]
     sections = [section(
@@ -137,6 +121,31 @@ def design_report(design, path, dpi: int = 90):
                "predicted standard deviation of each parameter, log scale",
                "Predicted std of each designed-for parameter (display units, log scale).")))
     sections.append(section("Notes", *([paragraph(n) for n in design.notes] or ["None."])))
+    return sections
+
+
+def design_report(design, path, dpi: int = 90):
+    """Write an HTML report of a measurement design.
+
+    Parameters
+    ----------
+    design : DesignResult
+    path : str or Path
+        HTML file to write; self-contained (figures embedded as PNG).
+    dpi : int
+        Resolution of the figures.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Examples
+    --------
+    >>> design_report(DesignResult.from_json("design.json"), "design.html")  # doctest: +SKIP
+    """
+    sections = design_sections(design, dpi)
     sections.append(section("Summary", preformatted(design.summary())))
-    title = f"Measurement design for {robot.name}: {design.model}, {design.criterion} criterion"
+    title = (f"Measurement design for {design.robot.name}: {design.model}, "
+             f"{design.criterion} criterion")
     return write_report(path, title, sections)

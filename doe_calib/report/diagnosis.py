@@ -54,8 +54,8 @@ def diagnosis_report(diagnosis, model, measurements, fit, path, dpi: int = 90):
     return write_report(path, f"Diagnosis of {diagnosis.model}", sections)
 
 
-def refine_report(result, model, measurements, path, dpi: int = 90):
-    """Write the HTML report of a refinement: the error at each step, then the final diagnosis.
+def refine_sections(result, model, measurements, dpi: int = 90) -> list:
+    """Sections of a refinement: the error at each step, then the final model's diagnosis.
 
     ``model`` is the final model (``result.fit`` is its identification).
     """
@@ -69,6 +69,11 @@ def refine_report(result, model, measurements, path, dpi: int = 90):
         "RMS per coordinate (mm) after each added effect; dashed: the noise floor."), table(
         ["step", "model", "fit RMS (mm)", "CV RMS (mm)", "validation RMS (mm)", "adequate",
          "why"], rows, 4), paragraph(f"Stopped: {result.stopped}"))]
-    sections += diagnosis_sections(result.diagnosis, model, measurements, result.fit, dpi)
+    return sections + diagnosis_sections(result.diagnosis, model, measurements, result.fit, dpi)
+
+
+def refine_report(result, model, measurements, path, dpi: int = 90):
+    """Write the HTML report of a refinement (:func:`refine_sections` and the final fit)."""
+    sections = refine_sections(result, model, measurements, dpi)
     sections.append(section("Final identification", preformatted(result.fit.summary())))
     return write_report(path, f"Refinement to {result.fit.model}", sections)
