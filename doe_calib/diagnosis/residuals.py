@@ -88,11 +88,16 @@ class Adequacy:
 def repeatability_sigma(measurements):
     """σ (m) pooled from readings repeated at the same configuration and marker, or None.
 
-    A configuration measured several times (same pose, load and marker)
-    shows the noise directly; the pooled within-group standard deviation of
+    A configuration measured several times (same pose id, joint positions,
+    load and marker, whether in one configuration or repeated ones) shows
+    the noise directly; the pooled within-group standard deviation of
     the coordinates estimates σ free of any model error.
     """
-    key = measurements.config * 1000 + measurements.marker
+    cfg = measurements.configurations
+    same = {}
+    group = np.array([same.setdefault((cfg.pose[c], cfg.q[c].tobytes(), cfg.wrench[c].tobytes()),
+                                      len(same)) for c in range(len(cfg))])
+    key = group[measurements.config] * (measurements.marker.max() + 1) + measurements.marker
     _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
     repeated = counts[inverse] > 1
     if repeated.sum() < 6:

@@ -1,0 +1,75 @@
+"""diagnose and refine from the command line, on the files a user brings; noise from repeats."""
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from doe_calib import Configurations, build_model, example, simulate
+from doe_calib.cli import main
+from doe_calib.data import concatenate
+from doe_calib.diagnosis import diagnose
+from doe_calib.diagnosis.residuals import repeatability_sigma
+from doe_calib.io import write_measurements
+from doe_calib.loads import unloaded_and_loaded
+from doe_calib.simulate import random_configurations, random_truth
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory, robot6, tool6):
+    """A campaign and a validation file with a hidden cyclic error of joint 3."""
+    rng = np.random.default_rng(4)
+    true = build_model(robot6, tool6, "joint_offset+joint_compliance+cyclic(j3)")
+    truth = random_truth(true, rng)
+    out = tmp_path_factory.mktemp("diag")
+    for name, n in (("m.csv", 30), ("v.csv", 15)):
+        cfg = unloaded_and_loaded(true, truth, random_configurations(robot6, n, rng), 250,
+                                  (0, 0, 0.2))
+        write_measurements(out / name, simulate(true, truth, cfg, 3e-5, rng), robot6, tool6)
+    return out
+
+
+def test_diagnose_command_writes_json_plot_and_report(files, capsys):
+    out = files
+    args = ["--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML, "--data",
+            str(out / "m.csv"), "--sigma", "0.03", "--model", "joint_offset+joint_compliance"]
+    assert main(["diagnose", *args, "--out", str(out / "d.json"), "--report",
+                 str(out / "d.html")]) == 0
+    d = json.loads((out / "d.json").read_text())
+    assert {"model", "rms_mm", "noise_floor_mm", "adequate", "candidates"} <= set(d)
+    top = d["candidates"][0]
+    assert (top["effect"], top["joint"]) == ("cyclic", 3) and not d["adequate"]
+    assert {"statistic", "p_value", "cv_rms_mm", "explained_fraction"} <= set(top)
+    assert (out / "d_residuals.png").stat().st_size > 10_000
+    assert "cyclic" in capsys.readouterr().out
+    assert "data:image/png;base64," in (out / "d.html").read_text()
+
+
+def test_refine_result_is_what_predict_takes(files):
+    out = files
+    assert main(["refine", "--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+                 "--data", str(out / "m.csv"), "--sigma", "0.03", "--model", "joint_offset",
+                 "--validation", str(out / "v.csv"), "--out", str(out / "r.json")]) == 0
+    steps = json.loads((out / "r_refine.json").read_text())["steps"]
+    assert steps[-1]["adequate"] and steps[-1]["validation_rms_mm"] < 0.04
+    assert main(["predict", "--result", str(out / "r.json"), "--data", str(out / "v.csv"),
+                 "--out", str(out / "p.csv")]) == 0
+    rows = [r for r in (out / "p.csv").read_text().splitlines() if r and r[0] != "#"]
+    assert len(rows) == 1 + 15 * 2 * 3  # header, then every reading of the validation file
+
+
+def test_noise_from_repeated_readings_overrides_a_wrong_sigma(robot6, tool6):
+    """Each configuration read three times: the pooled spread is σ, whatever σ was claimed."""
+    rng = np.random.default_rng(9)
+    model = build_model(robot6, tool6, "joint_offset")
+    truth = random_truth(model, rng)
+    cfg = Configurations.from_arrays(random_configurations(robot6, 25, rng))
+    reads = [simulate(model, truth, cfg, 5e-5, rng) for _ in range(3)]
+    claimed = [replace(r, sigma=r.sigma * 0.2) for r in reads]  # σ = 0.01 mm claimed
+    same = concatenate(claimed)
+    assert repeatability_sigma(claimed[0]) is None
+    sigma = repeatability_sigma(same)
+    assert sigma == pytest.approx(5e-5, rel=0.1)
+    d = diagnose(model, same)
+    assert d.chi2["sigma_source"] == "repeated readings" and d.adequate
+    assert d.noise_floor_mm == pytest.approx(0.05, rel=0.1)
