@@ -61,6 +61,7 @@ def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> 
         ``noise_floor_mm`` and the paths written.
     """
     from .report import design_sections, refine_sections, write_report
+    from .report.diagnosis import diagnosis_sections
     from .report.html import paragraph, section
 
     out.mkdir(parents=True, exist_ok=True)
@@ -127,6 +128,7 @@ def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> 
         f"Refinement stopped: {grown.stopped}")])]
     report = write_report(out / "report.html", "doe_calib demo: design → measure → identify → "
                           "diagnose → refine", story + refine_sections(grown, final, meas)
+                          + diagnosis_sections(d, start, meas, fit, title="Starting model: ")
                           + design_sections(design))
     say(f"8. Report → {report}. Files are in {out}/: design.json/csv, calib_poses.src/.dat, "
         f"campaign.csv, validation.csv, result.json (doe-calib predict --result "

@@ -19,28 +19,32 @@ def _candidates_table(diagnosis, top: int = 15):
                   "CV RMS (mm)"], rows, 4)
 
 
-def diagnosis_sections(diagnosis, model, measurements, fit, dpi: int = 90) -> list:
-    """The sections of one diagnosis: verdict, adequacy, ranked effects, residual plots."""
+def diagnosis_sections(diagnosis, model, measurements, fit, dpi: int = 90,
+                       title: str = "") -> list:
+    """The sections of one diagnosis: verdict, adequacy, ranked effects, residual plots.
+
+    ``title`` prefixes every section heading (e.g. "Starting model: ").
+    """
     c = diagnosis.chi2
-    out = [section("Verdict", paragraph(diagnosis.verdict), table(
+    out = [section(f"{title}Verdict", paragraph(diagnosis.verdict), table(
         ["model", "fit RMS (mm)", "CV RMS (mm)", "noise floor (mm)", "χ²", "dof", "p",
          "adequate"],
         [[diagnosis.model, diagnosis.rms_mm, diagnosis.cv_rms_mm, diagnosis.noise_floor_mm,
           c["statistic"], c["dof"], c["p_value"], "yes" if diagnosis.adequate else "no"]], 4))]
-    out.append(section("Which effect is missing", _candidates_table(diagnosis), figure(
+    out.append(section(f"{title}Which effect is missing", _candidates_table(diagnosis), figure(
         _png(candidate_bars(diagnosis), dpi), "share of the residual each candidate explains",
         "Share of the remaining residual (after projecting out what the model already "
         "absorbs) each candidate effect explains; green ones are significant.")))
     norms = residual_norms_mm(model, measurements, fit.parameters.values)
     follow = ", ".join(f"{f.variable} (adjusted R² {f.r2:.2f})" for f in diagnosis.follows[:5])
-    out.append(section("Where the model fails", paragraph(
+    out.append(section(f"{title}Where the model fails", paragraph(
         f"The residual size follows: {follow or 'nothing in particular'}."), figure(
         _png(figures.residual_scatter(norms, reading_columns(model, measurements)), dpi),
         "residual of each reading against every variable",
         "3-D residual norm (mm) of each reading against the joint positions, loads, joint "
         "torques, temperature and measurement order.")))
     if diagnosis.flagged:
-        out.append(section("Poses far outside the noise (kept in the fit)", table(
+        out.append(section(f"{title}Poses far outside the noise (kept in the fit)", table(
             ["pose", "RMS (mm)", "χ²/dof", "p"],
             [[p["pose"], p["rms_mm"], p["chi2_per_dof"], p["p_value"]]
              for p in diagnosis.flagged], 4)))
