@@ -110,3 +110,18 @@ def test_offsets_predict_a_held_out_session_better(robot, sessions):
                                                 held.measurements))["rms_mm"]
     assert rms["joint_offset"] < rms[""]
     assert rms["joint_offset"] < 10.0  # mm: a sane calibration, not a diverged one
+
+
+def test_diagnosis_tells_the_truth_about_real_data(robot, sessions):
+    """Unloaded postures without temperature cannot show load or thermal effects: those
+    candidates have no columns left; the geometric model is not adequate against the noise."""
+    from studies.tiago_mocap.fitting import VARIANTS
+    from studies.tiago_mocap.study import diagnosis
+
+    d = diagnosis(robot, sessions, VARIANTS[2], top=100)
+    assert d["model"] == "joint_offset+geometry" and not d["adequate"]
+    assert d["rms_mm"] > 3 * d["noise_floor_mm"]
+    blind = [c for c in d["candidates"] if c["effect"] in
+             ("joint_compliance", "compliance_by_angle", "backlash", "thermal", "link_compliance")]
+    assert blind and all(c["rank"] == 0 for c in blind)
+    assert d["follows"] and d["verdict"]

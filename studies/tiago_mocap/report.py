@@ -178,11 +178,33 @@ def markdown(s: dict) -> str:
         lines.append(f"| {x['residual']} | {x['driver']} | {x['r']:+.2f} | {x['p']:.1g} | "
                      f"{x['spearman_rho']:+.2f} |")
     lines += ["", "![held-out residual per driver](tiago_mocap_residuals.png)",
-              "![error per model](tiago_mocap_models.png)", "",
-              "## Findings", "", findings(s), "",
+              "![error per model](tiago_mocap_models.png)", ""]
+    if "diagnosis" in s:
+        lines += diagnosis_lines(s["diagnosis"])
+    lines += ["## Findings", "", findings(s), "",
               "Reproduce: `python -m studies.tiago_mocap` (needs the data folder and "
               "`pip install example-robot-data`); all numbers are in `tiago_mocap.json`.", ""]
     return "\n".join(lines)
+
+
+def diagnosis_lines(d: dict) -> list[str]:
+    """The ``doe-calib diagnose`` verdict on the fit to every session, and its top candidates."""
+    lines = ["## What `doe_calib.diagnosis` says", "",
+             f"Model {d['model']} fitted to all sessions (one base): residual RMS "
+             f"{_f(d['rms_mm'])} mm, cross-validated {_f(d['cv_rms_mm'])} mm (folds of session "
+             f"postures; the same postures recur in the other sessions), "
+             f"noise floor {_f(d['noise_floor_mm'])} mm; χ² p = {d['chi2']['p_value']:.2g} "
+             f"({'adequate' if d['adequate'] else 'not adequate'}). "
+             f"{d['n_candidates']} catalogue candidates tested (the unloaded data cannot show "
+             f"compliance, backlash or temperature effects: those are absorbed or empty).", "",
+             f"> {d['verdict']}", "",
+             "| candidate | F | p (Bonferroni) | explains | CV RMS (mm) |",
+             "|---|---:|---:|---:|---:|"]
+    for c in d["candidates"]:
+        cv = "–" if c["cv_rms_mm"] is None else _f(c["cv_rms_mm"])
+        lines.append(f"| {c['spec']} | {c['statistic']:.3g} | {c['p_value']:.2g} | "
+                     f"{100 * c['explained_fraction']:.0f} % | {cv} |")
+    return lines + [""]
 
 
 def findings(s: dict) -> str:

@@ -8,6 +8,7 @@ import numpy as np
 
 from doe_calib import build_model
 from doe_calib.data import concatenate
+from doe_calib.diagnosis import diagnose
 
 from .drivers import correlations, repeated_postures
 from .fitting import VARIANTS, Variant, error_stats, errors_mm, fit, with_load
@@ -43,6 +44,20 @@ def _final_fit(robot, sessions, variant: Variant) -> dict:
             "sigma_ratio": res.sigma_ratio, "n_free": int(res.parameters.free.sum()),
             "parameters": [r for r in rows if r["free"] or r["block"] != "geometry"],
             "warnings": list(res.warnings)}
+
+
+def diagnosis(robot, sessions, variant: Variant, top: int = 8) -> dict:
+    """``doe_calib.diagnosis`` on the variant fitted to every session (one base), as a dict.
+
+    Keeps the ``top`` candidates; the rest are counted.
+    """
+    model = build_model(robot, tiago_tool(), variant.spec)
+    res = fit(model, sessions, False, variant.fixed).result
+    d = diagnose(model, concatenate([s.measurements for s in sessions]), res).to_dict()
+    d["n_candidates"] = len(d["candidates"])
+    d["candidates"] = d["candidates"][:top]
+    d["flagged_poses"] = d["flagged_poses"][:10]
+    return d
 
 
 def _validate(robot, sessions, variant: Variant) -> tuple:
@@ -119,6 +134,7 @@ def run(data_dir=DEFAULT_DATA, out_dir="results") -> dict:
         "correlations_posture_cv": corr_posture[:12],
         "correlations_exploratory": {"model": explo, "top": corr_explo[:12]},
         "sigma_sensitivity": {"model": best["label"], "sigma": "constant", "cv": sens},
+        "diagnosis": diagnosis(robot, sessions, best_v),
     }
     (out_dir / "tiago_mocap.json").write_text(json.dumps(summary, indent=1, ensure_ascii=False),
                                               encoding="utf-8")
