@@ -9,9 +9,58 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Names of the per-configuration environment variables, in the order of the
-#: model's ``env`` input. Temperature is in °C (NaN when not measured).
+#: The environment fields every robot has, in the order they open the model's
+#: ``env`` input: temperature in °C (NaN when not measured). The full vector,
+#: with one approach direction per joint, is :func:`env_fields`.
 ENV_FIELDS = ("temperature",)
+
+
+def env_fields(n_joints: int) -> tuple:
+    """Names of the model's ``env`` input for an N-joint robot, in order.
+
+    ``("temperature", "approach1", …, "approachN")``: the temperature (°C,
+    NaN when not measured), then for each joint the direction from which it
+    reached the configuration: +1 (moving up, q increasing), −1 (moving
+    down), 0 (unknown). See :func:`approach_from_order`.
+
+    Examples
+    --------
+    >>> env_fields(2)
+    ('temperature', 'approach1', 'approach2')
+    """
+    return ENV_FIELDS + tuple(f"approach{k + 1}" for k in range(n_joints))
+
+
+def approach_from_order(q, tol: float = 0.0) -> np.ndarray:
+    """Direction from which each joint reached each configuration, visited in row order.
+
+    Configuration i gets ``sign(q_k(i) − q_k(i−1))`` for joint k; when the
+    joint did not move (``|Δq| <= tol``) it keeps the previous
+    configuration's direction; the first configuration gets 0 (unknown).
+
+    Parameters
+    ----------
+    q : array_like, shape (M, N)
+        Joint positions in measurement order (any unit; ``tol`` in the same).
+    tol : float
+        Largest change that counts as "did not move".
+
+    Returns
+    -------
+    ndarray, shape (M, N)
+        +1, −1 or 0.
+
+    Examples
+    --------
+    >>> approach_from_order([[0.0], [1.0], [1.0], [0.5]]).ravel().tolist()
+    [0.0, 1.0, 1.0, -1.0]
+    """
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    out = np.zeros_like(q)
+    for i in range(1, q.shape[0]):
+        step = q[i] - q[i - 1]
+        out[i] = np.where(np.abs(step) > tol, np.sign(step), out[i - 1])
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -27,8 +76,11 @@ class Configurations:
         Joint positions, rad (revolute) or m (prismatic).
     wrench : ndarray, shape (M, 6)
         Force (N) and moment (N·m) applied at the flange origin, robot base frame.
-    env : ndarray, shape (M, len(ENV_FIELDS))
-        Environment variables (see :data:`ENV_FIELDS`).
+    env : ndarray, shape (M, 1 + N)
+        Environment variables (see :func:`env_fields`): temperature (°C, NaN
+        when not measured), then each joint's approach direction (+1, −1, 0
+        unknown). An (M, 1) or (M,) temperature-only array is accepted and
+        completed with approach 0.
     """
 
     pose: tuple
@@ -36,16 +88,48 @@ class Configurations:
     wrench: np.ndarray
     env: np.ndarray
 
+    def __post_init__(self):
+        m, n = self.q.shape
+        env = np.asarray(self.env, dtype=float)
+        env = env.reshape(m, 1) if env.ndim == 1 else env
+        if env.shape[1] == len(ENV_FIELDS):
+            env = np.hstack([env, np.zeros((m, n))])
+        if env.shape != (m, len(ENV_FIELDS) + n):
+            raise ValueError(f"env has shape {env.shape}; expected ({m}, {len(ENV_FIELDS)}) "
+                             f"(temperature) or ({m}, {len(ENV_FIELDS) + n}) "
+                             f"({', '.join(env_fields(n))})")
+        if not np.isin(env[:, len(ENV_FIELDS):], (-1.0, 0.0, 1.0)).all():
+            raise ValueError("approach directions must be +1, -1 or 0")
+        object.__setattr__(self, "env", env)
+
     @classmethod
-    def from_arrays(cls, q, wrench=None, env=None, pose=None) -> "Configurations":
-        """Build from arrays; missing wrench is zero, missing env is NaN, ids are 1..M."""
+    def from_arrays(cls, q, wrench=None, env=None, pose=None,
+                    approach=None) -> "Configurations":
+        """Build from arrays.
+
+        Missing wrench is zero, missing env is NaN temperature and approach 0,
+        ids are 1..M. ``env`` is (M, 1) temperature or the full (M, 1 + N);
+        ``approach`` (M, N), when given, sets the approach directions.
+        """
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        m = q.shape[0]
+        m, n = q.shape
         wrench = np.zeros((m, 6)) if wrench is None else np.asarray(wrench, float).reshape(m, 6)
         env = np.full((m, len(ENV_FIELDS)), np.nan) if env is None else \
-            np.asarray(env, float).reshape(m, len(ENV_FIELDS))
+            np.asarray(env, float).reshape(m, -1 if m else len(ENV_FIELDS))
+        if approach is not None:
+            env = np.hstack([env[:, :len(ENV_FIELDS)], np.asarray(approach, float).reshape(m, n)])
         pose = tuple(str(i + 1) for i in range(m)) if pose is None else tuple(map(str, pose))
         return cls(pose, q, wrench, env)
+
+    @property
+    def temperature(self) -> np.ndarray:
+        """Temperature of each configuration, °C (NaN when not measured), shape (M,)."""
+        return self.env[:, 0]
+
+    @property
+    def approach(self) -> np.ndarray:
+        """Approach direction of each joint (+1, −1, 0 unknown), shape (M, N)."""
+        return self.env[:, len(ENV_FIELDS):]
 
     def __len__(self) -> int:
         return self.q.shape[0]

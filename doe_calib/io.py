@@ -4,6 +4,25 @@ Files are in controller and tracker units (deg, mm, N, N·m, °C); everything
 returned is SI. Every problem raises :class:`~doe_calib.errors.DataError`
 naming the file, the physical line and the column; with ``skip_bad`` a bad
 row is dropped instead and reported in ``Measurements.dropped``.
+
+Approach directions (for ``backlash``): the optional columns ``approach1``
+… ``approachN`` give, for each row, the direction from which joint k reached
+the pose: ``1`` (or ``+1``; moving up, q increasing), ``-1`` (moving down) or
+``0`` (unknown); any other value is an error. Give all N columns or none.
+When they are absent, the directions come from the measurement order: the
+configurations, in order of first appearance in the file, are taken to be
+visited in that order, so configuration i gets ``sign(q_k(i) − q_k(i−1))``
+for joint k, the previous configuration's direction when joint k did not move
+(the same pose under another load, or a joint held still), and 0 for the
+first configuration. With the columns, rows of one pose and load that differ
+in approach are different configurations (a pose measured from both sides).
+
+Writers put the approach columns in only when reading the file back would
+not derive the same directions from its order, so every measurement file
+round-trips exactly. A design whose directions are all 0 (not planned: the
+design algorithms cannot plan them) is written without them; reading it
+back then derives the directions the robot will have running the design in
+the file's order.
 """
 from __future__ import annotations
 
@@ -14,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .data import ENV_FIELDS, Configurations, Measurements
+from .data import Configurations, Measurements, approach_from_order
 from .errors import DataError
 
 WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
@@ -96,6 +115,43 @@ def _joint_columns(robot) -> list[str]:
     return [f"q{k + 1}" for k in range(robot.n_joints)]
 
 
+def _approach_columns(robot) -> list[str]:
+    return [f"approach{k + 1}" for k in range(robot.n_joints)]
+
+
+def _check_approach_columns(table, robot, line) -> bool:
+    """Whether the file gives the approach directions (all N columns; some is an error)."""
+    names = _approach_columns(robot)
+    present = [c for c in names if c in table.columns]
+    if present and len(present) < len(names):
+        missing = [c for c in names if c not in table.columns]
+        raise DataError(f"approach column(s) {', '.join(missing)} missing: give all of "
+                        f"{names[0]} … {names[-1]} or none (then they come from the "
+                        f"measurement order)", table.path, line, table.col(present[0]))
+    return bool(present)
+
+
+def _approach(table, line, fields, robot) -> tuple:
+    """Approach direction of each joint in one row: +1, −1 or 0."""
+    out = []
+    for name in _approach_columns(robot):
+        text = fields[table.columns.index(name)]
+        try:
+            value = float(text)
+        except ValueError:
+            value = None
+        if value not in (-1.0, 0.0, 1.0):
+            raise DataError(f"{text!r} is not an approach direction: write 1 (joint moving up), "
+                            f"-1 (moving down) or 0 (unknown)", table.path, line, table.col(name))
+        out.append(value + 0.0)  # no -0.0
+    return tuple(out)
+
+
+def _derived_approach(q, robot) -> np.ndarray:
+    """Approach directions from the visiting order of configurations q (M, N), SI."""
+    return approach_from_order(np.asarray(q) * robot.display_factors, _Q_TOL)
+
+
 def _joints(table, line, fields, robot) -> np.ndarray:
     """q of one row in SI, checked against the limits."""
     q = np.empty(robot.n_joints)
@@ -149,15 +205,18 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
     Returns
     -------
     Measurements
-        In SI; configurations keyed by (pose, wrench, temperature) in order
-        of first appearance.
+        In SI; configurations keyed by (pose, wrench, temperature, and the
+        approach directions when given) in order of first appearance; without
+        approach columns the directions come from that order (module notes).
     """
     table = _read_table(path)
     header_line = table.rows[0][0] - 1
     qcols = _joint_columns(robot)
     required = ["pose", *qcols, "marker", *(XYZ if require_xyz else ())]
-    optional = [*WRENCH, "temperature", "sigma", *(() if require_xyz else XYZ)]
+    optional = [*WRENCH, "temperature", "sigma", *_approach_columns(robot),
+                *(() if require_xyz else XYZ)]
     _check_columns(table, required, optional, header_line)
+    explicit = _check_approach_columns(table, robot, header_line)
     if "sigma" not in table.columns and sigma_mm is None:
         raise DataError("no 'sigma' column and no σ given: pass --sigma MM", table.path,
                         header_line)
@@ -190,7 +249,8 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
                             table.col("sigma"))
         xyz = np.array([_number(table, line, fields, c, np.nan if not require_xyz else None)
                         for c in XYZ]) / 1000.0
-        key = (pose, tuple(wrench), temp if np.isfinite(temp) else None)
+        approach = _approach(table, line, fields, robot) if explicit else None
+        key = (pose, tuple(wrench), temp if np.isfinite(temp) else None, approach)
         if (key, marker) in seen:
             raise DataError(f"marker {marker!r} is read twice in pose {pose!r} under the same "
                             f"load (first on line {seen[key, marker]})", table.path, line,
@@ -202,23 +262,29 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
     parsed, dropped = _parse_rows(table, robot, row, skip_bad)
     first, index, config = {}, {}, []  # configuration key → (q, wrench, temperature)
     for _, (key, q, wrench, temp, *_) in parsed:
-        first.setdefault(key, (q, wrench, [temp]))
+        first.setdefault(key, (q, wrench, temp))
         config.append(index.setdefault(key, len(index)))
-    values = list(first.values())
-    cfg = Configurations(tuple(k[0] for k in first), np.array([v[0] for v in values]),
-                         np.array([v[1] for v in values]),
-                         np.array([v[2] for v in values]).reshape(-1, len(ENV_FIELDS)))
+    q = np.array([v[0] for v in first.values()])
+    approach = np.array([k[3] for k in first]) if explicit else _derived_approach(q, robot)
+    cfg = Configurations.from_arrays(q, np.array([v[1] for v in first.values()]),
+                                     np.array([[v[2]] for v in first.values()]),
+                                     [k[0] for k in first], approach)
     return Measurements(cfg, np.array(config), np.array([p[4] for _, p in parsed]),
                         np.array([p[5] for _, p in parsed]), np.array([p[6] for _, p in parsed]),
                         np.array([line for line, _ in parsed]), table.path, tuple(dropped))
 
 
 def read_design(path, robot) -> Configurations:
-    """Read a design CSV (formats.md §4): pose, q1..qN (deg/mm), optional wrench, temperature."""
+    """Read a design CSV (formats.md §4): pose, q1..qN (deg/mm), optional wrench, temperature.
+
+    Optional ``approach1`` … ``approachN`` columns as in a measurement file;
+    without them the directions come from the row order (module notes).
+    """
     table = _read_table(path)
     header_line = table.rows[0][0] - 1
-    _check_columns(table, ["pose", *_joint_columns(robot)], [*WRENCH, "temperature"],
-                   header_line)
+    _check_columns(table, ["pose", *_joint_columns(robot)],
+                   [*WRENCH, "temperature", *_approach_columns(robot)], header_line)
+    explicit = _check_approach_columns(table, robot, header_line)
 
     def row(line, fields):
         pose = fields[table.columns.index("pose")]
@@ -226,12 +292,15 @@ def read_design(path, robot) -> Configurations:
             raise DataError("empty pose id", table.path, line, table.col("pose"))
         return (pose, _joints(table, line, fields, robot),
                 [_number(table, line, fields, c, 0.0) for c in WRENCH],
-                _number(table, line, fields, "temperature", np.nan))
+                _number(table, line, fields, "temperature", np.nan),
+                _approach(table, line, fields, robot) if explicit else None)
 
     parsed, _ = _parse_rows(table, robot, row, False)
     rows = [p for _, p in parsed]
-    return Configurations.from_arrays([r[1] for r in rows], [r[2] for r in rows],
-                                      [[r[3]] for r in rows], [r[0] for r in rows])
+    q = np.array([r[1] for r in rows])
+    approach = np.array([r[4] for r in rows]) if explicit else _derived_approach(q, robot)
+    return Configurations.from_arrays(q, [r[2] for r in rows], [[r[3]] for r in rows],
+                                      [r[0] for r in rows], approach)
 
 
 def _configuration_fields(cfg, c, robot) -> list[str]:
@@ -248,31 +317,67 @@ def _write(path, comment, header, rows):
     Path(path).write_text(buf.getvalue(), encoding="utf-8")
 
 
+def _approach_needed(cfg, order, robot) -> bool:
+    """Whether the file needs the approach columns to read back as ``cfg``.
+
+    They are needed when the directions differ from those derived when
+    visiting ``order``, or to tell apart configurations that share pose,
+    load and temperature (one pose reached from both sides).
+    """
+    approach = cfg.approach[order]
+    keys = {(cfg.pose[c], tuple(cfg.wrench[c]), np.nan_to_num(cfg.temperature[c], nan=np.inf))
+            for c in order}
+    return len(keys) < len(order) or \
+        not np.array_equal(approach, _derived_approach(cfg.q[order], robot))
+
+
+def _approach_fields(cfg, c) -> list[str]:
+    return [str(int(a)) for a in cfg.approach[c]]
+
+
 def write_measurements(path, measurements, robot, tool) -> None:
-    """Write readings as a measurement CSV (deg/mm, mm, N, N·m), exactly re-readable."""
+    """Write readings as a measurement CSV (deg/mm, mm, N, N·m), exactly re-readable.
+
+    The approach columns are written only when reading back would not derive
+    the same directions from the order of the rows (module notes).
+    """
     cfg = measurements.configurations
-    with_temp = bool(np.isfinite(cfg.env[:, 0]).any())
+    with_temp = bool(np.isfinite(cfg.temperature).any())
+    order = np.unique(measurements.config, return_index=True)
+    order = order[0][np.argsort(order[1])]  # configurations in order of first appearance
+    with_approach = _approach_needed(cfg, order, robot)
     header = ["pose", *_joint_columns(robot), *WRENCH, "marker", *XYZ,
-              *(["temperature"] if with_temp else []), "sigma"]
+              *(["temperature"] if with_temp else []), "sigma",
+              *(_approach_columns(robot) if with_approach else [])]
     rows = []
     for c, j, xyz, s in zip(measurements.config, measurements.marker, measurements.xyz,
                             measurements.sigma):
         temp = [repr(float(cfg.env[c, 0])) if np.isfinite(cfg.env[c, 0]) else ""]
         rows.append([*_configuration_fields(cfg, c, robot), tool.names[j],
                      *map(repr, map(float, xyz * 1000.0)), *(temp if with_temp else []),
-                     repr(float(s * 1000.0))])
+                     repr(float(s * 1000.0)),
+                     *(_approach_fields(cfg, c) if with_approach else [])])
     _write(path, "doe_calib measurements: q in deg (mm for prismatic joints), x/y/z and sigma "
                  "in mm, forces in N, moments in N·m, temperature in °C", header, rows)
 
 
 def write_design(path, configurations, robot) -> None:
-    """Write configurations as a design CSV (formats.md §4)."""
-    with_temp = bool(np.isfinite(configurations.env[:, 0]).any())
-    header = ["pose", *_joint_columns(robot), *WRENCH, *(["temperature"] if with_temp else [])]
+    """Write configurations as a design CSV (formats.md §4).
+
+    The approach columns are written only when some direction is planned (not
+    0) and reading back would not derive the same from the row order.
+    """
+    cfg = configurations
+    with_temp = bool(np.isfinite(cfg.temperature).any())
+    with_approach = bool(np.any(cfg.approach != 0)) and \
+        _approach_needed(cfg, np.arange(len(cfg)), robot)
+    header = ["pose", *_joint_columns(robot), *WRENCH, *(["temperature"] if with_temp else []),
+              *(_approach_columns(robot) if with_approach else [])]
     rows = []
-    for c in range(len(configurations)):
-        t = configurations.env[c, 0]
-        rows.append(_configuration_fields(configurations, c, robot)
-                    + ([repr(float(t)) if np.isfinite(t) else ""] if with_temp else []))
+    for c in range(len(cfg)):
+        t = cfg.env[c, 0]
+        rows.append(_configuration_fields(cfg, c, robot)
+                    + ([repr(float(t)) if np.isfinite(t) else ""] if with_temp else [])
+                    + (_approach_fields(cfg, c) if with_approach else []))
     _write(path, "doe_calib design: q in deg (mm for prismatic joints), forces in N, moments "
                  "in N·m", header, rows)

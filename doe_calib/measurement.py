@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from .data import ENV_FIELDS
+from .data import env_fields
 from .effects import DEFAULT_MODEL, parse_model
 from .effects.base import ChainSymbols
 from .kinematics import flange_pose
@@ -45,7 +45,8 @@ def marker_parameters(tool) -> list:
 class Model:
     """A robot + tool + set of effects, frozen into CasADi Functions.
 
-    Functions (inputs ``q`` (N), ``w`` (6: N, N·m), ``env`` (E), ``p`` (P), SI):
+    Functions (inputs ``q`` (N), ``w`` (6: N, N·m), ``env`` (1 + N: temperature °C,
+    approach direction of each joint, :func:`~doe_calib.data.env_fields`), ``p`` (P), SI):
 
     ``markers(q, w, env, p) -> x``
         All n marker positions in the tracker frame, (3n,) marker-major, m.
@@ -117,7 +118,7 @@ def build_model(robot, tool, model: str | tuple = DEFAULT_MODEL, compile: bool =
 
     q = ca.SX.sym("q", robot.n_joints)
     w = ca.SX.sym("w", 6)
-    env = ca.SX.sym("env", len(ENV_FIELDS))
+    env = ca.SX.sym("env", len(env_fields(robot.n_joints)))
     p = ca.SX.sym("p", len(params))
     t = ca.SX.sym("t", 3)
     by_name = {n: p[i] for i, n in enumerate(names)}

@@ -153,7 +153,7 @@ def test_six_axes_required(design, fmt, tmp_path):
     robot = replace(design.robot, joints=design.robot.joints[:5])
     cfg = design.configurations
     five = replace(design, robot=robot, configurations=Configurations(
-        cfg.pose, cfg.q[:, :5], cfg.wrench, cfg.env))
+        cfg.pose, cfg.q[:, :5], cfg.wrench, cfg.env[:, :6]))
     with pytest.raises(ModelError, match="6"):
         export_design(five, fmt, tmp_path)
 

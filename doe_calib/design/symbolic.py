@@ -4,18 +4,29 @@ Built from the model's own Functions (``point_robot``, ``observation``)
 called on SX symbols, so the expressions are the model that identifies.
 Positions are in the robot base frame, unloaded (the deflection under a
 load, a fraction of a millimetre, is neglected for placing things).
+
+The environment is unknown at design time: temperature NaN (no thermal
+correction) and every joint's approach direction 0 (a design cannot plan
+from which side a joint reaches a pose, so ``backlash`` enters the design
+only through the applied loads). Planning the approach would belong to the
+robot-program export, which does not do it.
 """
 from __future__ import annotations
 
 import casadi as ca
 import numpy as np
 
-from ..data import ENV_FIELDS
+from ..data import env_fields
 from ..loads import GRAVITY
 from ..measurement import build_model
 from .criteria import E_ORDER, check
 
-_ENV = ca.DM(np.full(len(ENV_FIELDS), np.nan))
+
+
+def design_env(robot) -> ca.DM:
+    """The environment of a planned pose: temperature NaN, every approach direction 0."""
+    fields = env_fields(robot.n_joints)
+    return ca.DM([np.nan if f == "temperature" else 0.0 for f in fields])
 
 
 def symbolic_model(model):
@@ -27,9 +38,9 @@ def symbolic_model(model):
 
 def flange_frame(model, values, q):
     """Flange rotation R (3×3) and origin o (3) in the robot base frame as SX of q (rad/m)."""
-    zero = ca.DM.zeros(6)
-    o = model.point_robot(q, zero, _ENV, values, ca.DM.zeros(3))[0]
-    axes = [model.point_robot(q, zero, _ENV, values, ca.DM(e))[0] - o for e in np.eye(3)]
+    zero, env = ca.DM.zeros(6), design_env(model.robot)
+    o = model.point_robot(q, zero, env, values, ca.DM.zeros(3))[0]
+    axes = [model.point_robot(q, zero, env, values, ca.DM(e))[0] - o for e in np.eye(3)]
     return ca.horzcat(*axes), o
 
 
@@ -52,9 +63,9 @@ def pose_information(model, params, loads, sigma: float) -> ca.Function:
     rotation, _ = flange_frame(model, values, q)
     free = np.flatnonzero(params.free).tolist()
     weight = ca.DM(params.scales[params.free] / sigma)
-    rows = []
+    rows, env = [], design_env(model.robot)
     for w in [ca.DM.zeros(6)] + [hanging_wrench(rotation, load) for load in loads]:
-        b = model.observation(q, w, _ENV, values)[1]
+        b = model.observation(q, w, env, values)[1]
         rows.append(b[:, free] @ ca.diag(weight))
     bt = ca.vertcat(*rows)
     return ca.Function("pose_information", [q], [bt.T @ bt], ["q"], ["M"])

@@ -2,7 +2,8 @@
 
 The variables are the joint angles (deg; mm for prismatic joints), the
 applied wrench components (N, N·m), the joint torques they cause (N·m), the
-temperature (°C, when measured) and the order of measurement. For each, the
+temperature (°C, when measured), each joint's approach direction (+1/−1, when
+known and not always the same) and the order of measurement. For each, the
 size of the residual at each configuration (mean of r² over its readings) is
 fitted by a smooth function of the variable (angles: sin/cos of one and two
 times the angle plus a line; others: a cubic); the adjusted R² says how much
@@ -50,9 +51,13 @@ def configuration_variables(robot, configurations) -> dict:
         for k, j in enumerate(robot.joints):
             if np.ptp(tau[:, k]) > 0:
                 out[f"tau{k + 1} ({j.name})"] = (tau[:, k], "N·m" if revolute[k] else "N", False)
-    t = configurations.env[:, 0]
+    t = configurations.temperature
     if np.all(np.isfinite(t)) and np.ptp(t) > 0:
         out["temperature"] = (t, "°C", False)
+    for k, j in enumerate(robot.joints):
+        a = configurations.approach[:, k]
+        if np.ptp(a) > 0:
+            out[f"approach of q{k + 1} ({j.name})"] = (a, "", False)
     out["measurement order"] = (np.arange(len(configurations), dtype=float), "", False)
     return out
 

@@ -37,8 +37,10 @@ class ChainSymbols:
     robot : Robot
     q : casadi.SX, shape (N, 1)
         Joint positions as commanded, rad or m.
-    env : casadi.SX, shape (E, 1)
-        Environment variables (:data:`doe_calib.data.ENV_FIELDS`).
+    env : casadi.SX, shape (1 + N, 1)
+        Environment variables (:func:`doe_calib.data.env_fields`): ``env[0]``
+        the temperature (°C, NaN when not measured), ``env[1 + k]`` the
+        direction from which joint k reached the configuration (+1, −1, 0).
     p : dict of str to casadi.SX
         Every model parameter by name (SI).
     wrench : casadi.SX, shape (6, 1), or None

@@ -1,7 +1,7 @@
 """``thermal(t_ref=20)``: link lengths growing with temperature.
 
 The robot's structure expands uniformly with the temperature ``T`` (°C,
-``env`` field ``temperature``, :data:`doe_calib.data.ENV_FIELDS`): every
+``env`` field ``temperature``, :func:`doe_calib.data.env_fields`): every
 joint placement's translation and the flange's translation become
 ``(1 + α (T − T_ref)) t_k``. ``alpha_thermal`` (1/K) is the structure's
 effective expansion coefficient (steel about 1.2e-5, aluminium 2.3e-5);

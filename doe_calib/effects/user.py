@@ -26,8 +26,9 @@ and at least one of the functions::
         # added joint deflection from the joint torques tau (N·m or N) of the wrench
 
 where ``q`` is the casadi SX joint vector (N, 1) (rad or m), ``env`` the SX
-environment vector (``env[0]`` the temperature, °C, NaN when not measured:
-guard it with ``casadi.if_else``), ``p`` a dict suffix → SX of this effect's
+environment vector (1 + N: ``env[0]`` the temperature, °C, NaN when not
+measured: guard it with ``casadi.if_else``; ``env[1 + k]`` the direction, +1,
+−1 or 0 unknown, from which joint k reached the pose), ``p`` a dict suffix → SX of this effect's
 parameters, ``wrench`` the SX 6-vector (N, N·m; flange wrench at the flange
 origin, base frame), ``tau`` the SX (N, 1) joint torques and ``joint`` the
 0-based joint index (None unless ``PER_JOINT``). The functions build symbolic
