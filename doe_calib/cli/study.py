@@ -12,7 +12,8 @@ from ..jsonfile import read_json, strict_json
 
 #: Study name → module in the ``studies`` package (each has ``main(argv)``).
 STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__main__",
-           "table2": "studies.table2.__main__", "diagnosis": "studies.diagnosis.__main__"}
+           "table2": "studies.table2.__main__", "diagnosis": "studies.diagnosis.__main__",
+           "design_sweep": "studies.design_sweep.__main__"}
 
 HELP = "run a study and write its results"
 EXAMPLE = "doe-calib study table1 --out results [--scheduler tcp://host:8786]"
