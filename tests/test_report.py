@@ -133,8 +133,25 @@ def _render(html_path, tmp_path):
     return imread(shot), dom.stdout.decode("utf-8")
 
 
+@pytest.fixture(scope="module")
+def refine_html(robot6, tool6, tmp_path_factory):
+    """A refine report (error falling, diagnosis sections) on data with a hidden cyclic error."""
+    from doe_calib.diagnosis.refine import refine
+    from doe_calib.report import refine_report
+
+    rng = np.random.default_rng(3)
+    true = build_model(robot6, tool6, "joint_offset+joint_compliance+cyclic(j3)")
+    truth = random_truth(true, rng)
+    cfg = unloaded_and_loaded(true, truth, random_configurations(robot6, 25, rng), 250,
+                              (0, 0, 0.2))
+    meas = simulate(true, truth, cfg, 3e-5, rng)
+    out = refine(build_model(robot6, tool6, "joint_offset+joint_compliance"), meas)
+    final = build_model(robot6, tool6, out.fit.model)
+    return refine_report(out, final, meas, tmp_path_factory.mktemp("refine") / "refine.html")
+
+
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
-@pytest.mark.parametrize("which", ["identification_html", "design_html"])
+@pytest.mark.parametrize("which", ["identification_html", "design_html", "refine_html"])
 def test_report_renders_in_chromium(which, request, tmp_path):
     path = request.getfixturevalue(which)
     shot, dom = _render(path, tmp_path)
