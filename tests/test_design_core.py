@@ -80,3 +80,7 @@ def test_design_command_writes_json_and_csv(tmp_path):
     assert np.all((cfg.q >= robot.lower) & (cfg.q <= robot.upper))
     loaded = cfg.wrench[1::2]
     assert np.allclose(loaded[:, 2], -250.0 * 9.80665)
+    # an optimal design beats the median random design of its size, and the file keeps it
+    vs = design.versus_random
+    assert vs["designs"] == 100 and 0 <= vs["singular_fraction"] < 0.5
+    assert vs["equivalent_poses"] >= 6

@@ -125,6 +125,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     randoms = [log_det(information(blocks[rng.choice(len(cands.q), n_poses, replace=False)],
                                    np.ones(n_poses))) for _ in range(_RANDOM_DESIGNS)]
     singular = float(np.mean(~np.isfinite(randoms)))
+    equivalent = None
     if np.isfinite(np.median(randoms)):
         equivalent = n_poses * np.exp((log_det(m) - np.median(randoms)) / p)
         versus_random = (f"{n_poses} optimal poses are as precise (D criterion) as "
@@ -159,4 +160,6 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
                         {par.name: (float(s * par.display_factor), par.display_unit)
                          for par, s in zip(free, std)}, used_constraints, tuple(notes),
                         efficiencies, criteria, equivalence, cands.to_dict(),
-                        {} if refinement is None else refinement.to_dict(), coverage)
+                        {} if refinement is None else refinement.to_dict(), coverage,
+                        {"designs": _RANDOM_DESIGNS, "singular_fraction": singular,
+                         "equivalent_poses": None if equivalent is None else float(equivalent)})

@@ -55,6 +55,12 @@ class DesignResult:
         The continuous refinement's outcome (empty when not run).
     coverage : dict
         Bins used by the poses and how many were asked for (empty when none).
+    versus_random : dict
+        ``designs`` (random designs of the same size drawn from the feasible
+        candidates), ``singular_fraction`` (share of them that cannot identify
+        every parameter) and ``equivalent_poses`` (how many random poses are as
+        precise, D criterion, against their median; None when that median is
+        singular).
     """
 
     robot: Robot
@@ -74,6 +80,7 @@ class DesignResult:
     candidates: dict = field(default_factory=dict)
     refinement: dict = field(default_factory=dict)
     coverage: dict = field(default_factory=dict)
+    versus_random: dict = field(default_factory=dict)
 
     def poses(self) -> list[dict]:
         """One entry per pose: id, q in deg (mm for prismatic joints) and its wrenches."""
@@ -131,6 +138,7 @@ class DesignResult:
                 "efficiencies": self.efficiencies, "criteria": self.criteria,
                 "equivalence": self.equivalence, "candidates": self.candidates,
                 "refinement": self.refinement, "coverage": self.coverage,
+                "versus_random": self.versus_random,
                 "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
 
     def to_json(self, path=None) -> str:
@@ -149,7 +157,8 @@ class DesignResult:
                    {r["name"]: (r["std"], r["unit"]) for r in d["predicted_std"]},
                    d.get("constraints", {}), tuple(d.get("notes", ())),
                    *(d.get(k, {}) for k in ("efficiencies", "criteria", "equivalence",
-                                            "candidates", "refinement", "coverage")))
+                                            "candidates", "refinement", "coverage",
+                                            "versus_random")))
 
     @classmethod
     def from_json(cls, path) -> "DesignResult":

@@ -10,7 +10,6 @@ compared on the same candidate poses, and no result depends on the engine.
 """
 from __future__ import annotations
 
-import re
 import time
 import warnings
 from dataclasses import asdict, dataclass
@@ -99,9 +98,6 @@ def _model(robot: str, tool: str):
     return build_model(Robot.from_urdf(setup.urdf), marker_tool, setup.model)
 
 
-_AS_RANDOM = re.compile(r"as precise \(D criterion\) as (\d+) random")
-
-
 def design_point(task: SweepTask) -> dict:
     """One optimal design → plain numbers (efficiencies, time, median std per parameter block).
 
@@ -124,11 +120,11 @@ def design_point(task: SweepTask) -> dict:
                              criterion=task.criterion, refine=task.refine,
                              rng=np.random.default_rng(task.seed))
     seconds = time.perf_counter() - start
-    found = _AS_RANDOM.search(res.notes[0])
+    equivalent = res.versus_random["equivalent_poses"]
     return {**asdict(task), "model": model.spec, "d_efficiency": float(res.efficiencies["D"]),
             "efficiency": float(res.efficiency), "value": float(res.value),
             "bound": float(res.bound),
-            "random_equivalent": int(found.group(1)) if found else None,
+            "random_equivalent": None if equivalent is None else round(equivalent),
             "median_std": block_medians(model, res.predicted_std),
             "refined": bool(res.refinement.get("accepted", False)),
             "warnings": sorted({f"{w.category.__name__}: {w.message}" for w in caught}),
