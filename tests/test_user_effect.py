@@ -190,6 +190,9 @@ def test_identify_and_predict_commands_with_an_effect_file(tmp_path, robot6, too
     assert main(["predict", "--result", str(out), "--data", str(data), "--out", str(pred)]) == 2
     assert main(["predict", "--result", str(out), "--data", str(data), "--out", str(pred),
                  "--effect-file", str(path)]) == 0 and pred.exists()
+    del REGISTRY["quad_scale"]
+    assert main(["compare", str(out), "--json"]) == 2
+    assert main(["compare", str(out), "--effect-file", str(path), "--json"]) == 0
 
 
 def test_loading_is_idempotent_and_specs_round_trip(tmp_path, robot6):

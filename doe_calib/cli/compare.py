@@ -7,7 +7,7 @@ from pathlib import Path
 from ..compare import compare, load_source, plot_std
 from ..io import read_design
 from ..jsonfile import strict_json
-from .common import parse_floats
+from .common import effect_file_argument, load_effect_files, parse_floats
 
 HELP = "compare designs and identification results: std per parameter, task-point accuracy"
 EXAMPLE = ("doe-calib compare d15.json d30.json result.json --task task.csv "
@@ -27,6 +27,7 @@ def add_arguments(c):
     c.add_argument("--report", metavar="FILE.html", help="also write an HTML report (tables "
                    "and bar plots of the std per parameter and of the task accuracy)")
     c.add_argument("--json", action="store_true", help="print JSON instead of the tables")
+    effect_file_argument(c)   # results whose model names a user effect need its file
 
 
 def _labels(files) -> list[str]:
@@ -36,6 +37,7 @@ def _labels(files) -> list[str]:
 
 
 def run(args):
+    load_effect_files(args.effect_file)
     sources = [load_source(f) for f in args.files]
     task = read_design(args.task, sources[0].robot) if args.task else None
     result = compare(sources, _labels(args.files),
