@@ -60,23 +60,16 @@ class Backlash(Effect):
     """``θ_k = backlash_<joint> / 2 · s_k``, s_k from the load, the approach or both."""
 
     name = "backlash"
+    per_joint = True
 
     def __init__(self, joint, mode: str = MODES[0]):
         if mode not in MODES:
             raise ModelError(f"backlash mode {mode!r}: use one of {', '.join(MODES)}")
-        self._joint, self._mode = str(joint), mode
+        self._mode = mode
         if mode == MODES[0]:
             super().__init__(joint)
         else:
             super().__init__(joint, mode=mode)
-
-    @classmethod
-    def candidates(cls, robot) -> list:
-        return [cls(f"j{k + 1}") for k in range(robot.n_joints)]
-
-    @property
-    def joint(self):
-        return self._joint
 
     @property
     def mode(self) -> str:
@@ -87,7 +80,7 @@ class Backlash(Effect):
         return self._mode != "approach"
 
     def parameters(self, robot) -> list:
-        j = robot.joints[joint_index(robot, self._joint)]
+        j = robot.joints[joint_index(robot, self.joint)]
         return [Parameter(f"backlash_{j.name}", self.name,
                           "rad" if j.kind == "revolute" else "m", 0.0, 1e-4,
                           f"backlash (dead-band width) of joint {j.name}")]
@@ -98,7 +91,7 @@ class Backlash(Effect):
     def joint_correction(self, s: ChainSymbols):
         if self._mode != "approach":
             return None
-        k = joint_index(s.robot, self._joint)
+        k = joint_index(s.robot, self.joint)
         out = ca.SX.zeros(s.robot.n_joints, 1)
         out[k] = self._half_width(s, k) * s.env[len(ENV_FIELDS) + k]
         return out
@@ -106,7 +99,7 @@ class Backlash(Effect):
     def deflection(self, s: ChainSymbols, tau: ca.SX):
         if self._mode == "approach":
             return None
-        k = joint_index(s.robot, self._joint)
+        k = joint_index(s.robot, self.joint)
         side = ca.tanh(tau[k] / TORQUE_SCALE)
         if self._mode == "both":
             side = side + (1 - side ** 2) * s.env[len(ENV_FIELDS) + k]

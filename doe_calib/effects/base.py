@@ -77,6 +77,8 @@ class Effect:
 
     #: Name used in ``--model`` strings, e.g. ``joint_offset``.
     name = ""
+    #: Whether the effect sits on one joint, given as its first argument (``cyclic(j3)``).
+    per_joint = False
 
     def __init__(self, *args, **options):
         self._args = tuple(str(a) for a in args)
@@ -102,15 +104,20 @@ class Effect:
     def candidates(cls, robot) -> list:
         """The instances model diagnosis tries when this effect is missing.
 
-        One instance for a whole-robot effect (the default); per-joint effects
-        return one per joint they can sit on, e.g. ``[Cyclic("j1"), …]``.
+        One instance for a whole-robot effect; a per-joint effect (``per_joint``)
+        one per joint, e.g. ``[GearRatio("j1"), …]``, with default options.
         """
+        if cls.per_joint:
+            return [cls(f"j{k + 1}") for k in range(robot.n_joints)]
         return [cls()]
 
     @property
     def joint(self):
-        """The joint selector the effect sits on (e.g. ``"j3"``), or None for a whole-robot one."""
-        return None
+        """The joint selector the effect sits on (e.g. ``"j3"``), or None for a whole-robot one.
+
+        A per-joint effect takes its joint as its first argument.
+        """
+        return self._args[0] if self.per_joint and self._args else None
 
     @property
     def uses_torque(self) -> bool:

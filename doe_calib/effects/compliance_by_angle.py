@@ -29,9 +29,10 @@ class ComplianceByAngle(Effect):
     """Piecewise-constant compliance ``chi_<joint>_1 … _B``, rad/(N·m) (m/N if prismatic)."""
 
     name = "compliance_by_angle"
+    per_joint = True
 
     def __init__(self, joint, bins: int = 5, edges_deg=None):
-        self._joint, self._bins = str(joint), int(bins)
+        self._bins = int(bins)
         if edges_deg is None:
             super().__init__(joint, bins=self._bins)
             self._edges_deg = None
@@ -53,23 +54,19 @@ class ComplianceByAngle(Effect):
     def candidates(cls, robot) -> list:
         return [cls(f"j{k + 1}", bins=3) for k in range(robot.n_joints)]
 
-    @property
-    def joint(self):
-        return self._joint
-
     def edges(self, robot) -> tuple:
         """Inner bin edges (rad or m) for this robot."""
-        j = robot.joints[joint_index(robot, self._joint)]
+        j = robot.joints[joint_index(robot, self.joint)]
         if self._edges_deg is not None:
             factor = np.radians(1.0) if j.kind == "revolute" else 1e-3
             return tuple(e * factor for e in self._edges_deg)
         if not (np.isfinite(j.lower) and np.isfinite(j.upper)):
-            raise ModelError(f"compliance_by_angle({self._joint}): joint {j.name} has no limits; "
+            raise ModelError(f"compliance_by_angle({self.joint}): joint {j.name} has no limits; "
                              f"give the bin edges")
         return tuple(np.linspace(j.lower, j.upper, self._bins + 1)[1:-1])
 
     def parameters(self, robot) -> list:
-        k = joint_index(robot, self._joint)
+        k = joint_index(robot, self.joint)
         j = robot.joints[k]
         edges = (-np.inf,) + self.edges(robot) + (np.inf,)
         unit = "rad/(N·m)" if j.kind == "revolute" else "m/N"
@@ -80,7 +77,7 @@ class ComplianceByAngle(Effect):
                 for b, (lo, hi) in enumerate(zip(edges[:-1], edges[1:]))]
 
     def deflection(self, s: ChainSymbols, tau: ca.SX):
-        k = joint_index(s.robot, self._joint)
+        k = joint_index(s.robot, self.joint)
         name = s.robot.joints[k].name
         edges = self.edges(s.robot)
         q = s.q[k]

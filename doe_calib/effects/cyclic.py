@@ -29,9 +29,9 @@ class Cyclic(Effect):
     """``Δq_k = Σ_h cyc_<joint>_s<h> sin(h q_k) + cyc_<joint>_c<h> cos(h q_k)``, rad."""
 
     name = "cyclic"
+    per_joint = True
 
     def __init__(self, joint, harmonics: int = 1):
-        self._joint = str(joint)
         try:
             self._harmonics = int(harmonics)
         except (TypeError, ValueError):
@@ -47,18 +47,14 @@ class Cyclic(Effect):
                 if j.kind == "revolute"]
 
     @property
-    def joint(self):
-        return self._joint
-
-    @property
     def harmonics(self) -> int:
         return self._harmonics
 
     def _revolute(self, robot):
-        k = joint_index(robot, self._joint)
+        k = joint_index(robot, self.joint)
         j = robot.joints[k]
         if j.kind != "revolute":
-            raise ModelError(f"cyclic({self._joint}): joint {j.name} is {j.kind}; the cyclic "
+            raise ModelError(f"cyclic({self.joint}): joint {j.name} is {j.kind}; the cyclic "
                              f"error is defined for revolute joints only")
         return k, j.name
 

@@ -18,26 +18,18 @@ class GearRatio(Effect):
     """``Δq_k = eps_<joint> · q_k``; ``eps_<joint>`` is dimensionless (unit "1")."""
 
     name = "gear_ratio"
+    per_joint = True
 
     def __init__(self, joint):
-        self._joint = str(joint)
         super().__init__(joint)
 
-    @classmethod
-    def candidates(cls, robot) -> list:
-        return [cls(f"j{k + 1}") for k in range(robot.n_joints)]
-
-    @property
-    def joint(self):
-        return self._joint
-
     def parameters(self, robot) -> list:
-        j = robot.joints[joint_index(robot, self._joint)]
+        j = robot.joints[joint_index(robot, self.joint)]
         return [Parameter(f"eps_{j.name}", self.name, "1", 0.0, 1e-4,
                           f"relative scale error of joint {j.name} (gear ratio, encoder)")]
 
     def joint_correction(self, s: ChainSymbols):
-        k = joint_index(s.robot, self._joint)
+        k = joint_index(s.robot, self.joint)
         out = ca.SX.zeros(s.robot.n_joints, 1)
         out[k] = s.p[f"eps_{s.robot.joints[k].name}"] * s.q[k]
         return out

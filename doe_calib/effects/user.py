@@ -107,7 +107,6 @@ class UserEffect(Effect):
     name = ""
     #: Resolved path of the declaring file.
     source = ""
-    per_joint = False
     #: ((suffix, unit, scale, description), …)
     parameter_specs = ()
     #: Function name → callable, for the functions the file defines.
@@ -120,25 +119,16 @@ class UserEffect(Effect):
         if not self.per_joint and joint is not None:
             raise ModelError(f"effect {self.name} (from {self.source}) is not per joint: write "
                              f"{self.name} without arguments, or set PER_JOINT = True")
-        self._joint = None if joint is None else str(joint)
         super().__init__(*(() if joint is None else (joint,)))
-
-    @classmethod
-    def candidates(cls, robot) -> list:
-        return [cls(f"j{k + 1}") for k in range(robot.n_joints)] if cls.per_joint else [cls()]
-
-    @property
-    def joint(self):
-        return self._joint
 
     @property
     def uses_torque(self) -> bool:
         return "deflection" in self.functions
 
     def _prefix(self, robot) -> tuple:
-        if self._joint is None:
+        if self.joint is None:
             return None, f"{self.name}_"
-        k = joint_index(robot, self._joint)
+        k = joint_index(robot, self.joint)
         return k, f"{self.name}_{robot.joints[k].name}_"
 
     def parameters(self, robot) -> list:
