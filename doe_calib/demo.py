@@ -9,7 +9,6 @@ measurement CSV, result JSON), exactly as the corresponding commands do.
 """
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +19,7 @@ from .design.optimal import optimal_design
 from .diagnosis import diagnose, validation_rms
 from .diagnosis.refine import refine
 from .export import export_design
-from .identify import identify
+from .identify import identify_quietly
 from .io import read_design, read_measurements, write_design, write_measurements
 from .loads import unloaded_and_loaded
 from .measurement import build_model
@@ -43,12 +42,6 @@ def tracker_base() -> np.ndarray:
     """Base parameters (robot base in the tracker frame: m, rotation vector) of the demo cell."""
     rot = rotation_vector_to_matrix(TRACKER_TURN)
     return np.concatenate([-rot @ TRACKER_POSITION, TRACKER_TURN])
-
-
-def _fit(model, meas):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return identify(model, meas)
 
 
 def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> dict:
@@ -101,7 +94,7 @@ def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> 
 
     meas = read_measurements(out / "campaign.csv", robot, tool)
     valid = read_measurements(out / "validation.csv", robot, tool)
-    fit = _fit(start, meas)
+    fit = identify_quietly(start, meas)
     fit.to_json(out / "result_start.json")
     say(f"5. Identified '{START}': fit RMS {fit.residuals['rms_mm']:.4f} mm, held-out RMS "
         f"{validation_rms(start, fit.parameters.values, valid):.4f} mm (noise {SIGMA_MM} mm)")
@@ -111,7 +104,8 @@ def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> 
     say(f"6. Diagnosis: {d.verdict}")
 
     say("7. Refining: add the best significant effect, re-identify, repeat until adequate…")
-    grown = refine(start, meas, valid, progress=lambda i, text: say(f"   step {i}: {text}"))
+    grown = refine(start, meas, valid, fit=fit,
+                   progress=lambda i, text: say(f"   step {i}: {text}"))
     grown.fit.to_json(out / "result.json")
     grown.to_json(out / "refine.json")
     for i, s in enumerate(grown.steps):

@@ -218,3 +218,14 @@ def identify(model, measurements, params=None, estimator: str = "point", **optio
         from .pose_estimator import identify_pose
         return identify_pose(model, measurements, params, **options)
     raise ValueError(f"unknown estimator {estimator!r}; choose one of {', '.join(ESTIMATORS)}")
+
+
+def identify_quietly(model, measurements, params=None, **options):
+    """:func:`identify` for fits run many times (cross-validation, diagnosis, refinement).
+
+    Identifiability, conditioning and convergence trouble is not issued as
+    warnings: it stays, in words, in the result's ``warnings``.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return identify(model, measurements, params, **options)

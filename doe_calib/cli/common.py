@@ -8,6 +8,8 @@ import numpy as np
 from ..effects import DEFAULT_MODEL
 from ..effects.user import load_effect_files
 from ..errors import DoeCalibError
+from ..io import read_measurements
+from ..measurement import build_model
 from ..robot import Robot
 from ..tool import Tool
 
@@ -40,6 +42,19 @@ def load_robot_tool(args):
     tool = Tool.from_yaml(args.tool)
     robot = Robot.from_urdf(args.robot, flange=args.flange or tool.flange)
     return robot, tool
+
+
+def model_and_measurements(args):
+    """The model (``--model``) and the measurements (``--data``, ``--sigma``, ``--skip-bad``).
+
+    Rows dropped on request are reported on stderr, one line each.
+    """
+    robot, tool = load_robot_tool(args)
+    model = build_model(robot, tool, args.model)
+    meas = read_measurements(args.data, robot, tool, sigma_mm=args.sigma, skip_bad=args.skip_bad)
+    for msg in meas.dropped:
+        print(f"dropped: {msg}", file=sys.stderr)
+    return model, meas
 
 
 def parse_floats(text: str, n: int, what: str) -> np.ndarray:

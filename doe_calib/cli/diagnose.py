@@ -2,15 +2,12 @@
 from __future__ import annotations
 
 import sys
-import warnings
 from pathlib import Path
 
 from ..diagnosis import diagnose
-from ..identify import identify
-from ..io import read_measurements
+from ..identify import identify_quietly
 from ..jsonfile import strict_json
-from ..measurement import build_model
-from .common import load_robot_tool, robot_arguments
+from .common import model_and_measurements, robot_arguments
 
 HELP = "test the model against the measurements and rank the effects it is missing"
 EXAMPLE = ("doe-calib diagnose --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -27,16 +24,6 @@ def measurement_arguments(c):
     c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")
 
 
-def read_data(args):
-    """Robot, tool, starting model and measurements named on the command line."""
-    robot, tool = load_robot_tool(args)
-    model = build_model(robot, tool, args.model)
-    meas = read_measurements(args.data, robot, tool, sigma_mm=args.sigma, skip_bad=args.skip_bad)
-    for msg in meas.dropped:
-        print(f"dropped: {msg}", file=sys.stderr)
-    return model, meas
-
-
 def add_arguments(c):
     robot_arguments(c)
     measurement_arguments(c)
@@ -45,13 +32,6 @@ def add_arguments(c):
                                   "(default: beside --out)")
     c.add_argument("--report", help="HTML report to write (self-contained)")
     c.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
-
-
-def fit_quietly(model, meas):
-    """The model's identification, its warnings gathered rather than printed."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return identify(model, meas)
 
 
 def residual_figure(model, meas, fit, path):
@@ -65,10 +45,10 @@ def residual_figure(model, meas, fit, path):
 
 
 def run(args):
-    model, meas = read_data(args)
+    model, meas = model_and_measurements(args)
     print(f"diagnosing {model.spec or '(base + markers)'} on {len(meas)} readings…",
           file=sys.stderr)
-    fit = fit_quietly(model, meas)
+    fit = identify_quietly(model, meas)
     d = diagnose(model, meas, fit, level=args.level,
                  progress=lambda i, n, s: print(f"  cross-validating {s} ({i + 1}/{n})",
                                                 file=sys.stderr))

@@ -5,10 +5,8 @@ import sys
 import warnings
 
 from ..identify import ESTIMATORS, identify
-from ..io import read_measurements
 from ..jsonfile import strict_json
-from ..measurement import build_model
-from .common import load_robot_tool, report_warnings, robot_arguments
+from .common import model_and_measurements, report_warnings, robot_arguments
 
 HELP = "identify parameters from a measurement CSV"
 EXAMPLE = ("doe-calib identify --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -31,11 +29,7 @@ def add_arguments(c):
 
 
 def run(args):
-    robot, tool = load_robot_tool(args)
-    model = build_model(robot, tool, args.model)
-    meas = read_measurements(args.data, robot, tool, sigma_mm=args.sigma, skip_bad=args.skip_bad)
-    for msg in meas.dropped:
-        print(f"dropped: {msg}", file=sys.stderr)
+    model, meas = model_and_measurements(args)
     params = model.nominal()
     if args.fix:
         params = params.fixed(args.fix.split(","))

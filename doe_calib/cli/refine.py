@@ -9,8 +9,8 @@ from ..io import read_measurements
 from ..jsonfile import strict_json
 from ..measurement import build_model
 from ..report.diagnosis_figures import error_falling
-from .common import robot_arguments
-from .diagnose import measurement_arguments, read_data
+from .common import model_and_measurements, robot_arguments
+from .diagnose import measurement_arguments
 
 HELP = "grow the model by the best significant effect until it is adequate; write the fit"
 EXAMPLE = ("doe-calib refine --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -31,7 +31,7 @@ def add_arguments(c):
 
 
 def run(args):
-    model, meas = read_data(args)
+    model, meas = model_and_measurements(args)
     val = None
     if args.validation:
         val = read_measurements(args.validation, model.robot, model.tool, sigma_mm=args.sigma)

@@ -9,13 +9,12 @@ different numbers of parameters.
 """
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 
 from ..errors import DoeCalibError
 from ..evaluation import marker_positions
-from ..identify import identify
+from ..identify import identify_quietly
 
 
 def pose_folds(measurements, k: int = 5, seed: int = 0) -> list[np.ndarray]:
@@ -46,9 +45,7 @@ def cross_validated_rms(model, measurements, params, k: int = 5, seed: int = 0) 
     for held in pose_folds(measurements, k, seed):
         train, test = measurements.subset(~held), measurements.subset(held)
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                fit = identify(model, train, params, register=False)
+            fit = identify_quietly(model, train, params, register=False)
         except DoeCalibError:
             return float("nan")
         e = validation_rms(model, fit.parameters.values, test) / 1e3

@@ -1,14 +1,14 @@
 """``diagnose``: from a fitted model and its data to a ranked list of missing effects, in words."""
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 from scipy import stats
 
 from ..errors import DoeCalibError
-from ..identify import identify
-from .candidates import augmented, candidate_effects, test_candidates
+from ..effects import parse_effect
+from ..identify import identify_quietly
+from .candidates import augmented, test_candidates
 from .cross_validation import cross_validated_rms
 from .residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from .result import DiagnosisResult
@@ -110,9 +110,7 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     DiagnosisResult
     """
     if fit is None:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            fit = identify(model, measurements)
+        fit = identify_quietly(model, measurements)
     params = fit.parameters
     res = residuals(model, measurements, params.values)
     rank = int(params.free.sum())
@@ -126,12 +124,9 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     for i, t in enumerate(chosen):
         if progress:
             progress(i, len(chosen), t.spec)
-        effect = next(e for e in candidate_effects(model) if e.spec() == t.spec)
-        big, bp = augmented(model, params, effect)
+        big, bp = augmented(model, params, parse_effect(t.spec))
         try:  # folds start from the grown model's own fit: what they hold fixed is then right
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                bp = identify(big, measurements, bp, register=False).parameters
+            bp = identify_quietly(big, measurements, bp, register=False).parameters
         except DoeCalibError:
             scored[t.spec] = t.with_cv(float("nan"))
             continue

@@ -5,11 +5,10 @@ validation set is given, the RMS on it — the error falling step by step.
 """
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 
 from ..effects import parse_effect
-from ..identify import identify
+from ..identify import identify_quietly
 from ..jsonfile import read_json, write_json
 from ..measurement import build_model
 from .candidates import augmented
@@ -86,14 +85,8 @@ class RefineResult:
         return [RefineStep(**s) for s in read_json(path, FORMAT, "refine history")["steps"]]
 
 
-def _fit(model, measurements, params=None):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return identify(model, measurements, params, register=params is None)
-
-
 def refine(model, measurements, validation=None, level: float = 0.01, max_steps: int = 5,
-           min_gain: float = 0.01, progress=None) -> RefineResult:
+           min_gain: float = 0.01, progress=None, fit=None) -> RefineResult:
     """Grow ``model`` one effect at a time until it is adequate.
 
     Parameters
@@ -113,12 +106,14 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         least this fraction.
     progress : callable, optional
         ``progress(step, text)`` after each step.
+    fit : IdentificationResult, optional
+        The starting model's fit to ``measurements``, when already at hand.
 
     Returns
     -------
     RefineResult
     """
-    fit = _fit(model, measurements)
+    fit = identify_quietly(model, measurements) if fit is None else fit
     steps, added, reason = [], None, "starting model"
     while True:
         diag = diagnose(model, measurements, fit, level)
@@ -146,7 +141,7 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         effect = parse_effect(best.spec)
         model, start = augmented(model, fit.parameters, effect)
         model = build_model(model.robot, model.tool, model.effects)
-        fit = _fit(model, measurements, start)
+        fit = identify_quietly(model, measurements, start, register=False)
         added = best.spec
         reason = (f"added {best.spec}: {describe(best, model.robot)} explained "
                   f"{100 * best.explained_fraction:.0f} % of the residual (p = "

@@ -1,11 +1,11 @@
 """The study: for every catalogue effect, hide it, diagnose, add what diagnosis proposes."""
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 
-from doe_calib import Robot, Tool, build_model, example, identify
+from doe_calib import Robot, Tool, build_model, example
+from doe_calib.identify import identify_quietly
 from doe_calib.diagnosis import diagnose, validation_rms
 from doe_calib.diagnosis.refine import refine
 from doe_calib.progress import Progress
@@ -24,12 +24,6 @@ CASES = (("joint_offset", "joint_compliance"),
          ("thermal", "joint_offset+joint_compliance"),
          ("link_compliance", "joint_offset+joint_compliance"))
 REFINE_TRUTH = "joint_offset+geometry+joint_compliance+cyclic(j3,harmonics=2)"
-
-
-def _fit(model, meas):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return identify(model, meas)
 
 
 def one_case(robot, tool, hidden, start, seed, n_train=40, n_valid=20, drift_m=0.0) -> dict:
@@ -51,12 +45,12 @@ def one_case(robot, tool, hidden, start, seed, n_train=40, n_valid=20, drift_m=0
             "rank_of_hidden": rank,
             "explained_fraction": best.explained_fraction, "follows": d.follows[0].variable,
             "cv_rms_mm": d.cv_rms_mm, "cv_rms_with_top_mm": best.cv_rms_mm,
-            "validation_rms_mm": validation_rms(model, _fit(model, train).parameters.values,
-                                                valid),
+            "validation_rms_mm": validation_rms(
+                model, identify_quietly(model, train).parameters.values, valid),
             "validation_rms_with_top_mm": validation_rms(
-                grown, _fit(grown, train).parameters.values, valid),
+                grown, identify_quietly(grown, train).parameters.values, valid),
             "validation_rms_true_model_mm": validation_rms(
-                true, _fit(true, train).parameters.values, valid),
+                true, identify_quietly(true, train).parameters.values, valid),
             "noise_floor_mm": d.noise_floor_mm}
 
 
@@ -75,7 +69,7 @@ def run(seed: int = 1) -> dict:
     truth = random_truth(true, rng)
     train, valid = (campaign(true, truth, robot, n, rng) for n in (40, 20))
     out = refine(build_model(robot, tool, "joint_offset"), train, valid)
-    reference = validation_rms(true, _fit(true, train).parameters.values, valid)
+    reference = validation_rms(true, identify_quietly(true, train).parameters.values, valid)
     bar.update(len(cases) + 1, "refine")
     bar.close()
     return {"robot": robot.name, "sigma_mm": SIGMA_M * 1e3, "cases": rows,
