@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import DoeCalibError
-from ..evaluation import marker_positions
 from ..identify import identify_quietly
+from .residuals import residuals
 
 
 def pose_folds(measurements, k: int = 5, seed: int = 0) -> list[np.ndarray]:
@@ -30,9 +30,7 @@ def pose_folds(measurements, k: int = 5, seed: int = 0) -> list[np.ndarray]:
 
 def validation_rms(model, values, measurements) -> float:
     """RMS (mm) of every coordinate's error when ``values`` predict ``measurements``."""
-    x = marker_positions(model, values, measurements.configurations)
-    e = measurements.xyz - x[measurements.config, measurements.marker]
-    return float(np.sqrt(np.mean(e ** 2)) * 1e3)
+    return residuals(model, measurements, values).rms_mm
 
 
 def cross_validated_rms(model, measurements, params, k: int = 5, seed: int = 0) -> float:

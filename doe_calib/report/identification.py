@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..diagnosis.residuals import residuals
 from ..diagnosis.variables import configuration_variables
-from ..identify import weighted_residual
 from . import figures
 from .html import figure, paragraph, preformatted, section, table, write_report
 
@@ -43,9 +43,8 @@ def reading_columns(model, measurements) -> list[tuple]:
 
 
 def residual_norms_mm(model, measurements, values) -> np.ndarray:
-    """3-D residual norm of each reading, shape (K,), mm, from the library's weighted residual."""
-    r, _ = weighted_residual(model, measurements, values, jacobian=False)
-    return np.linalg.norm(r.reshape(-1, 3), axis=1) * measurements.sigma * 1000.0
+    """3-D residual norm of each reading, shape (K,), mm (:func:`doe_calib.diagnosis.residuals`)."""
+    return np.linalg.norm(residuals(model, measurements, values).error, axis=1) * 1000.0
 
 
 def _stats_table(stats: dict, what: str):
