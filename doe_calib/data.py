@@ -167,6 +167,12 @@ class Measurements:
     dropped : tuple of str
         One message per input row dropped on request (``skip_bad``); never
         dropped silently.
+    warnings : tuple of str
+        One message per reading accepted with a doubt (a joint a hair past its
+        limit), naming file, line and column.
+    session : tuple of str
+        The measurement session of each configuration (length M; empty: one
+        session). Cross-validation holds out whole sessions when there are several.
     """
 
     configurations: Configurations
@@ -177,6 +183,8 @@ class Measurements:
     line: np.ndarray
     source: str = ""
     dropped: tuple = ()
+    warnings: tuple = ()
+    session: tuple = ()
 
     def __len__(self) -> int:
         return self.config.shape[0]
@@ -193,7 +201,14 @@ class Measurements:
             rows = np.flatnonzero(rows)
         used, new_config = np.unique(self.config[rows], return_inverse=True)
         return Measurements(self.configurations.subset(used), new_config, self.marker[rows],
-                            self.xyz[rows], self.sigma[rows], self.line[rows], self.source)
+                            self.xyz[rows], self.sigma[rows], self.line[rows], self.source,
+                            session=tuple(self.sessions[used]))
+
+    @property
+    def sessions(self) -> np.ndarray:
+        """Session name of each configuration, shape (M,) (the source when none was given)."""
+        m = len(self.configurations)
+        return np.array(self.session if self.session else (self.source,) * m, dtype=object)
 
     def split_by_pose(self, held_out_poses) -> tuple["Measurements", "Measurements"]:
         """Split into (kept, held out) by pose id, for validation on unseen poses."""
@@ -218,4 +233,6 @@ def concatenate(parts) -> Measurements:
                         np.concatenate([p.sigma for p in parts]),
                         np.concatenate([p.line for p in parts]),
                         "; ".join(dict.fromkeys(p.source for p in parts)),
-                        sum((p.dropped for p in parts), ()))
+                        sum((p.dropped for p in parts), ()),
+                        sum((p.warnings for p in parts), ()),
+                        tuple(s for p in parts for s in p.sessions))

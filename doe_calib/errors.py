@@ -51,6 +51,10 @@ class ConditioningWarning(UserWarning):
     """The observation matrix is close to rank deficient."""
 
 
+class DataWarning(UserWarning):
+    """Input accepted as it is, but worth a look (e.g. a joint reading a hair past its limit)."""
+
+
 class ConvergenceWarning(UserWarning):
     """An iterative solver stopped before it converged."""
 

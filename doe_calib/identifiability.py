@@ -106,7 +106,8 @@ def _explain(b, dependent, kept, params, norms) -> list[str]:
     for k, i in enumerate(dependent):
         p = params[i]
         if norms[i] == 0 or not kept:
-            no_load = " (no load was applied)" if p.unit in ("rad/(N·m)", "m/N") else ""
+            no_load = (" (no load in these configurations puts a torque on that joint)"
+                       if p.unit in ("rad/(N·m)", "m/N") else "")
             out.append(f"{p.description} ({p.name}) has no effect on the measured markers in "
                        f"these configurations{no_load}")
             continue

@@ -152,17 +152,34 @@ def _derived_approach(q, robot) -> np.ndarray:
     return approach_from_order(np.asarray(q) * robot.display_factors, _Q_TOL)
 
 
-def _joints(table, line, fields, robot) -> np.ndarray:
-    """q of one row in SI, checked against the limits."""
+#: A measured joint value past a URDF limit by at most this fraction of the joint's range
+#: is accepted with a warning (an encoder at a hard stop, a rounded limit); farther is an error.
+LIMIT_TOLERANCE = 0.02
+
+
+def _joints(table, line, fields, robot, tolerance: float = 0.0, notes=None) -> np.ndarray:
+    """q of one row in SI, checked against the limits.
+
+    A value past a limit by at most ``tolerance`` × the joint's range is kept
+    as read and described in ``notes``; farther out it is an error.
+    """
     q = np.empty(robot.n_joints)
     for k, (name, joint) in enumerate(zip(_joint_columns(robot), robot.joints)):
         shown = _number(table, line, fields, name)
         q[k] = shown / joint.display_factor
-        if not joint.lower - 1e-12 <= q[k] <= joint.upper + 1e-12:
-            lo, hi = joint.lower * joint.display_factor, joint.upper * joint.display_factor
-            raise DataError(f"{shown:g} {joint.display_unit} is outside the limits of joint "
-                            f"{joint.name} [{lo:g}, {hi:g}] {joint.display_unit}", table.path,
-                            line, table.col(name))
+        past = max(joint.lower - q[k], q[k] - joint.upper, 0.0)
+        if past <= 1e-12:
+            continue
+        lo, hi = joint.lower * joint.display_factor, joint.upper * joint.display_factor
+        where = (f"{shown:g} {joint.display_unit} is outside the limits of joint {joint.name} "
+                 f"[{lo:g}, {hi:g}] {joint.display_unit}")
+        span = joint.upper - joint.lower
+        if not np.isfinite(span) or past > tolerance * span:
+            hint = f" (more than {tolerance:.0%} of the range past it)" if tolerance else ""
+            raise DataError(where + hint, table.path, line, table.col(name))
+        notes.append(str(DataError(f"{where} by {past * joint.display_factor:.3g} "
+                                   f"{joint.display_unit}: accepted as measured",
+                                   table.path, line, table.col(name))))
     return q
 
 
@@ -185,7 +202,7 @@ def _parse_rows(table, robot, row_parser, skip_bad):
 
 
 def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad: bool = False,
-                      require_xyz: bool = True) -> Measurements:
+                      require_xyz: bool = True, session: str | None = None) -> Measurements:
     """Read a measurement CSV (formats.md §3).
 
     Parameters
@@ -201,19 +218,26 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
         Drop bad rows, reporting each in ``dropped``, instead of raising.
     require_xyz : bool
         False to accept files without x, y, z (positions are then NaN).
+    session : str, optional
+        Session name of rows without a ``session`` column value (default: the
+        file's name without extension).
 
     Returns
     -------
     Measurements
-        In SI; configurations keyed by (pose, wrench, temperature, and the
-        approach directions when given) in order of first appearance; without
-        approach columns the directions come from that order (module notes).
+        In SI; configurations keyed by (pose, wrench, temperature, session and
+        the approach directions when given) in order of first appearance;
+        without approach columns the directions come from that order, session
+        by session (module notes). A joint value past its limit by at most
+        :data:`LIMIT_TOLERANCE` of the range is kept, with a message in
+        ``warnings``.
     """
     table = _read_table(path)
+    default_session = session or Path(str(path)).stem
     header_line = table.rows[0][0] - 1
     qcols = _joint_columns(robot)
     required = ["pose", *qcols, "marker", *(XYZ if require_xyz else ())]
-    optional = [*WRENCH, "temperature", "sigma", *_approach_columns(robot),
+    optional = [*WRENCH, "temperature", "sigma", "session", *_approach_columns(robot),
                 *(() if require_xyz else XYZ)]
     _check_columns(table, required, optional, header_line)
     explicit = _check_approach_columns(table, robot, header_line)
@@ -222,20 +246,24 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
                         header_line)
     if sigma_mm is not None and not sigma_mm > 0:
         raise DataError(f"σ must be positive, got {sigma_mm} mm", table.path)
-    first_q, seen = {}, {}
+    first_q, seen, notes = {}, {}, []
 
     def row(line, fields):
         pose = fields[table.columns.index("pose")]
         marker = fields[table.columns.index("marker")]
+        session = fields[table.columns.index("session")] if "session" in table.columns \
+            else default_session
         if not pose:
             raise DataError("empty pose id", table.path, line, table.col("pose"))
+        if not session:
+            raise DataError("empty session name", table.path, line, table.col("session"))
         if marker not in tool.names:
             raise DataError(f"marker {marker!r} is not in the tool file (markers: "
                             f"{', '.join(tool.names)})", table.path, line, table.col("marker"))
-        q = _joints(table, line, fields, robot)
+        q = _joints(table, line, fields, robot, LIMIT_TOLERANCE, notes)
         shown = q * robot.display_factors
-        if pose in first_q:
-            ref_line, ref = first_q[pose]
+        if (session, pose) in first_q:
+            ref_line, ref = first_q[session, pose]
             bad = np.flatnonzero(np.abs(shown - ref) > _Q_TOL)
             if bad.size:
                 raise DataError(f"pose {pose!r} has q{bad[0] + 1} = {shown[bad[0]]:g} here but "
@@ -250,13 +278,13 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
         xyz = np.array([_number(table, line, fields, c, np.nan if not require_xyz else None)
                         for c in XYZ]) / 1000.0
         approach = _approach(table, line, fields, robot) if explicit else None
-        key = (pose, tuple(wrench), temp if np.isfinite(temp) else None, approach)
+        key = (pose, tuple(wrench), temp if np.isfinite(temp) else None, approach, session)
         if (key, marker) in seen:
             raise DataError(f"marker {marker!r} is read twice in pose {pose!r} under the same "
                             f"load (first on line {seen[key, marker]})", table.path, line,
                             table.col("marker"))
         seen[key, marker] = line
-        first_q.setdefault(pose, (line, shown))
+        first_q.setdefault((session, pose), (line, shown))
         return key, q, wrench, temp, tool.index(marker), xyz, sigma / 1000.0
 
     parsed, dropped = _parse_rows(table, robot, row, skip_bad)
@@ -265,13 +293,21 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
         first.setdefault(key, (q, wrench, temp))
         config.append(index.setdefault(key, len(index)))
     q = np.array([v[0] for v in first.values()])
-    approach = np.array([k[3] for k in first]) if explicit else _derived_approach(q, robot)
+    session = tuple(k[4] for k in first)
+    if explicit:
+        approach = np.array([k[3] for k in first])
+    else:  # each session's own visiting order
+        approach = np.zeros_like(q)
+        for name in dict.fromkeys(session):
+            mine = np.array([s == name for s in session])
+            approach[mine] = _derived_approach(q[mine], robot)
     cfg = Configurations.from_arrays(q, np.array([v[1] for v in first.values()]),
                                      np.array([[v[2]] for v in first.values()]),
                                      [k[0] for k in first], approach)
     return Measurements(cfg, np.array(config), np.array([p[4] for _, p in parsed]),
                         np.array([p[5] for _, p in parsed]), np.array([p[6] for _, p in parsed]),
-                        np.array([line for line, _ in parsed]), table.path, tuple(dropped))
+                        np.array([line for line, _ in parsed]), table.path, tuple(dropped),
+                        tuple(notes), session)
 
 
 def read_design(path, robot) -> Configurations:
@@ -339,16 +375,20 @@ def write_measurements(path, measurements, robot, tool) -> None:
     """Write readings as a measurement CSV (deg/mm, mm, N, N·m), exactly re-readable.
 
     The approach columns are written only when reading back would not derive
-    the same directions from the order of the rows (module notes).
+    the same directions from the order of the rows (module notes); the
+    ``session`` column only when the readings come from several sessions.
     """
     cfg = measurements.configurations
     with_temp = bool(np.isfinite(cfg.temperature).any())
     order = np.unique(measurements.config, return_index=True)
     order = order[0][np.argsort(order[1])]  # configurations in order of first appearance
     with_approach = _approach_needed(cfg, order, robot)
+    sessions = measurements.sessions
+    with_session = len(set(sessions)) > 1
     header = ["pose", *_joint_columns(robot), *WRENCH, "marker", *XYZ,
               *(["temperature"] if with_temp else []), "sigma",
-              *(_approach_columns(robot) if with_approach else [])]
+              *(_approach_columns(robot) if with_approach else []),
+              *(["session"] if with_session else [])]
     rows = []
     for c, j, xyz, s in zip(measurements.config, measurements.marker, measurements.xyz,
                             measurements.sigma):
@@ -356,7 +396,8 @@ def write_measurements(path, measurements, robot, tool) -> None:
         rows.append([*_configuration_fields(cfg, c, robot), tool.names[j],
                      *map(repr, map(float, xyz * 1000.0)), *(temp if with_temp else []),
                      repr(float(s * 1000.0)),
-                     *(_approach_fields(cfg, c) if with_approach else [])])
+                     *(_approach_fields(cfg, c) if with_approach else []),
+                     *([sessions[c]] if with_session else [])])
     _write(path, "doe_calib measurements: q in deg (mm for prismatic joints), x/y/z and sigma "
                  "in mm, forces in N, moments in N·m, temperature in °C", header, rows)
 

@@ -10,7 +10,9 @@ The chain (robot base frame, SI units) is::
 with ``M_k`` the nominal placement, ``E_k`` the effects' placement
 corrections, ``Δq`` their joint corrections and ``θ = deflection(τ)``
 where ``τ = J_θᵀ F`` are the joint torques of the wrench ``F`` (applied at
-the flange origin, base frame), evaluated on the unloaded chain.
+the flange origin, base frame), evaluated on the unloaded chain. Effects of
+the robot's own weight read ``τ_g(q)`` (:func:`gravity_torques`), the torques
+the links' weights exert on the nominal chain at the commanded q.
 """
 from __future__ import annotations
 
@@ -75,9 +77,47 @@ def joint_torques(robot, joint_frames, flange_position, wrench) -> ca.SX:
     return ca.vertcat(*tau)
 
 
+#: Gravitational acceleration in the robot base frame, m/s² (URDF convention: z up).
+GRAVITY = (0.0, 0.0, -9.81)
+
+
+def gravity_torques(robot, q) -> ca.SX:
+    """τ_g: torques (N·m) or forces (N) the links' own weight exerts on each joint, SX (N, 1).
+
+    Nominal chain at joint positions ``q``; masses and centres from the URDF
+    (:attr:`~doe_calib.robot.Joint.mass`). The sign is that of ``J_θᵀ F``: the
+    torque the load exerts, i.e. minus Pinocchio's ``computeGeneralizedGravity``.
+    """
+    g = ca.DM(GRAVITY)
+    frame = (ca.SX.eye(3), ca.SX.zeros(3, 1))
+    axes, origins, coms = [], [], []
+    for k, joint in enumerate(robot.joints):
+        frame = _compose(frame, _constant(joint.placement_matrix))
+        axes.append(frame[0] @ ca.DM(np.asarray(joint.axis, float).reshape(3, 1)))
+        origins.append(frame[1])
+        frame = _compose(frame, _motion(joint, q[k]))
+        coms.append(frame[0] @ ca.DM(np.asarray(joint.com, float).reshape(3, 1)) + frame[1])
+    tau = []
+    for k, joint in enumerate(robot.joints):
+        weights = [(robot.joints[i].mass, coms[i]) for i in range(k, robot.n_joints)]
+        if joint.kind == "revolute":
+            tau.append(sum(ca.dot(ca.cross(axes[k], c - origins[k]), m * g) for m, c in weights))
+        else:
+            tau.append(ca.dot(axes[k], sum(m for m, _ in weights) * g))
+    return ca.vertcat(*tau)
+
+
+def gravity_torque_function(robot) -> ca.Function:
+    """``tau_g(q)``: :func:`gravity_torques` as a Function (N·m or N)."""
+    q = ca.SX.sym("q", robot.n_joints)
+    return ca.Function("tau_g", [q], [gravity_torques(robot, q)], ["q"], ["tau_g"])
+
+
 def flange_pose(s: ChainSymbols, effects, wrench: ca.SX):
     """Flange pose ``(R, t)`` in the robot base frame, SX, including every effect."""
     s = replace(s, wrench=wrench)
+    if any(e.uses_gravity for e in effects):
+        s = replace(s, gravity=gravity_torques(s.robot, s.q))
     robot = s.robot
     n = robot.n_joints
     placements = [_placement(s, effects, k, j.placement_matrix) for k, j in enumerate(robot.joints)]

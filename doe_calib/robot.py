@@ -39,6 +39,12 @@ class Joint:
         4×4 homogeneous placement in the parent joint frame (row-major, metres).
     lower, upper : float
         Limits in rad (revolute) or m (prismatic); ±inf when unbounded.
+    mass : float
+        Mass (kg) the joint moves as one rigid body: its link, the links fixed
+        to it and any side branch (at its neutral configuration), from the
+        URDF's ``<inertial>`` tags; 0 when the URDF gives none.
+    com : tuple of 3 float
+        Centre of that mass in the joint's frame after its motion, metres.
     """
 
     name: str
@@ -47,6 +53,8 @@ class Joint:
     placement: tuple
     lower: float
     upper: float
+    mass: float = 0.0
+    com: tuple = (0.0, 0.0, 0.0)
 
     @property
     def placement_matrix(self) -> np.ndarray:
@@ -88,6 +96,11 @@ class Robot:
     source: str = ""
 
     @property
+    def has_inertials(self) -> bool:
+        """Whether the URDF gives the links' masses (self-weight effects need them)."""
+        return any(j.mass > 0 for j in self.joints)
+
+    @property
     def n_joints(self) -> int:
         """Number of actuated joints N."""
         return len(self.joints)
@@ -117,7 +130,8 @@ class Robot:
                 "flange_placement": list(self.flange_placement),
                 "joints": [{"name": j.name, "kind": j.kind, "axis": list(j.axis),
                             "placement": list(j.placement),
-                            "lower": _finite_or_none(j.lower), "upper": _finite_or_none(j.upper)}
+                            "lower": _finite_or_none(j.lower), "upper": _finite_or_none(j.upper),
+                            "mass": j.mass, "com": list(j.com)}
                            for j in self.joints]}
 
     @classmethod
@@ -125,7 +139,9 @@ class Robot:
         """Inverse of :meth:`to_dict`."""
         joints = tuple(Joint(j["name"], j["kind"], tuple(j["axis"]), tuple(j["placement"]),
                              -np.inf if j["lower"] is None else j["lower"],
-                             np.inf if j["upper"] is None else j["upper"]) for j in d["joints"])
+                             np.inf if j["upper"] is None else j["upper"],
+                             j.get("mass", 0.0), tuple(j.get("com", (0.0, 0.0, 0.0))))
+                       for j in d["joints"])
         return cls(d["name"], joints, d["flange"], tuple(d["flange_placement"]),
                    d.get("source", ""))
 
@@ -166,7 +182,8 @@ class Robot:
         chain.reverse()
         if not chain:
             raise ModelError(f"{path}: no actuated joint between the root and link {frame.name!r}")
-        joints = tuple(_joint_from_model(model, j, path) for j in chain)
+        bodies = _rigid_bodies(model, chain)
+        joints = tuple(_joint_from_model(model, j, path, bodies[j]) for j in chain)
         return cls(model.name, joints, frame.name,
                    tuple(frame.placement.homogeneous.ravel()), str(path))
 
@@ -197,7 +214,24 @@ def _flange_frame(model, flange, path) -> int:
     return max(bodies, key=lambda i: (model.frames[i].parentJoint, i))
 
 
-def _joint_from_model(model, jid: int, path) -> Joint:
+def _rigid_bodies(model, chain) -> dict:
+    """Per chain joint, the Pinocchio inertia it moves rigidly (side branches at neutral)."""
+    import pinocchio as pin
+
+    data = model.createData()
+    pin.forwardKinematics(model, data, pin.neutral(model))
+    inside = set(chain)
+    out = {j: pin.Inertia.Zero() for j in chain}
+    for j in range(1, model.njoints):
+        a = j
+        while a > 0 and a not in inside:
+            a = model.parents[a]
+        if a in inside:
+            out[a] = out[a] + (data.oMi[a].actInv(data.oMi[j])).act(model.inertias[j])
+    return out
+
+
+def _joint_from_model(model, jid: int, path, body) -> Joint:
     jm = model.joints[jid]
     short = jm.shortname()
     name = model.names[jid]
@@ -219,4 +253,5 @@ def _joint_from_model(model, jid: int, path) -> Joint:
         lo = -np.inf if abs(lo) > _UNBOUNDED else lo
         hi = np.inf if abs(hi) > _UNBOUNDED else hi
     placement = tuple(model.jointPlacements[jid].homogeneous.ravel())
-    return Joint(name, kind, tuple(float(a) for a in axis), placement, lo, hi)
+    return Joint(name, kind, tuple(float(a) for a in axis), placement, lo, hi,
+                 float(body.mass), tuple(float(c) for c in body.lever))

@@ -5,6 +5,9 @@ import numpy as np
 import pytest
 
 from doe_calib import Robot, Tool, build_model, example
+from doe_calib.threads import single_threaded_blas
+
+_BLAS = single_threaded_blas()  # pytest -n 2 on 2 cores: no BLAS threads fighting for them
 
 DATA = Path(__file__).parent / "data"
 ODD_CHAIN_URDF = DATA / "odd_chain.urdf"

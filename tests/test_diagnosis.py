@@ -88,7 +88,7 @@ def test_effect_outside_the_catalogue_is_named_by_the_variable_it_follows(robot6
     d = diagnose(model, meas)
     assert not d.adequate and d.proposed is None
     assert d.follows[0].variable == "measurement order", d.summary()
-    assert "measurement order" in d.verdict and "no catalogue effect explains" in d.verdict
+    assert "measurement order" in d.verdict and "no catalogue effect improves" in d.verdict
 
 
 def test_refine_adds_the_missing_effects_until_adequate(robot6, tool6):

@@ -243,8 +243,8 @@ def test_defaults_written_back_and_bad_arguments_reported(robot6):
         parse_model("cyclic(j3,harmonics=0)")
     with pytest.raises(ModelError, match="wrong arguments"):
         parse_model("backlash")
-    assert [e.spec() for e in Cyclic.candidates(robot6)] == [f"cyclic(j{k},harmonics=2)"
-                                                             for k in range(1, 7)]
+    assert [e.spec() for e in Cyclic.candidates(robot6)] == [
+        f"cyclic(j{k},harmonics={h})" for k in range(1, 7) for h in (1, 2, 3)]
     assert [e.spec() for e in LinkCompliance.candidates(robot6)] == ["link_compliance"]
     names = [p.name for p in LinkCompliance().parameters(robot6)]
     assert names == ["lc_a1", "lc_a2", "lc_a3", "lc_a5"]   # links 0.35, 1.15, 1.2, 0.215 m

@@ -9,6 +9,7 @@ import argparse
 import sys
 
 from ..errors import DoeCalibError
+from ..threads import single_threaded_blas
 from . import compare, demo, design, diagnose, export, identify, predict, refine, simulate, study
 
 #: Command name → module, in the order ``--help`` lists them.
@@ -44,6 +45,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv=None) -> int:
     """Run the command line; returns the exit status (2 on a user error, printed in one line)."""
     args = build_parser().parse_args(argv)
+    single_threaded_blas()
     try:
         args.func(args)
     except DoeCalibError as exc:

@@ -44,17 +44,59 @@ def load_robot_tool(args):
     return robot, tool
 
 
-def model_and_measurements(args):
-    """The model (``--model``) and the measurements (``--data``, ``--sigma``, ``--skip-bad``).
+def data_argument(c, required: bool = True):
+    """``--data FILE [FILE …]``: measurement CSVs, each file one session unless it has a column."""
+    c.add_argument("--data", required=required, nargs="+", metavar="CSV",
+                   help="measurement CSV(s) (docs/formats.md); several files are several "
+                        "sessions (a 'session' column also says so)")
 
-    Rows dropped on request are reported on stderr, one line each.
+
+def read_data(paths, robot, tool, sigma_mm=None, skip_bad=False, require_xyz=True):
+    """Measurements of one or several files (sessions), with what was dropped or doubted on stderr.
+
+    Rows dropped on request are reported one line each; joint readings a hair
+    past a limit (accepted) are summarised.
     """
-    robot, tool = load_robot_tool(args)
-    model = build_model(robot, tool, args.model)
-    meas = read_measurements(args.data, robot, tool, sigma_mm=args.sigma, skip_bad=args.skip_bad)
+    from ..data import concatenate
+
+    paths = [paths] if isinstance(paths, str) else list(paths)
+    meas = concatenate([read_measurements(p, robot, tool, sigma_mm=sigma_mm, skip_bad=skip_bad,
+                                          require_xyz=require_xyz) for p in paths])
     for msg in meas.dropped:
         print(f"dropped: {msg}", file=sys.stderr)
-    return model, meas
+    for msg in meas.warnings[:3]:
+        print(f"warning: {msg}", file=sys.stderr)
+    if len(meas.warnings) > 3:
+        print(f"warning: … and {len(meas.warnings) - 3} more joint readings slightly past a "
+              f"limit (accepted as measured)", file=sys.stderr)
+    return meas
+
+
+def excluding(meas, poses: str | None):
+    """The measurements without the poses named in ``--exclude-poses``, each reported on stderr."""
+    if not poses:
+        return meas
+    names = [p.strip() for p in poses.split(",") if p.strip()]
+    known = set(meas.configurations.pose)
+    unknown = [p for p in names if p not in known]
+    if unknown:
+        raise DoeCalibError(f"--exclude-poses: no pose {unknown[0]!r} in the data")
+    kept, held = meas.split_by_pose(names)
+    pose = np.array([held.configurations.pose[c] for c in held.config])
+    for p in names:
+        lines = held.line[pose == p]
+        print(f"excluded at your request: pose {p} ({len(lines)} readings, lines "
+              f"{lines.min()}–{lines.max()})", file=sys.stderr)
+    return kept
+
+
+def model_and_measurements(args):
+    """The model (``--model``) and the measurements (``--data``, ``--sigma``, ``--skip-bad``,
+    ``--exclude-poses``)."""
+    robot, tool = load_robot_tool(args)
+    model = build_model(robot, tool, args.model)
+    meas = read_data(args.data, robot, tool, args.sigma, args.skip_bad)
+    return model, excluding(meas, getattr(args, "exclude_poses", None))
 
 
 def parse_floats(text: str, n: int, what: str) -> np.ndarray:

@@ -5,9 +5,10 @@ import sys
 from pathlib import Path
 
 from ..diagnosis import diagnose
+from ..diagnosis.cross_validation import GROUPINGS
 from ..identify import identify_quietly
 from ..jsonfile import strict_json
-from .common import model_and_measurements, robot_arguments
+from .common import data_argument, model_and_measurements, robot_arguments
 
 HELP = "test the model against the measurements and rank the effects it is missing"
 EXAMPLE = ("doe-calib diagnose --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -15,12 +16,25 @@ EXAMPLE = ("doe-calib diagnose --robot kr270.urdf --tool tool.yaml --data meas.c
 
 
 def measurement_arguments(c):
-    """``--data``, ``--sigma``, ``--level``, ``--skip-bad`` (diagnose, refine)."""
-    c.add_argument("--data", required=True, help="measurement CSV (formats.md §3)")
+    """Data, σ and the diagnosis settings (diagnose, refine)."""
+    data_argument(c)
     c.add_argument("--sigma", type=float, help="tracker σ per coordinate, mm, for rows "
                                                "without a sigma column")
     c.add_argument("--level", type=float, default=0.01,
-                   help="significance level (default 0.01)")
+                   help="significance level, Bonferroni over every candidate (default 0.01)")
+    c.add_argument("--min-gain", type=float, default=0.02,
+                   help="material gain: an effect must lower the cross-validated RMS by this "
+                        "fraction (default 0.02)")
+    c.add_argument("--tolerance", type=float, default=0.05,
+                   help="σ̂ within this fraction of σ, with no material candidate, is adequate "
+                        "(default 0.05)")
+    c.add_argument("--cv-by", choices=GROUPINGS, default="auto",
+                   help="what cross-validation holds out: pose, session, region of joint "
+                        "space; auto = session when there are several, else pose")
+    c.add_argument("--folds", type=int, default=5, help="folds for --cv-by pose|region "
+                                                        "(default 5)")
+    c.add_argument("--exclude-poses", metavar="P1,P2",
+                   help="leave these poses out (each exclusion is reported)")
     c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")
 
 
@@ -49,7 +63,8 @@ def run(args):
     print(f"diagnosing {model.spec or '(base + markers)'} on {len(meas)} readings…",
           file=sys.stderr)
     fit = identify_quietly(model, meas)
-    d = diagnose(model, meas, fit, level=args.level,
+    d = diagnose(model, meas, fit, level=args.level, folds=args.folds, grouping=args.cv_by,
+                 min_gain=args.min_gain, tolerance=args.tolerance,
                  progress=lambda i, n, s: print(f"  cross-validating {s} ({i + 1}/{n})",
                                                 file=sys.stderr))
     d.to_json(args.out)

@@ -6,7 +6,7 @@ import warnings
 
 from ..identify import ESTIMATORS, identify
 from ..jsonfile import strict_json
-from .common import model_and_measurements, report_warnings, robot_arguments
+from .common import data_argument, model_and_measurements, report_warnings, robot_arguments
 
 HELP = "identify parameters from a measurement CSV"
 EXAMPLE = ("doe-calib identify --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -15,7 +15,7 @@ EXAMPLE = ("doe-calib identify --robot kr270.urdf --tool tool.yaml --data meas.c
 
 def add_arguments(c):
     robot_arguments(c)
-    c.add_argument("--data", required=True, help="measurement CSV (formats.md §3)")
+    data_argument(c)
     c.add_argument("--estimator", choices=ESTIMATORS, default="point")
     c.add_argument("--sigma", type=float, help="tracker σ per coordinate, mm, for rows "
                                                "without a sigma column")

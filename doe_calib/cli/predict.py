@@ -7,11 +7,11 @@ from dataclasses import replace
 import numpy as np
 
 from ..evaluation import marker_positions
-from ..io import read_measurements, write_measurements
+from ..io import write_measurements
 from ..jsonfile import strict_json
 from ..measurement import build_model
 from ..results import IdentificationResult
-from .common import effect_file_argument, load_effect_files
+from .common import effect_file_argument, load_effect_files, read_data
 
 HELP = "marker positions predicted by a result, for validation"
 EXAMPLE = "doe-calib predict --result result.json --data held_out.csv --out predicted.csv"
@@ -19,8 +19,9 @@ EXAMPLE = "doe-calib predict --result result.json --data held_out.csv --out pred
 
 def add_arguments(c):
     c.add_argument("--result", required=True, help="identification result JSON")
-    c.add_argument("--data", required=True, help="measurement-format CSV of the poses "
-                                                 "(x,y,z used for the error if present)")
+    c.add_argument("--data", required=True, nargs="+", metavar="CSV",
+                   help="measurement-format CSV(s) of the poses (x,y,z used for the error if "
+                        "present)")
     c.add_argument("--out", required=True, help="CSV to write with the model's x,y,z")
     c.add_argument("--json", action="store_true", help="print the error figures as JSON "
                                                        "(null when the data have no x,y,z)")
@@ -31,8 +32,7 @@ def run(args):
     load_effect_files(args.effect_file)
     result = IdentificationResult.from_json(args.result)
     model = build_model(result.robot, result.tool, result.model)
-    meas = read_measurements(args.data, result.robot, result.tool, sigma_mm=1.0,
-                             require_xyz=False)
+    meas = read_data(args.data, result.robot, result.tool, sigma_mm=1.0, require_xyz=False)
     x = marker_positions(model, result.parameters.values, meas.configurations)
     predicted = x[meas.config, meas.marker]
     write_measurements(args.out, replace(meas, xyz=predicted), result.robot, result.tool)
@@ -40,13 +40,14 @@ def run(args):
     if np.all(np.isfinite(meas.xyz)):
         err = (meas.xyz - predicted) * 1000.0
         d = np.linalg.norm(err, axis=1)
-        error = {"rms_mm": float(np.sqrt(np.mean(err ** 2))), "mean_3d_mm": float(d.mean()),
+        error = {"rms_mm": float(np.sqrt(np.mean(err ** 2))),
+                 "rms_3d_mm": float(np.sqrt(np.mean(d ** 2))), "mean_3d_mm": float(d.mean()),
                  "max_3d_mm": float(d.max())}
     if args.json:
         print(strict_json({"result": args.result, "model": result.model, "data": args.data,
                           "readings": len(meas), "predicted": args.out, "error": error}))
     elif error is not None:
         print(f"{len(meas)} readings: RMS {error['rms_mm']:.4f} mm per coordinate, "
-              f"mean 3-D {error['mean_3d_mm']:.4f} mm, max 3-D {error['max_3d_mm']:.4f} mm "
+              f"3-D RMS {error['rms_3d_mm']:.4f} mm, mean 3-D {error['mean_3d_mm']:.4f} mm, max 3-D {error['max_3d_mm']:.4f} mm "
               f"(model {result.model})")
     print(f"written: {args.out}", file=sys.stderr)

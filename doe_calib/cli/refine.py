@@ -5,11 +5,10 @@ import sys
 from pathlib import Path
 
 from ..diagnosis.refine import refine
-from ..io import read_measurements
 from ..jsonfile import strict_json
 from ..measurement import build_model
 from ..report.diagnosis_figures import error_falling
-from .common import model_and_measurements, robot_arguments
+from .common import model_and_measurements, read_data, robot_arguments
 from .diagnose import measurement_arguments
 
 HELP = "grow the model by the best significant effect until it is adequate; write the fit"
@@ -20,7 +19,9 @@ EXAMPLE = ("doe-calib refine --robot kr270.urdf --tool tool.yaml --data meas.csv
 def add_arguments(c):
     robot_arguments(c)
     measurement_arguments(c)
-    c.add_argument("--validation", help="held-out measurement CSV: its RMS is shown per step")
+    c.add_argument("--validation", nargs="+", metavar="CSV",
+                   help="held-out measurement CSV(s): their RMS is shown per step, never used "
+                        "to choose")
     c.add_argument("--max-steps", type=int, default=5, help="effects added at most (default 5)")
     c.add_argument("--out", required=True, help="identification result JSON of the final model "
                                                 "(what predict takes)")
@@ -34,10 +35,11 @@ def run(args):
     model, meas = model_and_measurements(args)
     val = None
     if args.validation:
-        val = read_measurements(args.validation, model.robot, model.tool, sigma_mm=args.sigma)
+        val = read_data(args.validation, model.robot, model.tool, args.sigma)
     print(f"refining from {model.spec or '(base + markers)'} on {len(meas)} readings…",
           file=sys.stderr)
     out = refine(model, meas, val, level=args.level, max_steps=args.max_steps,
+                 min_gain=args.min_gain, folds=args.folds, grouping=args.cv_by,
                  progress=lambda i, text: print(f"  step {i}: {text}", file=sys.stderr))
     stem = str(Path(args.out).with_suffix(""))
     history = args.history or stem + "_refine.json"

@@ -45,9 +45,15 @@ class CandidateTest:
     absorbed_fraction: float
     log10_p: float
     cv_rms_mm: float | None = None
+    fitted: tuple = ()
+    implausible: str = ""
 
-    def with_cv(self, cv_rms_mm: float) -> "CandidateTest":
-        return replace(self, cv_rms_mm=cv_rms_mm)
+    def with_cv(self, cv_rms_mm: float, fitted: tuple = (),
+                implausible: str = "") -> "CandidateTest":
+        """This test with its cross-validated RMS (mm) and, fitted on all data, its
+        parameters (dicts of name, value, std, unit, free; display units) and a note
+        when a value is physically implausible."""
+        return replace(self, cv_rms_mm=cv_rms_mm, fitted=tuple(fitted), implausible=implausible)
 
     def to_dict(self) -> dict:
         return {"effect": self.effect, "spec": self.spec, "joint": self.joint,
@@ -55,21 +61,28 @@ class CandidateTest:
                 "statistic": self.statistic, "p_value": self.p_value,
                 "p_value_raw": self.p_value_raw, "explained_fraction": self.explained_fraction,
                 "absorbed_fraction": self.absorbed_fraction, "log10_p": self.log10_p,
-                "cv_rms_mm": self.cv_rms_mm}
+                "cv_rms_mm": self.cv_rms_mm, "fitted": list(self.fitted),
+                "implausible": self.implausible}
 
     @classmethod
     def from_dict(cls, d: dict) -> "CandidateTest":
-        return cls(**{k: d[k] for k in cls.__dataclass_fields__})
+        fields = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
+        fields["fitted"] = tuple(fields.get("fitted", ()))
+        return cls(**fields)
 
 
-def candidate_effects(model) -> list:
-    """Every catalogue effect instance not yet in ``model`` (one per joint where it applies)."""
+def candidate_effects(model, configurations=None) -> list:
+    """Every catalogue effect instance not yet in ``model`` (one per joint where it applies).
+
+    Effects with several shapes give one candidate per shape;
+    ``configurations`` (the measured ones) place data-dependent shapes.
+    """
     robot = model.robot
     present = {(e.name, None if e.joint is None else joint_index(robot, e.joint))
                for e in model.effects}
     out = []
     for cls in REGISTRY.values():
-        for e in cls.candidates(robot):
+        for e in cls.candidates(robot, configurations):
             j = None if e.joint is None else joint_index(robot, e.joint)
             if (e.name, j) not in present and (e.name, None) not in present:
                 out.append(e)
@@ -111,7 +124,8 @@ def test_candidates(model, measurements, params, effects=None) -> list[Candidate
     -------
     list of CandidateTest, strongest evidence (smallest p, as log10) first.
     """
-    effects = candidate_effects(model) if effects is None else effects
+    effects = candidate_effects(model, measurements.configurations) if effects is None \
+        else effects
     r, jac = weighted_residual(model, measurements, params.values)
     q_basis = _basis(jac[:, params.free])
     rank_j = q_basis.shape[1]

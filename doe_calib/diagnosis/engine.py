@@ -1,15 +1,21 @@
-"""``diagnose``: from a fitted model and its data to a ranked list of missing effects, in words."""
+"""``diagnose``: from a fitted model and its data to a ranked list of missing effects, in words.
+
+An effect is proposed when it is significant (score test, Bonferroni over
+every candidate and shape tried) and lowers the cross-validated RMS by a
+material margin (``min_gain``); among those, the lowest cross-validated RMS
+wins. Whether the model is adequate is a separate verdict: the χ² test of the
+residual against σ, or, where that test is too sharp to be useful (large
+N), σ̂ within ``tolerance`` of σ with no candidate making a material gain.
+"""
 from __future__ import annotations
 
-
 import numpy as np
-from scipy import stats
 
 from ..errors import DoeCalibError
 from ..effects import parse_effect
 from ..identify import identify_quietly
 from .candidates import augmented, test_candidates
-from .cross_validation import cross_validated_rms
+from .cross_validation import cross_validated_rms, make_folds
 from .residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from .result import DiagnosisResult
 from .variables import configuration_variables, follows
@@ -18,9 +24,16 @@ _PHRASES = {"cyclic": "a cyclic (transmission) error of joint {j}",
             "gear_ratio": "a gear-ratio (encoder scale) error of joint {j}",
             "backlash": "backlash of joint {j}",
             "compliance_by_angle": "a compliance of joint {j} that changes with its angle",
+            "gravity_compliance": "a compliance of joint {j} under the robot's own weight",
             "joint_offset": "joint offsets", "geometry": "link geometry errors",
             "joint_compliance": "joint compliance", "thermal": "thermal expansion of the links",
             "link_compliance": "bending of the links under load"}
+
+#: Parameter-name prefixes of sizes that must be positive (compliances, band widths).
+_POSITIVE = ("k_", "kg_", "lc_", "backlash_")
+
+#: A residual "follows" a variable when its adjusted R² reaches this.
+FOLLOWS_R2 = 0.2
 
 
 def describe(candidate, robot) -> str:
@@ -30,62 +43,115 @@ def describe(candidate, robot) -> str:
     return _PHRASES.get(candidate.effect, f"effect {candidate.spec}").format(j=j)
 
 
-def _proposal(adequate_test, tests, level):
-    """The best significant candidate if it explains the residual, and the χ² p left after it.
+def _fitted(fit, names) -> tuple:
+    """The new parameters' values ± a-posteriori std in display units, and implausible ones."""
+    ps = fit.parameters
+    std = fit.std(a_posteriori=True)
+    rows, odd = [], []
+    for name in names:
+        i = ps.names.index(name)
+        p = ps.parameters[i]
+        f = p.display_factor
+        rows.append({"name": name, "value": float(ps.values[i] * f),
+                     "std": float(std[i] * f) if ps.free[i] else None, "unit": p.display_unit,
+                     "free": bool(ps.free[i])})
+        positive = name.startswith(_POSITIVE) or (
+            name.startswith("chi_") and not name.rsplit("_", 1)[1][:1] in "sc")
+        if positive and ps.free[i] and ps.values[i] + 2 * std[i] < 0:
+            odd.append(f"{name} = {ps.values[i] * f:.3g} ± {std[i] * f:.2g} {p.display_unit}")
+    note = ("physically implausible: negative " + ", ".join(odd)) if odd else ""
+    return tuple(rows), note
 
-    It explains the residual when it accounts for at least half of it, or
-    when the model with it would pass the adequacy test.
-    """
-    best = next((t for t in tests if t.p_value < level), None)
-    remaining_p = 1.0 if best is None else float(stats.chi2.sf(
-        adequate_test.statistic * (1 - best.explained_fraction), adequate_test.dof - best.rank))
-    if best is not None and (best.explained_fraction >= 0.5 or remaining_p >= level):
-        return best, remaining_p
-    return None, remaining_p
+
+def _groups_to_try(tests, level, top):
+    """Significant candidates of the ``top`` strongest (effect, joint) groups, every shape."""
+    keys = []
+    for t in tests:
+        if t.p_value < level and (t.effect, t.joint) not in keys:
+            keys.append((t.effect, t.joint))
+    keys = keys[:top]
+    return [t for t in tests if t.p_value < level and (t.effect, t.joint) in keys]
 
 
-def _verdict(model, adequate_test, cv_rms, noise, tests, follow, flagged, level):
-    sig = [t for t in tests if t.p_value < level]
-    floor = f"noise floor {noise:.3g} mm"
-    if adequate_test.adequate and not sig:
-        return (f"The model is adequate: residuals are consistent with the noise "
-                f"(χ² p = {adequate_test.p_value:.2g}, cross-validated RMS {cv_rms:.3g} mm, "
-                f"{floor}); no catalogue effect is significant at the {level:.0%} level.")
-    lead = ""
-    if follow:
-        top = follow[0]
-        lead = f"Residuals follow {top.variable} (adjusted R² {top.r2:.2f}). "
-    proposed, remaining_p = _proposal(adequate_test, tests, level)
-    best = sig[0] if sig else None
+def _proposal(tests, cv_rms, level, min_gain):
+    """The significant candidate with the lowest cross-validated RMS, if the gain is material."""
+    scored = [t for t in tests if t.p_value < level and t.cv_rms_mm is not None
+              and np.isfinite(t.cv_rms_mm) and t.cv_rms_mm < cv_rms * (1 - min_gain)]
+    return min(scored, key=lambda t: t.cv_rms_mm) if scored else None
+
+
+def _gross_errors(test, flagged, follow, n_poses):
+    """Whether the misfit sits in a few poses that follow no variable."""
+    excess = test.statistic - test.dof
+    if not flagged or excess <= 0 or len(flagged) > max(1, 0.1 * n_poses):
+        return False
+    inside = sum(p["chi2"] - p["chi2"] / p["chi2_per_dof"] for p in flagged)
+    return inside >= 0.5 * excess and (not follow or follow[0].r2 < FOLLOWS_R2)
+
+
+def _adequacy_words(test, tolerance):
+    lo, hi = test.ratio_interval()
+    return (f"σ̂/σ = {test.ratio:.3f} (95 % interval {lo:.3f}–{hi:.3f}; χ² p = "
+            f"{test.p_value:.2g}, σ {test.sigma_source} {test.sigma_mm:.3g} mm)")
+
+
+def _verdict(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross, level,
+             min_gain, tolerance):
+    ratio = _adequacy_words(test, tolerance)
+    cv_words = f"cross-validated RMS {cv:.3g} mm ({folds.description})"
     if proposed is not None:
-        best = proposed
-        words = describe(best, model.robot)
-        text = (f"{lead}{words[0].upper()}{words[1:]} explains "
-                f"{100 * best.explained_fraction:.0f} % of the remaining variance "
-                f"(F = {best.statistic:.3g}, p = {best.p_value:.2g})")
-        if best.cv_rms_mm is not None:
-            text += (f"; adding it ({best.spec}) moves the cross-validated RMS from "
-                     f"{cv_rms:.3g} to {best.cv_rms_mm:.3g} mm ({floor})")
-        if remaining_p < level:
-            text += (". Even with it the residual would stay above the noise: look at the "
-                     "variables below as well")
-        if adequate_test.adequate:
-            text = "The residual is within the noise overall, but: " + text
+        words = describe(proposed, model.robot)
+        size = "; ".join(f"{r['name']} = {r['value']:.3g}"
+                         + (f" ± {r['std']:.2g}" if r["std"] is not None else "")
+                         + f" {r['unit']}" for r in proposed.fitted[:4])
+        text = (f"{words[0].upper()}{words[1:]} is missing: adding {proposed.spec} lowers the "
+                f"{cv_words} to {proposed.cv_rms_mm:.3g} mm "
+                f"({100 * (1 - proposed.cv_rms_mm / cv):.0f} %) and accounts for "
+                f"{100 * proposed.explained_fraction:.0f} % of the residual (F = "
+                f"{proposed.statistic:.3g}, p = {proposed.p_value:.2g})")
+        if size:
+            text += f"; fitted {size}"
+        if proposed.implausible:
+            text += f" — {proposed.implausible}"
+        if not adequate:
+            text += (f". The model is not adequate yet ({ratio}): refine adds effects one at a "
+                     f"time while they help")
         return text + "."
-    names = ", ".join(f"{f.variable} (R² {f.r2:.2f})" for f in follow[:3]) or "no variable"
-    where = ", ".join(p["pose"] for p in flagged[:5])
-    partly = "" if best is None else (
-        f" (the best, {best.spec}, is significant but explains only "
-        f"{100 * best.explained_fraction:.0f} % of it)")
-    return (f"The model is NOT adequate (χ² p = {adequate_test.p_value:.2g}, residual "
-            f"σ̂ = {adequate_test.sigma_hat_mm:.3g} mm against {floor}) and no catalogue effect "
-            f"explains it{partly}. The residual size follows {names}"
-            + (f"; the largest residuals are at poses {where}" if where else "")
-            + ". Write a custom effect in those variables (--effect-file).")
+    if adequate:
+        why = "consistent with the noise" if test.adequate else \
+            f"within {tolerance:.0%} of the noise"
+        return (f"The model is adequate: the residual is {why} ({ratio}); no candidate effect "
+                f"lowers the {cv_words} by {min_gain:.0%}.")
+    where = ", ".join(p["pose"] + (f" (line {p['worst_line']})" if p["worst_line"] else "")
+                      for p in flagged[:8])
+    if gross:
+        return (f"The model is NOT adequate ({ratio}), but the misfit sits in {len(flagged)} "
+                f"pose(s) — {where} — and follows no measured variable: those readings look "
+                f"like gross errors (a reading off its target, a swapped marker, a pose typed "
+                f"wrong). Check them; to leave them out, rerun with --exclude-poses "
+                f"{','.join(p['pose'] for p in flagged)} (each exclusion is reported).")
+    sig = [t for t in tests if t.p_value < level]
+    partly = "" if not sig else (f" ({len(sig)} candidates are significant, but none lowers the "
+                                 f"{cv_words} by {min_gain:.0%})")
+    strong = [f for f in follow if f.r2 >= FOLLOWS_R2]
+    text = (f"The model is NOT adequate ({ratio}) and no catalogue effect improves "
+            f"its predictions{partly}.")
+    if strong:
+        names = ", ".join(f"{f.variable} (R² {f.r2:.2f})" for f in strong[:3])
+        text += (f" The residual size follows {names}: write an effect in those variables "
+                 f"(--effect-file).")
+    else:
+        best = f" (best R² {follow[0].r2:.2f})" if follow else ""
+        text += (f" The residual follows no measured variable{best}: check σ (a σ too small, "
+                 f"a unit mistake) and the readings.")
+    if where:
+        text += f" Largest residuals: {where}."
+    return text
 
 
 def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
-             cv_top: int = 6, progress=None) -> DiagnosisResult:
+             grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
+             tolerance: float = 0.05, progress=None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
 
     Parameters
@@ -96,12 +162,20 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     fit : IdentificationResult, optional
         The model's fit to these data; identified here when not given.
     level : float
-        Significance level for the adequacy test and for proposing an effect.
+        Significance level (Bonferroni-adjusted over every candidate and shape).
     folds : int
-        Folds (by pose) of the cross-validation.
+        Folds of the cross-validation (``pose`` and ``region`` groupings).
+    grouping : {"auto", "pose", "session", "region"}
+        What a fold holds out (:mod:`~doe_calib.diagnosis.cross_validation`).
     cv_top : int
-        Cross-validate this many of the significant candidates with the smallest p;
-        those are then ranked by cross-validated RMS.
+        Cross-validate every significant shape of this many (effect, joint)
+        groups with the strongest evidence.
+    min_gain : float
+        Material gain: an effect is proposed only if it lowers the
+        cross-validated RMS by at least this fraction.
+    tolerance : float
+        σ̂ within this fraction of σ, with no material candidate, is adequate
+        even when the χ² test (too sharp at large N) rejects.
     progress : callable, optional
         ``progress(done, total, note)`` while candidates are cross-validated.
 
@@ -117,35 +191,48 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     rep = repeatability_sigma(measurements)
     sigma_mm = float(np.median(measurements.sigma) * 1e3)
     test = adequacy(res, rank, sigma_mm, level, rep)
-    cv = cross_validated_rms(model, measurements, params, folds)
+    split = make_folds(measurements, folds, grouping)
+    cv = cross_validated_rms(model, measurements, params, split)
     tests = test_candidates(model, measurements, params)
-    chosen = [t for t in tests if t.p_value < level][:cv_top]
+    chosen = _groups_to_try(tests, level, cv_top)
     scored = {}
     for i, t in enumerate(chosen):
         if progress:
             progress(i, len(chosen), t.spec)
         big, bp = augmented(model, params, parse_effect(t.spec))
         try:  # folds start from the grown model's own fit: what they hold fixed is then right
-            bp = identify_quietly(big, measurements, bp, register=False).parameters
+            big_fit = identify_quietly(big, measurements, bp, register=False)
         except DoeCalibError:
             scored[t.spec] = t.with_cv(float("nan"))
             continue
-        scored[t.spec] = t.with_cv(cross_validated_rms(big, measurements, bp, folds))
+        new = [n for n in big_fit.parameters.names if n not in params.names]
+        rows, odd = _fitted(big_fit, new)
+        scored[t.spec] = t.with_cv(cross_validated_rms(big, measurements, big_fit.parameters,
+                                                       split), rows, odd)
     ranked = sorted(scored.values(), key=lambda t: (np.nan_to_num(t.cv_rms_mm, nan=np.inf),
                                                      t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]
-    size = np.bincount(res.config, (res.weighted ** 2).sum(axis=1),
-                       minlength=len(measurements.configurations))
-    count = np.bincount(res.config, minlength=len(measurements.configurations)) * 3
+    proposed = _proposal(ranked, cv, level, min_gain)
+    adequate = test.adequate or (test.ratio <= 1 + tolerance and proposed is None)
+    m = len(measurements.configurations)
+    size = np.bincount(res.config, (res.weighted ** 2).sum(axis=1), minlength=m)
+    count = np.bincount(res.config, minlength=m) * 3
     used = count > 0
     variables = {k: (v[0][used], v[1], v[2]) for k, v in
                  configuration_variables(model.robot, measurements.configurations).items()}
     follow = follows(size[used] / count[used], variables)
-    flagged = flagged_poses(res, test.dof / res.weighted.size)
-    verdict = _verdict(model, test, cv, test.sigma_mm, ranked, follow, flagged, level)
-    proposed, _ = _proposal(test, ranked, level)
+    flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
+    n_poses = len(set(measurements.configurations.pose))
+    gross = not adequate and proposed is None and _gross_errors(test, flagged, follow, n_poses)
+    verdict = _verdict(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
+                       gross, level, min_gain, tolerance)
+    lo, hi = test.ratio_interval()
     chi2 = {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
-            "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm}
-    return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, test.adequate, chi2,
+            "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,
+            "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
+            "tolerance": tolerance, "chi2_adequate": test.adequate}
+    return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, adequate, chi2,
                            tuple(ranked), tuple(follow), tuple(flagged), level, verdict,
-                           None if proposed is None else proposed.spec, int(res.weighted.size))
+                           None if proposed is None else proposed.spec, int(res.weighted.size),
+                           cv_grouping=split.description, min_gain=min_gain,
+                           gross_errors=tuple(p["pose"] for p in flagged) if gross else ())

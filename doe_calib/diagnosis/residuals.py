@@ -82,7 +82,20 @@ class Adequacy:
     @property
     def sigma_hat_mm(self) -> float:
         """A-posteriori σ̂ = σ·sqrt(Σr²/dof), mm."""
-        return self.sigma_mm * float(np.sqrt(self.statistic / max(self.dof, 1)))
+        return self.sigma_mm * self.ratio
+
+    @property
+    def ratio(self) -> float:
+        """σ̂/σ: how many times the noise the residual is."""
+        return float(np.sqrt(self.statistic / max(self.dof, 1)))
+
+    def ratio_interval(self, confidence: float = 0.95) -> tuple:
+        """Interval of the true σ over the assumed σ at ``confidence`` (from χ²(dof))."""
+        if self.dof <= 0:
+            return float("nan"), float("nan")
+        a = (1 - confidence) / 2
+        lo, hi = stats.chi2.ppf([1 - a, a], self.dof)
+        return (float(np.sqrt(self.statistic / lo)), float(np.sqrt(self.statistic / hi)))
 
 
 def repeatability_sigma(measurements):
@@ -129,16 +142,20 @@ def adequacy(res: Residuals, rank: int, sigma_mm: float, level: float = 0.01,
     return Adequacy(t, dof, p, float(sigma_mm), source, bool(p >= level), level)
 
 
-def flagged_poses(res: Residuals, dof_fraction: float, level: float = 1e-3) -> list[dict]:
+def flagged_poses(res: Residuals, dof_fraction: float, level: float = 1e-3,
+                  lines=None) -> list[dict]:
     """Poses whose residual is far outside the noise and the other poses (named, never dropped).
 
     A pose's ``Σ r²`` over its readings is compared with χ² on its share of
     the residual degrees of freedom (Bonferroni over the poses at ``level``),
     and must also exceed 4× the median pose's χ²/dof: when the whole model
-    is off, only the poses that stand out are named.
+    is off, only the poses that stand out are named. With ``lines`` (the
+    source line of each reading), each pose also names its worst reading's
+    line.
     """
     ids = list(dict.fromkeys(res.pose))
     pose = np.array(res.pose)
+    r2 = (res.weighted ** 2).sum(axis=1)
     ratio = {}
     for p in ids:
         w = res.weighted[pose == p]
@@ -149,8 +166,10 @@ def flagged_poses(res: Residuals, dof_fraction: float, level: float = 1e-3) -> l
     for p, (t, dof) in ratio.items():
         pv = float(stats.chi2.sf(t, dof)) * len(ids)
         if pv < level and t / dof > 4 * max(typical, 1.0):
-            out.append({"pose": p, "rms_mm": float(np.sqrt(np.mean(res.error[pose == p] ** 2))
+            mine = np.flatnonzero(pose == p)
+            worst = mine[np.argmax(r2[mine])]
+            out.append({"pose": p, "rms_mm": float(np.sqrt(np.mean(res.error[mine] ** 2))
                                                    * 1e3),
-                        "chi2_per_dof": t / dof, "p_value": min(pv, 1.0)})
+                        "chi2_per_dof": t / dof, "chi2": t, "p_value": min(pv, 1.0),
+                        "worst_line": int(lines[worst]) if lines is not None else 0})
     return sorted(out, key=lambda d: -d["chi2_per_dof"])
-

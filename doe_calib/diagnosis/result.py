@@ -21,13 +21,16 @@ class DiagnosisResult:
     rms_mm : float
         Fit residual RMS per coordinate, mm.
     cv_rms_mm : float
-        Cross-validated (by pose) RMS, mm.
+        Cross-validated RMS, mm (held out as ``cv_grouping`` says).
     noise_floor_mm : float
         The measurement σ per coordinate, mm (given, or from repeated readings).
     adequate : bool
-        Residuals consistent with the noise (χ² test at ``level``).
+        Residuals consistent with the noise: the χ² test at ``level`` passes,
+        or σ̂/σ ≤ 1 + ``chi2["tolerance"]`` and no candidate makes a material gain.
     chi2 : dict
-        ``statistic``, ``dof``, ``p_value``, ``sigma_source``, ``sigma_hat_mm``.
+        ``statistic``, ``dof``, ``p_value``, ``sigma_source``, ``sigma_hat_mm``,
+        ``sigma_ratio`` (σ̂/σ) and its 95 % ``sigma_ratio_interval``,
+        ``tolerance``, ``chi2_adequate`` (the χ² test alone).
     candidates : tuple of CandidateTest
         Best first: significant ones by cross-validated RMS, then by statistic.
     follows : tuple of Follows
@@ -39,9 +42,16 @@ class DiagnosisResult:
     verdict : str
         The conclusion in plain words.
     proposed : str or None
-        The effect to add (model-string form): the best significant candidate,
-        if it explains at least half of the residual or would make the model
-        adequate; None otherwise.
+        The effect to add (model-string form): among the significant
+        candidates, the one with the lowest cross-validated RMS, if it lowers
+        it by at least ``min_gain``; None otherwise.
+    cv_grouping : str
+        What the cross-validation held out, in words.
+    min_gain : float
+        The material gain (fraction of the cross-validated RMS).
+    gross_errors : tuple of str
+        Poses whose readings look like gross errors (the misfit sits there and
+        follows no variable); empty otherwise.
     """
 
     model: str
@@ -57,6 +67,9 @@ class DiagnosisResult:
     verdict: str
     proposed: str | None = None
     n_observations: int = 0
+    cv_grouping: str = ""
+    min_gain: float = 0.02
+    gross_errors: tuple = ()
     notes: tuple = field(default=())
 
     @property
@@ -72,17 +85,23 @@ class DiagnosisResult:
     def summary(self, top: int = 8) -> str:
         """The verdict, the adequacy test, the ranked candidates and what the residual follows."""
         c = self.chi2
+        ratio = c.get("sigma_ratio")
+        interval = c.get("sigma_ratio_interval")
         lines = [f"Diagnosis of model {self.model or '(base + markers)'}",
-                 f"residual RMS {self.rms_mm:.4f} mm, cross-validated {self.cv_rms_mm:.4f} mm, "
-                 f"noise floor {self.noise_floor_mm:.4f} mm (σ {c['sigma_source']})",
-                 f"χ² = {c['statistic']:.1f} on {c['dof']} dof (p = {c['p_value']:.3g}): "
-                 + ("adequate" if self.adequate else "NOT adequate")
-                 + f"; σ̂ = {c['sigma_hat_mm']:.4f} mm", "", self.verdict, "",
-                 f"{'candidate':<34}{'F':>10}{'p (adj.)':>11}{'explains':>10}{'CV RMS mm':>11}"]
+                 f"residual RMS {self.rms_mm:.4f} mm, cross-validated {self.cv_rms_mm:.4f} mm "
+                 f"({self.cv_grouping or 'by pose'}), noise floor {self.noise_floor_mm:.4f} mm "
+                 f"(σ {c['sigma_source']})",
+                 f"χ² = {c['statistic']:.1f} on {c['dof']} dof (p = {c['p_value']:.3g}); "
+                 f"σ̂ = {c['sigma_hat_mm']:.4f} mm"
+                 + (f", σ̂/σ = {ratio:.3f} [{interval[0]:.3f}, {interval[1]:.3f}]"
+                    if ratio is not None else "")
+                 + ": " + ("adequate" if self.adequate else "NOT adequate"), "", self.verdict, "",
+                 f"{'candidate':<44}{'F':>10}{'p (adj.)':>11}{'explains':>10}{'CV RMS mm':>11}"]
         for t in self.candidates[:top]:
             cv = f"{t.cv_rms_mm:11.4f}" if t.cv_rms_mm is not None else f"{'–':>11}"
-            lines.append(f"{t.spec:<34}{t.statistic:10.3g}{t.p_value:11.2g}"
-                         f"{100 * t.explained_fraction:9.1f}%{cv}")
+            lines.append(f"{t.spec:<44}{t.statistic:10.3g}{t.p_value:11.2g}"
+                         f"{100 * t.explained_fraction:9.1f}%{cv}"
+                         + ("  (implausible)" if t.implausible else ""))
         if len(self.candidates) > top:
             lines.append(f"… and {len(self.candidates) - top} more (JSON)")
         if self.follows:
@@ -99,7 +118,8 @@ class DiagnosisResult:
                 "cv_rms_mm": self.cv_rms_mm, "noise_floor_mm": self.noise_floor_mm,
                 "adequate": self.adequate, "chi2": self.chi2, "level": self.level,
                 "verdict": self.verdict, "proposed": self.proposed,
-                "n_observations": self.n_observations,
+                "n_observations": self.n_observations, "cv_grouping": self.cv_grouping,
+                "min_gain": self.min_gain, "gross_errors": list(self.gross_errors),
                 "candidates": [t.to_dict() for t in self.candidates],
                 "follows": [f.to_dict() for f in self.follows],
                 "flagged_poses": list(self.flagged), "notes": list(self.notes)}
@@ -113,7 +133,8 @@ class DiagnosisResult:
                    d["chi2"], tuple(CandidateTest.from_dict(t) for t in d["candidates"]),
                    tuple(Follows(**f) for f in d["follows"]), tuple(d["flagged_poses"]),
                    d["level"], d["verdict"], d.get("proposed"), d.get("n_observations", 0),
-                   tuple(d.get("notes", ())))
+                   d.get("cv_grouping", ""), d.get("min_gain", 0.02),
+                   tuple(d.get("gross_errors", ())), tuple(d.get("notes", ())))
 
     @classmethod
     def from_json(cls, path) -> "DiagnosisResult":

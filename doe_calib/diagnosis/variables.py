@@ -2,8 +2,11 @@
 
 The variables are the joint angles (deg; mm for prismatic joints), the
 applied wrench components (N, N·m), the joint torques they cause (N·m), the
+torques of the robot's own weight (N·m, when the URDF gives the masses), the
 temperature (°C, when measured), each joint's approach direction (+1/−1, when
-known and not always the same) and the order of measurement. For each, the
+known and not always the same) and the order of measurement. A variable that
+barely varies (a torque of 1e-13 N·m where the others reach 100 N·m: round-off,
+not a signal) is left out. For each, the
 size of the residual at each configuration (mean of r² over its readings) is
 fitted by a smooth function of the variable (angles: sin/cos of one and two
 times the angle plus a line; others: a cubic); the adjusted R² says how much
@@ -15,7 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kinematics import nominal_torque_function
+from ..kinematics import gravity_torque_function, nominal_torque_function
+
+#: A variable varies when its spread exceeds this fraction of its family's largest value.
+RELATIVE_SPREAD = 1e-6
 
 
 @dataclass(frozen=True)
@@ -44,13 +50,20 @@ def configuration_variables(robot, configurations) -> dict:
     if np.any(w != 0):
         for i, name in enumerate(("force fx", "force fy", "force fz", "moment mx", "moment my",
                                   "moment mz")):
-            if np.ptp(w[:, i]) > 0:
+            if _varies(w[:, i], w[:, :3] if i < 3 else w[:, 3:]):
                 out[name] = (w[:, i], "N" if i < 3 else "N·m", False)
         tau_f = nominal_torque_function(robot).map(len(configurations))
         tau = np.array(tau_f(configurations.q.T, w.T)).T
         for k, j in enumerate(robot.joints):
-            if np.ptp(tau[:, k]) > 0:
+            if _varies(tau[:, k], tau):
                 out[f"tau{k + 1} ({j.name})"] = (tau[:, k], "N·m" if revolute[k] else "N", False)
+    if robot.has_inertials:
+        tau_g = np.array(gravity_torque_function(robot).map(len(configurations))(
+            configurations.q.T)).T
+        for k, j in enumerate(robot.joints):
+            if _varies(tau_g[:, k], tau_g):
+                out[f"weight torque {k + 1} ({j.name})"] = (tau_g[:, k],
+                                                            "N·m" if revolute[k] else "N", False)
     t = configurations.temperature
     if np.all(np.isfinite(t)) and np.ptp(t) > 0:
         out["temperature"] = (t, "°C", False)
@@ -60,6 +73,11 @@ def configuration_variables(robot, configurations) -> dict:
             out[f"approach of q{k + 1} ({j.name})"] = (a, "", False)
     out["measurement order"] = (np.arange(len(configurations), dtype=float), "", False)
     return out
+
+
+def _varies(v: np.ndarray, family: np.ndarray) -> bool:
+    """Whether ``v`` spreads more than round-off next to the largest value of its family."""
+    return bool(np.ptp(v) > RELATIVE_SPREAD * max(float(np.abs(family).max()), 1e-300))
 
 
 def _basis(v: np.ndarray, is_angle: bool) -> np.ndarray:

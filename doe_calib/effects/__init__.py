@@ -15,6 +15,7 @@ from .compliance_by_angle import ComplianceByAngle
 from .cyclic import Cyclic
 from .gear_ratio import GearRatio
 from .geometry import Geometry
+from .gravity_compliance import GravityCompliance
 from .joint_compliance import JointCompliance
 from .joint_offset import JointOffset
 from .link_compliance import LinkCompliance
@@ -26,6 +27,7 @@ REGISTRY = {
     "geometry": Geometry,
     "joint_compliance": JointCompliance,
     "compliance_by_angle": ComplianceByAngle,
+    "gravity_compliance": GravityCompliance,
     "gear_ratio": GearRatio,
     "cyclic": Cyclic,
     "backlash": Backlash,

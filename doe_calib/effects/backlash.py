@@ -26,13 +26,20 @@ with ``s_k`` the side, chosen by ``mode``:
     approach does; in between the two blend smoothly. With no approach
     information (``a_k = 0``, e.g. data built in memory or designs) this is
     exactly ``torque``.
+``gravity``
+    ``s_k = tanh((τ_k + τ_g,k) / τ_0)``: the side is set by the whole static
+    torque, the applied load's plus the robot's own weight
+    (:func:`~doe_calib.kinematics.gravity_torques`, from the URDF's
+    inertials): the usual case on a real arm, where the weight holds each
+    joint against one end of the band and the side flips where the weight's
+    torque changes sign.
 
 The model is linear in ``b_k``. ``tanh`` is the sign of the torque for any
 calibration load (within 1e-8 of ±1 once ``|τ_k| > 10 τ_0``); unlike ``sign``
 it is smooth in q and in the load, so continuous design refinement gets
-gradients. The robot's own weight is not a torque of the applied wrench: a
-load that only adds to the gravity torque does not move the joint across the
-band in reality, which this model cannot know. A design cannot plan the
+gradients. In the modes ``torque`` and ``both`` the robot's own weight is
+ignored (a load that only adds to the weight's torque does not move the joint
+across the band in reality, which they cannot know); ``gravity`` adds it. A design cannot plan the
 approach (it is 0 at design time, :mod:`doe_calib.design.symbolic`), so a
 design sees only the load part.
 
@@ -53,7 +60,7 @@ from .base import ChainSymbols, Effect, joint_index
 TORQUE_SCALE = 1.0
 
 #: What decides the side of the band; the first is the default.
-MODES = ("both", "torque", "approach")
+MODES = ("both", "torque", "approach", "gravity")
 
 
 class Backlash(Effect):
@@ -71,6 +78,12 @@ class Backlash(Effect):
         else:
             super().__init__(joint, mode=mode)
 
+    @classmethod
+    def candidates(cls, robot, configurations=None) -> list:
+        """Every mode on every joint (``gravity`` only where the URDF has inertials)."""
+        modes = MODES if robot.has_inertials else MODES[:3]
+        return [cls(f"j{k + 1}", mode=m) for k in range(robot.n_joints) for m in modes]
+
     @property
     def mode(self) -> str:
         return self._mode
@@ -78,6 +91,10 @@ class Backlash(Effect):
     @property
     def uses_torque(self) -> bool:
         return self._mode != "approach"
+
+    @property
+    def uses_gravity(self) -> bool:
+        return self._mode == "gravity"
 
     def parameters(self, robot) -> list:
         j = robot.joints[joint_index(robot, self.joint)]
@@ -100,6 +117,8 @@ class Backlash(Effect):
         if self._mode == "approach":
             return None
         k = joint_index(s.robot, self.joint)
+        if self._mode == "gravity":
+            tau = tau + s.gravity
         side = ca.tanh(tau[k] / TORQUE_SCALE)
         if self._mode == "both":
             side = side + (1 - side ** 2) * s.env[len(ENV_FIELDS) + k]

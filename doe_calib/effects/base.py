@@ -46,6 +46,11 @@ class ChainSymbols:
     wrench : casadi.SX, shape (6, 1), or None
         The applied wrench (N, N·m) at the flange origin, base frame; set by
         :func:`~doe_calib.kinematics.flange_pose`.
+    gravity : casadi.SX, shape (N, 1), or None
+        Joint torques (N·m, N for a prismatic joint) that the robot's own
+        weight exerts at the commanded q (:func:`~doe_calib.kinematics.gravity_torques`);
+        set by :func:`~doe_calib.kinematics.flange_pose` when an effect
+        ``uses_gravity``.
     """
 
     robot: object
@@ -53,6 +58,7 @@ class ChainSymbols:
     env: ca.SX
     p: dict
     wrench: ca.SX | None = None
+    gravity: ca.SX | None = None
 
 
 def joint_index(robot, joint) -> int:
@@ -79,6 +85,8 @@ class Effect:
     name = ""
     #: Whether the effect sits on one joint, given as its first argument (``cyclic(j3)``).
     per_joint = False
+    #: Whether the effect reads ``ChainSymbols.gravity`` (the robot's own weight).
+    uses_gravity = False
 
     def __init__(self, *args, **options):
         self._args = tuple(str(a) for a in args)
@@ -101,12 +109,17 @@ class Effect:
         return None
 
     @classmethod
-    def candidates(cls, robot) -> list:
+    def candidates(cls, robot, configurations=None) -> list:
         """The instances model diagnosis tries when this effect is missing.
 
         One instance for a whole-robot effect; a per-joint effect (``per_joint``)
         one per joint, e.g. ``[GearRatio("j1"), …]``, with default options.
+        An effect with several shapes offers each as a separate candidate
+        (variants compete by cross-validation); ``configurations``, the
+        measured ones, lets a shape adapt to the range the data cover.
         """
+        if cls.uses_gravity and not robot.has_inertials:
+            return []
         if cls.per_joint:
             return [cls(f"j{k + 1}") for k in range(robot.n_joints)]
         return [cls()]

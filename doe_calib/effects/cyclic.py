@@ -11,10 +11,11 @@ with ``a_h = cyc_<joint>_s<h>`` and ``b_h = cyc_<joint>_c<h>`` in rad.
 The first harmonic overlaps partly with a joint offset and with the
 placement errors of :mod:`~doe_calib.effects.geometry` (``b_1 cos q`` is an
 offset near ``q = 0``); identifiability analysis fixes what the data cannot
-separate. Model diagnosis tries ``harmonics=2`` on every revolute joint:
-the once-per-revolution term (eccentricity) and the twice-per-revolution
-term typical of strain-wave (harmonic) drives, for four parameters a joint.
-Revolute joints only.
+separate. Model diagnosis tries ``harmonics=1``, ``2`` and ``3`` on every
+revolute joint as competing variants: the once-per-revolution term
+(eccentricity), the twice-per-revolution term typical of strain-wave
+(harmonic) drives, and a third; cross-validation picks how many the data
+support. Revolute joints only.
 """
 from __future__ import annotations
 
@@ -42,9 +43,9 @@ class Cyclic(Effect):
         super().__init__(joint, harmonics=self._harmonics)
 
     @classmethod
-    def candidates(cls, robot) -> list:
-        return [cls(f"j{k + 1}", harmonics=2) for k, j in enumerate(robot.joints)
-                if j.kind == "revolute"]
+    def candidates(cls, robot, configurations=None) -> list:
+        return [cls(f"j{k + 1}", harmonics=h) for k, j in enumerate(robot.joints)
+                if j.kind == "revolute" for h in (1, 2, 3)]
 
     @property
     def harmonics(self) -> int:

@@ -77,7 +77,7 @@ class LinkCompliance(Effect):
             super().__init__(min_length=f"{self._min_length:g}")
 
     @classmethod
-    def candidates(cls, robot) -> list:
+    def candidates(cls, robot, configurations=None) -> list:
         return [cls()] if long_links(robot) else []
 
     def parameters(self, robot) -> list:
