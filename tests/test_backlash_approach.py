@@ -158,7 +158,7 @@ def test_approach_mode_is_an_offset_by_half_the_width(robot6, tool6):
         model = build_model(robot6, tool6, f"backlash(j2,mode={mode})")
         cfg = Configurations.from_arrays(q, approach=np.outer([1, -1, 0], np.ones(6)))
         x = marker_positions(model, model.nominal().updated(backlash_a2=width).values, cfg)
-        for row, dq in ((0, width / 2), (1, -width / 2), (2, 0.0)):
+        for row, dq in ((0, -width / 2), (1, width / 2), (2, 0.0)):  # the output lags
             xo = marker_positions(offset, offset.nominal().updated(dq_a2=dq).values,
                                   cfg.subset([row]))
             assert np.abs(x[row] - xo[0]).max() < 1e-12

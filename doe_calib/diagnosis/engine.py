@@ -32,6 +32,10 @@ _PHRASES = {"cyclic": "a cyclic (transmission) error of joint {j}",
 #: Parameter-name prefixes of sizes that must be positive (compliances, band widths).
 _POSITIVE = ("k_", "kg_", "lc_", "backlash_")
 
+#: Largest plausible size of a transmission's cyclic error term or backlash, rad (2°);
+#: for a prismatic joint's backlash, 2 mm.
+TRANSMISSION_LIMIT = {"rad": np.radians(2.0), "m": 2e-3}
+
 #: A residual "follows" a variable when its adjusted R² reaches this.
 FOLLOWS_R2 = 0.2
 
@@ -57,9 +61,17 @@ def _fitted(fit, names) -> tuple:
                      "free": bool(ps.free[i])})
         positive = name.startswith(_POSITIVE) or (
             name.startswith("chi_") and not name.rsplit("_", 1)[1][:1] in "sc")
+        value = f"{name} = {ps.values[i] * f:.3g} ± {std[i] * f:.2g} {p.display_unit}"
         if positive and ps.free[i] and ps.values[i] + 2 * std[i] < 0:
-            odd.append(f"{name} = {ps.values[i] * f:.3g} ± {std[i] * f:.2g} {p.display_unit}")
-    note = ("physically implausible: negative " + ", ".join(odd)) if odd else ""
+            odd.append(f"negative {value}")
+        limit = TRANSMISSION_LIMIT.get(p.unit, np.inf)
+        if name.startswith("cyc_") and abs(ps.values[i]) > limit:
+            odd.append(f"{value}, far beyond a transmission's cyclic error (the joint covers "
+                       f"too little of a turn to separate the harmonics: a curve fit, not a "
+                       f"cyclic error)")
+        if name.startswith("backlash_") and abs(ps.values[i]) > limit:
+            odd.append(f"{value}, far wider than a transmission's play")
+    note = ("physically implausible: " + "; ".join(odd)) if odd else ""
     return tuple(rows), note
 
 
@@ -73,11 +85,17 @@ def _groups_to_try(tests, level, top):
     return [t for t in tests if t.p_value < level and (t.effect, t.joint) in keys]
 
 
+def _material(tests, cv_rms, level, min_gain):
+    """Significant candidates that lower the cross-validated RMS by ``min_gain``, best first."""
+    return sorted([t for t in tests if t.p_value < level and t.cv_rms_mm is not None
+                   and np.isfinite(t.cv_rms_mm) and t.cv_rms_mm < cv_rms * (1 - min_gain)],
+                  key=lambda t: t.cv_rms_mm)
+
+
 def _proposal(tests, cv_rms, level, min_gain):
-    """The significant candidate with the lowest cross-validated RMS, if the gain is material."""
-    scored = [t for t in tests if t.p_value < level and t.cv_rms_mm is not None
-              and np.isfinite(t.cv_rms_mm) and t.cv_rms_mm < cv_rms * (1 - min_gain)]
-    return min(scored, key=lambda t: t.cv_rms_mm) if scored else None
+    """The physically plausible material candidate with the lowest cross-validated RMS."""
+    return next((t for t in _material(tests, cv_rms, level, min_gain) if not t.implausible),
+                None)
 
 
 def _gross_errors(test, flagged, follow, n_poses):
@@ -226,6 +244,10 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     gross = not adequate and proposed is None and _gross_errors(test, flagged, follow, n_poses)
     verdict = _verdict(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
                        gross, level, min_gain, tolerance)
+    odd = next((t for t in _material(ranked, cv, level, min_gain) if t.implausible), None)
+    if odd is not None and (proposed is None or odd.cv_rms_mm < proposed.cv_rms_mm):
+        verdict += (f" Not proposed although it predicts better (cross-validated RMS "
+                    f"{odd.cv_rms_mm:.3g} mm): {odd.spec}, {odd.implausible}.")
     lo, hi = test.ratio_interval()
     chi2 = {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
             "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,

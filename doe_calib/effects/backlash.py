@@ -15,13 +15,14 @@ with ``s_k`` the side, chosen by ``mode``:
     one end. An unloaded pose gets 0, the middle of the band (the joint
     offset absorbs it).
 ``approach``
-    ``s_k = a_k``, the direction (+1, −1, 0 unknown) from which joint k
-    reached the pose (``env`` field ``approach<K>``, :func:`doe_calib.data.env_fields`;
-    from the file's columns or its measurement order, :mod:`doe_calib.io`):
-    a static, unloaded joint stays where the motion that brought it there
-    left it.
+    ``s_k = −a_k``, with ``a_k`` the direction (+1, −1, 0 unknown) from which
+    joint k reached the pose (``env`` field ``approach<K>``,
+    :func:`doe_calib.data.env_fields`; from the file's columns or its
+    measurement order, :mod:`doe_calib.io`): a static, unloaded joint stays
+    where the motion that brought it there left it, the output lagging
+    half the band behind the motor (and its encoder) that drove it.
 ``both`` (the default)
-    ``s_k = t + (1 − t²) · a_k`` with ``t = tanh(τ_k / τ_0)``: under a load
+    ``s_k = t − (1 − t²) · a_k`` with ``t = tanh(τ_k / τ_0)``: under a load
     the load decides (``t = ±1`` kills the approach term), unloaded the
     approach does; in between the two blend smoothly. With no approach
     information (``a_k = 0``, e.g. data built in memory or designs) this is
@@ -110,7 +111,7 @@ class Backlash(Effect):
             return None
         k = joint_index(s.robot, self.joint)
         out = ca.SX.zeros(s.robot.n_joints, 1)
-        out[k] = self._half_width(s, k) * s.env[len(ENV_FIELDS) + k]
+        out[k] = -self._half_width(s, k) * s.env[len(ENV_FIELDS) + k]
         return out
 
     def deflection(self, s: ChainSymbols, tau: ca.SX):
@@ -121,7 +122,7 @@ class Backlash(Effect):
             tau = tau + s.gravity
         side = ca.tanh(tau[k] / TORQUE_SCALE)
         if self._mode == "both":
-            side = side + (1 - side ** 2) * s.env[len(ENV_FIELDS) + k]
+            side = side - (1 - side ** 2) * s.env[len(ENV_FIELDS) + k]
         out = ca.SX.zeros(s.robot.n_joints, 1)
         out[k] = self._half_width(s, k) * side
         return out
