@@ -77,7 +77,7 @@ def random_truth(model, rng=None, length: float = 1e-3, angle: float = 1e-3,
             size = p.scale
         if p.block == "markers":
             size = marker
-        if p.unit in ("rad/(N·m)", "m/N"):  # compliances are positive
+        if p.unit in ("rad/(N·m)", "m/N") or p.block == "backlash":  # compliances, widths > 0
             v[i] = size * rng.uniform(0.2, 1.0)
         else:
             v[i] += size * rng.standard_normal()

@@ -62,7 +62,11 @@ def _fitted(fit, names) -> tuple:
         positive = name.startswith(_POSITIVE) or (
             name.startswith("chi_") and not name.rsplit("_", 1)[1][:1] in "sc")
         value = f"{name} = {ps.values[i] * f:.3g} ± {std[i] * f:.2g} {p.display_unit}"
-        if positive and ps.free[i] and ps.values[i] + 2 * std[i] < 0:
+        total = ps.values[i]
+        if name.startswith("chi_"):  # on top of the joint's constant compliance, if any
+            k = f"k_{name[4:].rsplit('_', 1)[0]}"
+            total += ps.values[ps.names.index(k)] if k in ps.names else 0.0
+        if positive and ps.free[i] and total + 2 * std[i] < 0:
             odd.append(f"negative {value}")
         limit = TRANSMISSION_LIMIT.get(p.unit, np.inf)
         if name.startswith("cyc_") and abs(ps.values[i]) > limit:
