@@ -275,11 +275,15 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
 
 
 def read_design(path, robot) -> Configurations:
-    """Read a design CSV (formats.md §4): pose, q1..qN (deg/mm), optional wrench, temperature.
+    """Read a design (formats.md §4): the CSV, or the JSON ``doe-calib design`` writes.
 
-    Optional ``approach1`` … ``approachN`` columns as in a measurement file;
-    without them the directions come from the row order (module notes).
+    CSV: pose, q1..qN (deg/mm), optional wrench, temperature, and optional
+    ``approach1`` … ``approachN`` columns as in a measurement file; without
+    them the directions come from the row order (module notes), as for the
+    poses of a JSON design. A JSON design must be for ``robot``'s joints.
     """
+    if Path(path).suffix.lower() == ".json":
+        return _read_design_json(path, robot)
     table = _read_table(path)
     header_line = table.rows[0][0] - 1
     _check_columns(table, ["pose", *_joint_columns(robot)],
@@ -301,6 +305,30 @@ def read_design(path, robot) -> Configurations:
     approach = np.array([r[4] for r in rows]) if explicit else _derived_approach(q, robot)
     return Configurations.from_arrays(q, [r[2] for r in rows], [[r[3]] for r in rows],
                                       [r[0] for r in rows], approach)
+
+
+def _read_design_json(path, robot) -> Configurations:
+    """The configurations of a design JSON, checked against ``robot``'s joints and limits."""
+    from .design.result import DesignResult
+
+    try:
+        design = DesignResult.from_json(path)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise DataError(f"not a complete doe_calib design file ({exc!r} is missing or "
+                        f"malformed)", path) from None
+    if design.robot.joint_names != robot.joint_names:
+        raise DataError(f"the design is for joints {', '.join(design.robot.joint_names)}, the "
+                        f"robot has {', '.join(robot.joint_names)}", path)
+    cfg = design.configurations
+    for c, q in enumerate(cfg.q):
+        outside = np.flatnonzero((q < robot.lower - 1e-12) | (q > robot.upper + 1e-12))
+        if outside.size:
+            joint = robot.joints[outside[0]]
+            raise DataError(f"pose {cfg.pose[c]!r}: q{outside[0] + 1} = "
+                            f"{q[outside[0]] * joint.display_factor:g} {joint.display_unit} is "
+                            f"outside the limits of joint {joint.name}", path)
+    return Configurations.from_arrays(cfg.q, cfg.wrench, pose=cfg.pose,
+                                      approach=_derived_approach(cfg.q, robot))
 
 
 def _configuration_fields(cfg, c, robot) -> list[str]:

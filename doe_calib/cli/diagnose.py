@@ -8,6 +8,7 @@ from ..diagnosis import diagnose
 from ..identify import identify_quietly
 from ..jsonfile import strict_json
 from .common import model_and_measurements, robot_arguments
+from .options import positive
 
 HELP = "test the model against the measurements and rank the effects it is missing"
 EXAMPLE = ("doe-calib diagnose --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -17,8 +18,9 @@ EXAMPLE = ("doe-calib diagnose --robot kr270.urdf --tool tool.yaml --data meas.c
 def measurement_arguments(c):
     """``--data``, ``--sigma``, ``--level``, ``--skip-bad`` (diagnose, refine)."""
     c.add_argument("--data", required=True, help="measurement CSV (formats.md §3)")
-    c.add_argument("--sigma", type=float, help="tracker σ per coordinate, mm, for rows "
-                                               "without a sigma column")
+    c.add_argument("--sigma", type=positive("--sigma", "mm"), help="tracker σ per coordinate, "
+                                                                    "mm, for rows without a "
+                                                                    "sigma column")
     c.add_argument("--level", type=float, default=0.01,
                    help="significance level (default 0.01)")
     c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")
@@ -32,6 +34,9 @@ def add_arguments(c):
                                   "(default: beside --out)")
     c.add_argument("--report", help="HTML report to write (self-contained)")
     c.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
+
+
+OUTPUTS = {"out": "file", "plot": "file", "report": "file"}
 
 
 def residual_figure(model, meas, fit, path):

@@ -1,0 +1,187 @@
+"""Every user mistake ends in one line naming the option, file, line or column, exit status 2."""
+import json
+
+import pytest
+
+from doe_calib import example
+from doe_calib.cli import main
+
+ROBOT = ["--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML]
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """A small simulated campaign and a small design, written by the commands themselves."""
+    d = tmp_path_factory.mktemp("errors")
+    assert _run(["simulate", *ROBOT, "--model", "joint_offset", "--poses", "8", "--seed", "1",
+                 "--out", str(d / "m.csv")]) == 0
+    assert _run(["design", *ROBOT, "--model", "joint_offset", "--poses", "6", "--candidates",
+                 "200", "--no-refine", "--seed", "1", "--out", str(d / "d.json")]) == 0
+    return d
+
+
+def _run(argv) -> int:
+    return main([str(a) for a in argv])
+
+
+def _fails(capsys, argv, *words):
+    """Run the command line; it must exit 2 with one ``error:`` line holding ``words``."""
+    capsys.readouterr()
+    code = _run(argv)
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "Traceback" not in err
+    line = err.strip().splitlines()[-1]
+    assert line.startswith("error: "), err
+    for w in words:
+        assert w in line, line
+    return line
+
+
+def test_fix_and_free_unknown_names_list_close_ones(files, tmp_path, capsys):
+    common = ["identify", *ROBOT, "--data", files / "m.csv", "--model", "joint_offset",
+              "--sigma", "0.02", "--out", tmp_path / "r.json"]
+    _fails(capsys, [*common, "--fix", "dq_a9"], "--fix", "'dq_a9'", "dq_a6")
+    _fails(capsys, [*common, "--free", "joint_ofset"], "--free", "joint_offset")
+    _fails(capsys, [*common, "--fix", "dq_a1,,dq_a2"], "--fix", "empty name")
+    assert not (tmp_path / "r.json").exists()
+
+
+@pytest.mark.parametrize("poses", ["0", "1", "-3", "2"])
+def test_design_refuses_too_few_poses(poses, tmp_path, capsys):
+    line = _fails(capsys, ["design", *ROBOT, "--poses", poses, "--candidates", "200",
+                           "--no-refine", "--out", tmp_path / "d.json"], "--poses")
+    if int(poses) > 0:
+        assert "identifiable parameters" in line and "at least" in line and "by counting" in line
+    assert not (tmp_path / "d.json").exists()
+
+
+@pytest.mark.parametrize("poses", ["0", "-2", "x"])
+def test_simulate_refuses_no_poses(poses, tmp_path, capsys):
+    _fails(capsys, ["simulate", *ROBOT, "--poses", poses, "--out", tmp_path / "m.csv"],
+           "--poses")
+
+
+@pytest.mark.parametrize("option, value", [
+    ("--out", "missing/r.json"), ("--report", "missing/r.html"), ("--out", "m.csv/r.json"),
+    ("--out", "."), ("--report", "r.json")])
+def test_identify_checks_outputs_first(files, option, value, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(files)
+    argv = ["identify", *ROBOT, "--data", "m.csv", "--sigma", "0.02", "--out", "r.json",
+            option, value]
+    _fails(capsys, argv, option, value)
+    assert not (files / "r.json").exists()
+
+
+@pytest.mark.parametrize("command, option", [
+    (["simulate", *ROBOT, "--out", "m.csv"], "--out"),
+    (["simulate", *ROBOT, "--out", "ok.csv"], "--truth-out"),
+    (["design", *ROBOT, "--out", "d.json"], "--report"),
+    (["predict", "--result", "r.json", "--data", "m.csv", "--out", "p.csv"], "--out"),
+    (["diagnose", *ROBOT, "--data", "m.csv", "--out", "x.json"], "--plot"),
+    (["refine", *ROBOT, "--data", "m.csv", "--out", "x.json"], "--history"),
+    (["compare", "d.json", "--sigma", "0.02"], "--plot"),
+    (["export", "d.json", "--format", "krl"], "--out"),
+    (["demo"], "--out"),
+    (["study", "table1"], "--out")])
+def test_every_writing_command_checks_its_outputs(command, option, tmp_path, capsys,
+                                                  monkeypatch):
+    """Into a folder under a plain file: refused before reading any input."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "file").write_text("not a folder")
+    argv = list(command)
+    if option in argv:
+        del argv[argv.index(option):argv.index(option) + 2]
+    _fails(capsys, [*argv, option, "file/sub/x.out"], option, "file")
+
+
+def test_design_out_must_be_json(tmp_path, capsys):
+    _fails(capsys, ["design", *ROBOT, "--out", tmp_path / "x.csv"], "--out", ".json",
+           "x.json")
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_simulate_takes_the_design_json_and_its_csv(files, tmp_path, capsys):
+    for name in ("d.json", "d.csv"):
+        out = tmp_path / f"from_{name}.csv"
+        assert _run(["simulate", *ROBOT, "--model", "joint_offset", "--design", files / name,
+                     "--seed", "2", "--out", out]) == 0
+    assert (tmp_path / "from_d.json.csv").read_text().splitlines()[1:] == \
+        (tmp_path / "from_d.csv.csv").read_text().splitlines()[1:]
+
+
+def test_simulate_design_and_load_are_exclusive(files, tmp_path, capsys):
+    _fails(capsys, ["simulate", *ROBOT, "--design", files / "d.json", "--load", "250@0,0,0",
+                    "--out", tmp_path / "m.csv"], "--load", "--design")
+
+
+def test_zero_load_writes_a_file_identify_accepts(tmp_path):
+    data = tmp_path / "m.csv"
+    assert _run(["simulate", *ROBOT, "--model", "joint_offset", "--poses", "8",
+                 "--load", "0@0,0,200", "--seed", "3", "--out", data]) == 0
+    assert _run(["identify", *ROBOT, "--model", "joint_offset", "--data", data,
+                 "--out", tmp_path / "r.json"]) == 0
+
+
+@pytest.mark.parametrize("argv", [
+    ["simulate", *ROBOT, "--sigma", "-1", "--out", "m.csv"],
+    ["simulate", *ROBOT, "--sigma", "0", "--out", "m.csv"],
+    ["identify", *ROBOT, "--data", "m.csv", "--sigma", "-0.03", "--out", "r.json"],
+    ["diagnose", *ROBOT, "--data", "m.csv", "--sigma", "nan", "--out", "x.json"],
+    ["compare", "d.json", "--sigma", "0"],
+    ["design", *ROBOT, "--sigma", "-0.02", "--out", "x.json"]])
+def test_sigma_must_be_positive_and_names_the_option(files, argv, capsys, monkeypatch):
+    monkeypatch.chdir(files)
+    line = _fails(capsys, argv, "--sigma")
+    assert "m.csv" not in line and "mm" in line
+
+
+@pytest.mark.parametrize("load", ["-250@0,0,200", "1e9@0,0,200", "abc@0,0,0", "250@0,0",
+                                  "nan@0,0,0"])
+def test_absurd_loads(load, tmp_path, capsys):
+    _fails(capsys, ["simulate", *ROBOT, f"--load={load}", "--out", tmp_path / "m.csv"],
+           "--load")
+
+
+@pytest.mark.parametrize("option, value", [("--handshake", "-1"), ("--handshake", "0"),
+                                           ("--dwell", "-2")])
+def test_export_settings(files, option, value, tmp_path, capsys):
+    line = _fails(capsys, ["export", files / "d.json", "--format", "krl", "--out", tmp_path,
+                           option, value], option)
+    assert "d.json" not in line
+
+
+def test_empty_model_needs_the_word_none(tmp_path, capsys):
+    _fails(capsys, ["simulate", *ROBOT, "--model", "", "--out", tmp_path / "m.csv"],
+           "--model", "none")
+    assert _run(["simulate", *ROBOT, "--model", "none", "--poses", "5", "--json",
+                 "--out", tmp_path / "m.csv"]) == 0
+    assert json.loads(capsys.readouterr().out)["model"] == ""
+
+
+def test_one_joint_named_two_ways(tmp_path, capsys):
+    _fails(capsys, ["simulate", *ROBOT, "--model", "cyclic(j3)+cyclic(a3)",
+                    "--out", tmp_path / "m.csv"], "cyclic(j3", "cyclic(a3", "cyc_a3_s1")
+
+
+def test_identifiability_warning_is_one_sentence(tmp_path, capsys):
+    data = tmp_path / "m.csv"
+    assert _run(["simulate", *ROBOT, "--poses", "20", "--load", "250@0,0,200", "--seed", "4",
+                 "--out", data]) == 0
+    capsys.readouterr()
+    assert _run(["identify", *ROBOT, "--data", data, "--out", tmp_path / "r.json"]) == 0
+    warnings = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("warning:")]
+    fixed = next(w for w in warnings if "not separable" in w)
+    assert len(fixed) < 300 and "geometry" in fixed and "--verbose" in fixed
+    assert _run(["identify", *ROBOT, "--data", data, "--verbose",
+                 "--out", tmp_path / "r.json"]) == 0
+    listed = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("fixed: ")]
+    assert len(listed) == int(fixed.split()[1])
+
+
+def test_help_points_to_the_formats(capsys):
+    with pytest.raises(SystemExit):
+        main(["identify", "--help"])
+    out = capsys.readouterr().out
+    assert "docs/formats.md" in out and "data" in out
+
