@@ -185,3 +185,68 @@ def test_help_points_to_the_formats(capsys):
     out = capsys.readouterr().out
     assert "docs/formats.md" in out and "data" in out
 
+
+def _rewrite(source, target, separator=",", decimal=".", encoding="utf-8", edit=None):
+    """The measurement file ``source`` with other separators, decimal marks or encoding.
+
+    ``edit(index, fields)`` may change the fields of the index-th line written;
+    the comment lines (not ASCII) are left out of a file not in UTF-8.
+    """
+    lines = source.read_text(encoding="utf-8").splitlines()
+    out = []
+    for line in lines:
+        if line.startswith("#"):
+            if encoding == "utf-8":
+                out.append(line)
+            continue
+        fields = line.split(",")
+        if edit is not None:
+            fields = edit(len(out), fields)
+        out.append(separator.join(f.replace(".", decimal) for f in fields))
+    target.write_bytes(("\n".join(out) + "\n").encode(encoding))
+    return target
+
+
+@pytest.mark.parametrize("separator, decimal", [(";", ","), (";", "."), ("\t", "."),
+                                                ("\t", ",")])
+def test_semicolon_and_tab_files_with_decimal_commas_are_read(files, tmp_path, separator,
+                                                               decimal):
+    data = _rewrite(files / "m.csv", tmp_path / "m.csv", separator, decimal)
+    assert _run(["identify", *ROBOT, "--model", "joint_offset", "--data", data,
+                 "--json", "--out", tmp_path / "r.json"]) == 0
+    ref = tmp_path / "ref.json"
+    assert _run(["identify", *ROBOT, "--model", "joint_offset", "--data", files / "m.csv",
+                 "--out", ref]) == 0
+    assert json.loads((tmp_path / "r.json").read_text())["parameters"] == \
+        json.loads(ref.read_text())["parameters"]
+
+
+def test_decimal_commas_in_a_comma_file_get_a_hint(files, tmp_path, capsys):
+    data = _rewrite(files / "m.csv", tmp_path / "m.csv", ",", ",")
+    _fails(capsys, ["identify", *ROBOT, "--data", data, "--out", tmp_path / "r.json"],
+           "m.csv", "line 3", "fields where the header has", "decimal commas")
+
+
+def test_latin1_file_names_line_and_column_of_the_bad_byte(files, tmp_path, capsys):
+    def rename(row, fields):
+        if row == 3:
+            fields[0] = "Pose_é"
+        return fields
+    data = _rewrite(files / "m.csv", tmp_path / "m.csv", edit=rename, encoding="latin-1")
+    _fails(capsys, ["identify", *ROBOT, "--data", data, "--out", tmp_path / "r.json"],
+           "m.csv, line 4, column 6", "0xe9", "UTF-8")
+
+
+def test_implausible_temperature_names_line_and_column(files, tmp_path, capsys):
+    def hot(row, fields):
+        return fields + (["temperature"] if row == 1 else ["2000" if row == 4 else "21.5"])
+    data = _rewrite(files / "m.csv", tmp_path / "m.csv", edit=hot)
+    _fails(capsys, ["identify", *ROBOT, "--data", data, "--out", tmp_path / "r.json"],
+           "m.csv, line 5, column 'temperature'", "2000 °C", "-50 to 150 °C")
+
+
+def test_compare_sigma_in_the_library_names_the_option_in_mm(files):
+    from doe_calib.compare import compare, load_source
+    from doe_calib.errors import OptionError
+    with pytest.raises(OptionError, match=r"--sigma\) must be positive, got 0 mm"):
+        compare([load_source(files / "d.json")], ["d"], 0.0)
