@@ -250,3 +250,18 @@ def test_compare_sigma_in_the_library_names_the_option_in_mm(files):
     from doe_calib.errors import OptionError
     with pytest.raises(OptionError, match=r"--sigma\) must be positive, got 0 mm"):
         compare([load_source(files / "d.json")], ["d"], 0.0)
+
+
+def test_formats_doc_names_every_key_the_commands_write(files, tmp_path):
+    from pathlib import Path
+    doc = (Path(__file__).parents[1] / "docs" / "formats.md").read_text(encoding="utf-8")
+    result = tmp_path / "r.json"
+    assert _run(["identify", *ROBOT, "--model", "joint_offset", "--data", files / "m.csv",
+                 "--out", result]) == 0
+    for path in (files / "d.json", result):
+        data = json.loads(path.read_text())
+        keys = set(data) | set(data["parameters" if "parameters" in data else "poses"][0])
+        missing = [k for k in keys if f"`{k}`" not in doc and f"{k}`" not in doc]
+        assert not missing, (path.name, missing)
+    header = (files / "m.csv").read_text().splitlines()[1].split(",")
+    assert all(f"`{c}`" in doc or c.rstrip("0123456789") in ("q", "approach") for c in header)

@@ -17,7 +17,7 @@ EXAMPLE = ("doe-calib diagnose --robot kr270.urdf --tool tool.yaml --data meas.c
 
 def measurement_arguments(c):
     """``--data``, ``--sigma``, ``--level``, ``--skip-bad`` (diagnose, refine)."""
-    c.add_argument("--data", required=True, help="measurement CSV (formats.md §3)")
+    c.add_argument("--data", required=True, help="measurement CSV (docs/formats.md §3)")
     c.add_argument("--sigma", type=positive("--sigma", "mm"), help="tracker σ per coordinate, "
                                                                     "mm, for rows without a "
                                                                     "sigma column")

@@ -16,7 +16,7 @@ EXAMPLE = ("doe-calib identify --robot kr270.urdf --tool tool.yaml --data meas.c
 
 def add_arguments(c):
     robot_arguments(c)
-    c.add_argument("--data", required=True, help="measurement CSV (formats.md §3)")
+    c.add_argument("--data", required=True, help="measurement CSV (docs/formats.md §3)")
     c.add_argument("--estimator", choices=ESTIMATORS, default="point")
     c.add_argument("--sigma", type=positive("--sigma", "mm"),
                    help="tracker σ per coordinate, mm, for rows without a sigma column")

@@ -35,7 +35,7 @@ FORMATS = {
     "krl": Format("KUKA KRL .src/.dat", krl.SUFFIXES, krl.render),
     "rapid": Format("ABB RAPID module", rapid.SUFFIXES, rapid.render),
     "urscript": Format("Universal Robots URScript", urscript.SUFFIXES, urscript.render),
-    "csv": Format("design CSV (formats.md section 4)", (".csv",), None),
+    "csv": Format("design CSV (docs/formats.md section 4)", (".csv",), None),
 }
 
 
