@@ -265,3 +265,14 @@ def test_formats_doc_names_every_key_the_commands_write(files, tmp_path):
         assert not missing, (path.name, missing)
     header = (files / "m.csv").read_text().splitlines()[1].split(",")
     assert all(f"`{c}`" in doc or c.rstrip("0123456789") in ("q", "approach") for c in header)
+
+
+
+@pytest.mark.parametrize("option, argv", [
+    ("--tracker", ["simulate", *ROBOT, "--tracker", "2500,0,nan,0,0,0", "--out", "m.csv"]),
+    ("--tracker", ["simulate", *ROBOT, "--tracker", "1,2,3", "--out", "m.csv"]),
+    ("--task-point", ["design", *ROBOT, "--model", "joint_offset", "--candidates", "200",
+                      "--no-refine", "--task-point", "0,0", "--out", "d.json"])])
+def test_vectors_must_be_finite_and_complete(option, argv, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    _fails(capsys, argv, option)

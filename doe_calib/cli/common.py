@@ -7,7 +7,7 @@ import numpy as np
 
 from ..effects import DEFAULT_MODEL
 from ..effects.user import load_effect_files
-from ..errors import DoeCalibError, OptionError
+from ..errors import OptionError
 from ..io import read_measurements
 from ..measurement import build_model
 from ..robot import Robot
@@ -69,13 +69,15 @@ def model_and_measurements(args):
 
 
 def parse_floats(text: str, n: int, what: str) -> np.ndarray:
-    """``n`` comma-separated numbers, or a clear error naming ``what``."""
+    """``n`` comma-separated finite numbers, or an :class:`OptionError` naming ``what``."""
     try:
         vals = np.array([float(v) for v in text.split(",")])
     except ValueError:
-        raise DoeCalibError(f"{what}: expected {n} comma-separated numbers, got {text!r}") from None
+        raise OptionError(f"{what}: expected {n} comma-separated numbers, got {text!r}") from None
     if len(vals) != n:
-        raise DoeCalibError(f"{what}: expected {n} comma-separated numbers, got {len(vals)}")
+        raise OptionError(f"{what}: expected {n} comma-separated numbers, got {len(vals)}")
+    if not np.all(np.isfinite(vals)):
+        raise OptionError(f"{what}: expected {n} finite numbers, got {text!r}")
     return vals
 
 
