@@ -15,7 +15,7 @@ from .covariance import CovariancePrediction, point_covariance, predict_covarian
 from .data import Configurations, Measurements
 from .effects import DEFAULT_MODEL, REGISTRY
 from .errors import (ConditioningWarning, ConvergenceWarning, DataError, DoeCalibError,
-                     IdentifiabilityWarning, ModelError, SolverError)
+                     IdentifiabilityWarning, ModelError, OptionError, SolverError)
 from .evaluation import marker_positions, observation_matrix
 from .identify import identify
 from .measurement import Model, build_model
@@ -32,6 +32,6 @@ __all__ = [
     "Measurements", "marker_positions", "observation_matrix", "identify",
     "IdentificationResult", "predict_covariance", "point_covariance", "CovariancePrediction",
     "simulate", "example", "DEFAULT_MODEL", "REGISTRY", "DoeCalibError", "DataError",
-    "ModelError", "SolverError", "IdentifiabilityWarning", "ConditioningWarning",
+    "ModelError", "OptionError", "SolverError", "IdentifiabilityWarning", "ConditioningWarning",
     "ConvergenceWarning",
 ]

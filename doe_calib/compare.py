@@ -14,7 +14,7 @@ import numpy as np
 
 from .covariance import point_covariance, predict_covariance
 from .design.result import DesignResult
-from .errors import DataError
+from .errors import DataError, OptionError
 from .jsonfile import read_json, write_json
 from .measurement import build_model
 from .results import IdentificationResult
@@ -184,7 +184,7 @@ def compare(sources, labels=None, sigma: float | None = None, task=None,
     if not sources or len(labels) != len(sources):
         raise DataError(f"{len(sources)} sources for {len(labels)} labels; give at least one")
     if sigma is not None and not sigma > 0:
-        raise DataError(f"σ must be positive, got {sigma} m")
+        raise OptionError(f"the tracker σ (--sigma) must be positive, got {1000 * sigma:g} mm")
     if task is not None and any(s.robot.n_joints != task.q.shape[1] for s in sources):
         raise DataError("the task poses and every source must have the same number of joints")
     names, units, stds, tcp, sigmas = {}, {}, [], [], []

@@ -39,6 +39,11 @@ class ModelError(DoeCalibError):
     """A robot, tool or effect description that cannot make a model."""
 
 
+class OptionError(DoeCalibError):
+    """A setting that cannot be used: a command-line option or a keyword argument
+    out of its range, an unknown parameter name, an output file that cannot be written."""
+
+
 class SolverError(DoeCalibError):
     """An estimation or design problem that could not be solved."""
 

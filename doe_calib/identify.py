@@ -60,6 +60,15 @@ def register_base(model, measurements, params):
     return params.with_values(v)
 
 
+def _fixed_sentence(params, names) -> str:
+    """One sentence: how many parameters were fixed as not separable, counted by block."""
+    blocks = [params.parameters[i].block for i in params.index(names)]
+    by_block = ", ".join(f"{blocks.count(b)} {b}" for b in dict.fromkeys(blocks))
+    return (f"{len(names)} parameters fixed as not separable by these data ({by_block}); "
+            f"the reason for each is in the result (the result JSON's \"fixed\" list; "
+            f"doe-calib identify --verbose prints them)")
+
+
 def fix_unidentifiable(model, measurements, params, tol: float = 1e-7):
     """Fix (at their current values) the free parameters the data cannot separate.
 
@@ -72,9 +81,7 @@ def fix_unidentifiable(model, measurements, params, tol: float = 1e-7):
         names = [n for n, _ in ident.dependent]
         for name, why in ident.dependent:
             params = params.fixed([name], why + "; fixed at its current value")
-        msg = (f"{len(names)} parameters cannot be separated by these data and were fixed: "
-               + "; ".join(why for _, why in ident.dependent))
-        warnings.warn(msg, IdentifiabilityWarning, stacklevel=3)
+        warnings.warn(_fixed_sentence(params, names), IdentifiabilityWarning, stacklevel=3)
         notes.append(f"{len(names)} parameters fixed as not identifiable (see the fixed list)")
     if ident.condition_number > _COND_WARN:
         msg = (f"the observation matrix is poorly conditioned (condition number "

@@ -5,6 +5,11 @@ returned is SI. Every problem raises :class:`~doe_calib.errors.DataError`
 naming the file, the physical line and the column; with ``skip_bad`` a bad
 row is dropped instead and reported in ``Measurements.dropped``.
 
+Files are UTF-8 (a bad byte is reported with its line and column); fields are
+separated by commas, or by semicolons or tabs as the header shows, and then a
+number may have a decimal comma (``1,5``). Values outside a plausible range
+(:data:`PLAUSIBLE`: a temperature outside -50 … 150 °C) are errors.
+
 Approach directions (for ``backlash``): the optional columns ``approach1``
 … ``approachN`` give, for each row, the direction from which joint k reached
 the pose: ``1`` (or ``+1``; moving up, q increasing), ``-1`` (moving down) or
@@ -39,33 +44,72 @@ from .errors import DataError
 WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
 XYZ = ("x", "y", "z")
 _Q_TOL = 1e-9  # file units: rows of one pose agree on q to this
+#: Column → (lowest, highest, unit) of a plausible value; outside is a unit or typing error.
+PLAUSIBLE = {"temperature": (-50.0, 150.0, "°C")}
+_DELIMITERS = (",", ";", "\t")  # field separators a header may use
 
 
 @dataclass
 class _Table:
-    """Header and rows of a CSV file, each row with its physical line number."""
+    """Header and rows of a CSV file, each row with its physical line number.
+
+    ``decimal_comma``: the fields are separated by ``;`` or tabs, so a number
+    may be written with a decimal comma (``1,5``), as spreadsheets in many
+    European locales write it.
+    """
 
     path: str
     columns: list
     rows: list  # (line, fields)
+    decimal_comma: bool = False
 
     def col(self, name: str) -> str:
         return f"'{name}' ({self.columns.index(name) + 1})"
 
 
+def _decode(path: str, data: bytes) -> str:
+    """UTF-8 text of a file; a bad byte is reported with its line and column."""
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        start = data.rfind(b"\n", 0, exc.start) + 1
+        column = len(data[start:exc.start].decode("utf-8-sig", errors="replace")) + 1
+        raise DataError(f"byte 0x{data[exc.start]:02x} is not UTF-8 text: save the file as "
+                        f"UTF-8 (it may be Latin-1 or Windows-1252)", path,
+                        data.count(b"\n", 0, exc.start) + 1, column) from None
+
+
+def _delimiter(header: str) -> str:
+    """The field separator of a file: the most frequent of , ; and tab in its header."""
+    counts = {d: header.count(d) for d in _DELIMITERS}
+    best = max(counts, key=counts.get)
+    return best if counts[best] > counts[","] else ","
+
+
 def _read_table(path) -> _Table:
+    """Header and rows of a CSV file separated by commas, semicolons or tabs.
+
+    Raises
+    ------
+    DataError
+        An unreadable or non-UTF-8 file, no header, a bad header, no rows.
+    """
     path = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8-sig")
+        data = Path(path).read_bytes()
     except OSError as exc:
         raise DataError(f"cannot read the file: {exc.strerror}", path) from exc
-    except UnicodeDecodeError as exc:
-        raise DataError(f"not UTF-8 text ({exc.reason})", path) from exc
-    header, rows = None, []
+    text = _decode(path, data)
+    header, rows, delimiter = None, [], ","
     for number, line in enumerate(text.splitlines(), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
-        fields = [f.strip() for f in next(csv.reader([line]))]
+        if header is None:
+            delimiter = _delimiter(line)
+        try:
+            fields = [f.strip() for f in next(csv.reader([line], delimiter=delimiter))]
+        except csv.Error as exc:
+            raise DataError(f"cannot split the line into fields ({exc})", path, number) from None
         if header is None:
             header = (number, fields)
         else:
@@ -80,7 +124,7 @@ def _read_table(path) -> _Table:
             raise DataError(f"column {c!r} appears twice in the header", path, line, i + 1)
     if not rows:
         raise DataError("the file has a header but no data rows", path, line)
-    return _Table(path, columns, rows)
+    return _Table(path, columns, rows, delimiter != ",")
 
 
 def _check_columns(table: _Table, required, optional, line):
@@ -103,12 +147,22 @@ def _number(table, line, fields, name, default=None) -> float:
     if text == "" and default is not None:
         return default
     try:
-        value = float(text)
+        value = float(text.replace(",", ".") if table.decimal_comma else text)
     except ValueError:
         raise DataError(f"{text!r} is not a number", table.path, line, table.col(name)) from None
     if not np.isfinite(value):
         raise DataError(f"{text!r} is not a finite number", table.path, line, table.col(name))
+    _check_plausible(table, line, name, value)
     return value
+
+
+def _check_plausible(table, line, name, value) -> None:
+    """Refuse a value outside the :data:`PLAUSIBLE` range of its column."""
+    if name in PLAUSIBLE:
+        low, high, unit = PLAUSIBLE[name]
+        if not low <= value <= high:
+            raise DataError(f"{value:g} {unit} is not a plausible {name}: expected {low:g} to "
+                            f"{high:g} {unit}", table.path, line, table.col(name))
 
 
 def _joint_columns(robot) -> list[str]:
@@ -189,8 +243,10 @@ def _parse_rows(table, robot, row_parser, skip_bad):
     for line, fields in table.rows:
         try:
             if len(fields) != len(table.columns):
+                hint = ("; decimal commas? separate the fields with ';' to use them"
+                        if len(fields) > len(table.columns) and not table.decimal_comma else "")
                 raise DataError(f"{len(fields)} fields where the header has "
-                                f"{len(table.columns)}", table.path, line)
+                                f"{len(table.columns)}{hint}", table.path, line)
             parsed.append((line, row_parser(line, fields)))
         except DataError as exc:
             if not skip_bad:
@@ -311,11 +367,15 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
 
 
 def read_design(path, robot) -> Configurations:
-    """Read a design CSV (formats.md §4): pose, q1..qN (deg/mm), optional wrench, temperature.
+    """Read a design (formats.md §4): the CSV, or the JSON ``doe-calib design`` writes.
 
-    Optional ``approach1`` … ``approachN`` columns as in a measurement file;
-    without them the directions come from the row order (module notes).
+    CSV: pose, q1..qN (deg/mm), optional wrench, temperature, and optional
+    ``approach1`` … ``approachN`` columns as in a measurement file; without
+    them the directions come from the row order (module notes), as for the
+    poses of a JSON design. A JSON design must be for ``robot``'s joints.
     """
+    if Path(path).suffix.lower() == ".json":
+        return _read_design_json(path, robot)
     table = _read_table(path)
     header_line = table.rows[0][0] - 1
     _check_columns(table, ["pose", *_joint_columns(robot)],
@@ -337,6 +397,30 @@ def read_design(path, robot) -> Configurations:
     approach = np.array([r[4] for r in rows]) if explicit else _derived_approach(q, robot)
     return Configurations.from_arrays(q, [r[2] for r in rows], [[r[3]] for r in rows],
                                       [r[0] for r in rows], approach)
+
+
+def _read_design_json(path, robot) -> Configurations:
+    """The configurations of a design JSON, checked against ``robot``'s joints and limits."""
+    from .design.result import DesignResult
+
+    try:
+        design = DesignResult.from_json(path)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise DataError(f"not a complete doe_calib design file ({exc!r} is missing or "
+                        f"malformed)", path) from None
+    if design.robot.joint_names != robot.joint_names:
+        raise DataError(f"the design is for joints {', '.join(design.robot.joint_names)}, the "
+                        f"robot has {', '.join(robot.joint_names)}", path)
+    cfg = design.configurations
+    for c, q in enumerate(cfg.q):
+        outside = np.flatnonzero((q < robot.lower - 1e-12) | (q > robot.upper + 1e-12))
+        if outside.size:
+            joint = robot.joints[outside[0]]
+            raise DataError(f"pose {cfg.pose[c]!r}: q{outside[0] + 1} = "
+                            f"{q[outside[0]] * joint.display_factor:g} {joint.display_unit} is "
+                            f"outside the limits of joint {joint.name}", path)
+    return Configurations.from_arrays(cfg.q, cfg.wrench, pose=cfg.pose,
+                                      approach=_derived_approach(cfg.q, robot))
 
 
 def _configuration_fields(cfg, c, robot) -> list[str]:

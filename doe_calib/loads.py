@@ -38,9 +38,16 @@ def hanging_mass_wrench(model, values, q, mass: float, com) -> np.ndarray:
 
 
 def unloaded_and_loaded(model, values, q, mass: float, com, pose=None) -> Configurations:
-    """Each pose measured unloaded, then with the mass hung on: 2M configurations."""
+    """Each pose measured unloaded, then with the mass hung on: 2M configurations.
+
+    A zero mass is no load: the M unloaded configurations only (the loaded ones
+    would repeat them, and a file cannot hold one reading twice).
+    """
     q = np.atleast_2d(np.asarray(q, float))
     m = q.shape[0]
+    if mass == 0:
+        ids = None if pose is None else [str(p) for p in pose]
+        return Configurations.from_arrays(q, pose=ids)
     w = np.zeros((2 * m, 6))
     w[1::2] = hanging_mass_wrench(model, values, q, mass, com)
     ids = [str(i + 1) for i in range(m)] if pose is None else [str(p) for p in pose]

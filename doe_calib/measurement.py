@@ -14,6 +14,7 @@ import casadi as ca
 from .data import env_fields
 from .effects import DEFAULT_MODEL, parse_model
 from .effects.base import ChainSymbols
+from .errors import ModelError
 from .kinematics import flange_pose
 from .parameters import Parameter, ParameterSet
 from .rotations import rotation_vector
@@ -100,6 +101,12 @@ def build_model(robot, tool, model: str | tuple = DEFAULT_MODEL, compile: bool =
         outputs, several times faster. The first build of a model takes a few
         seconds; later builds load the cached library.
 
+    Raises
+    ------
+    ModelError
+        An unknown effect, or two effects defining one parameter (e.g.
+        ``cyclic(j3)+cyclic(a3)`` where joint 3 is named a3).
+
     Examples
     --------
     >>> from doe_calib import Robot, Tool, example
@@ -110,11 +117,16 @@ def build_model(robot, tool, model: str | tuple = DEFAULT_MODEL, compile: bool =
     """
     effects = parse_model(model) if isinstance(model, str) else tuple(model)
     params = base_parameters() + marker_parameters(tool)
+    owner = {p.name: "the base and markers" for p in params}  # parameter → who defines it
     for e in effects:
-        params += e.parameters(robot)
+        for par in e.parameters(robot):
+            if par.name in owner:
+                raise ModelError(f"{owner[par.name]} and effect {e.spec()!r} both define "
+                                 f"{par.name} ({par.description}): the same effect on the same "
+                                 f"joint named two ways? keep one")
+            owner[par.name] = f"effect {e.spec()!r}"
+            params.append(par)
     names = [p.name for p in params]
-    if len(set(names)) != len(names):
-        raise ValueError("two effects define the same parameter name")
 
     q = ca.SX.sym("q", robot.n_joints)
     w = ca.SX.sym("w", 6)

@@ -6,8 +6,11 @@ returns a new set. Vectors are packed and unpacked only here.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from difflib import get_close_matches
 
 import numpy as np
+
+from .errors import OptionError
 
 # SI unit → (display unit, factor SI→display). Files and reports use display units.
 DISPLAY_UNITS = {
@@ -98,7 +101,14 @@ class ParameterSet:
         return np.array([p.nominal for p in self.parameters])
 
     def index(self, names) -> np.ndarray:
-        """Positions of ``names`` (a name, a list of names, or a block name)."""
+        """Positions of ``names`` (a name, a list of names, or a block name).
+
+        Raises
+        ------
+        OptionError
+            A name that is neither a parameter nor a block (the message lists
+            the closest names).
+        """
         if isinstance(names, str):
             names = [names]
         lookup = {p.name: i for i, p in enumerate(self.parameters)}
@@ -109,9 +119,17 @@ class ParameterSet:
                 continue
             block = [i for i, p in enumerate(self.parameters) if p.block == n]
             if not block:
-                raise KeyError(f"no parameter or block named {n!r}")
+                raise OptionError(self._unknown(n))
             out.extend(block)
         return np.array(out, dtype=int)
+
+    def _unknown(self, name: str) -> str:
+        """Words for an unknown name, with the closest parameter and block names."""
+        blocks = list(dict.fromkeys(p.block for p in self.parameters))
+        close = get_close_matches(str(name), self.names + blocks, n=5, cutoff=0.6)
+        hint = (f"; did you mean {', '.join(close)}?" if close else
+                f"; blocks: {', '.join(blocks)}")
+        return f"no parameter or block named {name!r}{hint}"
 
     def __getitem__(self, name: str) -> float:
         return float(self.values[self.index(name)[0]])

@@ -68,7 +68,7 @@ def test_identifiability_explained_in_words(model6, loaded_design):
     why = dict(zip(res.parameters.names, res.parameters.fixed_reason))
     assert not res.parameters.free[res.parameters.index("dq_a1")[0]]
     assert "base rotation" in why["dq_a1"]  # joint 1 turns about the tracker's view of the base
-    assert "not separable" in str(record[0].message)
+    assert "not separable" in str(record[0].message) and len(str(record[0].message)) < 300
     assert all(res.parameters.free[res.parameters.index(["base", "markers"])])
 
 

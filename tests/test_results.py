@@ -7,7 +7,7 @@ import pytest
 
 from doe_calib import Configurations, IdentificationResult, build_model, identify, simulate
 from doe_calib.data import Measurements
-from doe_calib.errors import DataError
+from doe_calib.errors import DataError, OptionError
 from doe_calib.simulate import random_configurations, random_truth
 
 
@@ -70,8 +70,10 @@ def test_parameter_set_fix_and_free_by_block(model6):
     assert p.free[p.index("g_a2_tx")[0]]
     only = p.only(["joint_offset"])
     assert only.free.sum() == 6
-    with pytest.raises(KeyError):
+    with pytest.raises(OptionError, match="no parameter or block named 'no_such_parameter'"):
         p.index("no_such_parameter")
+    with pytest.raises(OptionError, match="did you mean geometry"):
+        p.index("geometri")
 
 
 def test_subset_by_pose_keeps_configurations(robot6, tool6):

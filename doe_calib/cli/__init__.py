@@ -1,16 +1,24 @@
 """``doe-calib``: the command line. Thin: parse, call the public API, write files.
 
 Each command is a module here with ``HELP``, ``EXAMPLE``, ``add_arguments(parser)``
-and ``run(args)``; adding a command is one module and one line in :data:`COMMANDS`.
+and ``run(args)``, and ``OUTPUTS`` if it writes (:mod:`.options`); adding a command is
+one module and one line in :data:`COMMANDS`. File formats: ``docs/formats.md``.
 """
 from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
+from .. import example
 from ..errors import DoeCalibError
 from ..threads import single_threaded_blas
 from . import compare, demo, design, diagnose, export, identify, predict, refine, simulate, study
+from .options import check_outputs
+
+#: Where ``--help`` sends the user for file formats and examples.
+FORMATS_NOTE = ("file formats: docs/formats.md in the doe_calib repository; example robot, tool, "
+                f"constraints and effect files: {Path(example.ROBOT_URDF).parent}")
 
 #: Command name → module, in the order ``--help`` lists them.
 COMMANDS = {
@@ -31,22 +39,27 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``doe-calib`` argument parser with every command."""
     p = argparse.ArgumentParser(prog="doe-calib", description="Robot calibration from "
                                 "multi-marker tracker measurements, and the design of the "
-                                "measurement experiment.")
+                                "measurement experiment.", epilog=FORMATS_NOTE)
     sub = p.add_subparsers(dest="command", required=True)
     for name, module in COMMANDS.items():
         c = sub.add_parser(name, help=module.HELP, description=module.HELP,
-                           epilog=f"example:\n  {module.EXAMPLE}",
+                           epilog=f"example:\n  {module.EXAMPLE}\n\n{FORMATS_NOTE}",
                            formatter_class=argparse.RawDescriptionHelpFormatter)
         module.add_arguments(c)
-        c.set_defaults(func=module.run)
+        c.set_defaults(func=module.run, outputs=getattr(module, "OUTPUTS", {}))
     return p
 
 
 def main(argv=None) -> int:
-    """Run the command line; returns the exit status (2 on a user error, printed in one line)."""
-    args = build_parser().parse_args(argv)
-    single_threaded_blas()
+    """Run the command line; returns the exit status (2 on a user error, printed in one line).
+
+    Option values are checked while parsing, and every output path before the
+    command starts working (:mod:`.options`).
+    """
     try:
+        args = build_parser().parse_args(argv)
+        check_outputs(args, args.outputs)
+        single_threaded_blas()
         args.func(args)
     except DoeCalibError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..effects import DEFAULT_MODEL
 from ..effects.user import load_effect_files
-from ..errors import DoeCalibError
+from ..errors import OptionError
 from ..io import read_measurements
 from ..measurement import build_model
 from ..robot import Robot
@@ -28,9 +28,20 @@ def robot_arguments(c, model: bool = True):
                                     "chain's last link)")
     c.add_argument("--tool", required=True, help="tool YAML with marker positions (mm)")
     if model:
-        c.add_argument("--model", default=DEFAULT_MODEL,
-                       help=f"effects joined by '+' (default {DEFAULT_MODEL})")
+        c.add_argument("--model", default=DEFAULT_MODEL, type=model_option,
+                       help=f"effects joined by '+' (default {DEFAULT_MODEL}); 'none' for "
+                            f"base and markers only")
         effect_file_argument(c)
+
+
+def model_option(text: str) -> str:
+    """``--model``: a model string; ``none`` is the empty model (base and markers only)."""
+    if text.strip().lower() == "none":
+        return ""
+    if not text.strip():
+        raise OptionError(f"--model is empty: name the effects joined by '+' (e.g. "
+                          f"{DEFAULT_MODEL}) or write --model none for base and markers only")
+    return text
 
 
 def load_robot_tool(args):
@@ -100,25 +111,58 @@ def model_and_measurements(args):
 
 
 def parse_floats(text: str, n: int, what: str) -> np.ndarray:
-    """``n`` comma-separated numbers, or a clear error naming ``what``."""
+    """``n`` comma-separated finite numbers, or an :class:`OptionError` naming ``what``."""
     try:
         vals = np.array([float(v) for v in text.split(",")])
     except ValueError:
-        raise DoeCalibError(f"{what}: expected {n} comma-separated numbers, got {text!r}") from None
+        raise OptionError(f"{what}: expected {n} comma-separated numbers, got {text!r}") from None
     if len(vals) != n:
-        raise DoeCalibError(f"{what}: expected {n} comma-separated numbers, got {len(vals)}")
+        raise OptionError(f"{what}: expected {n} comma-separated numbers, got {len(vals)}")
+    if not np.all(np.isfinite(vals)):
+        raise OptionError(f"{what}: expected {n} finite numbers, got {text!r}")
     return vals
 
 
+#: Heaviest load accepted by ``--load``, kg (a heavy-duty robot carries up to ~2 300 kg).
+MAX_LOAD_KG = 10000.0
+
+
 def parse_load(text: str):
-    """``MASS_KG@X,Y,Z`` (centre of mass in mm, flange frame) → (kg, m)."""
+    """``MASS_KG@X,Y,Z`` (centre of mass in mm, flange frame) → (kg, m).
+
+    The mass is 0 … :data:`MAX_LOAD_KG` kg: a negative mass would pull the
+    flange up, a larger one is a typing error (grams?).
+    """
     mass, _, where = text.partition("@")
     try:
         kg = float(mass)
     except ValueError:
-        raise DoeCalibError(f"--load {text!r}: expected MASS_KG@X,Y,Z, e.g. 250@0,0,200") from None
+        raise OptionError(f"--load {text!r}: expected MASS_KG@X,Y,Z, e.g. 250@0,0,200") from None
+    if not 0.0 <= kg <= MAX_LOAD_KG:
+        raise OptionError(f"--load {text!r}: the mass must be 0 to {MAX_LOAD_KG:.0f} kg, got "
+                          f"{kg:g} kg (a mass hung on the flange, in kg)")
     com = parse_floats(where or "0,0,0", 3, "--load centre of mass (mm)") / 1000.0
     return kg, com
+
+
+def fix_and_free(params, fix: str | None, free: str | None):
+    """``params`` with the ``--fix`` names fixed, then the ``--free`` names freed.
+
+    Each option is a comma-separated list of parameter or block names; an
+    unknown name is an :class:`OptionError` naming the option and the closest names.
+    """
+    for option, text in (("--fix", fix), ("--free", free)):
+        if text is None:
+            continue
+        names = [n.strip() for n in text.split(",")]
+        if not all(names):
+            raise OptionError(f"{option} {text!r}: an empty name; write comma-separated "
+                              f"parameter or block names, e.g. {option} geometry,dq_a1")
+        try:
+            params = params.fixed(names) if option == "--fix" else params.freed(names)
+        except OptionError as exc:
+            raise OptionError(f"{option}: {exc}") from None
+    return params
 
 
 def report_warnings(caught):

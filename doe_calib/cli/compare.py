@@ -8,6 +8,7 @@ from ..compare import compare, load_source, plot_std
 from ..io import read_design
 from ..jsonfile import strict_json
 from .common import effect_file_argument, load_effect_files, parse_floats
+from .options import positive
 
 HELP = "compare designs and identification results: std per parameter, task-point accuracy"
 EXAMPLE = ("doe-calib compare d15.json d30.json result.json --task task.csv "
@@ -20,7 +21,8 @@ def add_arguments(c):
     c.add_argument("--task", help="design-format CSV of task poses (deg/mm, N, N·m)")
     c.add_argument("--task-point", default="0,0,0",
                    help="X,Y,Z of the task point in the flange frame, mm (default the flange)")
-    c.add_argument("--sigma", type=float, help="tracker σ per coordinate, mm: designs are "
+    c.add_argument("--sigma", type=positive("--sigma", "mm"), help="tracker σ per coordinate, "
+                   "mm: designs are "
                    "predicted with it (default 0.02), results rescaled to it (default: their own)")
     c.add_argument("--out", help="write the tables (Markdown) to this file")
     c.add_argument("--plot", help="write a bar plot of the std per parameter (PNG)")
@@ -28,6 +30,9 @@ def add_arguments(c):
                    "and bar plots of the std per parameter and of the task accuracy)")
     c.add_argument("--json", action="store_true", help="print JSON instead of the tables")
     effect_file_argument(c)   # results whose model names a user effect need its file
+
+
+OUTPUTS = {"out": "file", "plot": "file", "report": "file"}
 
 
 def _labels(files) -> list[str]:

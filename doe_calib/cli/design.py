@@ -6,13 +6,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DoeCalibError
+from ..errors import DoeCalibError, OptionError
 from ..design import CRITERIA, LoadCase, read_constraints
 from ..design.optimal import optimal_design
 from ..io import read_design, write_design
 from ..jsonfile import strict_json
 from ..measurement import build_model
 from .common import load_robot_tool, parse_floats, parse_load, robot_arguments
+from .options import count, positive
 
 HELP = "choose optimal measurement poses (D, A, E or task criterion; constraints; loads)"
 EXAMPLE = ("doe-calib design --robot kr270.urdf --tool tool.yaml --poses 15 "
@@ -22,10 +23,14 @@ EXAMPLE = ("doe-calib design --robot kr270.urdf --tool tool.yaml --poses 15 "
 
 def add_arguments(c):
     robot_arguments(c)
-    c.add_argument("--poses", type=int, default=15, help="number of poses N")
-    c.add_argument("--load", action="append", help="MASS_KG@X,Y,Z: each pose is also measured "
-                                                   "with this mass hung on (mm, flange frame)")
-    c.add_argument("--candidates", type=int, default=20000, help="feasible random candidate poses")
+    c.add_argument("--poses", type=count("--poses", 1, "pose"), default=15,
+                   help="number of poses N (at least what the model needs: its identifiable "
+                        "parameters / (3 × markers × load cases), rounded up)")
+    c.add_argument("--load", action="append", type=parse_load,
+                   help="MASS_KG@X,Y,Z: each pose is also measured with this mass hung on "
+                        "(kg; mm, flange frame); a 0 kg load adds nothing")
+    c.add_argument("--candidates", type=count("--candidates", 1), default=20000,
+                   help="feasible random candidate poses")
     c.add_argument("--criterion", choices=CRITERIA, default="D",
                    help="D (log det), A (trace of the scaled covariance), E (smallest "
                         "eigenvalue) or task (position variance at --task poses)")
@@ -36,11 +41,26 @@ def add_arguments(c):
                                          "and floor, line of sight, load torques, coverage")
     c.add_argument("--no-refine", action="store_true",
                    help="skip the continuous IPOPT refinement of the exact design")
-    c.add_argument("--sigma", type=float, default=0.02, help="tracker σ per coordinate, mm")
-    c.add_argument("--seed", type=int, help="random seed")
-    c.add_argument("--out", required=True, help="design JSON to write (CSV written beside it)")
+    c.add_argument("--sigma", type=positive("--sigma", "mm"), default=0.02,
+                   help="tracker σ per coordinate, mm")
+    c.add_argument("--seed", type=count("--seed", 0), help="random seed")
+    c.add_argument("--out", required=True, metavar="DESIGN.json",
+                   help="design JSON to write (the design CSV is written beside it: same name, "
+                        ".csv)")
     c.add_argument("--report", metavar="FILE.html", help="also write an HTML report")
     c.add_argument("--json", action="store_true", help="print the design as JSON")
+
+
+OUTPUTS = {"out": "file", "report": "file"}
+
+
+def _csv_beside(out: str) -> Path:
+    """The design CSV written beside the ``--out`` JSON; refuses an ``--out`` not ending .json."""
+    if Path(out).suffix.lower() != ".json":
+        raise OptionError(f"--out {out}: the design is written as JSON with a CSV beside it; "
+                          f"give a .json name (e.g. --out {Path(out).with_suffix('.json')}, "
+                          f"which also writes {Path(out).with_suffix('.csv')})")
+    return Path(out).with_suffix(".csv")
 
 
 def _progress():
@@ -54,9 +74,13 @@ def _progress():
 
 
 def run(args):
+    csv_path = _csv_beside(args.out)
+    if args.report and Path(args.report).resolve() == csv_path.resolve():
+        raise OptionError(f"--report {args.report}: the design CSV is written there; give the "
+                          f"report its own name")
     robot, tool = load_robot_tool(args)
     model = build_model(robot, tool, args.model)
-    loads = [LoadCase(*parse_load(text)) for text in args.load or []]
+    loads = [LoadCase(kg, com) for kg, com in args.load or [] if kg > 0]
     if args.criterion == "task" and not args.task:
         raise DoeCalibError("--criterion task needs --task TASK.csv (a design CSV of task poses)")
     task = read_design(args.task, robot) if args.task else None
@@ -70,7 +94,6 @@ def run(args):
     if progress:
         print(file=sys.stderr)
     result.to_json(args.out)
-    csv_path = Path(args.out).with_suffix(".csv")
     write_design(csv_path, result.configurations, robot)
     print(strict_json(result.to_dict()) if args.json else result.summary())
     print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)

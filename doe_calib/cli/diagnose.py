@@ -9,6 +9,7 @@ from ..diagnosis.cross_validation import GROUPINGS
 from ..identify import identify_quietly
 from ..jsonfile import strict_json
 from .common import data_argument, model_and_measurements, robot_arguments
+from .options import positive
 
 HELP = "test the model against the measurements and rank the effects it is missing"
 EXAMPLE = ("doe-calib diagnose --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -18,8 +19,9 @@ EXAMPLE = ("doe-calib diagnose --robot kr270.urdf --tool tool.yaml --data meas.c
 def measurement_arguments(c):
     """Data, σ and the diagnosis settings (diagnose, refine)."""
     data_argument(c)
-    c.add_argument("--sigma", type=float, help="tracker σ per coordinate, mm, for rows "
-                                               "without a sigma column")
+    c.add_argument("--sigma", type=positive("--sigma", "mm"), help="tracker σ per coordinate, "
+                                                                    "mm, for rows without a "
+                                                                    "sigma column")
     c.add_argument("--level", type=float, default=0.01,
                    help="significance level, Bonferroni over every candidate (default 0.01)")
     c.add_argument("--min-gain", type=float, default=0.02,
@@ -46,6 +48,9 @@ def add_arguments(c):
                                   "(default: beside --out)")
     c.add_argument("--report", help="HTML report to write (self-contained)")
     c.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
+
+
+OUTPUTS = {"out": "file", "plot": "file", "report": "file"}
 
 
 def residual_figure(model, meas, fit, path):

@@ -8,6 +8,7 @@ from ..design.result import DesignResult
 from ..errors import DataError
 from ..export import FORMATS, export_design
 from ..jsonfile import strict_json
+from .options import at_least, count
 
 HELP = "write a design as a KUKA KRL, ABB RAPID or URScript program, or a design CSV"
 EXAMPLE = "doe-calib export design.json --format krl --out programs/ --name calib --handshake 5"
@@ -20,14 +21,18 @@ def add_arguments(c):
     c.add_argument("--out", help="directory (files NAME.src/.dat/.mod/.script/.csv) or file "
                                  "(its stem is the program name); default: the design's folder")
     c.add_argument("--name", default="doe_calib", help="program name (default doe_calib)")
-    c.add_argument("--dwell", type=float, default=3.0,
+    c.add_argument("--dwell", type=at_least("--dwell", 0.0, "s"), default=3.0,
                    help="seconds to stand still at each pose (default 3)")
-    c.add_argument("--handshake", type=int, metavar="N",
+    c.add_argument("--handshake", type=count("--handshake", 1, "(a digital I/O number)"),
+                   metavar="N",
                    help="digital I/O number: set output N at the pose, wait for input N "
                         "(measured), reset; RAPID uses signals doCalibReady/diCalibDone. "
                         "Default: wait --dwell seconds only")
     c.add_argument("--json", action="store_true", help="print the poses, measurements and "
                                                        "files written as JSON")
+
+
+OUTPUTS = {"out": "folder"}
 
 
 def run(args):

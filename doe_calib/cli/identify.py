@@ -6,7 +6,9 @@ import warnings
 
 from ..identify import ESTIMATORS, identify
 from ..jsonfile import strict_json
-from .common import data_argument, model_and_measurements, report_warnings, robot_arguments
+from .common import (data_argument, fix_and_free, model_and_measurements,
+                     report_warnings, robot_arguments)
+from .options import positive
 
 HELP = "identify parameters from a measurement CSV"
 EXAMPLE = ("doe-calib identify --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -17,29 +19,36 @@ def add_arguments(c):
     robot_arguments(c)
     data_argument(c)
     c.add_argument("--estimator", choices=ESTIMATORS, default="point")
-    c.add_argument("--sigma", type=float, help="tracker σ per coordinate, mm, for rows "
-                                               "without a sigma column")
+    c.add_argument("--sigma", type=positive("--sigma", "mm"),
+                   help="tracker σ per coordinate, mm, for rows without a sigma column")
     c.add_argument("--fix", help="comma-separated parameters or blocks to hold at nominal")
     c.add_argument("--free", help="comma-separated parameters or blocks to estimate")
-    c.add_argument("--normalisation", type=float, help="pose estimator only: m per rad")
+    c.add_argument("--normalisation", type=positive("--normalisation", "m/rad"),
+                   help="pose estimator only: m per rad")
     c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")
     c.add_argument("--out", required=True, help="result JSON to write")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
     c.add_argument("--report", metavar="FILE.html", help="also write an HTML report")
+    c.add_argument("--verbose", action="store_true",
+                   help="print why each fixed parameter is fixed, one line each")
+
+
+OUTPUTS = {"out": "file", "report": "file"}
 
 
 def run(args):
     model, meas = model_and_measurements(args)
-    params = model.nominal()
-    if args.fix:
-        params = params.fixed(args.fix.split(","))
-    if args.free:
-        params = params.freed(args.free.split(","))
+    params = fix_and_free(model.nominal(), args.fix, args.free)
     options = {"normalisation": args.normalisation} if args.estimator == "pose" else {}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = identify(model, meas, params, estimator=args.estimator, **options)
     report_warnings(caught)
+    if args.verbose:
+        for p, free, why in zip(result.parameters.parameters, result.parameters.free,
+                                result.parameters.fixed_reason):
+            if not free:
+                print(f"fixed: {p.name}: {why}", file=sys.stderr)
     result.to_json(args.out)
     print(strict_json(result.to_dict()) if args.json else result.summary())
     print(f"\nwritten: {args.out}", file=sys.stderr)

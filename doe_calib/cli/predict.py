@@ -28,6 +28,9 @@ def add_arguments(c):
     effect_file_argument(c)   # a result whose model names a user effect needs its file
 
 
+OUTPUTS = {"out": "file"}
+
+
 def run(args):
     load_effect_files(args.effect_file)
     result = IdentificationResult.from_json(args.result)

@@ -31,6 +31,9 @@ def add_arguments(c):
     c.add_argument("--json", action="store_true", help="print the steps as JSON")
 
 
+OUTPUTS = {"out": "file", "history": "file", "plot": "file", "report": "file"}
+
+
 def run(args):
     model, meas = model_and_measurements(args)
     val = None

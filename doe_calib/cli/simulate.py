@@ -6,6 +6,7 @@ import sys
 import numpy as np
 
 from ..data import Configurations
+from ..errors import OptionError
 from ..io import read_design, write_measurements
 from ..jsonfile import strict_json
 from ..loads import unloaded_and_loaded
@@ -13,6 +14,7 @@ from ..measurement import build_model
 from ..results import load_parameters, save_parameters
 from ..simulate import random_configurations, random_truth, simulate
 from .common import load_robot_tool, parse_floats, parse_load, robot_arguments
+from .options import count, positive
 
 HELP = "simulate a measurement campaign"
 EXAMPLE = ("doe-calib simulate --robot kr270.urdf --tool tool.yaml --poses 40 "
@@ -21,19 +23,26 @@ EXAMPLE = ("doe-calib simulate --robot kr270.urdf --tool tool.yaml --poses 40 "
 
 def add_arguments(c):
     robot_arguments(c)
-    c.add_argument("--design", help="design CSV of poses and loads (else random poses)")
-    c.add_argument("--poses", type=int, default=30, help="random poses when no design")
-    c.add_argument("--load", help="MASS_KG@X,Y,Z: measure each pose unloaded and with this "
-                                  "mass (centre of mass in mm, flange frame)")
-    c.add_argument("--sigma", type=float, default=0.02, help="noise σ per coordinate, mm")
+    c.add_argument("--design", help="design of poses and loads: the JSON doe-calib design "
+                                    "writes, or its CSV (else random poses)")
+    c.add_argument("--poses", type=count("--poses", 1, "pose"), default=30,
+                   help="random poses when no design")
+    c.add_argument("--load", type=parse_load,
+                   help="MASS_KG@X,Y,Z: measure each pose unloaded and with this mass (kg; "
+                        "centre of mass in mm, flange frame); 0 kg measures unloaded only")
+    c.add_argument("--sigma", type=positive("--sigma", "mm"), default=0.02,
+                   help="noise σ per coordinate, mm")
     c.add_argument("--truth", help="JSON with the true parameters (else random errors)")
     c.add_argument("--tracker", help="tracker placement X,Y,Z,RX,RY,RZ (mm, rotation vector "
                                      "in deg) when errors are random")
-    c.add_argument("--seed", type=int, help="random seed")
+    c.add_argument("--seed", type=count("--seed", 0), help="random seed")
     c.add_argument("--out", required=True, help="measurement CSV to write")
     c.add_argument("--truth-out", help="JSON to write the true parameters to")
     c.add_argument("--json", action="store_true", help="print what was written as JSON "
                                                        "(messages go to stderr)")
+
+
+OUTPUTS = {"out": "file", "truth_out": "file"}
 
 
 def run(args):
@@ -49,11 +58,13 @@ def run(args):
             base = np.r_[t[:3] / 1000.0, np.radians(t[3:])]
         truth = model.nominal().with_values(random_truth(model, rng, base=base))
     if args.design:
+        if args.load:
+            raise OptionError("--load is for random poses: a --design carries its own loads")
         cfg = read_design(args.design, robot)
     else:
         q = random_configurations(robot, args.poses, rng)
         if args.load:
-            kg, com = parse_load(args.load)
+            kg, com = args.load
             cfg = unloaded_and_loaded(model, truth.values, q, kg, com)
         else:
             cfg = Configurations.from_arrays(q)

@@ -9,6 +9,7 @@ from contextlib import redirect_stdout
 from pathlib import Path
 
 from ..jsonfile import read_json, strict_json
+from .options import count
 
 #: Study name → module in the ``studies`` package (each has ``main(argv)``).
 STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__main__",
@@ -22,13 +23,17 @@ EXAMPLE = "doe-calib study table1 --out results [--scheduler tcp://host:8786]"
 def add_arguments(c):
     c.add_argument("name", choices=sorted(STUDIES))
     c.add_argument("--out", default="results", help="folder for the study's files")
-    c.add_argument("--repetitions", type=int, help="Monte-Carlo repetitions (studies that "
-                                                   "have them)")
+    c.add_argument("--repetitions", type=count("--repetitions", 1),
+                   help="Monte-Carlo repetitions (studies that have them)")
     c.add_argument("--scheduler", help="Dask scheduler address for Monte-Carlo studies "
                                        "(default: local processes)")
-    c.add_argument("--workers", type=int, help="local worker processes (default: all CPUs)")
+    c.add_argument("--workers", type=count("--workers", 1),
+                   help="local worker processes (default: all CPUs)")
     c.add_argument("--json", action="store_true", help="print the study's results JSON "
                    "(OUT/NAME.json) instead of its tables, which go to stderr")
+
+
+OUTPUTS = {"out": "folder"}
 
 
 class _Tee(io.StringIO):

@@ -8,13 +8,14 @@ import time
 
 import numpy as np
 
-from ..errors import SolverError
+from ..errors import OptionError, SolverError
 from .candidates import feasible_candidates
 from .constraints import DesignConstraints
 from .criteria import CRITERIA, check, efficiency, evaluate_criterion, log_det
 from .exchange import exact_design
 from .feasibility import build_feasibility
-from .problem import blocks_for, design_parameters, load_configurations, task_matrix
+from .problem import (blocks_for, check_enough_poses, design_parameters, load_configurations,
+                      task_matrix)
 from .refine import refine as refine_poses
 from .relaxation import equivalence_ratio, information, relax
 from .result import DesignResult
@@ -57,6 +58,8 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     model : Model
     n_poses : int
         Poses to measure; each is measured unloaded and under every load case.
+        At least what the identifiable parameters need
+        (:func:`.problem.check_enough_poses`).
     loads : sequence of LoadCase
     candidates : int
         Feasible candidate poses, drawn uniformly inside the joint bounds.
@@ -77,6 +80,8 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     progress : callable(stage, note), optional
     """
     check(criterion, task)
+    if n_poses < 1:
+        raise OptionError(f"{n_poses} poses (--poses): a design needs at least 1 pose")
     rng = np.random.default_rng() if rng is None else rng
     params = model.nominal() if params is None else params
     constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints
@@ -90,6 +95,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     t = None if task is None else task_matrix(model, params, task, task_point)
     stage("information", f"{len(cands.q)} candidates")
     blocks = blocks_for(model, params, cands.q, loads, sigma)
+    check_enough_poses(n_poses, blocks, model.tool.n_markers, len(loads), rng)
     stage("relaxation", f"{criterion} criterion over {len(blocks)} candidates")
     relaxed = relax(blocks, criterion, t, progress=stage.iterations("relaxation"))
     stage("exchange", f"{n_poses} poses")

@@ -2,10 +2,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from math import ceil
 
 import numpy as np
 
 from ..data import Configurations
+from ..errors import OptionError
 from ..evaluation import evaluate, observation_matrix
 from ..identifiability import analyse
 from ..loads import hanging_mass_wrench
@@ -74,3 +76,54 @@ def design_parameters(model, params, q, loads, sample: int = 400, rng=None):
     for name, why in ident.dependent:
         params = params.fixed([name], why + " (over the candidate poses)")
     return params
+
+
+def poses_needed(blocks, rng=None) -> int | None:
+    """Fewest poses that identify every free parameter, or None if no candidates do.
+
+    Stacks the blocks of random candidates (shape (K, r, F), as from
+    :func:`blocks_for`) one pose at a time from the counting bound
+    ``ceil(F / r)`` on, until their F columns have full rank: random poses
+    are generic, so this is the fewest any design can use.
+    """
+    rng = np.random.default_rng(0) if rng is None else rng
+    k_all, rows, f = blocks.shape
+    cols = blocks.reshape(-1, f)
+    norms = np.linalg.norm(cols, axis=0)
+    unit = blocks / np.where(norms > 0, norms, 1.0)
+    order = rng.permutation(k_all)
+    for k in range(max(1, ceil(f / rows)), k_all + 1):
+        if np.linalg.matrix_rank(unit[order[:k]].reshape(-1, f)) == f:
+            return k
+    return None
+
+
+def check_enough_poses(n_poses: int, blocks, n_markers: int, n_loads: int, rng=None) -> None:
+    """Refuse fewer poses than the free (identifiable) parameters need.
+
+    Each pose gives 3 coordinates of each of ``n_markers`` markers in each of
+    its ``n_loads + 1`` load cases, so F parameters need at least
+    ``ceil(F / (3 · n_markers · (n_loads + 1)))`` poses by counting; the
+    fewest that really separate them (:func:`poses_needed`) may be more.
+
+    Raises
+    ------
+    OptionError
+        Stating both numbers and how they are found.
+    """
+    f = blocks.shape[2]
+    per_pose = 3 * n_markers * (n_loads + 1)
+    counted = max(1, ceil(f / per_pose))
+    needed = poses_needed(blocks, rng)
+    if needed is not None and n_poses >= needed:
+        return
+    why = (f"the model has {f} identifiable parameters and each pose gives {per_pose} "
+           f"coordinates (3 × {n_markers} markers × {n_loads + 1} load case(s)), so at least "
+           f"{counted} poses are needed by counting ({f} / {per_pose}, rounded up)")
+    if needed is None:
+        raise OptionError(f"{n_poses} poses (--poses): {why}, and not even all the candidate "
+                          f"poses together separate every parameter")
+    extra = "" if needed == counted else (f", and {needed} random poses are the fewest that "
+                                          f"separate them all")
+    raise OptionError(f"{n_poses} poses (--poses) are too few: {why}{extra}; ask for "
+                      f"{needed} or more (more give a better design)")

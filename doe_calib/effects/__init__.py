@@ -72,7 +72,7 @@ def parse_effect(word: str, spec: str = ""):
             args.append(item)
     try:
         return REGISTRY[name](*args, **options)
-    except TypeError as exc:
+    except (TypeError, ValueError) as exc:
         raise ModelError(f"effect {word.strip()!r} in model {spec or word!r}: wrong arguments "
                          f"({exc}); see {name}'s documentation") from None
 

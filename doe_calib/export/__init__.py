@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from ..errors import DataError
+from ..errors import DataError, OptionError
 from ..io import write_design
 from . import krl, rapid, urscript
 from .program import Move, Settings, check_limits, moves
@@ -35,7 +35,7 @@ FORMATS = {
     "krl": Format("KUKA KRL .src/.dat", krl.SUFFIXES, krl.render),
     "rapid": Format("ABB RAPID module", rapid.SUFFIXES, rapid.render),
     "urscript": Format("Universal Robots URScript", urscript.SUFFIXES, urscript.render),
-    "csv": Format("design CSV (formats.md section 4)", (".csv",), None),
+    "csv": Format("design CSV (docs/formats.md section 4)", (".csv",), None),
 }
 
 
@@ -74,6 +74,8 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
         or a bad program name.
     ModelError
         A robot the format cannot drive (KRL, RAPID, URScript: 6 axes).
+    OptionError
+        A negative dwell or a handshake that is not an I/O number ≥ 1.
 
     Examples
     --------
@@ -83,7 +85,10 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
     if fmt not in FORMATS:
         raise DataError(f"unknown export format {fmt!r}; formats: {', '.join(FORMATS)}")
     if not dwell >= 0:
-        raise DataError(f"dwell must be 0 s or more, got {dwell}")
+        raise OptionError(f"the dwell (--dwell) must be 0 s or more, got {dwell} s")
+    if handshake is not None and not (float(handshake).is_integer() and handshake >= 1):
+        raise OptionError(f"the handshake (--handshake) must be a digital I/O number of 1 or "
+                          f"more, got {handshake}")
     stem, name = _stem(out, name)
     form = FORMATS[fmt]
     if form.render is None:

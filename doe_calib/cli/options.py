@@ -1,0 +1,118 @@
+"""Option values checked where they enter: numbers in range, output paths that can be written.
+
+Number converters are argparse ``type=`` functions that raise
+:class:`~doe_calib.errors.OptionError` naming the option, so a bad value stops
+the command before any work with one line (``error: --sigma -1: ...``).
+
+Each command module may declare ``OUTPUTS``: option destination → ``"file"``
+(written as given: its folder must exist) or ``"folder"`` (created if needed:
+its nearest existing ancestor must be a writable folder). :func:`check_outputs`
+checks them all before the command runs.
+"""
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+from ..errors import OptionError
+
+
+def _number(option: str, text: str, kind, what: str):
+    try:
+        value = kind(text)
+    except ValueError:
+        raise OptionError(f"{option} {text!r}: expected {what}") from None
+    if not math.isfinite(value):
+        raise OptionError(f"{option} {text!r}: expected {what}")
+    return value
+
+
+def positive(option: str, unit: str):
+    """A ``type=`` converter: a finite number > 0 in ``unit`` (e.g. ``--sigma`` in mm)."""
+    def convert(text: str) -> float:
+        value = _number(option, text, float, f"a positive number in {unit}")
+        if not value > 0:
+            raise OptionError(f"{option} {text}: must be positive (in {unit}), got {value:g}")
+        return value
+    return convert
+
+
+def at_least(option: str, minimum: float, unit: str = ""):
+    """A ``type=`` converter: a finite number ≥ ``minimum`` (e.g. ``--dwell`` ≥ 0 s)."""
+    unit = f" {unit}" if unit else ""
+
+    def convert(text: str) -> float:
+        value = _number(option, text, float, f"a number of {minimum:g}{unit} or more")
+        if not value >= minimum:
+            raise OptionError(f"{option} {text}: must be {minimum:g}{unit} or more")
+        return value
+    return convert
+
+
+def count(option: str, minimum: int = 1, what: str = ""):
+    """A ``type=`` converter: an integer ≥ ``minimum`` (e.g. ``--poses``)."""
+    what = f" {what}" if what else ""
+
+    def convert(text: str) -> int:
+        value = _number(option, text, int, f"a whole number of {minimum}{what} or more")
+        if value < minimum:
+            raise OptionError(f"{option} {text}: must be {minimum}{what} or more")
+        return value
+    return convert
+
+
+def _option_name(dest: str) -> str:
+    return "--" + dest.replace("_", "-")
+
+
+def _check_file(option: str, path: Path) -> None:
+    if path.is_dir():
+        raise OptionError(f"{option} {path}: is a folder; give a file name")
+    folder = path.parent
+    if not folder.is_dir():
+        raise OptionError(f"{option} {path}: the folder {folder} does not exist "
+                          f"(create it first)" if not folder.exists() else
+                          f"{option} {path}: {folder} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK) or \
+            (path.exists() and not os.access(path, os.W_OK)):
+        raise OptionError(f"{option} {path}: cannot write there (permission denied)")
+
+
+def _check_folder(option: str, path: Path) -> None:
+    existing = path
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise OptionError(f"{option} {path}: {existing} is a file, not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise OptionError(f"{option} {path}: cannot write in {existing} (permission denied)")
+
+
+def check_outputs(args, outputs: dict) -> None:
+    """Check, before any work, that every output option given can be written.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+    outputs : dict
+        Option destination (``"out"``, ``"truth_out"``) → ``"file"`` or ``"folder"``.
+
+    Raises
+    ------
+    OptionError
+        A file in a missing folder or under a file, a folder given for a file,
+        a place without write permission, or two options naming one file.
+    """
+    seen = {}
+    for dest, kind in outputs.items():
+        value = getattr(args, dest, None)
+        if value is None:
+            continue
+        option, path = _option_name(dest), Path(value)
+        (_check_file if kind == "file" else _check_folder)(option, path)
+        key = os.path.abspath(path)
+        if key in seen:
+            raise OptionError(f"{option} {value}: the same file as {seen[key]}; "
+                              f"give each output its own name")
+        seen[key] = option
