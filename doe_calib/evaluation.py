@@ -5,7 +5,9 @@ call, no Python loop over poses; "serial": CasADi's "thread" map starts a
 thread per pose, which costs more than the work, see benchmarks/) and
 evaluated through CasADi's zero-copy
 buffers, so numpy arrays go in and out without DM conversion. Mapped
-Functions and their buffers are cached per (Function, M).
+Functions and their buffers are cached per (Function, M), the least recently
+used dropped beyond a count or a total buffer size (diagnosis builds a model
+per candidate effect: their buffers must not pile up).
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ import numpy as np
 
 _CACHE: OrderedDict = OrderedDict()
 _CACHE_SIZE = 64
+_CACHE_BYTES = 256 * 2 ** 20
 
 
 class _Batch:
@@ -29,6 +32,7 @@ class _Batch:
         self.args = [np.zeros(self.mapped.size_in(i)[::-1]) for i in range(self.mapped.n_in())]
         self.res = [np.zeros(self.mapped.size_out(i)[::-1]) for i in range(self.mapped.n_out())]
         self.shapes = [function.size_out(i) for i in range(function.n_out())]
+        self.nbytes = sum(a.nbytes for a in self.args + self.res)
         self.buffer, self.call = self.mapped.buffer()
         for i, a in enumerate(self.args):
             self.buffer.set_arg(i, memoryview(a))
@@ -53,7 +57,8 @@ def _batch(function: ca.Function, m: int, shared: tuple) -> _Batch:
         return hit[1]
     batch = _Batch(function, m, shared)
     _CACHE[key] = (function, batch)
-    if len(_CACHE) > _CACHE_SIZE:
+    while len(_CACHE) > 1 and (len(_CACHE) > _CACHE_SIZE or
+                               sum(b.nbytes for _, b in _CACHE.values()) > _CACHE_BYTES):
         _CACHE.popitem(last=False)
     return batch
 

@@ -39,6 +39,24 @@ TRANSMISSION_LIMIT = {"rad": np.radians(2.0), "m": 2e-3}
 #: A residual "follows" a variable when its adjusted R² reaches this.
 FOLLOWS_R2 = 0.2
 
+#: Candidates are tested and cross-validated on at most this many configurations.
+SCREENING_CONFIGURATIONS = 1500
+
+
+def screening_set(measurements, limit: int = SCREENING_CONFIGURATIONS, seed: int = 0):
+    """The readings candidates are tested on: all, or whole poses drawn at random up to ``limit``
+    configurations; and a note in words when it is a subset."""
+    cfg = measurements.configurations
+    if len(cfg) <= limit:
+        return measurements, ""
+    poses = np.array(list(dict.fromkeys(cfg.pose)))
+    per_pose = len(cfg) / len(poses)
+    keep = set(np.random.default_rng(seed).permutation(poses)[:int(limit / per_pose)])
+    subset = measurements.subset(np.array([cfg.pose[c] in keep for c in measurements.config]))
+    return subset, (f"candidate effects were tested and cross-validated on {len(keep)} poses "
+                    f"drawn at random ({len(subset.configurations)} of {len(cfg)} "
+                    f"configurations); the adequacy test and the fit use every reading")
+
 
 def describe(candidate, robot) -> str:
     """The candidate in words, e.g. "a cyclic (transmission) error of joint 3 (a3)"."""
@@ -213,9 +231,10 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     rep = repeatability_sigma(measurements)
     sigma_mm = float(np.median(measurements.sigma) * 1e3)
     test = adequacy(res, rank, sigma_mm, level, rep)
-    split = make_folds(measurements, folds, grouping)
-    cv = cross_validated_rms(model, measurements, params, split)
-    tests = test_candidates(model, measurements, params)
+    screen, screened = screening_set(measurements)
+    split = make_folds(screen, folds, grouping)
+    cv = cross_validated_rms(model, screen, params, split)
+    tests = test_candidates(model, screen, params)
     chosen = _groups_to_try(tests, level, cv_top)
     scored = {}
     for i, t in enumerate(chosen):
@@ -223,14 +242,14 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
             progress(i, len(chosen), t.spec)
         big, bp = augmented(model, params, parse_effect(t.spec))
         try:  # folds start from the grown model's own fit: what they hold fixed is then right
-            big_fit = identify_quietly(big, measurements, bp, register=False)
+            big_fit = identify_quietly(big, screen, bp, register=False)
         except DoeCalibError:
             scored[t.spec] = t.with_cv(float("nan"))
             continue
         new = [n for n in big_fit.parameters.names if n not in params.names]
         rows, odd = _fitted(big_fit, new)
-        scored[t.spec] = t.with_cv(cross_validated_rms(big, measurements, big_fit.parameters,
-                                                       split), rows, odd)
+        scored[t.spec] = t.with_cv(cross_validated_rms(big, screen, big_fit.parameters, split),
+                                   rows, odd)
     ranked = sorted(scored.values(), key=lambda t: (np.nan_to_num(t.cv_rms_mm, nan=np.inf),
                                                      t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]
@@ -261,4 +280,5 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                            tuple(ranked), tuple(follow), tuple(flagged), level, verdict,
                            None if proposed is None else proposed.spec, int(res.weighted.size),
                            cv_grouping=split.description, min_gain=min_gain,
-                           gross_errors=tuple(p["pose"] for p in flagged) if gross else ())
+                           gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
+                           notes=(screened,) if screened else ())

@@ -153,23 +153,23 @@ def flagged_poses(res: Residuals, dof_fraction: float, level: float = 1e-3,
     source line of each reading), each pose also names its worst reading's
     line.
     """
-    ids = list(dict.fromkeys(res.pose))
-    pose = np.array(res.pose)
+    ids, first, of = np.unique(np.array(res.pose), return_index=True, return_inverse=True)
+    order = np.argsort(first)  # poses in order of appearance
     r2 = (res.weighted ** 2).sum(axis=1)
-    ratio = {}
-    for p in ids:
-        w = res.weighted[pose == p]
-        dof = max(w.size * dof_fraction, 1.0)
-        ratio[p] = (float((w ** 2).sum()), dof)
-    typical = float(np.median([t / d for t, d in ratio.values()]))
+    t_all = np.bincount(of, r2, len(ids))
+    dof_all = np.maximum(np.bincount(of, minlength=len(ids)) * 3 * dof_fraction, 1.0)
+    typical = float(np.median(t_all / dof_all))
+    pv_all = stats.chi2.sf(t_all, dof_all) * len(ids)
+    worst = np.full(len(ids), -1)
+    for i in np.argsort(r2):  # ascending: the last write per pose is its worst reading
+        worst[of[i]] = i
     out = []
-    for p, (t, dof) in ratio.items():
-        pv = float(stats.chi2.sf(t, dof)) * len(ids)
+    for g in order:
+        t, dof, pv = float(t_all[g]), float(dof_all[g]), float(pv_all[g])
         if pv < level and t / dof > 4 * max(typical, 1.0):
-            mine = np.flatnonzero(pose == p)
-            worst = mine[np.argmax(r2[mine])]
-            out.append({"pose": p, "rms_mm": float(np.sqrt(np.mean(res.error[mine] ** 2))
-                                                   * 1e3),
+            mine = of == g
+            out.append({"pose": str(ids[g]),
+                        "rms_mm": float(np.sqrt(np.mean(res.error[mine] ** 2)) * 1e3),
                         "chi2_per_dof": t / dof, "chi2": t, "p_value": min(pv, 1.0),
-                        "worst_line": int(lines[worst]) if lines is not None else 0})
+                        "worst_line": int(lines[worst[g]]) if lines is not None else 0})
     return sorted(out, key=lambda d: -d["chi2_per_dof"])
