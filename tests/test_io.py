@@ -139,3 +139,45 @@ def test_tool_file_errors(tmp_path):
     bad = _write(tmp_path, "markers:", "  A: [1, 2, 3]", "  B: [1, 2, 4]", name="t3.yaml")
     with pytest.raises(DataError, match="at least 3 markers"):
         Tool.from_yaml(bad)
+
+
+def test_a_joint_a_hair_past_its_limit_is_a_warning_far_past_an_error(rt, tmp_path):
+    robot, tool = rt
+    upper = np.degrees(robot.upper[1])
+    span = np.degrees(robot.upper[1] - robot.lower[1])
+    rows = [f"p{i},10,{q2:.6g},90,0,30,0,A,1000.5,20.25,1500"
+            for i, q2 in enumerate((upper + 0.01 * span, upper - 1.0))]
+    meas = read_measurements(_write(tmp_path, HEADER, *rows), robot, tool, sigma_mm=0.02)
+    assert len(meas) == 2 and meas.configurations.q[0, 1] > robot.upper[1]  # kept as measured
+    (warning,) = meas.warnings
+    assert "line 2" in warning and "'q2' (3)" in warning and "accepted as measured" in warning
+    far = f"p9,10,{upper + 0.03 * span:.6g},90,0,30,0,A,1000.5,20.25,1500"
+    message = _error(tmp_path, rt, HEADER, far)
+    assert "line 2" in message and "'q2' (3)" in message and "outside the limits" in message
+    design = _write(tmp_path, "pose,q1,q2,q3,q4,q5,q6", f"d1,10,{upper + 0.01 * span:.6g},90,0,30,0",
+                    name="d.csv")
+    with pytest.raises(DataError, match="outside the limits"):  # designs stay strict
+        read_design(design, robot)
+
+
+def test_sessions_from_a_column_or_from_several_files(rt, tmp_path):
+    from doe_calib.data import concatenate
+    from doe_calib.diagnosis.cross_validation import make_folds
+
+    robot, tool = rt
+    rows = [f"p{i},10,{-90 + i},90,0,30,0,{m},1000.5,20.25,1500,{'s1' if i < 3 else 's2'}"
+            for i in range(6) for m in "ABC"]
+    meas = read_measurements(_write(tmp_path, HEADER + ",session", *rows), robot, tool,
+                             sigma_mm=0.02)
+    assert list(meas.sessions) == ["s1"] * 3 + ["s2"] * 3
+    folds = make_folds(meas)
+    assert folds.grouping == "session" and len(folds.held) == 2
+    assert [int(h.sum()) for h in folds.held] == [9, 9]
+    one = read_measurements(_write(tmp_path, HEADER, *[r.rsplit(",", 1)[0] for r in rows[:9]],
+                                   name="monday.csv"), robot, tool, sigma_mm=0.02)
+    assert make_folds(one).grouping == "pose" and set(one.sessions) == {"monday"}
+    both = concatenate([one, meas.subset(np.arange(9, 18))])
+    assert list(dict.fromkeys(both.sessions)) == ["monday", "s2"]
+    assert "session" in make_folds(both).description
+    region = make_folds(meas, k=2, grouping="region")
+    assert region.grouping == "region" and sum(int(h.sum()) for h in region.held) == 18
