@@ -73,3 +73,20 @@ def test_noise_from_repeated_readings_overrides_a_wrong_sigma(robot6, tool6):
     d = diagnose(model, same)
     assert d.chi2["sigma_source"] == "repeated readings" and d.adequate
     assert d.noise_floor_mm == pytest.approx(0.05, rel=0.1)
+
+
+def test_exclude_poses_is_reported_and_cv_by_region(files, capsys):
+    out = files
+    args = ["--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML, "--data",
+            str(out / "m.csv"), "--sigma", "0.03", "--model", "joint_offset+joint_compliance"]
+    assert main(["diagnose", *args, "--exclude-poses", "1,2", "--cv-by", "region",
+                 "--out", str(out / "x.json")]) == 0
+    err = capsys.readouterr().err
+    assert "excluded at your request: pose 1 (6 readings, lines" in err
+    assert "excluded at your request: pose 2 (6 readings" in err
+    d = json.loads((out / "x.json").read_text())
+    assert "regions of joint space" in d["cv_grouping"]
+    assert d["n_observations"] == 3 * (6 * 30 - 12)
+    assert main(["diagnose", *args, "--exclude-poses", "nope", "--out",
+                 str(out / "y.json")]) == 2
+    assert "--exclude-poses: no pose 'nope'" in capsys.readouterr().err

@@ -91,7 +91,7 @@ def excluding(meas, poses: str | None):
     known = set(meas.configurations.pose)
     unknown = [p for p in names if p not in known]
     if unknown:
-        raise DoeCalibError(f"--exclude-poses: no pose {unknown[0]!r} in the data")
+        raise OptionError(f"--exclude-poses: no pose {unknown[0]!r} in the data")
     kept, held = meas.split_by_pose(names)
     pose = np.array([held.configurations.pose[c] for c in held.config])
     for p in names:

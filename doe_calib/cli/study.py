@@ -13,6 +13,7 @@ from .options import count
 
 #: Study name → module in the ``studies`` package (each has ``main(argv)``).
 STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__main__",
+           "tiago_refine": "studies.tiago_refine.__main__",
            "table2": "studies.table2.__main__", "diagnosis": "studies.diagnosis.__main__",
            "design_sweep": "studies.design_sweep.__main__"}
 

@@ -26,11 +26,14 @@ def diagnosis_sections(diagnosis, model, measurements, fit, dpi: int = 90,
     ``title`` prefixes every section heading (e.g. "Starting model: ").
     """
     c = diagnosis.chi2
+    held = paragraph(f"Cross-validation: {diagnosis.cv_grouping or 'folds of whole poses'}. "
+                     + " ".join(diagnosis.notes))
     out = [section(f"{title}Verdict", paragraph(diagnosis.verdict), table(
-        ["model", "fit RMS (mm)", "CV RMS (mm)", "noise floor (mm)", "χ²", "dof", "p",
+        ["model", "fit RMS (mm)", "CV RMS (mm)", "noise floor (mm)", "σ̂/σ", "χ²", "dof", "p",
          "adequate"],
         [[diagnosis.model, diagnosis.rms_mm, diagnosis.cv_rms_mm, diagnosis.noise_floor_mm,
-          c["statistic"], c["dof"], c["p_value"], "yes" if diagnosis.adequate else "no"]], 4))]
+          c.get("sigma_ratio", float("nan")), c["statistic"], c["dof"], c["p_value"],
+          "yes" if diagnosis.adequate else "no"]], 4), held)]
     out.append(section(f"{title}Which effect is missing", _candidates_table(diagnosis), figure(
         _png(candidate_bars(diagnosis), dpi), "share of the residual each candidate explains",
         "Share of the remaining residual (after projecting out what the model already "
