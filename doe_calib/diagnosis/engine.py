@@ -69,7 +69,7 @@ def _fitted(fit, names) -> tuple:
     """The new parameters' values ± a-posteriori std in display units, and implausible ones."""
     ps = fit.parameters
     std = fit.std(a_posteriori=True)
-    rows, odd = [], []
+    rows, negative, cyclic, wide = [], [], [], []
     for name in names:
         i = ps.names.index(name)
         p = ps.parameters[i]
@@ -85,14 +85,19 @@ def _fitted(fit, names) -> tuple:
             k = f"k_{name[4:].rsplit('_', 1)[0]}"
             total += ps.values[ps.names.index(k)] if k in ps.names else 0.0
         if positive and ps.free[i] and total + 2 * std[i] < 0:
-            odd.append(f"negative {value}")
+            negative.append(value)
         limit = TRANSMISSION_LIMIT.get(p.unit, np.inf)
         if name.startswith("cyc_") and abs(ps.values[i]) > limit:
-            odd.append(f"{value}, far beyond a transmission's cyclic error (the joint covers "
-                       f"too little of a turn to separate the harmonics: a curve fit, not a "
-                       f"cyclic error)")
+            cyclic.append(value)
         if name.startswith("backlash_") and abs(ps.values[i]) > limit:
-            odd.append(f"{value}, far wider than a transmission's play")
+            wide.append(value)
+    odd = [f"negative {', '.join(negative)}"] if negative else []
+    if cyclic:
+        odd.append(f"{', '.join(cyclic)}: far beyond a transmission's cyclic error (the joint "
+                   f"covers too little of a turn to separate the harmonics: a curve fit, not a "
+                   f"cyclic error)")
+    if wide:
+        odd.append(f"{', '.join(wide)}: far wider than a transmission's play")
     note = ("physically implausible: " + "; ".join(odd)) if odd else ""
     return tuple(rows), note
 
