@@ -167,15 +167,18 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
     scale = params.scales[free]
     cache = {}
 
-    def evaluate(x):
+    def evaluate(x, jacobian: bool):
+        """(r, J) at x; J only when asked (trial steps need the residual alone)."""
         key = x.tobytes()
-        if key not in cache:
+        hit = cache.get(key)
+        if hit is None or (jacobian and hit[1] is None):
             cache.clear()
-            cache[key] = weighted_residual(model, measurements, params.with_free_values(x).values)
-        return cache[key]
+            cache[key] = hit = weighted_residual(model, measurements,
+                                                 params.with_free_values(x).values, jacobian)
+        return hit
 
-    sol = least_squares(lambda x: evaluate(x)[0], params.free_values(),
-                        jac=lambda x: evaluate(x)[1][:, free], method="lm", x_scale=scale,
+    sol = least_squares(lambda x: evaluate(x, False)[0], params.free_values(),
+                        jac=lambda x: evaluate(x, True)[1][:, free], method="lm", x_scale=scale,
                         xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=max_iterations * 10)
     if not np.all(np.isfinite(sol.x)):
         raise SolverError("the identification diverged (non-finite parameters); check the "
