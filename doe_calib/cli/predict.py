@@ -51,6 +51,7 @@ def run(args):
                           "readings": len(meas), "predicted": args.out, "error": error}))
     elif error is not None:
         print(f"{len(meas)} readings: RMS {error['rms_mm']:.4f} mm per coordinate, "
-              f"3-D RMS {error['rms_3d_mm']:.4f} mm, mean 3-D {error['mean_3d_mm']:.4f} mm, max 3-D {error['max_3d_mm']:.4f} mm "
+              f"3-D RMS {error['rms_3d_mm']:.4f} mm, mean 3-D {error['mean_3d_mm']:.4f} mm, "
+              f"max 3-D {error['max_3d_mm']:.4f} mm "
               f"(model {result.model})")
     print(f"written: {args.out}", file=sys.stderr)

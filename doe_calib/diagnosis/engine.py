@@ -78,7 +78,7 @@ def _fitted(fit, names) -> tuple:
                      "std": float(std[i] * f) if ps.free[i] else None, "unit": p.display_unit,
                      "free": bool(ps.free[i])})
         positive = name.startswith(_POSITIVE) or (
-            name.startswith("chi_") and not name.rsplit("_", 1)[1][:1] in "sc")
+            name.startswith("chi_") and name.rsplit("_", 1)[1][:1] not in "sc")
         value = f"{name} = {ps.values[i] * f:.3g} ± {std[i] * f:.2g} {p.display_unit}"
         total = ps.values[i]
         if name.startswith("chi_"):  # on top of the joint's constant compliance, if any

@@ -1,1 +1,2 @@
-"""The TIAGo real data through the commands a user runs: refine on three sessions, predict the fourth."""
+"""The TIAGo real data through the commands a user runs: refine on three sessions, predict
+the fourth."""

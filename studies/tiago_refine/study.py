@@ -62,7 +62,8 @@ def held_out_session(urdf, data_dir, held: int, work: Path, max_steps: int = 5) 
               "held_out_rms_3d_mm": s["validation_rms_mm"] * np.sqrt(3), "reason": s["reason"]}
              for s in history["steps"]]
     return {"session": name, "trained_on": [Path(t).stem for t in train], "steps": steps,
-            "stopped": history["stopped"], "held_out": errors, "final_model": history["final_model"]}
+            "stopped": history["stopped"], "held_out": errors,
+            "final_model": history["final_model"]}
 
 
 def pooled_rms_3d(folds, tag: str) -> float:
