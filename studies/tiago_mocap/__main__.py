@@ -6,7 +6,7 @@ from pathlib import Path
 
 
 
-from .robot import DEFAULT_DATA, tiago_urdf
+from .robot import DEFAULT_DATA, missing
 from .study import run
 
 def main(argv=None) -> int:
@@ -16,11 +16,9 @@ def main(argv=None) -> int:
     ap.add_argument("--data", type=Path, default=DEFAULT_DATA, help="folder of the session CSVs")
     ap.add_argument("--out", type=Path, default=Path("results"), help="output folder")
     args = ap.parse_args(argv)
-    if not args.data.is_dir():
-        print(f"tiago_mocap: skipped: no data folder {args.data}")
-        return 0
-    if tiago_urdf() is None:
-        print("tiago_mocap: skipped: the TIAGo URDF needs `pip install example-robot-data`")
+    why = missing(args.data)
+    if why:
+        print(f"tiago_mocap: skipped: {why}")
         return 0
     s = run(args.data, args.out)
     for m in s["models"]:

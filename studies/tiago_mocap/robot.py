@@ -46,6 +46,15 @@ def tiago_urdf() -> Path | None:
     return None
 
 
+def missing(data_dir) -> str | None:
+    """Why a TIAGo study cannot run here (no data folder, no URDF), or None when it can."""
+    if not Path(data_dir).is_dir():
+        return f"no data folder {data_dir}"
+    if tiago_urdf() is None:
+        return "the TIAGo URDF needs `pip install example-robot-data`"
+    return None
+
+
 def tiago_robot(urdf=None) -> Robot:
     """Torso lift + 7 arm joints from the URDF root to :data:`FLANGE`."""
     robot = Robot.from_urdf(urdf or tiago_urdf(), flange=FLANGE)

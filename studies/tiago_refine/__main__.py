@@ -5,7 +5,7 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from studies.tiago_mocap.robot import DEFAULT_DATA, tiago_urdf
+from studies.tiago_mocap.robot import DEFAULT_DATA, missing, tiago_urdf
 
 from .study import run
 
@@ -17,11 +17,9 @@ def main(argv=None) -> int:
                     help="folder of the session CSVs in the measurement format")
     ap.add_argument("--out", type=Path, default=Path("results"), help="output folder")
     args = ap.parse_args(argv)
-    if not args.data.is_dir():
-        print(f"tiago_refine: skipped: no data folder {args.data}")
-        return 0
-    if tiago_urdf() is None:
-        print("tiago_refine: skipped: the TIAGo URDF needs `pip install example-robot-data`")
+    why = missing(args.data)
+    if why:
+        print(f"tiago_refine: skipped: {why}")
         return 0
     with tempfile.TemporaryDirectory() as work:
         s = run(tiago_urdf(), args.data, args.out, Path(work))
