@@ -172,6 +172,20 @@ def _fold_flange(root, joints, robot, e_flange) -> str:
     return name
 
 
+def pinocchio_configuration(pin_model, robot, q) -> np.ndarray:
+    """Pinocchio's configuration vector for the chain's joint values ``q`` (N,), rad/m.
+
+    Joints off the chain stay neutral; a continuous joint is (cos q, sin q).
+    """
+    import pinocchio as pin
+
+    out = pin.neutral(pin_model)
+    for joint, v in zip(robot.joints, np.asarray(q, float)):
+        jm = pin_model.joints[pin_model.getJointId(joint.name)]
+        out[jm.idx_q:jm.idx_q + jm.nq] = [np.cos(v), np.sin(v)] if jm.nq == 2 else [v]
+    return out
+
+
 def leftovers(model, parameters, std=None) -> list[dict]:
     """Parameters a URDF cannot hold: name, value, unit, std (display units), free, description."""
     rows = []

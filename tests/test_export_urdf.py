@@ -8,7 +8,8 @@ import yaml
 
 from doe_calib import (Configurations, IdentificationResult, build_model, identify,
                        marker_positions, simulate)
-from doe_calib.calibrated_urdf import export_urdf, matrix_to_rpy, rpy_to_matrix
+from doe_calib.calibrated_urdf import (export_urdf, matrix_to_rpy, pinocchio_configuration,
+                                       rpy_to_matrix)
 from doe_calib.cli import main
 from doe_calib.loads import unloaded_and_loaded
 from doe_calib.simulate import random_configurations, random_truth
@@ -35,13 +36,13 @@ def result(robot6, tool6):
                                 res.n_observations, res.sigma_mm)
 
 
-def _pinocchio_markers(urdf, flange, points, q):
+def _pinocchio_markers(urdf, robot, flange, points, q):
     model = pin.buildModelFromUrdf(str(urdf))
     data = model.createData()
     frame = model.getFrameId(flange)
     out = []
     for qi in q:
-        pin.framesForwardKinematics(model, data, qi)
+        pin.framesForwardKinematics(model, data, pinocchio_configuration(model, robot, qi))
         placement = data.oMf[frame]
         out.append(points @ placement.rotation.T + placement.translation)
     return np.array(out)
@@ -54,7 +55,7 @@ def test_pinocchio_fk_equals_identified_model(result, tmp_path):
     q = random_configurations(result.robot, 50, np.random.default_rng(0), margin=0.0)
     expected = marker_positions(model, result.parameters.values, Configurations.from_arrays(q))
     points = np.array([doc["markers_mm"][m] for m in result.tool.names]) / 1000.0
-    got = _pinocchio_markers(urdf, doc["flange_link"], points, q)
+    got = _pinocchio_markers(urdf, result.robot, doc["flange_link"], points, q)
     assert np.abs(got - expected).max() < 1e-9
     names = {r["name"] for r in doc["not_in_urdf"]}
     assert names == {f"k_{j}" for j in result.robot.joint_names}
@@ -81,3 +82,19 @@ def test_cli(result, tmp_path):
     assert yaml.safe_load((tmp_path / "cal.yaml").read_text())["model"] == MODEL
     assert main(["export-urdf", "--result", str(tmp_path / "r.json"), "--out",
                  str(tmp_path / "missing" / "cal.urdf")]) == 2
+
+
+def test_odd_chain_fixed_joints_prismatic_unaligned_axes(model_odd, tmp_path):
+    """Fixed joints between and after the actuated ones, a prismatic joint, unaligned axes."""
+    params = model_odd.nominal().with_values(random_truth(model_odd, np.random.default_rng(9)))
+    result = IdentificationResult(model_odd.robot, model_odd.tool, model_odd.spec, "point",
+                                  params, np.zeros((len(params), len(params))), 1.0,
+                                  {}, {}, 0, 0.02)
+    urdf, extra = export_urdf(result, tmp_path / "odd.urdf", model_odd)
+    doc = yaml.safe_load(extra.read_text())
+    assert doc["flange_link"] == "tip"
+    q = random_configurations(model_odd.robot, 30, np.random.default_rng(1), margin=0.0)
+    expected = marker_positions(model_odd, params.values, Configurations.from_arrays(q))
+    points = np.array([doc["markers_mm"][m] for m in model_odd.tool.names]) / 1000.0
+    got = _pinocchio_markers(urdf, model_odd.robot, "tip", points, q)
+    assert np.abs(got - expected).max() < 1e-9
