@@ -6,11 +6,13 @@ import warnings
 import numpy as np
 import pytest
 
-from doe_calib import Configurations, DataError, build_model, identify, simulate
+from doe_calib import (Configurations, DataError, IdentificationResult, build_model, identify,
+                       simulate)
 from doe_calib.cli import main
 from doe_calib.compensation import (CompensationResult, Targets, build_problem, compensate,
                                     read_compensated_csv, read_targets)
-from doe_calib.errors import ConvergenceWarning
+from doe_calib.errors import ConvergenceWarning, ModelError
+from doe_calib.compensation.program import compensated_design
 from doe_calib.evaluation import evaluate
 from doe_calib.io import write_design
 from doe_calib.loads import hanging_mass_wrench, unloaded_and_loaded
@@ -76,6 +78,8 @@ def test_unreachable_target_named(campaign):
         out = compensate(model, result, far, np.zeros(3))
     assert not out.converged.any()
     assert all("not reached" in n or "IPOPT" in n for n in out.note)
+    design = compensated_design(out, model.tool)   # the program keeps q where not reached
+    assert np.array_equal(design.configurations.q, far.configurations.q)
 
 
 def test_json_and_csv_round_trip(campaign, tmp_path):
@@ -140,3 +144,18 @@ def test_cli(campaign, tmp_path):
     assert main(args + ["--tcp", "Z", "--out", str(tmp_path / "c3.csv")]) == 2
     assert main(args + ["--tcp", "A", "--out", str(tmp_path / "c4.csv"), "--program-out",
                         str(tmp_path / "p")]) == 2
+
+
+def test_four_joint_chain_position_reached_orientation_named(model_odd):
+    """A 4-joint chain (prismatic, unaligned axes): positions are reached, full poses are not."""
+    rng = np.random.default_rng(4)
+    params = model_odd.nominal().with_values(random_truth(model_odd, rng))
+    result = IdentificationResult(model_odd.robot, model_odd.tool, model_odd.spec, "point",
+                                  params, 1e-12 * np.eye(len(params)), 1.0, {}, {}, 0, 0.02)
+    q = random_configurations(model_odd.robot, 4, rng, margin=0.2)
+    targets = Targets(Configurations.from_arrays(q))
+    out = compensate(model_odd, result, targets, "A", build_problem(model_odd, True))
+    assert out.converged.all() and out.residual.max() < 1e-9
+    assert np.all(out.predicted_std > 0)
+    with pytest.raises(ModelError, match="position only"):
+        build_problem(model_odd)

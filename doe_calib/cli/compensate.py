@@ -76,4 +76,8 @@ def run(args):
             paths = export_compensated(out, result.tool, args.format, where, name=args.name)
         except DataError as exc:
             raise DataError(f"compensated program: {exc}") from exc
+        kept = [p for p, ok in zip(out.pose, out.converged) if not ok]
+        if kept:
+            print(f"warning: the program keeps the programmed q for the targets not reached: "
+                  f"{', '.join(kept)}", file=sys.stderr)
         print(f"written: {', '.join(map(str, paths))}", file=sys.stderr)

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from ..errors import ModelError
+
 #: Default length (m) weighting the rotation error: 1 mrad counts as 1 mm.
 ORIENTATION_LENGTH = 1.0
 _MM = 1000.0  # the objective is in mm², so that IPOPT's tolerances mean something
@@ -88,6 +90,11 @@ def build_problem(model, position_only: bool = False,
     -------
     CompensationProblem
 
+    Raises
+    ------
+    ModelError
+        A full pose asked of a robot with fewer than 6 joints.
+
     Examples
     --------
     >>> from doe_calib import Robot, Tool, build_model, example
@@ -97,6 +104,10 @@ def build_problem(model, position_only: bool = False,
     'compensate'
     """
     n = model.robot.n_joints
+    if not position_only and n < 6:
+        raise ModelError(f"robot {model.robot.name!r} has {n} joints: it cannot reach an "
+                         f"arbitrary position and orientation; compensate the position only "
+                         f"(position_only=True, --position-only)")
     q = ca.SX.sym("q", n)
     w = ca.SX.sym("w", 6)
     env = ca.SX.sym("env", model.flange.size1_in(2))

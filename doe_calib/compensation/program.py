@@ -4,6 +4,8 @@ from __future__ import annotations
 import math
 from collections import Counter
 
+import numpy as np
+
 from ..data import Configurations
 from ..design.result import DesignResult
 from ..export import export_design
@@ -13,13 +15,16 @@ def compensated_design(result, tool) -> DesignResult:
     """The compensated rows as a design the exporters can write, in the program's order.
 
     A pose id that appears on several rows (one pose under several loads) gets
-    ``_<k>`` appended, since each row now has its own q′.
+    ``_<k>`` appended, since each row now has its own q′. A row whose target
+    was not reached keeps its programmed q (the solver's last iterate is no
+    joint value to send to a robot).
     """
     counts, seen, ids = Counter(result.pose), Counter(), []
     for pose in result.pose:
         seen[pose] += 1
         ids.append(pose if counts[pose] == 1 else f"{pose}_{seen[pose]}")
-    cfg = Configurations.from_arrays(result.q_compensated, result.wrench, pose=ids)
+    q = np.where(result.converged[:, None], result.q_compensated, result.q)
+    cfg = Configurations.from_arrays(q, result.wrench, pose=ids)
     return DesignResult(robot=result.robot, tool=tool, model=result.model, configurations=cfg,
                         criterion="compensated", value=math.nan, bound=math.nan,
                         efficiency=math.nan, predicted_std={}, constraints={},
