@@ -50,6 +50,7 @@ def test_true_error_falls_to_predicted(campaign):
     model, truth, result, targets = campaign
     out = compensate(model, result, targets, "A")
     assert out.converged.all() and out.residual.max() < 1e-9
+    assert out.rotation_residual.max() < 1e-9
     before = np.linalg.norm(_true_tcp(model, truth, targets.configurations) - out.target, axis=1)
     after = np.linalg.norm(_true_tcp(model, truth, out.configurations()) - out.target, axis=1)
     assert np.sqrt(np.mean(before ** 2)) > 1e-3          # millimetres before

@@ -9,6 +9,8 @@ without them, line numbers kept).
 """
 from __future__ import annotations
 
+import csv
+import io
 import re
 import tempfile
 from dataclasses import dataclass
@@ -43,8 +45,12 @@ class Targets:
 
 
 def _split_line(line: str, delimiter: str, drop: list) -> str:
-    fields = line.split(delimiter)
-    return delimiter.join(f for i, f in enumerate(fields) if i not in drop)
+    """``line`` without the fields at ``drop`` (quoted fields kept whole)."""
+    fields = next(csv.reader([line], delimiter=delimiter))
+    buf = io.StringIO()
+    csv.writer(buf, delimiter=delimiter, lineterminator="").writerow(
+        [f for i, f in enumerate(fields) if i not in drop])
+    return buf.getvalue()
 
 
 def _renumber(message_column, columns, kept):
