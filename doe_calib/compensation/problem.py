@@ -48,6 +48,9 @@ class CompensationProblem:
     error : casadi.Function
         ``error(q, w, env, p, t, x_t, R_t) -> (position, rotation)``: position
         error (3, m) and rotation error ``vee(R_tᵀ R)`` (3, rad).
+    jacobian : casadi.Function
+        ``jacobian(q, w, env, p, t, x_t, R_t) -> J``: ∂(target equations)/∂q′,
+        (3 or 6, N), mm/rad; its condition number tells a singular configuration.
     solver : casadi.Function
         IPOPT over ``x`` = q′ (rad/m) with parameter vector
         ``[x_t (3), vec(R_t) (9), w (6), env (1+N), p (P), t (3), q (N)]``, see
@@ -58,6 +61,7 @@ class CompensationProblem:
     orientation_length: float
     tcp_pose: ca.Function
     error: ca.Function
+    jacobian: ca.Function
     solver: ca.Function
 
     @staticmethod
@@ -125,6 +129,9 @@ def build_problem(model, position_only: bool = False,
     residual = _MM * e_pos
     if not position_only:
         residual = ca.vertcat(residual, _MM * orientation_length * e_rot)
+    jacobian = ca.Function("jacobian", [q, w, env, p, t, x_t, r_t],
+                           [ca.densify(ca.jacobian(residual, q))],
+                           ["q", "w", "env", "p", "t", "x_t", "R_t"], ["J"])
     q_0 = ca.SX.sym("q_0", n)
     nlp = {"x": q, "p": ca.vertcat(x_t, ca.vec(r_t), w, env, p, t, q_0),
            "f": 0.5 * ca.sumsqr(q - q_0), "g": residual}
@@ -132,4 +139,5 @@ def build_problem(model, position_only: bool = False,
             "ipopt.tol": tolerance_mm, "ipopt.constr_viol_tol": tolerance_mm,
             "ipopt.max_iter": max_iter}
     solver = ca.nlpsol("compensate", "ipopt", nlp, opts)
-    return CompensationProblem(position_only, orientation_length, tcp_pose, error, solver)
+    return CompensationProblem(position_only, orientation_length, tcp_pose, error, jacobian,
+                               solver)

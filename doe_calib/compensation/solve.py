@@ -72,7 +72,11 @@ def tcp_std(model, result, configurations, tcp) -> np.ndarray:
     return np.sqrt(np.einsum("mij,jk,mik->m", j, cov, j))
 
 
-def _reason(status: str, pos: float, rot: float, at_limit: list) -> str:
+#: Condition number of ∂(pose)/∂q′ above which a configuration is called near-singular.
+SINGULAR_CONDITION = 1e4
+
+
+def _reason(status: str, pos: float, rot: float, at_limit: list, condition: float) -> str:
     words = []
     if status not in _SOLVED:
         words.append(f"IPOPT: {status}")
@@ -80,6 +84,9 @@ def _reason(status: str, pos: float, rot: float, at_limit: list) -> str:
         words.append(f"target not reached: off by {pos * 1000:.4g} mm, {np.degrees(rot):.3g} deg")
     if words and at_limit:
         words.append(f"at the limit of {', '.join(at_limit)}")
+    if words and condition > SINGULAR_CONDITION:
+        words.append(f"near a singularity or the edge of the workspace (condition number of "
+                     f"the pose Jacobian {condition:.2g})")
     return "; ".join(words)
 
 
@@ -137,7 +144,9 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
             float(np.arcsin(min(1.0, np.linalg.norm(np.asarray(e_rot)))))
         at_limit = [j.name for j, v in zip(robot.joints, q_out[i])
                     if min(v - j.lower, j.upper - v) < 1e-9]
-        notes.append(_reason(status, pos_err[i], rot_err[i], at_limit))
+        jac = np.asarray(problem.jacobian(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
+                                          x_t[i], r_nom[i]))
+        notes.append(_reason(status, pos_err[i], rot_err[i], at_limit, np.linalg.cond(jac)))
         ok[i] = not notes[-1]
         log.debug("row %s: %s, %.3g mm", cfg.pose[i], status, pos_err[i] * 1000)
     if not ok.all():
