@@ -13,7 +13,8 @@ from pathlib import Path
 from .. import example
 from ..errors import DoeCalibError
 from ..threads import single_threaded_blas
-from . import compare, demo, design, diagnose, export, identify, predict, refine, simulate, study
+from . import (compare, compensate, demo, design, diagnose, export, export_urdf, identify,
+               predict, refine, simulate, study)
 from .options import check_outputs
 
 #: Where ``--help`` sends the user for file formats and examples.
@@ -32,6 +33,8 @@ COMMANDS = {
     "study": study,
     "export": export,
     "compare": compare,
+    "compensate": compensate,
+    "export-urdf": export_urdf,
 }
 
 

@@ -15,7 +15,8 @@ from .options import count
 STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__main__",
            "tiago_refine": "studies.tiago_refine.__main__",
            "table2": "studies.table2.__main__", "diagnosis": "studies.diagnosis.__main__",
-           "design_sweep": "studies.design_sweep.__main__"}
+           "design_sweep": "studies.design_sweep.__main__",
+           "compensation": "studies.compensation.__main__"}
 
 HELP = "run a study and write its results"
 EXAMPLE = "doe-calib study table1 --out results [--scheduler tcp://host:8786]"

@@ -1,0 +1,83 @@
+"""``doe-calib compensate``: joint values that make the identified robot reach a program."""
+from __future__ import annotations
+
+import sys
+import warnings
+from pathlib import Path
+
+from ..compensation import build_problem, compensate, read_targets
+from ..compensation.program import export_compensated
+from ..errors import ConvergenceWarning, DataError, OptionError
+from ..export import FORMATS
+from ..jsonfile import strict_json
+from ..measurement import build_model
+from ..results import IdentificationResult
+from .common import effect_file_argument, load_effect_files, parse_floats, report_warnings
+
+HELP = ("compensate a program: joint values that put the TCP on its targets with the "
+        "identified model")
+EXAMPLE = ("doe-calib compensate --result result.json --targets program.csv --tcp A "
+           "--out compensated.csv --format krl --program-out programs/")
+
+
+def add_arguments(c):
+    c.add_argument("--result", required=True, help="identification result JSON")
+    c.add_argument("--targets", required=True,
+                   help="design CSV of the program (pose, q1..qN in deg/mm, optional wrench "
+                        "fx..mz) with optional x,y,z target positions (mm, tracker frame)")
+    c.add_argument("--tcp", required=True, metavar="MARKER|X,Y,Z",
+                   help="a marker of the result, or a point in the flange frame (mm)")
+    c.add_argument("--out", required=True, help="compensated CSV to write")
+    c.add_argument("--position-only", action="store_true",
+                   help="reach the target positions only, the orientation free")
+    c.add_argument("--format", choices=list(FORMATS),
+                   help="also write the compensated program: "
+                        + "; ".join(f"{k}: {f.description}" for k, f in FORMATS.items()))
+    c.add_argument("--program-out", help="directory (or file) for --format (default: the "
+                                         "folder of --out)")
+    c.add_argument("--name", default="compensated", help="program name (default compensated)")
+    c.add_argument("--json", action="store_true", help="print the result as JSON")
+    effect_file_argument(c)
+
+
+OUTPUTS = {"out": "file", "program_out": "folder"}
+
+
+def _tcp(text: str, result):
+    if "," in text:
+        return parse_floats(text, 3, "--tcp X,Y,Z (mm, flange frame)") / 1000.0
+    if text not in result.tool.names:
+        raise OptionError(f"--tcp {text!r}: no such marker in the result; markers: "
+                          f"{', '.join(result.tool.names)}, or give X,Y,Z in mm (flange frame)")
+    return text
+
+
+def run(args):
+    if args.program_out is not None and args.format is None:
+        raise OptionError("--program-out needs --format (krl, rapid, urscript or csv)")
+    load_effect_files(args.effect_file)
+    result = IdentificationResult.from_json(args.result)
+    tcp = _tcp(args.tcp, result)
+    targets = read_targets(args.targets, result.robot)
+    model = build_model(result.robot, result.tool, result.model)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = compensate(model, result, targets, tcp, build_problem(model, args.position_only))
+    report_warnings([w for w in caught if not issubclass(w.category, ConvergenceWarning)])
+    for pose, ok, note in zip(out.pose, out.converged, out.note):
+        if not ok:
+            print(f"warning: target {pose} not reached: {note}", file=sys.stderr)
+    out.to_csv(args.out)
+    print(strict_json(out.to_dict()) if args.json else out.summary())
+    print(f"\nwritten: {args.out}", file=sys.stderr)
+    if args.format:
+        where = args.program_out if args.program_out is not None else Path(args.out).parent
+        try:
+            paths = export_compensated(out, result.tool, args.format, where, name=args.name)
+        except DataError as exc:
+            raise DataError(f"compensated program: {exc}") from exc
+        kept = [p for p, ok in zip(out.pose, out.converged) if not ok]
+        if kept:
+            print(f"warning: the program keeps the programmed q for the targets not reached: "
+                  f"{', '.join(kept)}", file=sys.stderr)
+        print(f"written: {', '.join(map(str, paths))}", file=sys.stderr)

@@ -1,0 +1,37 @@
+"""``doe-calib export-urdf``: the identified geometry folded into a URDF, the rest in a YAML."""
+from __future__ import annotations
+
+import sys
+import warnings
+
+from ..calibrated_urdf import export_urdf
+from ..jsonfile import strict_json
+from ..results import IdentificationResult
+from .common import effect_file_argument, load_effect_files, report_warnings
+
+HELP = ("write a calibrated URDF (offsets, geometry and base folded into the joint origins) "
+        "and a YAML of the parameters a URDF cannot hold")
+EXAMPLE = "doe-calib export-urdf --result result.json --out robot_calibrated.urdf"
+
+
+def add_arguments(c):
+    c.add_argument("--result", required=True, help="identification result JSON")
+    c.add_argument("--out", required=True,
+                   help="URDF to write; the YAML beside it takes the same name with .yaml")
+    c.add_argument("--json", action="store_true", help="print the files written as JSON")
+    effect_file_argument(c)
+
+
+OUTPUTS = {"out": "file"}
+
+
+def run(args):
+    load_effect_files(args.effect_file)
+    result = IdentificationResult.from_json(args.result)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        urdf, extra = export_urdf(result, args.out)
+    report_warnings(caught)
+    if args.json:
+        print(strict_json({"result": args.result, "urdf": str(urdf), "yaml": str(extra)}))
+    print(f"written: {urdf}, {extra}", file=sys.stderr)

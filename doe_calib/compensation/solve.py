@@ -1,0 +1,162 @@
+"""Numeric compensation: targets in, compensated joint values and their predicted accuracy out.
+
+Takes the Functions of :mod:`.problem` and arrays; builds no expression.
+"""
+from __future__ import annotations
+
+import logging
+import warnings
+
+import numpy as np
+
+from ..errors import ConvergenceWarning, OptionError
+from ..evaluation import evaluate
+from .problem import CompensationProblem, build_problem
+from .result import CompensationResult
+
+log = logging.getLogger(__name__)
+
+#: Position error (m) and rotation error (rad) above which a row is not reached.
+POSITION_TOLERANCE = 1e-6
+ROTATION_TOLERANCE = 1e-6
+_SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+
+
+def tcp_point(parameters, tcp) -> tuple[np.ndarray, str | None]:
+    """The TCP in the flange frame (m) and its marker name, from a marker name or a point.
+
+    Parameters
+    ----------
+    parameters : ParameterSet
+        Identified parameters: a marker's position is ``marker_<name>_{x,y,z}``.
+    tcp : str or array_like, shape (3,)
+        A marker name, or a point in the flange frame, metres.
+    """
+    if isinstance(tcp, str):
+        names = [f"marker_{tcp}_{a}" for a in "xyz"]
+        if not all(n in parameters.names for n in names):
+            markers = sorted({n.split("_")[1] for n in parameters.names
+                              if n.startswith("marker_")})
+            raise OptionError(f"--tcp {tcp!r}: no such marker in the result; markers: "
+                              f"{', '.join(markers)}, or give X,Y,Z in mm (flange frame)")
+        return np.array([parameters[n] for n in names]), tcp
+    point = np.asarray(tcp, float).reshape(3)
+    return point, None
+
+
+def nominal_targets(model, parameters, configurations, tcp) -> tuple[np.ndarray, np.ndarray]:
+    """Where the nominal robot, placed by the identified base, puts the TCP.
+
+    Returns x (M, 3) in m and R (M, 3, 3), tracker frame.
+
+    ``base ∘ FK_nominal(q) ∘ tcp``: every effect at its nominal value, no wrench.
+    """
+    values = model.nominal().values.copy()
+    base = parameters.index("base")
+    values[base] = parameters.values[base]
+    cfg = configurations
+    unloaded = type(cfg).from_arrays(cfg.q, None, cfg.env, cfg.pose)
+    rot, origin = evaluate(model.flange, unloaded, values)
+    return origin[:, :, 0] + rot @ tcp, rot
+
+
+def tcp_std(model, result, configurations, tcp) -> np.ndarray:
+    """3-D standard deviation (m) of the TCP position predicted at each configuration, (M,).
+
+    ``sqrt(tr(J Σ Jᵀ))`` with J the TCP position Jacobian wrt the free
+    parameters and Σ the result's a-posteriori covariance (σ̂).
+    """
+    (_, jac) = evaluate(model.point, configurations, result.parameters.values, tcp)
+    j = jac[:, :, result.parameters.free]
+    cov = result.cov_params(a_posteriori=True)
+    return np.sqrt(np.einsum("mij,jk,mik->m", j, cov, j))
+
+
+#: Condition number of ∂(pose)/∂q′ above which a configuration is called near-singular.
+SINGULAR_CONDITION = 1e4
+
+
+def _reason(status: str, pos: float, rot: float, at_limit: list, condition: float) -> str:
+    words = []
+    if status not in _SOLVED:
+        words.append(f"IPOPT: {status}")
+    if pos > POSITION_TOLERANCE or rot > ROTATION_TOLERANCE:
+        words.append(f"target not reached: off by {pos * 1000:.4g} mm, {np.degrees(rot):.3g} deg")
+    if words and at_limit:
+        words.append(f"at the limit of {', '.join(at_limit)}")
+    if words and condition > SINGULAR_CONDITION:
+        words.append(f"near a singularity or the edge of the workspace (condition number of "
+                     f"the pose Jacobian {condition:.2g})")
+    return "; ".join(words)
+
+
+def compensate(model, result, targets, tcp, problem: CompensationProblem | None = None,
+               position_only: bool = False) -> CompensationResult:
+    """Joint values that make the identified model reach each target.
+
+    Parameters
+    ----------
+    model : Model
+        Built from the result: ``build_model(result.robot, result.tool, result.model)``.
+    result : IdentificationResult
+    targets : Targets
+        Programmed rows (q, wrench) and optional target positions (m, tracker frame).
+    tcp : str or array_like, shape (3,)
+        A marker name of the result, or a point in the flange frame (m).
+    problem : CompensationProblem, optional
+        Built by :func:`~.problem.build_problem` (built here when not given).
+    position_only : bool
+        Leave the orientation free (ignored when ``problem`` is given).
+
+    Returns
+    -------
+    CompensationResult
+        A row that is not reached keeps its best q′ with ``converged`` False
+        and the reason in its note; a :class:`ConvergenceWarning` names them.
+
+    Examples
+    --------
+    >>> targets = read_targets("program.csv", model.robot)  # doctest: +SKIP
+    >>> print(compensate(model, result, targets, "A").summary())  # doctest: +SKIP
+    """
+    problem = build_problem(model, position_only) if problem is None else problem
+    cfg = targets.configurations
+    point, name = tcp_point(result.parameters, tcp)
+    x_nom, r_nom = nominal_targets(model, result.parameters, cfg, point)
+    x_t = x_nom if targets.positions is None else np.asarray(targets.positions, float)
+    values = result.parameters.values
+    robot = model.robot
+    lower, upper = robot.lower, robot.upper
+    q_out, notes, ok = np.empty_like(cfg.q), [], np.zeros(len(cfg), bool)
+    pos_err, rot_err = np.empty(len(cfg)), np.empty(len(cfg))
+    for i in range(len(cfg)):
+        p = problem.nlp_parameters(x_t[i], r_nom[i], cfg.wrench[i], cfg.env[i], values, point,
+                                   cfg.q[i])
+        sol = problem.solver(x0=np.clip(cfg.q[i], lower, upper), p=p, lbx=lower, ubx=upper,
+                             lbg=0.0, ubg=0.0)
+        status = problem.solver.stats()["return_status"]
+        # IPOPT relaxes the bounds by ~1e-8: the program must stay inside them
+        q_out[i] = np.clip(np.asarray(sol["x"]).ravel(), lower, upper)
+        e_pos, e_rot = problem.error(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
+                                     x_t[i], r_nom[i])
+        pos_err[i] = float(np.linalg.norm(np.asarray(e_pos)))
+        rot_err[i] = 0.0 if problem.position_only else \
+            float(np.arcsin(min(1.0, np.linalg.norm(np.asarray(e_rot)))))
+        at_limit = [j.name for j, v in zip(robot.joints, q_out[i])
+                    if min(v - j.lower, j.upper - v) < 1e-9]
+        jac = np.asarray(problem.jacobian(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
+                                          x_t[i], r_nom[i]))
+        notes.append(_reason(status, pos_err[i], rot_err[i], at_limit, np.linalg.cond(jac)))
+        ok[i] = not notes[-1]
+        log.debug("row %s: %s, %.3g mm", cfg.pose[i], status, pos_err[i] * 1000)
+    if not ok.all():
+        bad = [f"{cfg.pose[i]} ({notes[i]})" for i in np.flatnonzero(~ok)]
+        warnings.warn(f"{len(bad)} target(s) not reached: {'; '.join(bad)}", ConvergenceWarning,
+                      stacklevel=2)
+    compensated = type(cfg).from_arrays(q_out, cfg.wrench, cfg.env, cfg.pose)
+    return CompensationResult(
+        robot=robot, model=result.model, tcp=point, tcp_marker=name,
+        position_only=problem.position_only, pose=cfg.pose, q=cfg.q, q_compensated=q_out,
+        wrench=cfg.wrench, target=x_t, residual=pos_err, rotation_residual=rot_err,
+        predicted_std=tcp_std(model, result, compensated, point), converged=ok,
+        note=tuple(notes))

@@ -1,0 +1,139 @@
+"""The program to compensate: design-CSV rows, optionally with target positions ``x,y,z``.
+
+A targets CSV is a design CSV (docs/formats.md §4: ``pose``, ``q1``…``qN`` in
+deg/mm, optional wrench, temperature and approach columns) that may carry
+``x``, ``y``, ``z`` (mm, tracker frame): where the TCP must go for that row.
+The design columns are read by :func:`doe_calib.io.read_design`; this module
+only reads the three extra columns (and hands ``read_design`` the file
+without them, line numbers kept).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import re
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..data import Configurations
+from ..errors import DataError
+from ..io import XYZ, _delimiter, _read_table, read_design
+
+
+@dataclass(frozen=True, eq=False)
+class Targets:
+    """Rows of a program to compensate.
+
+    Attributes
+    ----------
+    configurations : Configurations
+        One per row: the programmed q (rad/m), the wrench carried there (N,
+        N·m, base frame), temperature and approach directions.
+    positions : ndarray, shape (M, 3), or None
+        Target TCP positions in the tracker frame (m); None when the file has
+        no ``x,y,z``: the targets are then where the nominal robot puts the TCP.
+    """
+
+    configurations: Configurations
+    positions: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return len(self.configurations)
+
+
+def _split_line(line: str, delimiter: str, drop: list) -> str:
+    """``line`` without the fields at ``drop`` (quoted fields kept whole)."""
+    fields = next(csv.reader([line], delimiter=delimiter))
+    buf = io.StringIO()
+    csv.writer(buf, delimiter=delimiter, lineterminator="").writerow(
+        [f for i, f in enumerate(fields) if i not in drop])
+    return buf.getvalue()
+
+
+def _renumber(message_column, columns, kept):
+    """A DataError column ``'q3' (4)`` of the stripped file as a column of the original."""
+    if not isinstance(message_column, str):
+        return message_column if message_column is None else kept[message_column - 1] + 1
+    match = re.fullmatch(r"'(.*)' \((\d+)\)", message_column)
+    if match and match.group(1) in columns:
+        return f"'{match.group(1)}' ({columns.index(match.group(1)) + 1})"
+    return message_column
+
+
+def read_targets(path, robot) -> Targets:
+    """Read a targets CSV (design columns, optional ``x,y,z`` in mm).
+
+    Parameters
+    ----------
+    path : path-like
+    robot : Robot
+
+    Returns
+    -------
+    Targets
+
+    Raises
+    ------
+    DataError
+        Anything :func:`~doe_calib.io.read_design` refuses (with the file's
+        own line and column), only some of ``x,y,z``, or a value there that
+        is not a finite number.
+
+    Examples
+    --------
+    >>> targets = read_targets("program.csv", robot)   # doctest: +SKIP
+    >>> targets.positions is None                       # doctest: +SKIP
+    True
+    """
+    table = _read_table(path)
+    present = [c for c in XYZ if c in table.columns]
+    if not present:
+        return Targets(read_design(path, robot))
+    header_line = table.rows[0][0] - 1
+    if len(present) < 3:
+        missing = ", ".join(c for c in XYZ if c not in present)
+        raise DataError(f"target column(s) {', '.join(present)} without {missing}: give all "
+                        f"of x, y, z (mm, tracker frame) or none", path, header_line)
+    drop = [table.columns.index(c) for c in XYZ]
+    kept = [i for i in range(len(table.columns)) if i not in drop]
+    xyz = np.empty((len(table.rows), 3))
+    for r, (line, fields) in enumerate(table.rows):
+        for a, c in enumerate(XYZ):
+            text = fields[drop[a]] if drop[a] < len(fields) else ""
+            try:
+                value = float(text.replace(",", ".") if table.decimal_comma else text)
+            except ValueError:
+                raise DataError(f"{text!r} is not a number (target {c} in mm)", path, line,
+                                table.col(c)) from None
+            if not np.isfinite(value):
+                raise DataError(f"{text!r} is not a finite number", path, line, table.col(c))
+            xyz[r, a] = value / 1000.0
+    delimiter = _delimiter(_first_line(path))
+    text = Path(path).read_text(encoding="utf-8-sig")
+    lines = [ln if not ln.strip() or ln.lstrip().startswith("#") else
+             _split_line(ln, delimiter, drop) for ln in text.splitlines()]
+    with tempfile.TemporaryDirectory() as tmp:
+        stripped = Path(tmp) / Path(path).name
+        stripped.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        try:
+            cfg = read_design(stripped, robot)
+        except DataError as exc:
+            raise DataError(_message(exc), path, exc.line,
+                            _renumber(exc.column, table.columns, kept)) from None
+    return Targets(cfg, xyz)
+
+
+def _message(exc: DataError) -> str:
+    """The message of a DataError without its ``path, line, column:`` prefix."""
+    where = DataError("", exc.path, exc.line, exc.column)
+    return str(exc)[len(str(where)):]
+
+
+def _first_line(path) -> str:
+    for line in Path(path).read_text(encoding="utf-8-sig").splitlines():
+        if line.strip() and not line.lstrip().startswith("#"):
+            return line
+    return ""

@@ -1,0 +1,1 @@
+"""Compensation on a simulated KR 270 campaign with known truth (``study compensation``)."""
