@@ -156,8 +156,8 @@ def test_a_joint_a_hair_past_its_limit_is_a_warning_far_past_an_error(rt, tmp_pa
     far = f"p9,10,{upper + 0.03 * span:.6g},90,0,30,0,A,1000.5,20.25,1500"
     message = _error(tmp_path, rt, HEADER, far)
     assert "line 2" in message and "'q2' (3)" in message and "outside the limits" in message
-    design = _write(tmp_path, "pose,q1,q2,q3,q4,q5,q6", f"d1,10,{upper + 0.01 * span:.6g},90,0,30,0",
-                    name="d.csv")
+    design = _write(tmp_path, "pose,q1,q2,q3,q4,q5,q6",
+                    f"d1,10,{upper + 0.01 * span:.6g},90,0,30,0", name="d.csv")
     with pytest.raises(DataError, match="outside the limits"):  # designs stay strict
         read_design(design, robot)
 
