@@ -142,10 +142,14 @@ def check(model, measurements, result) -> tuple:
     """
     robot = model.robot
     found = []
+    sigma_hat_mm = result.sigma_ratio * result.sigma_mm
     if not measurements.sigma_estimated:
         found.append(sigma_ratio_finding(result.sigma_ratio, result.sigma_mm))
+    elif sigma_hat_mm > BAD_SIGMA_HAT_MM:
+        found.append(f"σ estimated from the residuals is {sigma_hat_mm:.3g} mm, far more than a "
+                     f"laser tracker's noise: a unit mistake or a missing effect "
+                     f"(run doe-calib diagnose)")
     found.append(xyz_in_metres(measurements.xyz, robot))
-    sigma_hat_mm = result.sigma_ratio * result.sigma_mm
     bad_fit = result.sigma_ratio > SIGMA_RATIO_RANGE[1] or \
         (measurements.sigma_estimated and sigma_hat_mm > BAD_SIGMA_HAT_MM)
     if bad_fit:

@@ -69,6 +69,11 @@ def test_joint_angles_in_radians_are_reported(model3):
     bad = identify_quietly(model3, as_if_radians)
     assert bad.sigma_ratio > 100
     assert any("joint angles look like radians" in w for w in bad.warnings)
+    unknown = identify_quietly(model3, replace(as_if_radians, sigma_estimated=True))
+    assert any("joint angles look like radians" in w for w in unknown.warnings)
+    found = [w for w in unknown.warnings if "far more than a laser tracker" in w]
+    assert len(found) == 1 and f"{unknown.sigma_mm:.3g} mm" in found[0]
+    assert unknown.sigma_mm == pytest.approx(bad.sigma_ratio * SIGMA * 1000, rel=1e-3)
     good = identify_quietly(model3, meas)
     assert not any("radians" in w for w in good.warnings)
     # small true angles (all within ±3 deg) fitted well are not mistaken for radians
@@ -127,3 +132,23 @@ def test_mimic_joint_in_the_chain_is_refused_by_name(tmp_path):
         Robot.from_urdf(path)
     assert str(path) in str(info.value)
     assert Robot.from_urdf(URDF).n_joints == 3
+
+
+def test_collinear_tool_stops_the_cli_with_rc_2(tmp_path, capsys):
+    tool = _tool_file(tmp_path, {"A": (0, 0, 0), "B": (0, 50, 0), "C": (0, 120, 0)})
+    code = main(["simulate", "--robot", str(URDF), "--tool", str(tool), "--poses", "5",
+                 "--sigma", "0.02", "--out", str(tmp_path / "s.csv")])
+    err = capsys.readouterr().err
+    assert code == 2 and f"error: {tool}: the markers are collinear" in err
+
+
+def test_mimic_joint_off_the_chain_is_accepted(tmp_path):
+    text = URDF.read_text()
+    finger = ('<link name="finger"/>\n  <joint name="grip" type="revolute">\n'
+              '    <parent link="link_2"/><child link="finger"/><axis xyz="0 0 1"/>\n'
+              '    <limit lower="-1" upper="1" effort="1" velocity="1"/>\n'
+              '    <mimic joint="q2"/>\n  </joint>\n</robot>')
+    path = tmp_path / "finger.urdf"
+    path.write_text(text.replace("</robot>", finger))
+    robot = Robot.from_urdf(path, flange="flange")
+    assert robot.joint_names == ["q1", "q2", "q3"]

@@ -92,6 +92,20 @@ def test_diagnose_cli_without_sigma_uses_the_estimate(no_sigma_file, tmp_path, c
     assert float(line.split(", ")[-1].split(" mm")[0]) == pytest.approx(SIGMA * 1000, rel=0.10)
 
 
+def test_refine_cli_without_sigma_validates_at_the_estimate(no_sigma_file, tmp_path, capsys):
+    out = tmp_path / "r.json"
+    assert main(["refine", "--robot", str(URDF), "--tool", str(TOOL), "--data",
+                 str(no_sigma_file), "--validation", str(no_sigma_file), "--model",
+                 "joint_offset", "--max-steps", "1", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    line = next(ln for ln in err.splitlines() if ln.startswith("σ not given"))
+    sigma_hat = float(line.split(", ")[-1].split(" mm")[0])
+    assert sigma_hat == pytest.approx(SIGMA * 1000, rel=0.10)
+    fit = IdentificationResult.from_json(out)
+    assert not fit.sigma_estimated and fit.sigma_mm == pytest.approx(sigma_hat, rel=1e-2)
+    assert fit.sigma_ratio == pytest.approx(1.0, abs=0.02)  # the data fitted at their own σ̂
+
+
 def test_design_stores_its_sigma_and_compare_uses_it(model3, tmp_path):
     design = optimal_design(model3, 8, candidates=300, sigma=3e-5, refine=False,
                             rng=np.random.default_rng(1))
