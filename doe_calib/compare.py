@@ -140,7 +140,8 @@ def _covariance(source, sigma):
     """(model, parameter set, covariance of the free parameters (SI), σ (m)) of a source."""
     model = build_model(source.robot, source.tool, source.model)
     if isinstance(source, DesignResult):
-        sigma = DEFAULT_SIGMA if sigma is None else sigma
+        if sigma is None:  # the design's own σ; DEFAULT_SIGMA for files that lack it
+            sigma = DEFAULT_SIGMA if source.sigma_mm is None else source.sigma_mm / 1000.0
         params = model.nominal()
         params = params.fixed([n for n in params.names if n not in source.predicted_std],
                               "not in the design")
@@ -161,9 +162,9 @@ def compare(sources, labels=None, sigma: float | None = None, task=None,
     labels : sequence of str, optional
         Column names (default ``1``, ``2``, ...).
     sigma : float, optional
-        Tracker σ per coordinate, m. Designs are predicted with it (default
-        :data:`DEFAULT_SIGMA`); results are rescaled to it from their own
-        a-priori σ (default: kept at their own σ).
+        Tracker σ per coordinate, m. Designs are predicted with it (default:
+        the σ stored in the design, else :data:`DEFAULT_SIGMA`); results are
+        rescaled to it from their own a-priori σ (default: kept at their own σ).
     task : Configurations, optional
         Task poses and their wrenches (SI), e.g. from :func:`doe_calib.io.read_design`.
     task_point : array_like, shape (3,)

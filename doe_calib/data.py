@@ -173,6 +173,10 @@ class Measurements:
     session : tuple of str
         The measurement session of each configuration (length M; empty: one
         session). Cross-validation holds out whole sessions when there are several.
+    sigma_estimated : bool
+        True when no σ was given (no ``sigma`` column, no ``--sigma``): ``sigma``
+        then holds a provisional 1 mm and identification estimates σ from the
+        residuals (formats.md §3).
     """
 
     configurations: Configurations
@@ -185,6 +189,7 @@ class Measurements:
     dropped: tuple = ()
     warnings: tuple = ()
     session: tuple = ()
+    sigma_estimated: bool = False
 
     def __len__(self) -> int:
         return self.config.shape[0]
@@ -202,7 +207,8 @@ class Measurements:
         used, new_config = np.unique(self.config[rows], return_inverse=True)
         return Measurements(self.configurations.subset(used), new_config, self.marker[rows],
                             self.xyz[rows], self.sigma[rows], self.line[rows], self.source,
-                            session=tuple(self.sessions[used]))
+                            session=tuple(self.sessions[used]),
+                            sigma_estimated=self.sigma_estimated)
 
     @property
     def sessions(self) -> np.ndarray:
@@ -235,4 +241,5 @@ def concatenate(parts) -> Measurements:
                         "; ".join(dict.fromkeys(p.source for p in parts)),
                         sum((p.dropped for p in parts), ()),
                         sum((p.warnings for p in parts), ()),
-                        tuple(s for p in parts for s in p.sessions))
+                        tuple(s for p in parts for s in p.sessions),
+                        any(p.sigma_estimated for p in parts))

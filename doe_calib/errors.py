@@ -60,6 +60,10 @@ class DataWarning(UserWarning):
     """Input accepted as it is, but worth a look (e.g. a joint reading a hair past its limit)."""
 
 
+class PlausibilityWarning(DataWarning):
+    """A fit that ran but looks implausible (σ̂/σ far from 1, units, huge placement errors)."""
+
+
 class ConvergenceWarning(UserWarning):
     """An iterative solver stopped before it converged."""
 

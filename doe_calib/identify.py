@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import logging
 import warnings
+from dataclasses import replace
 
 import numpy as np
 from scipy.optimize import least_squares
 
+from . import plausibility
 from .errors import (ConditioningWarning, ConvergenceWarning, DataError,
-                     IdentifiabilityWarning, SolverError)
+                     IdentifiabilityWarning, PlausibilityWarning, SolverError)
 from .evaluation import marker_positions, observation_matrix
 from .identifiability import analyse
 from .registration import register
@@ -141,10 +143,15 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
         covariance = np.linalg.pinv(jf.T @ jf)
     dof = len(r) - n_free
     ratio = float(np.sqrt(r @ r / dof)) if dof > 0 else float("nan")
+    sigma_mm = float(np.median(measurements.sigma) * 1000.0)
+    estimated = bool(measurements.sigma_estimated and np.isfinite(ratio))
+    if estimated:  # σ unknown: σ̂ becomes σ and scales the covariance (statsmodels' scale)
+        covariance, sigma_mm, ratio = covariance * ratio ** 2, sigma_mm * ratio, 1.0
+        notes = [f"σ estimated from the residuals: {sigma_mm:.3g} mm"] + list(notes)
     return IdentificationResult(
         model.robot, model.tool, model.spec, estimator, params, covariance, ratio,
         residual_statistics(model, measurements, params.values), convergence, len(r),
-        float(np.median(measurements.sigma) * 1000.0), tuple(notes))
+        sigma_mm, tuple(notes), estimated)
 
 
 def identify_point(model, measurements, params=None, max_iterations: int = 200,
@@ -218,16 +225,32 @@ def identify(model, measurements, params=None, estimator: str = "point", **optio
     Returns
     -------
     IdentificationResult
+        Its ``warnings`` end with the plausibility findings (σ̂/σ far from 1,
+        units, placement errors as large as a link, collinear markers). When
+        ``measurements.sigma_estimated``, σ is estimated from the residuals:
+        ``sigma_mm`` is σ̂, the covariance is scaled to it, and the result says so.
     """
     if estimator == "point":
-        return identify_point(model, measurements, params, **options)
-    if estimator == "two-step":
+        result = identify_point(model, measurements, params, **options)
+    elif estimator == "two-step":
         from .two_step import identify_two_step
-        return identify_two_step(model, measurements, params, **options)
-    if estimator == "pose":
+        result = identify_two_step(model, measurements, params, **options)
+    elif estimator == "pose":
         from .pose_estimator import identify_pose
-        return identify_pose(model, measurements, params, **options)
-    raise ValueError(f"unknown estimator {estimator!r}; choose one of {', '.join(ESTIMATORS)}")
+        result = identify_pose(model, measurements, params, **options)
+    else:
+        raise ValueError(f"unknown estimator {estimator!r}; choose one of "
+                         f"{', '.join(ESTIMATORS)}")
+    return with_plausibility(model, measurements, result)
+
+
+def with_plausibility(model, measurements, result):
+    """``result`` with the :mod:`~doe_calib.plausibility` findings added to its warnings,
+    each also issued as a :class:`~doe_calib.errors.PlausibilityWarning`."""
+    findings = plausibility.check(model, measurements, result)
+    for f in findings:
+        warnings.warn(f, PlausibilityWarning, stacklevel=3)
+    return replace(result, warnings=result.warnings + findings) if findings else result
 
 
 def identify_quietly(model, measurements, params=None, **options):

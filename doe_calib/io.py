@@ -47,6 +47,10 @@ _Q_TOL = 1e-9  # file units: rows of one pose agree on q to this
 #: Column → (lowest, highest, unit) of a plausible value; outside is a unit or typing error.
 PLAUSIBLE = {"temperature": (-50.0, 150.0, "°C")}
 _DELIMITERS = (",", ";", "\t")  # field separators a header may use
+#: σ (mm) of the readings of a file without σ, until identification estimates it.
+PROVISIONAL_SIGMA_MM = 1.0
+#: Columns ``doe-calib predict`` adds: predicted std of each coordinate (mm); ignored on reading.
+PREDICTED_STD = ("std_x", "std_y", "std_z")
 
 
 @dataclass
@@ -269,7 +273,9 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
     tool : Tool
         Gives the marker names.
     sigma_mm : float, optional
-        σ (mm) of rows without a ``sigma`` value.
+        σ (mm) of rows without a ``sigma`` value. With neither (no column, no
+        σ), σ is unknown: a provisional :data:`PROVISIONAL_SIGMA_MM` is used and
+        ``sigma_estimated`` is set, so identification estimates σ from the residuals.
     skip_bad : bool
         Drop bad rows, reporting each in ``dropped``, instead of raising.
     require_xyz : bool
@@ -294,12 +300,11 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
     qcols = _joint_columns(robot)
     required = ["pose", *qcols, "marker", *(XYZ if require_xyz else ())]
     optional = [*WRENCH, "temperature", "sigma", "session", *_approach_columns(robot),
-                *(() if require_xyz else XYZ)]
+                *(() if require_xyz else XYZ), *PREDICTED_STD]
     _check_columns(table, required, optional, header_line)
     explicit = _check_approach_columns(table, robot, header_line)
-    if "sigma" not in table.columns and sigma_mm is None:
-        raise DataError("no 'sigma' column and no σ given: pass --sigma MM", table.path,
-                        header_line)
+    estimated = "sigma" not in table.columns and sigma_mm is None
+    sigma_mm = PROVISIONAL_SIGMA_MM if estimated else sigma_mm
     if sigma_mm is not None and not sigma_mm > 0:
         raise DataError(f"σ must be positive, got {sigma_mm} mm", table.path)
     first_q, seen, notes = {}, {}, []
@@ -360,10 +365,23 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
     cfg = Configurations.from_arrays(q, np.array([v[1] for v in first.values()]),
                                      np.array([[v[2]] for v in first.values()]),
                                      [k[0] for k in first], approach)
-    return Measurements(cfg, np.array(config), np.array([p[4] for _, p in parsed]),
+    meas = Measurements(cfg, np.array(config), np.array([p[4] for _, p in parsed]),
                         np.array([p[5] for _, p in parsed]), np.array([p[6] for _, p in parsed]),
                         np.array([line for line, _ in parsed]), table.path, tuple(dropped),
-                        tuple(notes), session)
+                        tuple(notes), session, estimated)
+    return _with_unit_check(meas, robot)
+
+
+def _with_unit_check(meas, robot) -> Measurements:
+    """``meas`` with a warning first when its x, y, z look like metres (plausibility)."""
+    from dataclasses import replace
+
+    from .plausibility import xyz_in_metres
+
+    finding = xyz_in_metres(meas.xyz, robot)
+    if finding is None:
+        return meas
+    return replace(meas, warnings=(f"{meas.source}: {finding}",) + meas.warnings)
 
 
 def read_design(path, robot) -> Configurations:
@@ -455,12 +473,14 @@ def _approach_fields(cfg, c) -> list[str]:
     return [str(int(a)) for a in cfg.approach[c]]
 
 
-def write_measurements(path, measurements, robot, tool) -> None:
+def write_measurements(path, measurements, robot, tool, std=None) -> None:
     """Write readings as a measurement CSV (deg/mm, mm, N, N·m), exactly re-readable.
 
     The approach columns are written only when reading back would not derive
     the same directions from the order of the rows (module notes); the
     ``session`` column only when the readings come from several sessions.
+    ``std`` (K, 3), m: a prediction's standard deviation of each coordinate,
+    written as the :data:`PREDICTED_STD` columns in mm (ignored on reading).
     """
     cfg = measurements.configurations
     with_temp = bool(np.isfinite(cfg.temperature).any())
@@ -472,7 +492,8 @@ def write_measurements(path, measurements, robot, tool) -> None:
     header = ["pose", *_joint_columns(robot), *WRENCH, "marker", *XYZ,
               *(["temperature"] if with_temp else []), "sigma",
               *(_approach_columns(robot) if with_approach else []),
-              *(["session"] if with_session else [])]
+              *(["session"] if with_session else []), *(PREDICTED_STD if std is not None else [])]
+    std_mm = None if std is None else np.asarray(std, float) * 1000.0
     rows = []
     for c, j, xyz, s in zip(measurements.config, measurements.marker, measurements.xyz,
                             measurements.sigma):
@@ -481,7 +502,8 @@ def write_measurements(path, measurements, robot, tool) -> None:
                      *map(repr, map(float, xyz * 1000.0)), *(temp if with_temp else []),
                      repr(float(s * 1000.0)),
                      *(_approach_fields(cfg, c) if with_approach else []),
-                     *([sessions[c]] if with_session else [])])
+                     *([sessions[c]] if with_session else []),
+                     *(map(repr, map(float, std_mm[len(rows)])) if std is not None else [])])
     _write(path, "doe_calib measurements: q in deg (mm for prismatic joints), x/y/z and sigma "
                  "in mm, forces in N, moments in N·m, temperature in °C", header, rows)
 

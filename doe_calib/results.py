@@ -42,6 +42,9 @@ class IdentificationResult:
         The a-priori σ used where a row did not give its own (mm).
     warnings : tuple of str
         Numerical trouble reported during the fit, in words.
+    sigma_estimated : bool
+        True when no σ was given: ``sigma_mm`` is then σ̂, estimated from the
+        residuals, and the covariance is for it (``sigma_ratio`` is 1).
     """
 
     robot: Robot
@@ -56,6 +59,7 @@ class IdentificationResult:
     n_observations: int
     sigma_mm: float
     warnings: tuple = field(default=())
+    sigma_estimated: bool = False
 
     @property
     def free_names(self) -> list[str]:
@@ -94,8 +98,11 @@ class IdentificationResult:
                  f"robot {self.robot.name} ({self.robot.n_joints} joints), "
                  f"{self.tool.n_markers} markers, {self.n_observations} observations",
                  f"residual RMS {self.residuals['rms_mm']:.4f} mm, max 3-D "
-                 f"{self.residuals['max_3d_mm']:.4f} mm; σ = {self.sigma_mm:g} mm a priori, "
-                 f"σ̂ = {self.sigma_ratio * self.sigma_mm:.4g} mm a posteriori",
+                 f"{self.residuals['max_3d_mm']:.4f} mm; " + (
+                     f"σ estimated from the residuals: {self.sigma_mm:.4g} mm"
+                     if self.sigma_estimated else
+                     f"σ = {self.sigma_mm:g} mm a priori, "
+                     f"σ̂ = {self.sigma_ratio * self.sigma_mm:.4g} mm a posteriori"),
                  f"{self.convergence['message']}", "",
                  f"{'parameter':<22}{'value':>14}{'± std':>12}  {'unit':<12}{'nominal':>12}"]
         std = self.std()
@@ -131,6 +138,7 @@ class IdentificationResult:
                                 "matrix": self.correlation().tolist()},
                 "sigma_mm": self.sigma_mm, "sigma_ratio": self.sigma_ratio,
                 "sigma_a_posteriori_mm": self.sigma_ratio * self.sigma_mm,
+                "sigma_estimated": self.sigma_estimated,
                 "n_observations": self.n_observations,
                 "residuals": self.residuals, "convergence": self.convergence,
                 "warnings": list(self.warnings),
@@ -150,7 +158,8 @@ class IdentificationResult:
         return cls(robot, tool, d["model"], d["estimator"], params,
                    np.array(d["covariance_si"], float).reshape(int(params.free.sum()), -1),
                    float(d["sigma_ratio"]), d["residuals"], d["convergence"],
-                   int(d["n_observations"]), float(d["sigma_mm"]), tuple(d.get("warnings", ())))
+                   int(d["n_observations"]), float(d["sigma_mm"]), tuple(d.get("warnings", ())),
+                   bool(d.get("sigma_estimated", False)))
 
     @classmethod
     def from_json(cls, path) -> "IdentificationResult":

@@ -182,10 +182,27 @@ class Robot:
         chain.reverse()
         if not chain:
             raise ModelError(f"{path}: no actuated joint between the root and link {frame.name!r}")
+        _refuse_mimic(path, [model.names[j] for j in chain])
         bodies = _rigid_bodies(model, chain)
         joints = tuple(_joint_from_model(model, j, path, bodies[j]) for j in chain)
         return cls(model.name, joints, frame.name,
                    tuple(frame.placement.homogeneous.ravel()), str(path))
+
+
+def _refuse_mimic(path, chain_joints) -> None:
+    """Raise a ModelError naming the first chain joint that ``<mimic>``s another."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError:
+        return  # Pinocchio read it; nothing more to check here
+    mimic = [j.get("name") for j in root.iter("joint") if j.find("mimic") is not None]
+    for name in chain_joints:
+        if name in mimic:
+            raise ModelError(f"{path}: joint {name!r} is a <mimic> joint (it copies another "
+                             f"joint); mimic joints are not supported in the chain: make it a "
+                             f"fixed joint or an independent one")
 
 
 def _finite_or_none(x: float):

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from .errors import DataError
+from .errors import DataError, ModelError
 
 
 @dataclass(frozen=True)
@@ -109,5 +109,17 @@ class Tool:
         if len(names) < 3:
             raise DataError(f"a tool needs at least 3 markers to fix the flange orientation; "
                             f"found {len(names)}", path, top["markers"].start_mark.line + 1, 1)
+        _check_layout(positions, path)
         flange = top["flange"].value if "flange" in top else None
         return cls(tuple(names), tuple(positions), flange, str(path))
+
+
+def _check_layout(positions, path) -> None:
+    """Refuse markers that cannot fix the flange orientation: all on one line or one point."""
+    from .plausibility import marker_condition
+
+    if not np.isfinite(marker_condition(positions)):
+        raise ModelError(f"{path}: the markers are collinear or coincident (condition number "
+                         f"of their centred positions is infinite), so the rotation about "
+                         f"their line is not fixed: the tool needs at least 3 markers not on "
+                         f"one line")

@@ -100,9 +100,11 @@ def test_bad_measurement_file(rt, tmp_path, lines, where, words):
     assert "m.csv" in msg and where in msg and words in msg, msg
 
 
-def test_no_sigma_anywhere(rt, tmp_path):
-    msg = _error(tmp_path, rt, HEADER, GOOD, sigma_mm=None)
-    assert "--sigma" in msg
+def test_no_sigma_anywhere_marks_sigma_unknown(rt, tmp_path):
+    meas = read_measurements(_write(tmp_path, HEADER, GOOD), *rt, sigma_mm=None)
+    assert meas.sigma_estimated and meas.sigma.tolist() == [1e-3]
+    given = read_measurements(_write(tmp_path, HEADER, GOOD), *rt, sigma_mm=0.02)
+    assert not given.sigma_estimated and given.sigma.tolist() == [2e-5]
 
 
 def test_sigma_column_must_be_positive(rt, tmp_path):

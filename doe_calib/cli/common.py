@@ -101,13 +101,32 @@ def excluding(meas, poses: str | None):
     return kept
 
 
-def model_and_measurements(args):
+def model_and_measurements(args, estimate_sigma: bool = True):
     """The model (``--model``) and the measurements (``--data``, ``--sigma``, ``--skip-bad``,
-    ``--exclude-poses``)."""
+    ``--exclude-poses``).
+
+    With no σ given (no ``--sigma``, no ``sigma`` column) and ``estimate_sigma``,
+    σ is set to the σ̂ of the starting model (:func:`with_estimated_sigma`).
+    """
     robot, tool = load_robot_tool(args)
     model = build_model(robot, tool, args.model)
     meas = read_data(args.data, robot, tool, args.sigma, args.skip_bad)
-    return model, excluding(meas, getattr(args, "exclude_poses", None))
+    meas = excluding(meas, getattr(args, "exclude_poses", None))
+    if estimate_sigma and meas.sigma_estimated:
+        meas = with_estimated_sigma(model, meas)
+    return model, meas
+
+
+def with_estimated_sigma(model, meas):
+    """``meas`` with σ set to the σ̂ of one identification of ``model``, said on stderr."""
+    from dataclasses import replace
+
+    from ..identify import identify_quietly
+
+    sigma_mm = identify_quietly(model, meas).sigma_mm
+    print(f"σ not given: estimated from the residuals of the starting model, {sigma_mm:.3g} mm",
+          file=sys.stderr)
+    return replace(meas, sigma=np.full(len(meas), sigma_mm / 1000.0), sigma_estimated=False)
 
 
 def parse_floats(text: str, n: int, what: str) -> np.ndarray:

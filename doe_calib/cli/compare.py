@@ -22,8 +22,8 @@ def add_arguments(c):
     c.add_argument("--task-point", default="0,0,0",
                    help="X,Y,Z of the task point in the flange frame, mm (default the flange)")
     c.add_argument("--sigma", type=positive("--sigma", "mm"), help="tracker σ per coordinate, "
-                   "mm: designs are "
-                   "predicted with it (default 0.02), results rescaled to it (default: their own)")
+                   "mm: designs are predicted with it (default: the σ the design was made "
+                   "for), results rescaled to it (default: their own)")
     c.add_argument("--out", help="write the tables (Markdown) to this file")
     c.add_argument("--plot", help="write a bar plot of the std per parameter (PNG)")
     c.add_argument("--report", metavar="FILE.html", help="also write an HTML report (tables "

@@ -20,7 +20,8 @@ def add_arguments(c):
     data_argument(c)
     c.add_argument("--estimator", choices=ESTIMATORS, default="point")
     c.add_argument("--sigma", type=positive("--sigma", "mm"),
-                   help="tracker σ per coordinate, mm, for rows without a sigma column")
+                   help="tracker σ per coordinate, mm, for rows without a sigma column "
+                        "(with neither, σ is estimated from the residuals)")
     c.add_argument("--fix", help="comma-separated parameters or blocks to hold at nominal")
     c.add_argument("--free", help="comma-separated parameters or blocks to estimate")
     c.add_argument("--normalisation", type=positive("--normalisation", "m/rad"),
@@ -37,7 +38,7 @@ OUTPUTS = {"out": "file", "report": "file"}
 
 
 def run(args):
-    model, meas = model_and_measurements(args)
+    model, meas = model_and_measurements(args, estimate_sigma=False)  # identify says σ̂ itself
     params = fix_and_free(model.nominal(), args.fix, args.free)
     options = {"normalisation": args.normalisation} if args.estimator == "pose" else {}
     with warnings.catch_warnings(record=True) as caught:

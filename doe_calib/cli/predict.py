@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..evaluation import marker_positions
+from ..evaluation import observation_matrix
 from ..io import write_measurements
 from ..jsonfile import strict_json
 from ..measurement import build_model
@@ -22,7 +22,8 @@ def add_arguments(c):
     c.add_argument("--data", required=True, nargs="+", metavar="CSV",
                    help="measurement-format CSV(s) of the poses (x,y,z used for the error if "
                         "present)")
-    c.add_argument("--out", required=True, help="CSV to write with the model's x,y,z")
+    c.add_argument("--out", required=True, help="CSV to write with the model's x,y,z and "
+                                                "their predicted std_x,std_y,std_z (mm)")
     c.add_argument("--json", action="store_true", help="print the error figures as JSON "
                                                        "(null when the data have no x,y,z)")
     effect_file_argument(c)   # a result whose model names a user effect needs its file
@@ -31,14 +32,28 @@ def add_arguments(c):
 OUTPUTS = {"out": "file"}
 
 
+def predicted_markers(model, result, meas):
+    """Predicted marker position of each reading and its std per coordinate, both (K, 3), m.
+
+    The std propagates the result's covariance of the free parameters (for its
+    σ, a priori; σ̂ when σ was estimated): ``diag(B Σ Bᵀ)`` with ``B`` the
+    observation matrix of the reading.
+    """
+    x, b = observation_matrix(model, result.parameters.values, meas.configurations)
+    bf = b[meas.config, meas.marker][..., result.parameters.free]
+    var = np.einsum("kif,fg,kig->ki", bf, result.covariance, bf)
+    return x[meas.config, meas.marker], np.sqrt(np.clip(var, 0.0, None))
+
+
 def run(args):
     load_effect_files(args.effect_file)
     result = IdentificationResult.from_json(args.result)
     model = build_model(result.robot, result.tool, result.model)
     meas = read_data(args.data, result.robot, result.tool, sigma_mm=1.0, require_xyz=False)
-    x = marker_positions(model, result.parameters.values, meas.configurations)
-    predicted = x[meas.config, meas.marker]
-    write_measurements(args.out, replace(meas, xyz=predicted), result.robot, result.tool)
+    predicted, std = predicted_markers(model, result, meas)
+    sigma = np.full(len(meas), result.sigma_mm / 1000.0)
+    write_measurements(args.out, replace(meas, xyz=predicted, sigma=sigma), result.robot,
+                       result.tool, std=std)
     error = None
     if np.all(np.isfinite(meas.xyz)):
         err = (meas.xyz - predicted) * 1000.0
@@ -52,6 +67,5 @@ def run(args):
     elif error is not None:
         print(f"{len(meas)} readings: RMS {error['rms_mm']:.4f} mm per coordinate, "
               f"3-D RMS {error['rms_3d_mm']:.4f} mm, mean 3-D {error['mean_3d_mm']:.4f} mm, "
-              f"max 3-D {error['max_3d_mm']:.4f} mm "
-              f"(model {result.model})")
+              f"max 3-D {error['max_3d_mm']:.4f} mm (model {result.model})")
     print(f"written: {args.out}", file=sys.stderr)

@@ -4,6 +4,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from ..diagnosis.refine import refine
 from ..jsonfile import strict_json
 from ..measurement import build_model
@@ -38,7 +40,8 @@ def run(args):
     model, meas = model_and_measurements(args)
     val = None
     if args.validation:
-        val = read_data(args.validation, model.robot, model.tool, args.sigma)
+        sigma_mm = args.sigma or float(np.median(meas.sigma)) * 1000.0  # σ̂ when not given
+        val = read_data(args.validation, model.robot, model.tool, sigma_mm)
     print(f"refining from {model.spec or '(base + markers)'} on {len(meas)} readings…",
           file=sys.stderr)
     out = refine(model, meas, val, level=args.level, max_steps=args.max_steps,

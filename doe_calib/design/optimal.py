@@ -168,4 +168,5 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
                         efficiencies, criteria, equivalence, cands.to_dict(),
                         {} if refinement is None else refinement.to_dict(), coverage,
                         {"designs": _RANDOM_DESIGNS, "singular_fraction": singular,
-                         "equivalent_poses": None if equivalent is None else float(equivalent)})
+                         "equivalent_poses": None if equivalent is None else float(equivalent)},
+                        sigma_mm=1000.0 * sigma)

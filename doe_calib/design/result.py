@@ -61,6 +61,9 @@ class DesignResult:
         every parameter) and ``equivalent_poses`` (how many random poses are as
         precise, D criterion, against their median; None when that median is
         singular).
+    sigma_mm : float or None
+        The tracker σ per coordinate (mm) the predicted std are for (None in
+        design files written before it was stored).
     """
 
     robot: Robot
@@ -81,6 +84,7 @@ class DesignResult:
     refinement: dict = field(default_factory=dict)
     coverage: dict = field(default_factory=dict)
     versus_random: dict = field(default_factory=dict)
+    sigma_mm: float | None = None
 
     def poses(self) -> list[dict]:
         """One entry per pose: id, q in deg (mm for prismatic joints) and its wrenches."""
@@ -138,7 +142,7 @@ class DesignResult:
                 "efficiencies": self.efficiencies, "criteria": self.criteria,
                 "equivalence": self.equivalence, "candidates": self.candidates,
                 "refinement": self.refinement, "coverage": self.coverage,
-                "versus_random": self.versus_random,
+                "versus_random": self.versus_random, "sigma_mm": self.sigma_mm,
                 "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
 
     def to_json(self, path=None) -> str:
@@ -158,7 +162,8 @@ class DesignResult:
                    d.get("constraints", {}), tuple(d.get("notes", ())),
                    *(d.get(k, {}) for k in ("efficiencies", "criteria", "equivalence",
                                             "candidates", "refinement", "coverage",
-                                            "versus_random")))
+                                            "versus_random")),
+                   sigma_mm=None if d.get("sigma_mm") is None else float(d["sigma_mm"]))
 
     @classmethod
     def from_json(cls, path) -> "DesignResult":
