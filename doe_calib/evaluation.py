@@ -7,16 +7,18 @@ evaluated through CasADi's zero-copy
 buffers, so numpy arrays go in and out without DM conversion. Mapped
 Functions and their buffers are cached per (Function, M), the least recently
 used dropped beyond a count or a total buffer size (diagnosis builds a model
-per candidate effect: their buffers must not pile up).
+per candidate effect: their buffers must not pile up). The cache is per
+thread: a Dask worker running several tasks at once never shares a buffer.
 """
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 
 import casadi as ca
 import numpy as np
 
-_CACHE: OrderedDict = OrderedDict()
+_LOCAL = threading.local()
 _CACHE_SIZE = 64
 _CACHE_BYTES = 256 * 2 ** 20
 
@@ -50,16 +52,19 @@ class _Batch:
 
 
 def _batch(function: ca.Function, m: int, shared: tuple) -> _Batch:
+    cache = getattr(_LOCAL, "cache", None)
+    if cache is None:
+        cache = _LOCAL.cache = OrderedDict()
     key = (id(function), m, shared)
-    hit = _CACHE.get(key)
-    if hit is not None and hit[0] is function:
-        _CACHE.move_to_end(key)
+    hit = cache.get(key)
+    if hit is not None and hit[0] is function:  # the Function itself, not a reused id
+        cache.move_to_end(key)
         return hit[1]
     batch = _Batch(function, m, shared)
-    _CACHE[key] = (function, batch)
-    while len(_CACHE) > 1 and (len(_CACHE) > _CACHE_SIZE or
-                               sum(b.nbytes for _, b in _CACHE.values()) > _CACHE_BYTES):
-        _CACHE.popitem(last=False)
+    cache[key] = (function, batch)
+    while len(cache) > 1 and (len(cache) > _CACHE_SIZE or
+                              sum(b.nbytes for _, b in cache.values()) > _CACHE_BYTES):
+        cache.popitem(last=False)
     return batch
 
 

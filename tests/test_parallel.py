@@ -44,3 +44,27 @@ def test_unreachable_scheduler_is_reported_in_words():
     pytest.importorskip("distributed")
     with pytest.raises(DoeCalibError, match="cannot reach the Dask scheduler"):
         run_tasks(_draw, [1, 2], scheduler="tcp://127.0.0.1:9", connect_timeout=1)
+
+
+
+def test_threads_evaluating_one_model_at_once_get_their_own_numbers(robot6, tool6):
+    """What a Dask worker with several threads does: evaluation buffers are per thread."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from doe_calib import Configurations, build_model
+    from doe_calib.evaluation import marker_positions
+    from doe_calib.simulate import random_configurations
+
+    rng = np.random.default_rng(6)
+    model = build_model(robot6, tool6, "joint_offset")
+    cfg = Configurations.from_arrays(random_configurations(robot6, 400, rng))
+    values = [model.nominal().values + rng.normal(0, 1e-2, model.n_parameters)
+              for _ in range(8)]
+    expected = [marker_positions(model, v, cfg) for v in values]
+
+    def check(i):
+        return all(np.array_equal(marker_positions(model, values[i % 8], cfg), expected[i % 8])
+                   for _ in range(30))
+
+    with ThreadPoolExecutor(4) as pool:
+        assert all(pool.map(check, range(16)))
