@@ -134,7 +134,7 @@ def _gross_errors(test, flagged, follow, n_poses):
     return inside >= 0.5 * excess and (not follow or follow[0].r2 < FOLLOWS_R2)
 
 
-def _adequacy_words(test, tolerance):
+def _adequacy_words(test):
     lo, hi = test.ratio_interval()
     return (f"σ̂/σ = {test.ratio:.3f} (95 % interval {lo:.3f}–{hi:.3f}; χ² p = "
             f"{test.p_value:.2g}, σ {test.sigma_source} {test.sigma_mm:.3g} mm)")
@@ -142,7 +142,7 @@ def _adequacy_words(test, tolerance):
 
 def _verdict(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross, level,
              min_gain, tolerance):
-    ratio = _adequacy_words(test, tolerance)
+    ratio = _adequacy_words(test)
     cv_words = f"cross-validated RMS {cv:.3g} mm ({folds.description})"
     if proposed is not None:
         words = describe(proposed, model.robot)

@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 from ..effects import parse_effect
 from ..identify import identify_quietly
 from ..jsonfile import read_json, write_json
-from ..measurement import build_model
 from .candidates import augmented
 from .cross_validation import validation_rms
 from .engine import describe, diagnose
@@ -154,7 +153,6 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
             stopped = f"stopped after {max_steps} added effects ({best.spec} would be next)"
             break
         model, start = augmented(model, fit.parameters, parse_effect(best.spec))
-        model = build_model(model.robot, model.tool, model.effects)
         fit = identify_quietly(model, measurements, start, register=False)
         added, fitted = best.spec, best.fitted
         reason = (f"added {best.spec}, {describe(best, model.robot)}: "

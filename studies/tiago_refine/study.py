@@ -50,9 +50,8 @@ def held_out_session(urdf, data_dir, held: int, work: Path, max_steps: int = 5) 
     _run(["refine", *_common(urdf, data_dir), "--model", START, "--data", *train,
           "--validation", str(files[held]), "--max-steps", str(max_steps), "--out", str(result)])
     history = json.loads((work / f"{name}_result_refine.json").read_text())
-    start = _run(["identify", *_common(urdf, data_dir), "--model", START, "--data", *train,
-                  "--out", str(work / f"{name}_start.json")])
-    del start
+    _run(["identify", *_common(urdf, data_dir), "--model", START, "--data", *train,
+          "--out", str(work / f"{name}_start.json")])
     errors = {}
     for tag, path in (("start", work / f"{name}_start.json"), ("refined", result)):
         out = json.loads(_run(["predict", "--result", str(path), "--data", str(files[held]),
