@@ -1,9 +1,10 @@
 """Identification from all 3·m·n marker coordinates (the ``point`` estimator) and
-what every estimator shares: weighted residuals, rank analysis, result assembly.
+what every estimator shares: start values, rank analysis, result assembly.
 
-The weighted residual of reading k (configuration c, marker j) is
-``r_k = (y_k − x_cj(p)) / σ_k``; its Jacobian is ``−B_cj / σ_k`` with ``B`` the
-model's observation matrix (CasADi, never finite differences).
+The weighted residuals and their Jacobian (:mod:`doe_calib.weighted`) are
+taken a block of configurations at a time and kept only as their QR factor
+(:mod:`doe_calib.least_squares`), so memory does not grow with the number of
+readings.
 """
 from __future__ import annotations
 
@@ -12,36 +13,26 @@ import warnings
 from dataclasses import replace
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from . import plausibility
 from .errors import (ConditioningWarning, ConvergenceWarning, DataError,
                      IdentifiabilityWarning, PlausibilityWarning, SolverError)
-from .evaluation import marker_positions, observation_matrix
+from .evaluation import marker_positions
 from .identifiability import analyse
+from .least_squares import levenberg_marquardt
+from .measurement import for_workload
 from .registration import register
 from .results import IdentificationResult
 from .rotations import matrix_to_rotation_vector
+from .weighted import reduce_jacobian, residual_norm2
 
 log = logging.getLogger(__name__)
 
 ESTIMATORS = ("point", "two-step", "pose")
 _COND_WARN = 1e6
-
-
-def weighted_residual(model, measurements, values, jacobian: bool = True):
-    """Weighted residuals r (3K,) and, if asked, ∂r/∂p (3K, P) for all P parameters."""
-    cfg = measurements.configurations
-    if jacobian:
-        x, b = observation_matrix(model, values, cfg)
-    else:
-        x, b = marker_positions(model, values, cfg), None
-    c, j, s = measurements.config, measurements.marker, measurements.sigma[:, None]
-    r = ((measurements.xyz - x[c, j]) / s).ravel()
-    if not jacobian:
-        return r, None
-    jac = -(b[c, j] / s[:, :, None]).reshape(3 * len(measurements), -1)
-    return r, jac
+#: Passes over every configuration a typical fit makes (start, Jacobians, trial
+#: steps, result): what :func:`~doe_calib.measurement.for_workload` is told.
+_PASSES = 10
 
 
 def register_base(model, measurements, params):
@@ -76,8 +67,8 @@ def fix_unidentifiable(model, measurements, params, tol: float = 1e-7):
 
     Returns the new parameter set and the warnings issued, in words.
     """
-    _, jac = weighted_residual(model, measurements, params.values)
-    ident = analyse(jac, params, tol=tol)
+    red = reduce_jacobian(model, measurements, params.values)
+    ident = analyse(red.r_factor, params, tol=tol)  # RᵀR = JᵀJ: same columns' geometry
     notes = []
     if ident.dependent:
         names = [n for n, _ in ident.dependent]
@@ -118,31 +109,44 @@ def residual_statistics(model, measurements, values) -> dict:
     """Residual RMS (per coordinate) and max 3-D error, overall, per marker and per pose, mm."""
     x = marker_positions(model, values, measurements.configurations)
     e = (measurements.xyz - x[measurements.config, measurements.marker]) * 1000.0
-    d = np.linalg.norm(e, axis=1)
+    sq, d = np.sum(e ** 2, axis=1), np.linalg.norm(e, axis=1)
 
-    def stats(mask):
-        return {"rms_mm": float(np.sqrt(np.mean(e[mask] ** 2))), "max_3d_mm": float(d[mask].max()),
-                "n": int(mask.sum())}
+    def stats(groups, names):
+        n = np.bincount(groups, minlength=len(names))
+        ss = np.bincount(groups, sq, minlength=len(names))
+        worst = np.full(len(names), -np.inf)
+        np.maximum.at(worst, groups, d)
+        return {name: {"rms_mm": float(np.sqrt(ss[k] / (3 * n[k]))),
+                       "max_3d_mm": float(worst[k]), "n": int(n[k])}
+                for k, name in enumerate(names) if n[k]}
 
-    names = model.tool.names
-    poses = measurements.configurations.pose
-    pose_of_row = np.array([poses[c] for c in measurements.config])
-    out = stats(np.ones(len(d), bool))
-    out["per_marker"] = {names[j]: stats(measurements.marker == j)
-                         for j in np.unique(measurements.marker)}
-    out["per_pose"] = {p: stats(pose_of_row == p) for p in dict.fromkeys(pose_of_row)}
+    out = stats(np.zeros(len(d), int), ["all"])["all"]
+    out["per_marker"] = stats(measurements.marker, list(model.tool.names))
+    pose_names, pose_of_config = np.unique(np.asarray(measurements.configurations.pose, object),
+                                           return_inverse=True)
+    first = {}  # poses in order of first reading, as in the file
+    for p in np.asarray(pose_names)[pose_of_config[measurements.config]]:
+        first.setdefault(p, None)
+    per_pose = stats(pose_of_config[measurements.config], list(pose_names))
+    out["per_pose"] = {p: per_pose[p] for p in first}
     return out
 
 
-def finish(model, measurements, params, estimator, convergence, notes, covariance=None):
-    """Assemble the result: covariance σ²(BᵀWB)⁻¹, σ̂, residual statistics."""
-    r, jac = weighted_residual(model, measurements, params.values)
-    jf = jac[:, params.free]
-    n_free = jf.shape[1]
-    if covariance is None:
-        covariance = np.linalg.pinv(jf.T @ jf)
-    dof = len(r) - n_free
-    ratio = float(np.sqrt(r @ r / dof)) if dof > 0 else float("nan")
+def finish(model, measurements, params, estimator, convergence, notes, covariance=None,
+           norm2=None):
+    """Assemble the result: covariance σ²(BᵀWB)⁻¹, σ̂, residual statistics.
+
+    ``covariance`` (of the free parameters, SI) and ``norm2`` (‖r‖² at
+    ``params``) are computed here, a block of readings at a time, unless given.
+    """
+    n_free = int(params.free.sum())
+    if covariance is None or norm2 is None:
+        red = reduce_jacobian(model, measurements, params.values, params.free)
+        covariance = _covariance(red.r_factor) if covariance is None else covariance
+        norm2 = red.norm2 if norm2 is None else norm2
+    n_obs = 3 * len(measurements)
+    dof = n_obs - n_free
+    ratio = float(np.sqrt(norm2 / dof)) if dof > 0 else float("nan")
     sigma_mm = float(np.median(measurements.sigma) * 1000.0)
     estimated = bool(measurements.sigma_estimated and np.isfinite(ratio))
     if estimated:  # σ unknown: σ̂ becomes σ and scales the covariance (statsmodels' scale)
@@ -150,12 +154,19 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
         notes = [f"σ estimated from the residuals: {sigma_mm:.3g} mm"] + list(notes)
     return IdentificationResult(
         model.robot, model.tool, model.spec, estimator, params, covariance, ratio,
-        residual_statistics(model, measurements, params.values), convergence, len(r),
+        residual_statistics(model, measurements, params.values), convergence, n_obs,
         sigma_mm, tuple(notes), estimated)
 
 
+def _covariance(r_factor, scale=None) -> np.ndarray:
+    """(JᵀJ)⁺ from R (RᵀR = JᵀJ) of the Jacobian scaled by ``scale``, in unscaled units."""
+    r_inv = np.linalg.pinv(r_factor)
+    cov = r_inv @ r_inv.T
+    return cov if scale is None else cov * np.outer(scale, scale)
+
+
 def identify_point(model, measurements, params=None, max_iterations: int = 200,
-                   register: bool = True) -> IdentificationResult:
+                   register: bool = True, progress=None) -> IdentificationResult:
     """Levenberg–Marquardt on all marker coordinates (the paper's approach #2).
 
     Parameters
@@ -168,43 +179,41 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
         Jacobian evaluations allowed.
     register : bool
         Start the base pose from a point-set registration.
+    progress : callable(stage, note), optional
+        Told of each iteration (weighted RMS of the residuals).
     """
     params, notes = prepare(model, measurements, params, register)
     free = params.free
     scale = params.scales[free]
-    cache = {}
+    n_obs = 3 * len(measurements)
 
-    def evaluate(x, jacobian: bool):
-        """(r, J) at x; J only when asked (trial steps need the residual alone)."""
-        key = x.tobytes()
-        hit = cache.get(key)
-        if hit is None or (jacobian and hit[1] is None):
-            cache.clear()
-            cache[key] = hit = weighted_residual(model, measurements,
-                                                 params.with_free_values(x).values, jacobian)
-        return hit
+    def values(x):
+        return params.with_free_values(x).values
 
-    sol = least_squares(lambda x: evaluate(x, False)[0], params.free_values(),
-                        jac=lambda x: evaluate(x, True)[1][:, free], method="lm", x_scale=scale,
-                        xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=max_iterations * 10)
+    sol = levenberg_marquardt(
+        lambda x: residual_norm2(model, measurements, values(x)),
+        lambda x: reduce_jacobian(model, measurements, values(x), free, scale),
+        params.free_values(), scale, max_iterations=max_iterations,
+        progress=None if progress is None else lambda k, f: progress(
+            "Levenberg–Marquardt", f"iteration {k}, weighted RMS {np.sqrt(f / n_obs):.4g}"))
     if not np.all(np.isfinite(sol.x)):
         raise SolverError("the identification diverged (non-finite parameters); check the "
                           "tool file and the units of the measurement file")
-    converged = sol.status > 0
-    if not converged:
+    if not sol.converged:
         msg = f"Levenberg–Marquardt stopped before converging: {sol.message}"
         warnings.warn(msg, ConvergenceWarning, stacklevel=2)
         notes.append(msg)
-    log.info("point estimator: %d evaluations, status %d", sol.nfev, sol.status)
-    convergence = {"converged": bool(converged), "iterations": int(sol.njev or sol.nfev),
-                   "evaluations": int(sol.nfev), "status": int(sol.status),
-                   "message": f"Levenberg–Marquardt: {sol.message}",
-                   "residual_norm2": float(2.0 * sol.cost)}
+    log.info("point estimator: %d Jacobian and %d residual passes, status %d", sol.iterations,
+             sol.evaluations, sol.status)
+    convergence = {"converged": sol.converged, "iterations": sol.iterations,
+                   "evaluations": sol.evaluations, "status": sol.status,
+                   "message": f"Levenberg–Marquardt: {sol.message}", "residual_norm2": sol.norm2}
     return finish(model, measurements, params.with_free_values(sol.x), "point", convergence,
-                  notes)
+                  notes, _covariance(sol.reduction.r_factor, scale), sol.norm2)
 
 
-def identify(model, measurements, params=None, estimator: str = "point", **options):
+def identify(model, measurements, params=None, estimator: str = "point", progress=None,
+             **options):
     """Identify the model's parameters from marker readings.
 
     Parameters
@@ -221,6 +230,8 @@ def identify(model, measurements, params=None, estimator: str = "point", **optio
         ``two-step``: the paper's alternation of base+markers and robot
         parameters. ``pose``: full poses reconstructed from the markers, only
         for comparison (``normalisation`` option, m/rad).
+    progress : callable(stage, note), optional
+        Told of long steps (compiling the model, each iteration of ``point``).
 
     Returns
     -------
@@ -230,8 +241,9 @@ def identify(model, measurements, params=None, estimator: str = "point", **optio
         ``measurements.sigma_estimated``, σ is estimated from the residuals:
         ``sigma_mm`` is σ̂, the covariance is scaled to it, and the result says so.
     """
+    model = for_workload(model, _PASSES * len(measurements.configurations), progress)
     if estimator == "point":
-        result = identify_point(model, measurements, params, **options)
+        result = identify_point(model, measurements, params, progress=progress, **options)
     elif estimator == "two-step":
         from .two_step import identify_two_step
         result = identify_two_step(model, measurements, params, **options)

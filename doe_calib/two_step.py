@@ -14,7 +14,8 @@ import warnings
 import numpy as np
 
 from .errors import ConvergenceWarning, SolverError
-from .identify import finish, prepare, weighted_residual
+from .identify import finish, prepare
+from .weighted import weighted_residual
 
 _STEP1_BLOCKS = ("base", "markers")
 

@@ -25,7 +25,7 @@ from scipy import stats
 
 from ..effects import REGISTRY, joint_index
 from ..errors import ModelError
-from ..identify import weighted_residual
+from ..weighted import weighted_residual
 from ..measurement import build_model
 
 

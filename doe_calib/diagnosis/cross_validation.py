@@ -36,7 +36,7 @@ import numpy as np
 from scipy.cluster.vq import kmeans2
 
 from ..errors import DoeCalibError
-from ..identify import weighted_residual
+from ..weighted import weighted_residual
 from .residuals import residuals
 
 GROUPINGS = ("auto", "pose", "session", "region")
