@@ -18,7 +18,7 @@ from .errors import (ConditioningWarning, ConvergenceWarning, DataError, DoeCali
                      IdentifiabilityWarning, ModelError, OptionError, SolverError)
 from .evaluation import marker_positions, observation_matrix
 from .identify import identify
-from .measurement import Model, build_model
+from .measurement import Model, ModelDescription, build_model, describe_model, for_workload
 from .parameters import Parameter, ParameterSet
 from .results import IdentificationResult
 from .robot import Robot
@@ -28,7 +28,8 @@ from .tool import Tool
 __version__ = "0.1.0"
 
 __all__ = [
-    "Robot", "Tool", "Model", "build_model", "Parameter", "ParameterSet", "Configurations",
+    "Robot", "Tool", "Model", "ModelDescription", "build_model", "describe_model",
+    "for_workload", "Parameter", "ParameterSet", "Configurations",
     "Measurements", "marker_positions", "observation_matrix", "identify",
     "IdentificationResult", "predict_covariance", "point_covariance", "CovariancePrediction",
     "simulate", "example", "DEFAULT_MODEL", "REGISTRY", "DoeCalibError", "DataError",

@@ -150,11 +150,11 @@ class IdentificationResult:
 
     @classmethod
     def from_dict(cls, d: dict) -> "IdentificationResult":
-        """Inverse of :meth:`to_dict` (rebuilds the parameter set from the model)."""
-        from .measurement import build_model
+        """Inverse of :meth:`to_dict` (the parameter set from the model's description)."""
+        from .measurement import describe_model
 
         robot, tool = Robot.from_dict(d["robot"]), Tool.from_dict(d["tool"])
-        params = build_model(robot, tool, d["model"]).nominal().from_list(d["parameters"])
+        params = describe_model(robot, tool, d["model"]).nominal().from_list(d["parameters"])
         return cls(robot, tool, d["model"], d["estimator"], params,
                    np.array(d["covariance_si"], float).reshape(int(params.free.sum()), -1),
                    float(d["sigma_ratio"]), d["residuals"], d["convergence"],

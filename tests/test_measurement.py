@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from doe_calib import Configurations, marker_positions, observation_matrix
+from doe_calib import Configurations, build_model, marker_positions, observation_matrix
 from doe_calib.simulate import random_configurations, random_truth
 
 
@@ -81,3 +81,64 @@ def test_compliance_deflects_as_k_tau(robot6, tool6, rng):
     radius = np.linalg.norm(np.cross(axis6, x0 - origin), axis=1)
     assert np.allclose(np.linalg.norm(x1 - x0, axis=1), 2 * radius * np.sin(rot_expected / 2),
                        rtol=1e-9)
+
+
+def test_one_build_per_model_and_a_description_without_one(robot6, tool6, monkeypatch):
+    import doe_calib.measurement as measurement
+    from doe_calib import describe_model
+
+    a = build_model(robot6, tool6, "joint_offset+joint_compliance")
+    assert build_model(robot6, tool6, "joint_offset+joint_compliance") is a
+    assert build_model(a.description) is a
+    assert build_model(robot6, tool6, "joint_offset") is not a
+
+    def no_build(*_):
+        raise AssertionError("the CasADi graph was built")
+
+    monkeypatch.setattr(measurement, "_build", no_build)
+    measurement._BUILT.clear()
+    d = describe_model(robot6, tool6, "joint_offset+geometry+cyclic(a2)")
+    assert [p.name for p in d.parameters] == [p.name for p in d.nominal().parameters]
+    assert d.spec.startswith("joint_offset+geometry+cyclic(a2") and d.n_parameters > 60
+
+
+def test_a_result_is_read_without_building_its_model(model6, tmp_path, monkeypatch):
+    import doe_calib.measurement as measurement
+    from doe_calib import IdentificationResult, simulate
+    from doe_calib.identify import identify_quietly
+    from doe_calib.simulate import random_configurations
+
+    rng = np.random.default_rng(2)
+    cfg = Configurations.from_arrays(random_configurations(model6.robot, 12, rng))
+    fit = identify_quietly(model6, simulate(model6, model6.nominal(), cfg, 2e-5, rng))
+    fit.to_json(tmp_path / "r.json")
+    monkeypatch.setattr(measurement, "_build", lambda *_: pytest.fail("built a model"))
+    back = IdentificationResult.from_json(tmp_path / "r.json")
+    assert np.allclose(back.parameters.values, fit.parameters.values, rtol=1e-12, atol=0)
+
+
+def test_native_code_when_the_work_pays_for_it(robot6, tool6, rng, monkeypatch):
+    from doe_calib import OptionError, for_workload
+    from doe_calib.compiled import find_compiler
+    from doe_calib.evaluation import observation_matrix
+    from doe_calib.measurement import NATIVE_WORKLOAD
+
+    model = build_model(robot6, tool6, "joint_offset")
+    monkeypatch.delenv("DOE_CALIB_COMPILE", raising=False)
+    assert for_workload(model, NATIVE_WORKLOAD - 1) is model
+    monkeypatch.setenv("DOE_CALIB_COMPILE", "never")
+    assert for_workload(model, 10 * NATIVE_WORKLOAD) is model
+    monkeypatch.setenv("DOE_CALIB_COMPILE", "sometimes")
+    with pytest.raises(OptionError, match="DOE_CALIB_COMPILE"):
+        for_workload(model, 1)
+    if find_compiler() is None:
+        pytest.skip("no C compiler here")
+    monkeypatch.setenv("DOE_CALIB_COMPILE", "auto")
+    native = for_workload(model, NATIVE_WORKLOAD)
+    assert native.native and not model.native and native.description is model.description
+    assert for_workload(model, NATIVE_WORKLOAD) is native  # built once
+    cfg = Configurations.from_arrays(robot6.lower + (robot6.upper - robot6.lower) *
+                                     rng.uniform(size=(9, 6)))
+    v = model.nominal().values + rng.normal(scale=1e-3, size=model.n_parameters)
+    for a, b in zip(observation_matrix(native, v, cfg), observation_matrix(model, v, cfg)):
+        assert np.allclose(a, b, rtol=1e-12, atol=1e-13)
