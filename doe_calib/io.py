@@ -38,12 +38,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .column_reader import Columns, read_columns
 from .data import Configurations, Measurements, approach_from_order
 from .errors import DataError
 
 WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
 XYZ = ("x", "y", "z")
-_Q_TOL = 1e-9  # file units: rows of one pose agree on q to this
+Q_TOL = 1e-9  # file units: rows of one pose agree on q to this
 #: Column → (lowest, highest, unit) of a plausible value; outside is a unit or typing error.
 PLAUSIBLE = {"temperature": (-50.0, 150.0, "°C")}
 _DELIMITERS = (",", ";", "\t")  # field separators a header may use
@@ -104,22 +105,24 @@ def _read_table(path) -> _Table:
     except OSError as exc:
         raise DataError(f"cannot read the file: {exc.strerror}", path) from exc
     text = _decode(path, data)
-    header, rows, delimiter = None, [], ","
-    for number, line in enumerate(text.splitlines(), start=1):
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        if header is None:
-            delimiter = _delimiter(line)
+    kept = [(number, line) for number, line in enumerate(text.splitlines(), start=1)
+            if line.strip() and not line.lstrip().startswith("#")]
+    if not kept:
+        raise DataError("the file is empty: expected a header row", path, 1)
+    delimiter = _delimiter(kept[0][1])
+    rows = []
+    # One physical line is one record. Without quotes one reader does every line;
+    # with them each line gets its own, so an open quote cannot swallow the next line.
+    one = csv.reader((line for _, line in kept), delimiter=delimiter) \
+        if '"' not in text else None
+    for number, line in kept:
         try:
-            fields = [f.strip() for f in next(csv.reader([line], delimiter=delimiter))]
+            fields = next(one) if one is not None else \
+                next(csv.reader([line], delimiter=delimiter))
         except csv.Error as exc:
             raise DataError(f"cannot split the line into fields ({exc})", path, number) from None
-        if header is None:
-            header = (number, fields)
-        else:
-            rows.append((number, fields))
-    if header is None:
-        raise DataError("the file is empty: expected a header row", path, 1)
+        rows.append((number, [f.strip() for f in fields]))
+    header, rows = rows[0], rows[1:]
     line, columns = header
     for i, c in enumerate(columns):
         if not c:
@@ -169,17 +172,17 @@ def _check_plausible(table, line, name, value) -> None:
                             f"{high:g} {unit}", table.path, line, table.col(name))
 
 
-def _joint_columns(robot) -> list[str]:
+def joint_columns(robot) -> list[str]:
     return [f"q{k + 1}" for k in range(robot.n_joints)]
 
 
-def _approach_columns(robot) -> list[str]:
+def approach_columns(robot) -> list[str]:
     return [f"approach{k + 1}" for k in range(robot.n_joints)]
 
 
-def _check_approach_columns(table, robot, line) -> bool:
+def _checkapproach_columns(table, robot, line) -> bool:
     """Whether the file gives the approach directions (all N columns; some is an error)."""
-    names = _approach_columns(robot)
+    names = approach_columns(robot)
     present = [c for c in names if c in table.columns]
     if present and len(present) < len(names):
         missing = [c for c in names if c not in table.columns]
@@ -192,7 +195,7 @@ def _check_approach_columns(table, robot, line) -> bool:
 def _approach(table, line, fields, robot) -> tuple:
     """Approach direction of each joint in one row: +1, −1 or 0."""
     out = []
-    for name in _approach_columns(robot):
+    for name in approach_columns(robot):
         text = fields[table.columns.index(name)]
         try:
             value = float(text)
@@ -207,7 +210,7 @@ def _approach(table, line, fields, robot) -> tuple:
 
 def _derived_approach(q, robot) -> np.ndarray:
     """Approach directions from the visiting order of configurations q (M, N), SI."""
-    return approach_from_order(np.asarray(q) * robot.display_factors, _Q_TOL)
+    return approach_from_order(np.asarray(q) * robot.display_factors, Q_TOL)
 
 
 #: A measured joint value past a URDF limit by at most this fraction of the joint's range
@@ -222,7 +225,7 @@ def _joints(table, line, fields, robot, tolerance: float = 0.0, notes=None) -> n
     as read and described in ``notes``; farther out it is an error.
     """
     q = np.empty(robot.n_joints)
-    for k, (name, joint) in enumerate(zip(_joint_columns(robot), robot.joints)):
+    for k, (name, joint) in enumerate(zip(joint_columns(robot), robot.joints)):
         shown = _number(table, line, fields, name)
         q[k] = shown / joint.display_factor
         past = max(joint.lower - q[k], q[k] - joint.upper, 0.0)
@@ -297,12 +300,12 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
     table = _read_table(path)
     default_session = session or Path(str(path)).stem
     header_line = table.rows[0][0] - 1
-    qcols = _joint_columns(robot)
+    qcols = joint_columns(robot)
     required = ["pose", *qcols, "marker", *(XYZ if require_xyz else ())]
-    optional = [*WRENCH, "temperature", "sigma", "session", *_approach_columns(robot),
+    optional = [*WRENCH, "temperature", "sigma", "session", *approach_columns(robot),
                 *(() if require_xyz else XYZ), *PREDICTED_STD]
     _check_columns(table, required, optional, header_line)
-    explicit = _check_approach_columns(table, robot, header_line)
+    explicit = _checkapproach_columns(table, robot, header_line)
     estimated = "sigma" not in table.columns and sigma_mm is None
     sigma_mm = PROVISIONAL_SIGMA_MM if estimated else sigma_mm
     if sigma_mm is not None and not sigma_mm > 0:
@@ -325,7 +328,7 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
         shown = q * robot.display_factors
         if (session, pose) in first_q:
             ref_line, ref = first_q[session, pose]
-            bad = np.flatnonzero(np.abs(shown - ref) > _Q_TOL)
+            bad = np.flatnonzero(np.abs(shown - ref) > Q_TOL)
             if bad.size:
                 raise DataError(f"pose {pose!r} has q{bad[0] + 1} = {shown[bad[0]]:g} here but "
                                 f"{ref[bad[0]]:g} on line {ref_line}; all rows of a pose share q",
@@ -348,27 +351,33 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
         first_q.setdefault((session, pose), (line, shown))
         return key, q, wrench, temp, tool.index(marker), xyz, sigma / 1000.0
 
-    parsed, dropped = _parse_rows(table, robot, row, skip_bad)
-    first, index, config = {}, {}, []  # configuration key → (q, wrench, temperature)
-    for _, (key, q, wrench, temp, *_) in parsed:
-        first.setdefault(key, (q, wrench, temp))
-        config.append(index.setdefault(key, len(index)))
-    q = np.array([v[0] for v in first.values()])
-    session = tuple(k[4] for k in first)
+    cols = None if skip_bad else read_columns(table, robot, tool, sigma_mm, require_xyz,
+                                              explicit, default_session)
+    dropped = []
+    if cols is None:  # row by row, naming file, line and column of each problem
+        parsed, dropped = _parse_rows(table, robot, row, skip_bad)
+        first, index, config = {}, {}, []  # configuration key → (q, wrench, temperature)
+        for _, (key, q, wrench, temp, *_) in parsed:
+            first.setdefault(key, (q, wrench, temp))
+            config.append(index.setdefault(key, len(index)))
+        cols = Columns(list(first), np.array(config), np.array([v[0] for v in first.values()]),
+                       np.array([v[1] for v in first.values()]),
+                       np.array([v[2] for v in first.values()]),
+                       np.array([p[4] for _, p in parsed]), np.array([p[5] for _, p in parsed]),
+                       np.array([p[6] for _, p in parsed]),
+                       np.array([line for line, _ in parsed]))
+    session = tuple(k[4] for k in cols.keys)
     if explicit:
-        approach = np.array([k[3] for k in first])
+        approach = np.array([k[3] for k in cols.keys])
     else:  # each session's own visiting order
-        approach = np.zeros_like(q)
+        approach = np.zeros_like(cols.q)
         for name in dict.fromkeys(session):
             mine = np.array([s == name for s in session])
-            approach[mine] = _derived_approach(q[mine], robot)
-    cfg = Configurations.from_arrays(q, np.array([v[1] for v in first.values()]),
-                                     np.array([[v[2]] for v in first.values()]),
-                                     [k[0] for k in first], approach)
-    meas = Measurements(cfg, np.array(config), np.array([p[4] for _, p in parsed]),
-                        np.array([p[5] for _, p in parsed]), np.array([p[6] for _, p in parsed]),
-                        np.array([line for line, _ in parsed]), table.path, tuple(dropped),
-                        tuple(notes), session, estimated)
+            approach[mine] = _derived_approach(cols.q[mine], robot)
+    cfg = Configurations.from_arrays(cols.q, cols.wrench, cols.temperature[:, None],
+                                     [k[0] for k in cols.keys], approach)
+    meas = Measurements(cfg, cols.config, cols.marker, cols.xyz, cols.sigma, cols.line,
+                        table.path, tuple(dropped), tuple(notes), session, estimated)
     return _with_unit_check(meas, robot)
 
 
@@ -396,9 +405,9 @@ def read_design(path, robot) -> Configurations:
         return _read_design_json(path, robot)
     table = _read_table(path)
     header_line = table.rows[0][0] - 1
-    _check_columns(table, ["pose", *_joint_columns(robot)],
-                   [*WRENCH, "temperature", *_approach_columns(robot)], header_line)
-    explicit = _check_approach_columns(table, robot, header_line)
+    _check_columns(table, ["pose", *joint_columns(robot)],
+                   [*WRENCH, "temperature", *approach_columns(robot)], header_line)
+    explicit = _checkapproach_columns(table, robot, header_line)
 
     def row(line, fields):
         pose = fields[table.columns.index("pose")]
@@ -489,9 +498,9 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     with_approach = _approach_needed(cfg, order, robot)
     sessions = measurements.sessions
     with_session = len(set(sessions)) > 1
-    header = ["pose", *_joint_columns(robot), *WRENCH, "marker", *XYZ,
+    header = ["pose", *joint_columns(robot), *WRENCH, "marker", *XYZ,
               *(["temperature"] if with_temp else []), "sigma",
-              *(_approach_columns(robot) if with_approach else []),
+              *(approach_columns(robot) if with_approach else []),
               *(["session"] if with_session else []), *(PREDICTED_STD if std is not None else [])]
     std_mm = None if std is None else np.asarray(std, float) * 1000.0
     rows = []
@@ -518,8 +527,8 @@ def write_design(path, configurations, robot) -> None:
     with_temp = bool(np.isfinite(cfg.temperature).any())
     with_approach = bool(np.any(cfg.approach != 0)) and \
         _approach_needed(cfg, np.arange(len(cfg)), robot)
-    header = ["pose", *_joint_columns(robot), *WRENCH, *(["temperature"] if with_temp else []),
-              *(_approach_columns(robot) if with_approach else [])]
+    header = ["pose", *joint_columns(robot), *WRENCH, *(["temperature"] if with_temp else []),
+              *(approach_columns(robot) if with_approach else [])]
     rows = []
     for c in range(len(cfg)):
         t = cfg.env[c, 0]
