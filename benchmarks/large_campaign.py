@@ -1,4 +1,9 @@
-"""(f) A large campaign: 100 002 readings of a correct 6R model, read, identified, diagnosed.
+"""(f) A large campaign: 100 002 readings of a correct 6R model, identified and diagnosed.
+
+Each command runs as a user runs it (``doe-calib identify`` / ``diagnose`` on
+the CSV), in its own process, timed and with its own peak memory. identify
+runs twice: with an empty native-code cache (the model is compiled first)
+and again with the cache filled.
 
 The question is not only speed: at this size the χ² test rejects a correct
 model for a σ misstated by a fraction of a percent; diagnosis must still call
@@ -7,24 +12,36 @@ cross-validated gain).
 """
 from __future__ import annotations
 
+import json
+import os
+import resource
+import subprocess
+import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
 from doe_calib import Configurations, Robot, Tool, build_model, example
-from doe_calib.diagnosis import diagnose
-from doe_calib.identify import identify_quietly
-from doe_calib.io import read_measurements, write_measurements
+from doe_calib.io import write_measurements
 from doe_calib.loads import hanging_mass_wrench
 from doe_calib.simulate import random_configurations, random_truth, simulate
+from doe_calib.weighted import residual_norm2
 
 from ._common import MODEL_6R, Row, Section
 
 SIGMA = 3e-5  # m
 #: The readings' real noise is this much larger than the σ the file states (0.7 %).
 UNDERSTATED = 1.007
+#: The issue's targets on 2 cores: identify ≤ 20 s and 1 GB, diagnose ≤ 120 s and 3 GB.
+TARGETS = {"identify": (20.0, 1024.0), "diagnose": (120.0, 3072.0)}
+
+_MEASURED = """import resource, subprocess, sys, time
+t = time.perf_counter()
+with open(sys.argv[1], "w") as out:
+    rc = subprocess.call(sys.argv[2:], stdout=out)
+print(time.perf_counter() - t, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, rc)
+"""
 
 
 def _campaign(robot, model, n_poses, rng):
@@ -35,36 +52,74 @@ def _campaign(robot, model, n_poses, rng):
     cfg = Configurations.from_arrays(q, w, pose=np.repeat(np.arange(n_poses) + 1, 2))
     meas = simulate(model, truth, cfg, SIGMA * UNDERSTATED, rng)
     return meas.__class__(meas.configurations, meas.config, meas.marker, meas.xyz,
-                          np.full(len(meas), SIGMA), meas.line, meas.source)
+                          np.full(len(meas), SIGMA), meas.line, meas.source), truth
+
+
+def _run(argv, env, stdout) -> tuple[float, float]:
+    """Wall time (s) and peak resident memory (MB) of one command in its own process; its
+    standard output goes to the file ``stdout``."""
+    out = subprocess.run([sys.executable, "-c", _MEASURED, str(stdout), *argv], env=env,
+                         check=True, capture_output=True, text=True).stdout.split()
+    seconds, kb, rc = float(out[0]), float(out[1]), int(out[2])
+    if rc != 0:
+        raise RuntimeError(f"{' '.join(argv)} exited with {rc}")
+    return seconds, kb / 1024.0
+
+
+def _target_note(step, seconds, mb) -> str:
+    t, m = TARGETS[step]
+    ok = seconds <= t and mb <= m
+    return f"{mb:.0f} MB peak; target ≤ {t:.0f} s and ≤ {m:.0f} MB: {'met' if ok else 'NOT met'}"
 
 
 def run(quick: bool = False) -> Section:
     robot, tool = Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML)
     model = build_model(robot, tool, MODEL_6R)
     n_poses = 3334 if quick else 16667  # × 2 load cases × 3 markers: 20 004 or 100 002
-    meas = _campaign(robot, model, n_poses, np.random.default_rng(100))
+    meas, truth = _campaign(robot, model, n_poses, np.random.default_rng(100))
+    at_truth = np.sqrt(residual_norm2(model, meas, truth) / (3 * len(meas)))
     with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "large.csv"
-        write_measurements(path, meas, robot, tool)
-        t0 = time.perf_counter()
-        meas = read_measurements(path, robot, tool)
-        t1 = time.perf_counter()
-    fit = identify_quietly(model, meas)
-    t2 = time.perf_counter()
-    d = diagnose(model, meas, fit)
-    t3 = time.perf_counter()
-    c = d.chi2
-    lo, hi = c["sigma_ratio_interval"]
-    rows = (Row(f"read the CSV ({len(meas)} readings)", t1 - t0, "s"),
-            Row("identify (point estimator)", t2 - t1, "s"),
-            Row("diagnose (tests, cross-validation, verdict)", t3 - t2, "s"),
-            Row("σ̂/σ", c["sigma_ratio"], "1", note=f"95 % interval {lo:.4f}–{hi:.4f}; χ² p = "
-                f"{c['p_value']:.2g}"),
-            Row("judged adequate", float(d.adequate), "1 = yes",
-                note="by the χ² test" if c["chi2_adequate"] else
-                f"σ̂ within {c['tolerance']:.0%} of σ, no material candidate"))
+        tmp = Path(tmp)
+        data = tmp / "large.csv"
+        write_measurements(data, meas, robot, tool)
+        env = dict(os.environ, DOE_CALIB_CACHE=str(tmp / "cache"))
+
+        def command(name, *more):
+            return [sys.executable, "-m", "doe_calib", name, "--robot", str(example.ROBOT_URDF),
+                    "--tool", str(example.TOOL_YAML), "--data", str(data), "--model", MODEL_6R,
+                    *more]
+
+        cold = _run(command("identify", "--out", str(tmp / "r.json")), env, tmp / "o.txt")
+        warm = _run(command("identify", "--out", str(tmp / "r.json")), env, tmp / "o.txt")
+        diag = _run(command("diagnose", "--json"), env, tmp / "d.json")
+        ratio = json.loads((tmp / "r.json").read_text())["sigma_ratio"]
+        verdict = json.loads((tmp / "d.json").read_text())
+    rows = (Row("doe-calib identify, native code compiled first", cold[0], "s",
+                note=_target_note("identify", *cold)),
+            Row("doe-calib identify, native code cached", warm[0], "s",
+                note=_target_note("identify", *warm)),
+            Row("doe-calib diagnose (fit, tests, cross-validation, verdict)", diag[0], "s",
+                note=_target_note("diagnose", *diag)),
+            Row("σ̂/σ of the fit", ratio, "1", note=f"at the true parameters {at_truth:.4f}"),
+            Row("judged adequate", float(verdict["adequate"]), "1 = yes"))
     notes = (f"model {MODEL_6R} on the built-in KR 270, {n_poses} poses unloaded and with "
-             f"250 kg, 3 markers; real noise {UNDERSTATED} × the stated σ = 0.03 mm; SX "
-             f"virtual machine.", f"verdict: {d.verdict}")
+             f"250 kg, 3 markers; real noise {UNDERSTATED} × the stated σ = 0.03 mm; each "
+             f"command in its own process (read the CSV, fit, write the result); "
+             f"{os.cpu_count()} CPUs, BLAS on one thread.",
+             f"verdict: {verdict['verdict']}",
+             "σ̂/σ of the fit above its value at the truth: the truth sets every parameter, "
+             "also those the rank analysis fixes at nominal (tilt of axis 1, flange placement, "
+             "k_a1, …). Rigidly these are absorbed by the base and the markers, but under load "
+             "they also change the deflection slightly (the wrench is given in the robot's "
+             "base frame), which the kept parameters cannot mimic exactly: without noise the same "
+             "kind of truth leaves a misfit of ≈ 3 µm RMS, and with those parameters held at "
+             "their true values instead of nominal the fit's σ̂/σ falls to its value at the "
+             "truth (checked on 20 004 readings: 1.024 → 1.006). A second-order effect of "
+             "the parameterisation, not of the solver.")
     return Section(f"(f) a large campaign: {len(meas)} readings of a correct model", rows, "",
-                   notes)
+                   notes, measures_memory=True)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    print(run(quick="--quick" in sys.argv))
+    print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "MB in this process")

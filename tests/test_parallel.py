@@ -40,6 +40,20 @@ def test_monte_carlo_on_a_local_dask_cluster_matches_local_processes():
     assert np.all((ratio > 0.6) & (ratio < 1.5)), ratio
 
 
+def test_a_dask_worker_with_four_threads_matches_the_serial_run(monkeypatch):
+    """Several identifications at once in one worker process (one model, built once, shared
+    by its threads): the numbers of a serial run."""
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.setattr(table1, "_CHUNK", 5)  # 8 tasks for the 4 threads
+    cfg = table1.random_configurations(np.random.default_rng(2))
+    serial = table1.monte_carlo(cfg, 40, 13, 0.1, workers=1)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=4, processes=True,
+                                  dashboard_address=None) as cluster:
+        on_dask = table1.monte_carlo(cfg, 40, 13, 0.1, scheduler=cluster.scheduler_address)
+    for a in ("pose", "point"):
+        assert np.array_equal(on_dask[a], serial[a])
+
+
 def test_unreachable_scheduler_is_reported_in_words():
     pytest.importorskip("distributed")
     with pytest.raises(DoeCalibError, match="cannot reach the Dask scheduler"):

@@ -101,6 +101,16 @@ def excluding(meas, poses: str | None):
     return kept
 
 
+def stage_progress():
+    """A one-line ``stage: note`` display on a terminal (stderr); None (silent) otherwise."""
+    if not sys.stderr.isatty():
+        return None
+
+    def show(stage, note):
+        print(f"\r{stage}: {note}"[:100].ljust(100), end="", file=sys.stderr, flush=True)
+    return show
+
+
 def model_and_measurements(args, estimate_sigma: bool = True):
     """The model (``--model``) and the measurements (``--data``, ``--sigma``, ``--skip-bad``,
     ``--exclude-poses``).

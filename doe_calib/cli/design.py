@@ -12,7 +12,7 @@ from ..design.optimal import optimal_design
 from ..io import read_design, write_design
 from ..jsonfile import strict_json
 from ..measurement import build_model
-from .common import load_robot_tool, parse_floats, parse_load, robot_arguments
+from .common import load_robot_tool, parse_floats, parse_load, robot_arguments, stage_progress
 from .options import count, positive
 
 HELP = "choose optimal measurement poses (D, A, E or task criterion; constraints; loads)"
@@ -63,16 +63,6 @@ def _csv_beside(out: str) -> Path:
     return Path(out).with_suffix(".csv")
 
 
-def _progress():
-    """A one-line ``stage: note`` display on a terminal; None (silent) otherwise."""
-    if not sys.stderr.isatty():
-        return None
-
-    def show(stage, note):
-        print(f"\r{stage}: {note}"[:100].ljust(100), end="", file=sys.stderr, flush=True)
-    return show
-
-
 def run(args):
     csv_path = _csv_beside(args.out)
     if args.report and Path(args.report).resolve() == csv_path.resolve():
@@ -85,7 +75,7 @@ def run(args):
         raise DoeCalibError("--criterion task needs --task TASK.csv (a design CSV of task poses)")
     task = read_design(args.task, robot) if args.task else None
     constraints = read_constraints(args.constraints, robot, tool) if args.constraints else None
-    progress = _progress()
+    progress = stage_progress()
     result = optimal_design(model, args.poses, loads, candidates=args.candidates,
                             sigma=args.sigma / 1000.0, criterion=args.criterion, task=task,
                             task_point=parse_floats(args.task_point, 3, "--task-point") / 1000.0,

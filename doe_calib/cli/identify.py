@@ -7,7 +7,7 @@ import warnings
 from ..identify import ESTIMATORS, identify
 from ..jsonfile import strict_json
 from .common import (data_argument, fix_and_free, model_and_measurements,
-                     report_warnings, robot_arguments)
+                     report_warnings, robot_arguments, stage_progress)
 from .options import positive
 
 HELP = "identify parameters from a measurement CSV"
@@ -41,9 +41,13 @@ def run(args):
     model, meas = model_and_measurements(args, estimate_sigma=False)  # identify says σ̂ itself
     params = fix_and_free(model.nominal(), args.fix, args.free)
     options = {"normalisation": args.normalisation} if args.estimator == "pose" else {}
+    progress = stage_progress()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        result = identify(model, meas, params, estimator=args.estimator, **options)
+        result = identify(model, meas, params, estimator=args.estimator, progress=progress,
+                          **options)
+    if progress:
+        print(file=sys.stderr)
     report_warnings(caught)
     if args.verbose:
         for p, free, why in zip(result.parameters.parameters, result.parameters.free,
