@@ -9,14 +9,15 @@ together, so the axis that needs longest sets the time). The order is an
 open path — the robot does not return to the first pose — optionally
 starting from a fixed configuration (the last pose of the previous load
 case). Nearest-neighbour paths are improved by 2-opt segment reversals and
-by moving segments of 1–3 poses (or-opt) until neither shortens them. This is a heuristic; on a few poses it is within a few per cent of the
+by moving segments of 1–3 poses (or-opt) until neither shortens them. This
+is a heuristic; on a few poses it is within a few per cent of the
 exhaustive optimum (``tests/test_export_ordering.py``).
 """
 from __future__ import annotations
 
 import numpy as np
 
-#: Nearest-neighbour paths improved by 2-opt (the shortest ones).
+#: Nearest-neighbour paths improved by 2-opt and or-opt (the shortest ones).
 TRIES = 8
 
 #: Joint speed assumed when the URDF gives none: rad/s (revolute), m/s (prismatic).
@@ -144,9 +145,9 @@ def _improve(times, path: list, start) -> list:
 def short_path(times, start=None) -> np.ndarray:
     """A short open path through every pose: nearest neighbour, then 2-opt and or-opt.
 
-    The nearest-neighbour path from every possible first pose (or from the
-    one nearest ``start``) is built; the :data:`TRIES` shortest are improved
-    by 2-opt and or-opt and the shortest result is returned.
+    The nearest-neighbour path from every possible first pose is built
+    (its length counting the move from ``start``); the :data:`TRIES` shortest
+    are improved by 2-opt and or-opt and the shortest result is returned.
 
     Parameters
     ----------
@@ -154,7 +155,7 @@ def short_path(times, start=None) -> np.ndarray:
         Symmetric move times between the poses, s (:func:`move_times`).
     start : ndarray, shape (M,), optional
         Move time from the configuration the robot starts at to each pose;
-        None: free start (every pose is tried as the first).
+        None: the path may start anywhere.
 
     Returns
     -------
@@ -171,8 +172,7 @@ def short_path(times, start=None) -> np.ndarray:
     m = len(times)
     if m == 0:
         return np.zeros(0, dtype=int)
-    firsts = [int(np.argmin(start))] if start is not None else range(m)
-    paths = sorted((_nearest_neighbour(times, f) for f in firsts),
+    paths = sorted((_nearest_neighbour(times, f) for f in range(m)),
                    key=lambda p: path_time(times, p, start))
     paths = [_improve(times, p, start) for p in paths[:TRIES]]
     return np.array(min(paths, key=lambda p: path_time(times, p, start)), dtype=int)
