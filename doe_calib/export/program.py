@@ -109,11 +109,10 @@ class Move:
         return ascii_text(f"pose {self.pose}: {todo}").replace('"', "'").replace("\\", "/")
 
     def approach_words(self, joint_names) -> str:
-        """``pre-pose of pose 3: a2 arrives moving up, a4 moving down``."""
+        """``pre-pose of pose 3 (arrive moving: a2 up, a4 down)``."""
         sides = [f"{name} {'up' if a > 0 else 'down'}"
                  for name, a in zip(joint_names, self.approach) if a]
-        return ascii_text(f"pre-pose of pose {self.pose}: joints arrive moving "
-                          f"{', '.join(sides)}")
+        return ascii_text(f"pre-pose of pose {self.pose} (arrive moving: {', '.join(sides)})")
 
 
 def ascii_text(text: str) -> str:
