@@ -399,7 +399,8 @@ def read_design(path, robot) -> Configurations:
     CSV: pose, q1..qN (deg/mm), optional wrench, temperature, and optional
     ``approach1`` … ``approachN`` columns as in a measurement file; without
     them the directions come from the row order (module notes), as for the
-    poses of a JSON design. A JSON design must be for ``robot``'s joints.
+    poses of a JSON design (where a pose plans no direction for a joint). A
+    JSON design must be for ``robot``'s joints.
     """
     if Path(path).suffix.lower() == ".json":
         return _read_design_json(path, robot)
@@ -446,8 +447,8 @@ def _read_design_json(path, robot) -> Configurations:
             raise DataError(f"pose {cfg.pose[c]!r}: q{outside[0] + 1} = "
                             f"{q[outside[0]] * joint.display_factor:g} {joint.display_unit} is "
                             f"outside the limits of joint {joint.name}", path)
-    return Configurations.from_arrays(cfg.q, cfg.wrench, pose=cfg.pose,
-                                      approach=_derived_approach(cfg.q, robot))
+    approach = np.where(cfg.approach != 0, cfg.approach, _derived_approach(cfg.q, robot))
+    return Configurations.from_arrays(cfg.q, cfg.wrench, pose=cfg.pose, approach=approach)
 
 
 def _configuration_fields(cfg, c, robot) -> list[str]:

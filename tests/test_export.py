@@ -10,7 +10,7 @@ from doe_calib.cli import main
 from doe_calib.data import Configurations
 from doe_calib.design import LoadCase
 from doe_calib.design.optimal import optimal_design
-from doe_calib.export import FORMATS, export_design
+from doe_calib.export import FORMATS, Plan, export_design, moves
 from doe_calib.io import read_design
 
 N_POSES = 5
@@ -29,18 +29,24 @@ def _numbers(text):
 
 
 def _visits(lines, move):
-    """(comment match, move match) for each move line, the comment being the last before it."""
-    out, comment = [], None
+    """(comment match, move match, is pre-pose) for each move line.
+
+    The comment is the last load-case comment before the move; a move right
+    after a ``pre-pose of pose`` comment line goes to a pre-pose.
+    """
+    out, comment, pre = [], None, False
     for line in lines:
         c = re.search(r"pose (\S+), load case (\d+) of (\d+): (.*)$", line)
         comment = c or comment
         m = re.match(move, line.strip())
         if m:
-            out.append((comment, m))
+            out.append((comment, m, pre))
+        pre = "pre-pose of pose" in line
     return out
 
 
 def parse_krl(src, dat):
+    """[(comment, A1..A6 in deg, is pre-pose)] of every PTP of a KRL program."""
     assert re.match(r"&ACCESS RVP\n&REL 1\nDEF (\w+)\( \)\n", src) and src.rstrip().endswith("END")
     name = re.search(r"DEF (\w+)\(", src).group(1)
     assert re.search(rf"^DEFDAT {name}$", dat, re.M) and dat.rstrip().endswith("ENDDAT")
@@ -49,10 +55,13 @@ def parse_krl(src, dat):
         vals = dict(re.findall(r"([AE]\d) (-?\d+\.?\d*)", body))
         assert len(vals) == 12
         axes[var] = [float(vals[f"A{k}"]) for k in range(1, 7)]
-    return [(c, axes[m.group(1)]) for c, m in _visits(src.splitlines(), r"PTP (\w+)$")]
+    visits = _visits(src.splitlines(), r"PTP (\w+)$")
+    assert all(pre == m.group(1).startswith("XA") for _, m, pre in visits)
+    return [(c, axes[m.group(1)], pre) for c, m, pre in visits]
 
 
 def parse_rapid(mod):
+    """[(comment, robax in deg, is pre-pose)] of every MoveAbsJ of a RAPID module."""
     assert mod.startswith("MODULE ") and mod.rstrip().endswith("ENDMODULE")
     targets = {}
     for var, robax, extax in re.findall(r"CONST jointtarget (\w+):=\[\[([^\]]*)\],\[([^\]]*)\]\];",
@@ -60,14 +69,17 @@ def parse_rapid(mod):
         assert _numbers(extax) == [9e9] * 6
         targets[var] = _numbers(robax)
     move = r"MoveAbsJ (\w+)\\NoEOffs, v100, fine, tool0;$"
-    return [(c, targets[m.group(1)]) for c, m in _visits(mod.splitlines(), move)]
+    visits = _visits(mod.splitlines(), move)
+    assert all(pre == m.group(1).startswith("ja") for _, m, pre in visits)
+    return [(c, targets[m.group(1)], pre) for c, m, pre in visits]
 
 
 def parse_urscript(script):
+    """[(comment, joints in deg, is pre-pose)] of every movej of a URScript program."""
     assert re.match(r"def \w+\(\):\n", script) and script.rstrip().endswith("end")
     move = r"movej\(\[([^\]]*)\], a=[\d.]+, v=[\d.]+\)$"
-    return [(c, list(np.degrees(_numbers(m.group(1)))))
-            for c, m in _visits(script.splitlines(), move)]
+    return [(c, list(np.degrees(_numbers(m.group(1)))), pre)
+            for c, m, pre in _visits(script.splitlines(), move)]
 
 
 PARSERS = {"krl": lambda p: parse_krl(p[0].read_text(), p[1].read_text()),
@@ -75,20 +87,34 @@ PARSERS = {"krl": lambda p: parse_krl(p[0].read_text(), p[1].read_text()),
            "urscript": lambda p: parse_urscript(p[0].read_text())}
 
 
+def _rows(design, visits):
+    """Design row of each parsed visit (by pose id and load case)."""
+    cfg = design.configurations
+    rows = {}
+    for r, pose in enumerate(cfg.pose):
+        rows[(pose, str(sum(p == pose for p in cfg.pose[:r + 1])))] = r
+    return [rows[(c.group(1), c.group(2))] for c, _, _ in visits]
+
+
 @pytest.mark.parametrize("fmt", ["krl", "rapid", "urscript"])
 def test_program_parses_back_to_the_design(design, fmt, tmp_path):
     paths = export_design(design, fmt, tmp_path, name="calib")
     assert [p.suffix for p in paths] == list(FORMATS[fmt].suffixes)
     visits = PARSERS[fmt](paths)
+    assert not any(pre for _, _, pre in visits)  # no backlash, no planned side: no pre-pose
     cfg = design.configurations
     assert len(visits) == N_POSES * 2 == len(cfg)  # poses × load cases
-    for (comment, q), pose, q_design, w in zip(visits, cfg.pose, cfg.q, cfg.wrench):
-        assert np.allclose(q, np.degrees(q_design), atol=1e-6, rtol=0)
-        assert comment.group(1) == pose and comment.group(3) == "2"
+    rows = _rows(design, visits)
+    assert sorted(rows) == list(range(len(cfg)))  # every (pose, load case) once
+    for (comment, q, _), r in zip(visits, rows):
+        assert np.allclose(q, np.degrees(cfg.q[r]), atol=1e-6, rtol=0)
+        assert comment.group(3) == "2"
         loaded = comment.group(2) == "2"
-        assert loaded == bool(np.any(w))
+        assert loaded == bool(np.any(cfg.wrench[r]))
         assert (LOAD_WORDS in comment.group(4)) == loaded
         assert ("no load" in comment.group(4)) != loaded
+    # grouped by load case: every unloaded visit, then every loaded one
+    assert [c.group(2) for c, _, _ in visits] == ["1"] * N_POSES + ["2"] * N_POSES
 
 
 def test_waits_and_operator_stops(design, tmp_path):
@@ -97,20 +123,24 @@ def test_waits_and_operator_stops(design, tmp_path):
     n = len(design.configurations)
     assert text.count("WAIT SEC 2") == n and text.count("WAIT FOR $IN[4]") == n
     assert text.count("WAIT FOR NOT $IN[4]") == n and text.count("$OUT[4]=TRUE") == n
-    assert text.count("\n  HALT") == n - 1  # every visit after the first changes the load
+    assert text.count("\n  HALT") == 1  # one load change: unloaded, then loaded
     mod = export_design(design, "rapid", tmp_path)[0].read_text()
-    assert mod.count("WaitTime 3;") == n and mod.count("Stop;") == n - 1
+    assert mod.count("WaitTime 3;") == n and mod.count("Stop;") == 1
     assert re.search(rf'TPWrite "pose \S+: hang {LOAD_WORDS}', mod)
     script = export_design(design, "urscript", tmp_path)[0].read_text()
-    assert script.count("popup(") == n - 1 and script.count("sleep(3)") == n
+    assert script.count("popup(") == 1 and script.count("sleep(3)") == n
+    kept = export_design(design, "krl", tmp_path / "kept", plan=Plan(group_by="none"))[0]
+    assert kept.read_text().count("\n  HALT") == n - 1  # each pose's load cases together
 
 
-def test_csv_is_the_design_csv(design, tmp_path, robot6):
+def test_csv_is_the_design_csv_in_program_order(design, tmp_path, robot6):
     (path,) = export_design(design, "csv", tmp_path / "plan.csv")
     assert path.name == "plan.csv"
     cfg = read_design(path, robot6)
-    assert np.allclose(cfg.q, design.configurations.q, atol=1e-12)
-    assert np.allclose(cfg.wrench, design.configurations.wrench, atol=1e-9)
+    rows = [m.row for m in moves(design)]
+    assert cfg.pose == tuple(design.configurations.pose[r] for r in rows)
+    assert np.allclose(cfg.q, design.configurations.q[rows], atol=1e-12)
+    assert np.allclose(cfg.wrench, design.configurations.wrench[rows], atol=1e-9)
 
 
 def _moved(design, pose_index, joint, value):
@@ -139,13 +169,14 @@ def test_cli_refuses_pose_outside_limits_naming_the_file(design, tmp_path, capsy
     assert str(bad) in err and "pose '1'" in err and design.robot.joints[0].name in err
 
 
-def test_cli_writes_program(design, tmp_path):
+def test_cli_writes_program(design, tmp_path, capsys):
     path = tmp_path / "d.json"
     design.to_json(path)
     assert main(["export", str(path), "--format", "krl", "--out", str(tmp_path / "cal.src"),
                  "--handshake", "3"]) == 0
     assert len(parse_krl((tmp_path / "cal.src").read_text(),
                          (tmp_path / "cal.dat").read_text())) == 2 * N_POSES
+    assert "estimated cycle time" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("fmt", ["krl", "rapid", "urscript"])

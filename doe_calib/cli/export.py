@@ -6,12 +6,14 @@ from pathlib import Path
 
 from ..design.result import DesignResult
 from ..errors import DataError
-from ..export import FORMATS, export_design
+from ..export import FORMATS, AxisMap, Plan, cycle_time, export_design, moves
+from ..export.sequence import GROUPINGS, ORDERS
 from ..jsonfile import strict_json
-from .options import at_least, count
+from .options import at_least, count, positive
 
 HELP = "write a design as a KUKA KRL, ABB RAPID or URScript program, or a design CSV"
-EXAMPLE = "doe-calib export design.json --format krl --out programs/ --name calib --handshake 5"
+EXAMPLE = ("doe-calib export design.json --format krl --out programs/ --name calib --handshake 5 "
+           "--axis-map a1:-1:0,a3:1:-90")
 
 
 def add_arguments(c):
@@ -28,6 +30,25 @@ def add_arguments(c):
                    help="digital I/O number: set output N at the pose, wait for input N "
                         "(measured), reset; RAPID uses signals doCalibReady/diCalibDone. "
                         "Default: wait --dwell seconds only")
+    c.add_argument("--group-by", choices=GROUPINGS, default=GROUPINGS[0],
+                   help="load: every unloaded visit, then every visit under each load (one load "
+                        "change per load case; default); none: each pose's load cases together")
+    c.add_argument("--order", choices=ORDERS, default=ORDERS[0],
+                   help="travel: order the poses of each group for short joint travel (default); "
+                        "design: keep the design's order")
+    c.add_argument("--approach-step", type=positive("--approach-step", "deg"), default=2.0,
+                   metavar="DEG", help="pre-pose distance before a pose on the side a joint must "
+                                       "arrive from, deg (mm for a prismatic joint; default 2)")
+    c.add_argument("--alternate", choices=("backlash", "none"), default="backlash",
+                   help="backlash (default): joints with backlash(mode=approach|both) in the "
+                        "model reach consecutive poses from alternate sides where the design "
+                        "plans none; none: only the design's approach directions")
+    c.add_argument("--axis-map", metavar="J:SIGN:OFFSET,...",
+                   help="controller value = SIGN * URDF value + OFFSET (deg, mm) per joint, for a "
+                        "URDF that does not count joints as the controller, e.g. a1:-1:0,a3:1:-90")
+    c.add_argument("--load-change-time", type=at_least("--load-change-time", 0.0, "s"),
+                   default=300.0, metavar="S",
+                   help="seconds to change the load, for the cycle-time estimate (default 300)")
     c.add_argument("--json", action="store_true", help="print the poses, measurements and "
                                                        "files written as JSON")
 
@@ -36,19 +57,24 @@ OUTPUTS = {"out": "folder"}
 
 
 def run(args):
-    design = DesignResult.from_json(args.design)
-    out = args.out if args.out is not None else Path(args.design).parent
     try:
+        design = DesignResult.from_json(args.design)
+        axis_map = None if args.axis_map is None else AxisMap.parse(args.axis_map, design.robot)
+        plan = Plan(args.group_by, args.order, args.approach_step, args.alternate != "none",
+                    axis_map)
+        out = args.out if args.out is not None else Path(args.design).parent
         paths = export_design(design, args.format, out, name=args.name, dwell=args.dwell,
-                              handshake=args.handshake)
+                              handshake=args.handshake, plan=plan)
+        cycle = cycle_time(moves(design, plan), design.robot, args.dwell, args.load_change_time)
     except DataError as exc:
         if exc.path is not None:
             raise
         raise DataError(str(exc), args.design) from exc
     n_poses = len(design.poses())
     print(f"{n_poses} poses, {len(design.configurations)} measurements", file=sys.stderr)
+    print(cycle.summary(), file=sys.stderr)
     print(f"written: {', '.join(map(str, paths))}", file=sys.stderr)
     if args.json:
         print(strict_json({"design": args.design, "format": args.format, "name": args.name,
                           "poses": n_poses, "measurements": len(design.configurations),
-                          "files": [str(p) for p in paths]}))
+                          "cycle_time": cycle.to_dict(), "files": [str(p) for p in paths]}))

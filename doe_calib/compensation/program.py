@@ -8,7 +8,10 @@ import numpy as np
 
 from ..data import Configurations
 from ..design.result import DesignResult
-from ..export import export_design
+from ..export import Plan, export_design
+
+#: A compensated program keeps the targets' order and adds no pre-poses.
+AS_GIVEN = Plan(group_by="none", order="design", alternate=False)
 
 
 def compensated_design(result, tool) -> DesignResult:
@@ -35,7 +38,8 @@ def export_compensated(result, tool, fmt: str, out, name: str = "compensated", d
                        handshake: int | None = None) -> list:
     """Write the compensated program with :func:`doe_calib.export.export_design`.
 
-    Returns the files written.
+    The rows keep their order (:data:`AS_GIVEN`): it is the user's program,
+    not a measurement plan. Returns the files written.
     """
     return export_design(compensated_design(result, tool), fmt, out, name=name, dwell=dwell,
-                         handshake=handshake)
+                         handshake=handshake, plan=AS_GIVEN)

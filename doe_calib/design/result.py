@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..data import Configurations
+from ..errors import DataError
 from ..jsonfile import read_json, write_json
 from ..robot import Robot
 from ..tool import Tool
@@ -87,16 +88,27 @@ class DesignResult:
     sigma_mm: float | None = None
 
     def poses(self) -> list[dict]:
-        """One entry per pose: id, q in deg (mm for prismatic joints) and its wrenches."""
+        """One entry per pose: id, q in deg (mm for prismatic joints), its wrenches and approach.
+
+        ``approach`` is the planned direction of each joint (+1 reached moving
+        up, −1 moving down, 0 no requirement), the same for every load case
+        of the pose; load cases that plan different directions are refused.
+        """
         out, index = [], {}
         cfg = self.configurations
         for c, pose in enumerate(cfg.pose):
+            approach = [int(a) for a in cfg.approach[c]]
             if pose not in index:
                 index[pose] = len(out)
                 out.append({"pose": pose,
                             "q_deg": (cfg.q[c] * self.robot.display_factors).tolist(),
-                            "wrenches": []})
-            out[index[pose]]["wrenches"].append(cfg.wrench[c].tolist())
+                            "wrenches": [], "approach": approach})
+            entry = out[index[pose]]
+            if entry["approach"] != approach:
+                raise DataError(f"pose {pose!r}: its load cases plan different approach "
+                                f"directions ({entry['approach']}, {approach}); a design plans "
+                                f"one per pose")
+            entry["wrenches"].append(cfg.wrench[c].tolist())
         return out
 
     def summary(self) -> str:
@@ -152,10 +164,12 @@ class DesignResult:
     @classmethod
     def from_dict(cls, d: dict) -> "DesignResult":
         robot = Robot.from_dict(d["robot"])
-        rows = [(p["pose"], p["q_deg"], w) for p in d["poses"] for w in p["wrenches"]]
+        rows = [(p["pose"], p["q_deg"], w, _approach(p, robot.n_joints))
+                for p in d["poses"] for w in p["wrenches"]]
         cfg = Configurations.from_arrays(np.array([r[1] for r in rows]) / robot.display_factors,
                                          np.array([r[2] for r in rows]),
-                                         pose=[r[0] for r in rows])
+                                         pose=[r[0] for r in rows],
+                                         approach=np.array([r[3] for r in rows], float))
         return cls(robot, Tool.from_dict(d["tool"]), d["model"], cfg, d["criterion"],
                    float(d["value"]), float(d["bound"]), float(d["efficiency"]),
                    {r["name"]: (r["std"], r["unit"]) for r in d["predicted_std"]},
@@ -169,3 +183,14 @@ class DesignResult:
     def from_json(cls, path) -> "DesignResult":
         """Read a design file written by :meth:`to_json`."""
         return cls.from_dict(read_json(path, FORMAT, "doe_calib design file"))
+
+
+def _approach(pose: dict, n_joints: int) -> list:
+    """A pose entry's planned approach directions (N values of 1, -1, 0; all 0 when absent)."""
+    approach = pose.get("approach", [0] * n_joints)
+    if not (isinstance(approach, list) and len(approach) == n_joints
+            and all(a in (-1, 0, 1) for a in approach)):
+        raise DataError(f"pose {pose.get('pose')!r}: \"approach\" must be a list of {n_joints} "
+                        f"values 1 (joint reached moving up), -1 (moving down) or 0 (no "
+                        f"requirement), got {approach!r}")
+    return approach

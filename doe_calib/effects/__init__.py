@@ -77,7 +77,7 @@ def parse_effect(word: str, spec: str = ""):
                          f"({exc}); see {name}'s documentation") from None
 
 
-def _split(spec: str) -> list:
+def split_model(spec: str) -> list:
     """Split at '+' outside parentheses."""
     words, depth, cur = [], 0, ""
     for ch in spec:
@@ -99,7 +99,7 @@ def parse_model(spec: str) -> tuple:
     ['joint_offset', 'joint_compliance']
     """
     effects = []
-    for word in _split(spec):
+    for word in split_model(spec):
         effect = parse_effect(word, spec)
         if any(e.spec() == effect.spec() for e in effects):
             raise ModelError(f"effect {effect.spec()!r} appears twice in model {spec!r}")
@@ -108,4 +108,4 @@ def parse_model(spec: str) -> tuple:
 
 
 __all__ = ["ChainSymbols", "Effect", "REGISTRY", "DEFAULT_MODEL", "joint_index", "parse_effect",
-           "parse_model"]
+           "parse_model", "split_model"]

@@ -1,9 +1,12 @@
 """Robot programs that visit a design's poses: KUKA KRL, ABB RAPID, URScript, and the design CSV.
 
-Every format visits each pose once per load case, in the design's measuring
-order, stops for the operator where the load changes and waits for the
-measurement at each pose (:class:`.program.Settings`). Joint limits are
-checked again before anything is written.
+Every format visits each pose once per load case — by default grouped by
+load case and ordered for short joint travel (:class:`.sequence.Plan`) —,
+reaches each pose from the side the design or the backlash model asks for
+through a pre-pose (:mod:`.approach`), stops for the operator where the load
+changes and waits for the measurement at each pose
+(:class:`.program.Settings`). Joint limits are checked again before anything
+is written. :func:`.cycle.cycle_time` estimates how long the program runs.
 """
 from __future__ import annotations
 
@@ -11,10 +14,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from ..data import Configurations
 from ..errors import DataError, OptionError
 from ..io import write_design
 from . import krl, rapid, urscript
-from .program import Move, Settings, check_limits, moves
+from .axis_map import AxisMap
+from .cycle import CycleTime, cycle_time
+from .program import Move, Settings, moves, realised_approach
+from .sequence import Plan
 
 
 @dataclass(frozen=True)
@@ -22,7 +29,8 @@ class Format:
     """An export format: its file suffixes and how its text is made.
 
     ``render(design, visits, settings)`` returns suffix → file text; None
-    for the design CSV, written by :func:`doe_calib.io.write_design`.
+    for the design CSV, written by :func:`doe_calib.io.write_design`
+    (:func:`program_configurations`).
     """
 
     description: str
@@ -47,8 +55,21 @@ def _stem(out, name: str) -> tuple[Path, str]:
     return out / name, name
 
 
+def program_configurations(design, visits) -> Configurations:
+    """The configurations in the program's order, with the approach directions it realises.
+
+    Read back as a design or measurement file, their order and ``approach``
+    columns give the ``backlash`` effect exactly what the program does.
+    """
+    cfg = design.configurations
+    rows = [m.row for m in visits]
+    return Configurations.from_arrays(cfg.q[rows], cfg.wrench[rows], cfg.temperature[rows],
+                                      [m.pose for m in visits],
+                                      realised_approach(visits, design.robot))
+
+
 def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float = 3.0,
-                  handshake: int | None = None) -> list[Path]:
+                  handshake: int | None = None, plan: Plan | None = None) -> list[Path]:
     """Write ``design`` as a robot program (or design CSV); return the files written.
 
     Parameters
@@ -66,16 +87,23 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
     handshake : int, optional
         Digital I/O number of the measurement handshake (see
         :class:`.program.Settings`); None waits ``dwell`` only.
+    plan : Plan, optional
+        Grouping by load case, order, pre-poses and axis map. The design CSV
+        lists the configurations in the program's order with the approach
+        directions the program realises (:func:`program_configurations`), in
+        the URDF's joint values (no axis map). Default ``Plan()``.
 
     Raises
     ------
     DataError
         A pose outside the robot's joint limits (naming pose, joint, limit),
-        or a bad program name.
+        a demanded approach side a pre-pose cannot realise inside them, or a
+        bad program name.
     ModelError
         A robot the format cannot drive (KRL, RAPID, URScript: 6 axes).
     OptionError
-        A negative dwell or a handshake that is not an I/O number ≥ 1.
+        A negative dwell, a handshake that is not an I/O number ≥ 1, or an
+        axis map with the design CSV.
 
     Examples
     --------
@@ -91,16 +119,21 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
                           f"more, got {handshake}")
     stem, name = _stem(out, name)
     form = FORMATS[fmt]
+    if form.render is None and plan is not None and plan.axis_map is not None:
+        raise OptionError("--axis-map: the design CSV keeps the URDF's joint values; the axis "
+                          "map is for robot programs (krl, rapid, urscript)")
+    visits = moves(design, plan)
     if form.render is None:
-        check_limits(design)
         stem.parent.mkdir(parents=True, exist_ok=True)
-        write_design(stem.with_suffix(".csv"), design.configurations, design.robot)
+        write_design(stem.with_suffix(".csv"), program_configurations(design, visits),
+                     design.robot)
         return [stem.with_suffix(".csv")]
-    texts = form.render(design, moves(design), Settings(name, dwell, handshake))
+    texts = form.render(design, visits, Settings(name, dwell, handshake))
     stem.parent.mkdir(parents=True, exist_ok=True)
     paths = [stem.with_suffix(s) for s in form.suffixes]
     for path in paths:
         path.write_text(texts[path.suffix], encoding="ascii")
     return paths
 
-__all__ = ["FORMATS", "Format", "Move", "Settings", "export_design", "moves"]
+__all__ = ["FORMATS", "AxisMap", "CycleTime", "Format", "Move", "Plan", "Settings",
+           "cycle_time", "export_design", "moves", "program_configurations", "realised_approach"]

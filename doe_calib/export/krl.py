@@ -2,6 +2,8 @@
 
 Each visit is ``PTP XP<i>`` (exact positioning) to the pose's axis values,
 A1..A6 in deg (mm for a linear axis), declared in the ``.dat``; E1..E6 are 0.
+A visit whose joints must arrive from a given side is preceded by
+``PTP XA<n>``, its pre-pose (n: the visit's number in the program).
 Before a visit whose load differs from the previous one the program HALTs
 with a comment telling the operator which load to hang (restart with Start).
 At each pose it waits ``dwell`` s (``WAIT SEC``, which also stops the
@@ -60,6 +62,8 @@ def render(design, visits, settings) -> dict:
         src += ["", f"  ; {m.comment()}"]
         if change:
             src += [f"  ; OPERATOR: {m.instruction()}, then press Start", "  HALT"]
+        if m.pre is not None:
+            src += [f"  ; {m.approach_words(design.robot.joint_names)}", f"  PTP XA{m.number}"]
         src += [f"  PTP XP{m.index}", *_wait(settings)]
     src += ["END", ""]
     dat = [*header, f"DEFDAT {name}"]
@@ -69,5 +73,9 @@ def render(design, visits, settings) -> dict:
             seen.add(m.index)
             dat += ["  ; " + ascii_text(f"pose {m.pose}"),
                     f"  DECL E6AXIS XP{m.index}={_axis(m.q)}"]
+    for m in visits:
+        if m.pre is not None:
+            dat += ["  ; " + ascii_text(f"pre-pose of pose {m.pose}, visit {m.number}"),
+                    f"  DECL E6AXIS XA{m.number}={_axis(m.pre)}"]
     dat += ["ENDDAT", ""]
     return {".src": "\n".join(src), ".dat": "\n".join(dat)}

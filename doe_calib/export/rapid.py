@@ -1,7 +1,9 @@
 """ABB RAPID: one MODULE with a CONST jointtarget per pose and a ``main`` procedure.
 
 Each visit is ``MoveAbsJ jp<i>\\NoEOffs, v100, fine, tool0;`` to robax in deg
-(mm for a linear axis), extax 9E9 (no external axes). Before a visit whose
+(mm for a linear axis), extax 9E9 (no external axes). A visit whose joints
+must arrive from a given side is preceded by ``MoveAbsJ ja<n>...`` to its
+pre-pose (n: the visit's number in the program), also ``fine``. Before a visit whose
 load differs from the previous one: ``TPWrite`` the load to hang, then
 ``Stop;`` (restart with Start). At each pose ``WaitTime dwell;`` and, with a
 handshake, ``SetDO doCalibReady, 1; WaitDI diCalibDone, 1; SetDO doCalibReady,
@@ -53,11 +55,18 @@ def render(design, visits, settings) -> dict:
             seen.add(m.index)
             out.append(f"  CONST jointtarget jp{m.index}:={_target(m.q)}; ! "
                        + ascii_text(f"pose {m.pose}"))
+    for m in visits:
+        if m.pre is not None:
+            out.append(f"  CONST jointtarget ja{m.number}:={_target(m.pre)}; ! "
+                       + ascii_text(f"pre-pose of pose {m.pose}, visit {m.number}"))
     out += ["", "  PROC main()"]
     for m, change in zip(visits, load_changes(visits)):
         out.append(f"    ! {m.comment()}")
         if change:
             out += [f'    TPWrite "{m.instruction()[:TPWRITE_MAX]}";', "    Stop;"]
+        if m.pre is not None:
+            out += [f"    ! {m.approach_words(design.robot.joint_names)}",
+                    f"    MoveAbsJ ja{m.number}\\NoEOffs, {SPEED}, fine, tool0;"]
         out += [f"    MoveAbsJ jp{m.index}\\NoEOffs, {SPEED}, fine, tool0;", *_wait(settings)]
     out += ["  ENDPROC", "ENDMODULE", ""]
     return {".mod": "\n".join(out)}

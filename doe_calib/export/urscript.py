@@ -2,7 +2,8 @@
 
 Joint positions are in rad (URScript's unit), written to 1e-10 rad. Before a
 visit whose load differs from the previous one a blocking ``popup`` tells the
-operator which load to hang. At each pose ``sleep(dwell)`` and, with a
+operator which load to hang. A visit whose joints must arrive from a given
+side is preceded by a ``movej`` to its pre-pose. At each pose ``sleep(dwell)`` and, with a
 handshake n, standard digital output n is set, the program waits for
 standard digital input n, resets the output and waits for the input to drop.
 Only 6 revolute joints are supported.
@@ -37,6 +38,11 @@ def _wait(settings) -> list[str]:
     return lines
 
 
+def _movej(q) -> str:
+    values = ", ".join(f"{v:.10f}" for v in q)
+    return f"  movej([{values}], a={ACCELERATION:g}, v={VELOCITY:g})"
+
+
 def render(design, visits, settings) -> dict:
     """Text of the ``.script`` file, keyed by suffix."""
     check_robot(design.robot)
@@ -50,7 +56,8 @@ def render(design, visits, settings) -> dict:
         out += ["", f"  # {m.comment()}"]
         if change:
             out.append(f'  popup("{m.instruction()}", title="doe_calib", blocking=True)')
-        q = ", ".join(f"{v:.10f}" for v in m.q_si)
-        out += [f"  movej([{q}], a={ACCELERATION:g}, v={VELOCITY:g})", *_wait(settings)]
+        if m.pre is not None:
+            out += [f"  # {m.approach_words(design.robot.joint_names)}", _movej(m.pre_si)]
+        out += [_movej(m.q_si), *_wait(settings)]
     out += ["end", ""]
     return {".script": "\n".join(out)}

@@ -1,0 +1,101 @@
+"""An estimate of how long a measurement program runs.
+
+Model: every PTP move (pre-poses included) takes
+
+    t = max_j |Δq_j| / (f · v_j) + t_ramp
+
+with v_j each joint's maximum speed (:func:`.ordering.axis_speeds`), f the
+programmed share of it (:data:`SPEED_FRACTION`, KRL's ``BAS(#VEL_PTP, 10)``)
+and t_ramp a fixed allowance for accelerating and braking (:data:`RAMP`);
+every visit adds the dwell, every load change the time to change the load.
+The move to the first pose (from wherever the robot stands) and the
+handshake's waiting for the tracker are not counted.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .ordering import axis_speeds, move_times
+from .program import load_changes
+
+#: Share of each axis's maximum speed the programs move at.
+SPEED_FRACTION = 0.1
+#: Seconds added to every move for accelerating and braking.
+RAMP = 0.5
+
+
+@dataclass(frozen=True)
+class CycleTime:
+    """Estimated duration of a program, s.
+
+    Attributes
+    ----------
+    travel : float
+        Time moving, pre-poses included.
+    moves : int
+        Number of PTP moves counted.
+    dwell : float
+        Time standing at the poses.
+    load_changes : int
+        Number of times the operator changes the load.
+    load_change : float
+        Time spent on them.
+    """
+
+    travel: float
+    moves: int
+    dwell: float
+    load_changes: int
+    load_change: float
+
+    @property
+    def total(self) -> float:
+        """The whole estimate, s."""
+        return self.travel + self.dwell + self.load_change
+
+    def summary(self) -> str:
+        """One line, e.g. ``estimated cycle time 24.1 min: travel 6.2 min (61 moves), ...``."""
+        return (f"estimated cycle time {self.total / 60:.1f} min: travel "
+                f"{self.travel / 60:.1f} min ({self.moves} moves at {SPEED_FRACTION:.0%} of the "
+                f"axes' maximum speed), dwell {self.dwell / 60:.1f} min, {self.load_changes} "
+                f"load change(s) {self.load_change / 60:.1f} min")
+
+    def to_dict(self) -> dict:
+        return {"total_s": self.total, "travel_s": self.travel, "moves": self.moves,
+                "dwell_s": self.dwell, "load_changes": self.load_changes,
+                "load_change_s": self.load_change}
+
+
+def cycle_time(visits, robot, dwell: float, load_change: float) -> CycleTime:
+    """Estimate the duration of a program visiting ``visits`` (module notes).
+
+    Parameters
+    ----------
+    visits : list of Move
+        The program's moves (:func:`.program.moves`).
+    robot : Robot
+    dwell : float
+        Seconds standing at each pose.
+    load_change : float
+        Seconds the operator needs to change the load.
+
+    Returns
+    -------
+    CycleTime
+
+    Examples
+    --------
+    >>> cycle_time(moves(design), design.robot, 3.0, 300.0).total  # doctest: +SKIP
+    1342.7
+    """
+    path = [q for m in visits for q in ((m.urdf_q,) if m.urdf_pre is None
+                                        else (m.urdf_pre, m.urdf_q))]
+    speed = SPEED_FRACTION * axis_speeds(robot)
+    steps = [float(move_times(a, b, speed)[0, 0]) for a, b in zip(path[:-1], path[1:])]
+    moving = [t for t in steps if t > 0]
+    changes = int(np.sum(load_changes(visits)))
+    return CycleTime(travel=sum(moving) + RAMP * len(moving), moves=len(moving),
+                     dwell=dwell * len(visits), load_changes=changes,
+                     load_change=load_change * changes)
