@@ -9,6 +9,10 @@ import yaml
 
 from .errors import DataError, ModelError
 
+#: Collision sizes of a tool whose file gives none: marker sphere and rod radius, m
+#: (a 1.5-inch reflector in its nest; a 20 mm arm).
+DEFAULT_MARKER_RADIUS, DEFAULT_ROD_RADIUS = 0.02, 0.01
+
 
 @dataclass(frozen=True)
 class Tool:
@@ -24,12 +28,19 @@ class Tool:
         Link the tool is bolted to, when the file names it.
     source : str
         File the tool was read from.
+    marker_radius : float
+        Radius of the sphere each marker is drawn as in the collision check, m.
+    rod_radius : float
+        Radius of the rod from the flange to each marker (the plate or arms
+        holding it) in the collision check, m; 0 for none.
     """
 
     names: tuple
     positions: tuple
     flange: str | None = None
     source: str = ""
+    marker_radius: float = DEFAULT_MARKER_RADIUS
+    rod_radius: float = DEFAULT_ROD_RADIUS
 
     @property
     def n_markers(self) -> int:
@@ -47,13 +58,18 @@ class Tool:
     def to_dict(self) -> dict:
         """JSON-able form in the file's units (mm)."""
         return {"flange": self.flange, "source": self.source,
-                "markers": {n: [1000.0 * v for v in p] for n, p in zip(self.names, self.positions)}}
+                "markers": {n: [1000.0 * v for v in p] for n, p in zip(self.names, self.positions)},
+                "collision": {"marker_radius": 1000.0 * self.marker_radius,
+                              "rod_radius": 1000.0 * self.rod_radius}}
 
     @classmethod
     def from_dict(cls, d: dict, source: str = "") -> "Tool":
         names = tuple(d["markers"])
         pos = tuple(tuple(float(v) / 1000.0 for v in d["markers"][n]) for n in names)
-        return cls(names, pos, d.get("flange"), d.get("source", source))
+        sizes = d.get("collision") or {}
+        return cls(names, pos, d.get("flange"), d.get("source", source),
+                   float(sizes.get("marker_radius", 1000.0 * DEFAULT_MARKER_RADIUS)) / 1000.0,
+                   float(sizes.get("rod_radius", 1000.0 * DEFAULT_ROD_RADIUS)) / 1000.0)
 
     @classmethod
     def from_markers(cls, markers_mm: dict, flange: str | None = None) -> "Tool":
@@ -111,7 +127,35 @@ class Tool:
                             f"found {len(names)}", path, top["markers"].start_mark.line + 1, 1)
         _check_layout(positions, path)
         flange = top["flange"].value if "flange" in top else None
-        return cls(tuple(names), tuple(positions), flange, str(path))
+        sizes = _collision_sizes(top.get("collision"), path)
+        return cls(tuple(names), tuple(positions), flange, str(path), *sizes)
+
+
+def _collision_sizes(node, path) -> tuple[float, float]:
+    """``collision: {marker_radius: MM, rod_radius: MM}`` → (m, m); defaults when absent."""
+    out = {"marker_radius": DEFAULT_MARKER_RADIUS, "rod_radius": DEFAULT_ROD_RADIUS}
+    if node is None:
+        return out["marker_radius"], out["rod_radius"]
+    if not isinstance(node, yaml.MappingNode):
+        raise DataError("collision: expected a mapping {marker_radius: MM, rod_radius: MM}",
+                        path, node.start_mark.line + 1, node.start_mark.column + 1)
+    for key, val in node.value:
+        where = (path, val.start_mark.line + 1, val.start_mark.column + 1)
+        if key.value not in out:
+            raise DataError(f"collision: unknown entry {key.value!r}; expected marker_radius or "
+                            f"rod_radius (mm)", path, key.start_mark.line + 1,
+                            key.start_mark.column + 1)
+        try:
+            v = float(val.value)
+        except (TypeError, ValueError):
+            v = float("nan")
+        if not np.isfinite(v) or v < 0:
+            raise DataError(f"collision {key.value}: {val.value!r} is not a size in mm (≥ 0)",
+                            *where)
+        out[key.value] = v / 1000.0
+    if out["marker_radius"] <= 0:
+        raise DataError("collision marker_radius: a marker needs a positive size (mm)", path)
+    return out["marker_radius"], out["rod_radius"]
 
 
 def _check_layout(positions, path) -> None:

@@ -13,7 +13,7 @@ from doe_calib.io import _read_table
 
 QUICK = settings(max_examples=300, deadline=None,
                  suppress_health_check=[HealthCheck.function_scoped_fixture])
-NUMBERISH = st.text(alphabet="0123456789.,@-+eE naif;()=_jqx", max_size=30)
+NUMBERISH = st.text(alphabet="0123456789.,@:-+eE naif;()=_jqx", max_size=30)
 ANY_TEXT = st.one_of(st.text(max_size=40), NUMBERISH)
 
 
@@ -21,10 +21,10 @@ ANY_TEXT = st.one_of(st.text(max_size=40), NUMBERISH)
 @given(ANY_TEXT)
 def test_parse_load(text):
     try:
-        kg, com = parse_load(text)
+        kg, com, radius = parse_load(text)
     except DoeCalibError:
         return
-    assert 0.0 <= kg <= MAX_LOAD_KG and com.shape == (3,)
+    assert 0.0 <= kg <= MAX_LOAD_KG and com.shape == (3,) and (radius is None or radius > 0)
 
 
 @QUICK

@@ -157,12 +157,15 @@ MAX_LOAD_KG = 10000.0
 
 
 def parse_load(text: str):
-    """``MASS_KG@X,Y,Z`` (centre of mass in mm, flange frame) → (kg, m).
+    """``MASS_KG@X,Y,Z[:R]`` (centre of mass in mm, flange frame; radius in mm) → (kg, m, m).
 
     The mass is 0 … :data:`MAX_LOAD_KG` kg: a negative mass would pull the
-    flange up, a larger one is a typing error (grams?).
+    flange up, a larger one is a typing error (grams?). ``R`` is the radius
+    of the sphere the load is drawn as in the collision check (None: a steel
+    sphere of that mass).
     """
     mass, _, where = text.partition("@")
+    where, _, size = where.partition(":")
     try:
         kg = float(mass)
     except ValueError:
@@ -171,7 +174,12 @@ def parse_load(text: str):
         raise OptionError(f"--load {text!r}: the mass must be 0 to {MAX_LOAD_KG:.0f} kg, got "
                           f"{kg:g} kg (a mass hung on the flange, in kg)")
     com = parse_floats(where or "0,0,0", 3, "--load centre of mass (mm)") / 1000.0
-    return kg, com
+    radius = None
+    if size:
+        radius = float(parse_floats(size, 1, "--load radius after ':' (mm)")[0]) / 1000.0
+        if radius <= 0:
+            raise OptionError(f"--load {text!r}: the radius after ':' must be positive (mm)")
+    return kg, com, radius
 
 
 def fix_and_free(params, fix: str | None, free: str | None):

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..collision import build_collision_model
 from ..errors import DoeCalibError, OptionError
 from ..design import CRITERIA, LoadCase, read_constraints
 from ..design.optimal import optimal_design
@@ -13,7 +14,7 @@ from ..io import read_design, write_design
 from ..jsonfile import strict_json
 from ..measurement import build_model
 from .common import load_robot_tool, parse_floats, parse_load, robot_arguments, stage_progress
-from .options import count, positive
+from .options import at_least, count, positive
 
 HELP = "choose optimal measurement poses (D, A, E or task criterion; constraints; loads)"
 EXAMPLE = ("doe-calib design --robot kr270.urdf --tool tool.yaml --poses 15 "
@@ -27,8 +28,10 @@ def add_arguments(c):
                    help="number of poses N (at least what the model needs: its identifiable "
                         "parameters / (3 × markers × load cases), rounded up)")
     c.add_argument("--load", action="append", type=parse_load,
-                   help="MASS_KG@X,Y,Z: each pose is also measured with this mass hung on "
-                        "(kg; mm, flange frame); a 0 kg load adds nothing")
+                   help="MASS_KG@X,Y,Z[:R]: each pose is also measured with this mass hung on "
+                        "(kg; mm, flange frame); R: radius (mm) of the sphere it is drawn as "
+                        "in the collision check (default: a steel sphere of that mass); a 0 kg "
+                        "load adds nothing")
     c.add_argument("--candidates", type=count("--candidates", 1), default=20000,
                    help="feasible random candidate poses")
     c.add_argument("--criterion", choices=CRITERIA, default="D",
@@ -39,6 +42,16 @@ def add_arguments(c):
                    help="X,Y,Z of the task point in the flange frame, mm (default the flange)")
     c.add_argument("--constraints", help="constraints YAML: joint limits, margin, Cartesian boxes "
                                          "and floor, line of sight, load torques, coverage")
+    c.add_argument("--clearance", type=at_least("--clearance", 0.0, "mm"), default=20.0,
+                   metavar="MM", help="distance the robot keeps from the tool, payloads, floor "
+                                      "and keep-out boxes, mm (default 20; 0: no contact)")
+    c.add_argument("--self-clearance", type=at_least("--self-clearance", 0.0, "mm"),
+                   default=0.0, metavar="MM",
+                   help="distance the robot's links keep from one another, mm (default 0)")
+    c.add_argument("--srdf", help="SRDF whose <disable_collisions> pairs are not checked "
+                                  "(default: adjacent links and pairs always in contact)")
+    c.add_argument("--no-collision", action="store_true",
+                   help="skip the collision check (not recommended)")
     c.add_argument("--no-refine", action="store_true",
                    help="skip the continuous IPOPT refinement of the exact design")
     c.add_argument("--sigma", type=positive("--sigma", "mm"), default=0.02,
@@ -70,17 +83,24 @@ def run(args):
                           f"report its own name")
     robot, tool = load_robot_tool(args)
     model = build_model(robot, tool, args.model)
-    loads = [LoadCase(kg, com) for kg, com in args.load or [] if kg > 0]
+    loads = [LoadCase(kg, com, r) for kg, com, r in args.load or [] if kg > 0]
     if args.criterion == "task" and not args.task:
         raise DoeCalibError("--criterion task needs --task TASK.csv (a design CSV of task poses)")
     task = read_design(args.task, robot) if args.task else None
     constraints = read_constraints(args.constraints, robot, tool) if args.constraints else None
+    collision = None
+    if not args.no_collision:
+        collision = build_collision_model(robot, tool, loads, constraints,
+                                          clearance=args.clearance / 1000.0,
+                                          self_clearance=args.self_clearance / 1000.0,
+                                          srdf=args.srdf)
     progress = stage_progress()
     result = optimal_design(model, args.poses, loads, candidates=args.candidates,
                             sigma=args.sigma / 1000.0, criterion=args.criterion, task=task,
                             task_point=parse_floats(args.task_point, 3, "--task-point") / 1000.0,
                             constraints=constraints, refine=not args.no_refine,
-                            rng=np.random.default_rng(args.seed), progress=progress)
+                            rng=np.random.default_rng(args.seed), progress=progress,
+                            collision=collision)
     if progress:
         print(file=sys.stderr)
     result.to_json(args.out)

@@ -64,7 +64,7 @@ def run(args):
     else:
         q = random_configurations(robot, args.poses, rng)
         if args.load:
-            kg, com = args.load
+            kg, com, _ = args.load
             cfg = unloaded_and_loaded(model, truth.values, q, kg, com)
         else:
             cfg = Configurations.from_arrays(q)

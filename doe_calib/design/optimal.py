@@ -10,6 +10,7 @@ import numpy as np
 
 from ..errors import OptionError, SolverError
 from .candidates import feasible_candidates
+from .clearances import collision_note, pose_clearances
 from .constraints import DesignConstraints
 from .criteria import CRITERIA, check, efficiency, evaluate_criterion, log_det
 from .exchange import exact_design
@@ -50,7 +51,7 @@ class _Stages:
 def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma: float = 2e-5,
                    criterion: str = "D", task=None, task_point=(0.0, 0.0, 0.0),
                    constraints: DesignConstraints | None = None, refine: bool = True,
-                   params=None, rng=None, progress=None) -> DesignResult:
+                   params=None, rng=None, progress=None, collision=None) -> DesignResult:
     """Optimal N-pose design for ``model`` under constraints.
 
     Parameters
@@ -78,6 +79,10 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         Expected values (default nominal); parameters no candidate can
         identify are fixed.
     progress : callable(stage, note), optional
+    collision : CollisionModel, optional
+        Candidates closer than its clearances are rejected, refined poses
+        that lose it step back, and each pose's clearance is reported
+        (:func:`doe_calib.collision.build_collision_model`; None: no check).
     """
     check(criterion, task)
     if n_poses < 1:
@@ -88,7 +93,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     stage = _Stages(progress)
     stage("candidates", f"drawing {candidates} feasible poses")
     feasibility = build_feasibility(model, params.values, constraints, loads)
-    cands = feasible_candidates(feasibility, model.robot, candidates, rng)
+    cands = feasible_candidates(feasibility, model.robot, candidates, rng, collision)
     if len(cands.q) < n_poses:
         raise SolverError(f"only {len(cands.q)} feasible candidates for {n_poses} poses")
     params = design_parameters(model, params, cands.q, loads, rng=rng)
@@ -106,7 +111,8 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     q, refinement = cands.q[chosen], None
     if refine:
         stage("refinement", f"IPOPT on {q.size} joint angles")
-        refinement = refine_poses(model, params, loads, sigma, q, feasibility, criterion, t)
+        refinement = refine_poses(model, params, loads, sigma, q, feasibility, criterion, t,
+                                  collision=collision)
         q = refinement.q
         if refinement.accepted:
             stage("bound", "relaxation with the refined poses as candidates")
@@ -160,6 +166,12 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
                     "min_bins": cov.min_bins, "met": len(used) >= cov.min_bins}
     used_constraints = constraints.to_dict(model.robot, model.tool)
     used_constraints["loads"] = [ld.spec() for ld in loads]
+    clearances = ()
+    if collision is not None:
+        stage("clearance", f"distances at the {n_poses} poses")
+        clearances = pose_clearances(collision, q)
+        used_constraints["collision"] = collision.summary()
+        notes.append(collision_note(collision, cands.removed, cands.drawn, clearances))
     cfg = load_configurations(model, params.values, q, loads)
     return DesignResult(model.robot, model.tool, model.spec, cfg, criterion, value, bound,
                         efficiencies[criterion],
@@ -169,4 +181,4 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
                         {} if refinement is None else refinement.to_dict(), coverage,
                         {"designs": _RANDOM_DESIGNS, "singular_fraction": singular,
                          "equivalent_poses": None if equivalent is None else float(equivalent)},
-                        sigma_mm=1000.0 * sigma)
+                        sigma_mm=1000.0 * sigma, clearances=clearances)

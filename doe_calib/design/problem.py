@@ -16,13 +16,20 @@ from .batch import chunks
 
 @dataclass(frozen=True)
 class LoadCase:
-    """A mass hung on the flange: kg, centre of mass in the flange frame (m)."""
+    """A mass hung on the flange: kg, centre of mass in the flange frame (m).
+
+    ``radius`` (m) is the sphere it is drawn as in the collision check; None:
+    a steel sphere of that mass (:func:`doe_calib.collision.shapes.load_radius`).
+    """
 
     mass: float
     com: tuple
+    radius: float | None = None
 
     def spec(self) -> str:
-        return f"{self.mass:g}@" + ",".join(f"{1000 * c:g}" for c in self.com)
+        """``KG@X,Y,Z`` (mm), with ``:R`` (mm) when a radius is given, as ``--load`` reads it."""
+        size = "" if self.radius is None else f":{1000 * self.radius:g}"
+        return f"{self.mass:g}@" + ",".join(f"{1000 * c:g}" for c in self.com) + size
 
 
 def load_configurations(model, values, q, loads) -> Configurations:

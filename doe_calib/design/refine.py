@@ -4,9 +4,11 @@ The exact design's poses are the start; the objective is log Φ of the
 information M(q_1 … q_N) = Σ_i pose_information(q_i) (:mod:`.symbolic`,
 loads' wrenches functions of q), under the joint bounds and the pose
 constraints (:mod:`.feasibility`). Coverage is kept by holding one pose of
-each required bin inside its bin. The refined design is kept only if it
-satisfies every constraint (checked numerically, exactly) and improves
-the criterion.
+each required bin inside its bin. Each refined pose is re-checked
+numerically, exactly (constraints and, with a collision model, the
+clearance); one that fails steps back toward its start (halfway, a quarter
+of the way …, else the start itself). The refined design is kept only if it
+improves the criterion.
 """
 from __future__ import annotations
 
@@ -17,12 +19,14 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from ..collision import too_close
 from .criteria import evaluate_criterion
 from .symbolic import log_criterion, pose_information
 
 log = logging.getLogger(__name__)
 
 _MARGIN = 1e-7  # rows g ≥ this in IPOPT, so its tolerance never leaves g < 0
+_STEPS_BACK = (0.5, 0.25, 0.125, 0.0625)  # fractions of the move kept when a pose fails
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,6 +44,8 @@ class Refinement:
         IPOPT's return status, or why the result was not kept.
     iterations : int
     seconds : float
+    stepped_back : int
+        Refined poses that failed the re-check and were moved back toward their start.
     """
 
     q: np.ndarray
@@ -49,10 +55,36 @@ class Refinement:
     status: str
     iterations: int
     seconds: float
+    stepped_back: int = 0
 
     def to_dict(self) -> dict:
         return {"accepted": self.accepted, "status": self.status, "iterations": self.iterations,
-                "seconds": self.seconds, "start_value": self.start_value, "value": self.value}
+                "seconds": self.seconds, "start_value": self.start_value, "value": self.value,
+                "stepped_back": self.stepped_back}
+
+
+def _admissible(feasibility, collision, q: np.ndarray) -> np.ndarray:
+    """Mask of the poses of q (M, N) meeting every constraint and keeping their clearance."""
+    ok, _ = feasibility.feasible(q)
+    if collision is not None:
+        ok &= too_close(collision, q) < 0
+    return ok
+
+
+def step_back(q0: np.ndarray, q1: np.ndarray, admissible) -> tuple[np.ndarray, int]:
+    """Poses q1 (M, N), each failing one moved back toward its admissible start q0.
+
+    ``admissible(q) -> mask`` re-checks poses; a failing pose is tried at
+    the fractions :data:`_STEPS_BACK` of its move, and is its start when none
+    passes. Returns the poses and how many stepped back.
+    """
+    out = q1.copy()
+    bad = np.flatnonzero(~admissible(q1))
+    for i in bad:
+        tries = q0[i] + np.array(_STEPS_BACK)[:, None] * (q1[i] - q0[i])
+        ok = np.flatnonzero(admissible(tries))
+        out[i] = tries[ok[0]] if len(ok) else q0[i]
+    return out, len(bad)
 
 
 def _bounds(q0, constraints, robot):
@@ -71,7 +103,7 @@ def _bounds(q0, constraints, robot):
 
 def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
            criterion: str = "D", task: np.ndarray | None = None,
-           max_iterations: int = 300) -> Refinement:
+           max_iterations: int = 300, collision=None) -> Refinement:
     """Optimise the poses q0 (N, n_joints) jointly with IPOPT (L-BFGS Hessian).
 
     Parameters
@@ -88,6 +120,8 @@ def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
     criterion : {"D", "A", "E", "task"}
     task : ndarray, optional
         Task Jacobians (scaled), for the task criterion.
+    collision : CollisionModel, optional
+        Refined poses closer than its clearances step back (:func:`step_back`).
     """
     t0 = time.perf_counter()
     n, dof = q0.shape
@@ -110,15 +144,18 @@ def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
     stats = solver.stats()
     status, iterations = str(stats["return_status"]), int(stats["iter_count"])
     q1 = np.clip(np.array(sol["x"]).reshape(n, dof), lbx, ubx)
+    q1, stepped = step_back(q0, q1, lambda q: _admissible(feasibility, collision, q))
+    if stepped:
+        status += (f"; {stepped} pose(s) failing the re-check "
+                   f"({'constraints or clearance' if collision is not None else 'constraints'}) "
+                   f"stepped back toward the start")
     m1 = np.array(info.map(n)(q1.T)).reshape(-1, n, p).sum(axis=1)
     value = evaluate_criterion(criterion, m1, task)
-    ok, _ = feasibility.feasible(q1)
-    accepted = bool(ok.all()) and value > start_value
+    accepted = bool(value > start_value)
     if not accepted:
-        status += "; not kept: " + ("a constraint is violated" if not ok.all()
-                                    else "the criterion did not improve")
+        status += "; not kept: the criterion did not improve"
     log.info("refinement: %s after %d iterations, %.6g → %.6g", status, iterations, start_value,
              value)
     return Refinement(q1 if accepted else q0, float(start_value),
                       float(value if accepted else start_value), accepted, status, iterations,
-                      time.perf_counter() - t0)
+                      time.perf_counter() - t0, stepped)

@@ -65,6 +65,10 @@ class DesignResult:
     sigma_mm : float or None
         The tracker σ per coordinate (mm) the predicted std are for (None in
         design files written before it was stored).
+    clearances : tuple of (float, str)
+        Per pose, in measuring order: its clearance (mm) and the pair with
+        least distance to spare (:mod:`doe_calib.collision`); empty when not
+        checked.
     """
 
     robot: Robot
@@ -86,9 +90,11 @@ class DesignResult:
     coverage: dict = field(default_factory=dict)
     versus_random: dict = field(default_factory=dict)
     sigma_mm: float | None = None
+    clearances: tuple = ()
 
     def poses(self) -> list[dict]:
-        """One entry per pose: id, q in deg (mm for prismatic joints), its wrenches and approach.
+        """One entry per pose: id, q in deg (mm for prismatic joints), its wrenches, approach
+        and, when checked, ``clearance_mm`` and ``clearance_pair``.
 
         ``approach`` is the planned direction of each joint (+1 reached moving
         up, −1 moving down, 0 no requirement), the same for every load case
@@ -109,6 +115,8 @@ class DesignResult:
                                 f"directions ({entry['approach']}, {approach}); a design plans "
                                 f"one per pose")
             entry["wrenches"].append(cfg.wrench[c].tolist())
+        for entry, (mm, pair) in zip(out, self.clearances):
+            entry["clearance_mm"], entry["clearance_pair"] = float(mm), pair
         return out
 
     def summary(self) -> str:
@@ -140,6 +148,9 @@ class DesignResult:
             c = self.coverage
             lines.append(f"coverage of joint {c['joint']}: bins {c['bins_used']} used, "
                          f"{c['min_bins']} required: {'met' if c['met'] else 'NOT met'}")
+        if self.clearances:
+            mm, pair = min(self.clearances)
+            lines.append(f"clearance: every pose keeps ≥ {mm:.1f} mm ({pair} the closest)")
         lines += [*self.notes, "", f"{'parameter':<22}{'predicted std':>14}  unit"]
         lines += [f"{n:<22}{s:14.4g}  {u}" for n, (s, u) in self.predicted_std.items()]
         return "\n".join(lines)
@@ -177,7 +188,9 @@ class DesignResult:
                    *(d.get(k, {}) for k in ("efficiencies", "criteria", "equivalence",
                                             "candidates", "refinement", "coverage",
                                             "versus_random")),
-                   sigma_mm=None if d.get("sigma_mm") is None else float(d["sigma_mm"]))
+                   sigma_mm=None if d.get("sigma_mm") is None else float(d["sigma_mm"]),
+                   clearances=tuple((float(p["clearance_mm"]), p["clearance_pair"])
+                                    for p in d["poses"] if "clearance_mm" in p))
 
     @classmethod
     def from_json(cls, path) -> "DesignResult":

@@ -62,7 +62,9 @@ def _pose_rows(design):
     for p in design.poses():
         loads = "; ".join("(" + ", ".join(f"{v:.4g}" for v in w) + ")"
                           for w in p["wrenches"] if any(w)) or "unloaded only"
-        rows.append([p["pose"], *[float(v) for v in p["q_deg"]], len(p["wrenches"]), loads])
+        clear = [f"{p['clearance_mm']:.1f}", p["clearance_pair"]] if design.clearances else []
+        rows.append([p["pose"], *[float(v) for v in p["q_deg"]], len(p["wrenches"]), loads,
+                     *clear])
     return rows
 
 
@@ -70,12 +72,15 @@ def design_sections(design, dpi: int = 90) -> list:
     """The report sections of a design: poses, joint chart, 3-D view, constraints, bound, std."""
     robot, png = design.robot, figures.to_png
     units = [j.display_unit for j in robot.joints]
+    clear = ["clearance (mm)", "closest pair"] if design.clearances else []
     sections = [section(
         "Chosen poses", "Joint positions in deg (mm for prismatic joints), in measuring "
         "order; each pose is measured unloaded and under every load case, whose wrench "
-        "at the flange (f_x, f_y, f_z in N; m_x, m_y, m_z in N·m, robot base frame) is listed.",
+        "at the flange (f_x, f_y, f_z in N; m_x, m_y, m_z in N·m, robot base frame) is listed"
+        + ("; clearance: the distance of the pair of bodies with least to spare (robot links, "
+           "tool, payload, floor, keep-out boxes)." if clear else "."),
         table(["pose", *[f"{j.name} ({u})" for j, u in zip(robot.joints, units)],
-               "measurements", "load wrenches"], _pose_rows(design), 5))]
+               "measurements", "load wrenches", *clear], _pose_rows(design), 5))]
     q = np.array([p["q_deg"] for p in design.poses()], float)
     k = robot.display_factors
     sections.append(section("Joint positions", figure(

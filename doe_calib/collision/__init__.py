@@ -1,0 +1,15 @@
+"""Collisions: the robot's collision geometry with its tool, payloads and cell.
+
+:mod:`.model` builds the :class:`CollisionModel` (URDF collision tags through
+Pinocchio and coal, :mod:`.shapes` for tool, payloads, keep-out boxes and
+floor); :mod:`.pairs` decides which pairs are never checked (SRDF, adjacent
+links, always in contact); :mod:`.clearance` gives the clearance at a pose,
+screens many poses and checks a joint-space move at ≤ 1° steps.
+"""
+from .clearance import (SEGMENT_STEP, Clearance, SegmentCheck, Workspace, check_segment,
+                        clearance, contacts, too_close)
+from .model import DEFAULT_CLEARANCE, CollisionModel, build_collision_model
+
+__all__ = ["SEGMENT_STEP", "Clearance", "SegmentCheck", "Workspace", "check_segment",
+           "clearance", "contacts", "too_close", "DEFAULT_CLEARANCE", "CollisionModel",
+           "build_collision_model"]

@@ -1,0 +1,174 @@
+"""Clearance at a pose, collision screening of many poses, and the check of a joint-space move.
+
+Screening asks coal only whether each checked pair is closer than the
+clearance (a collision test with a security margin, stopping at the first
+pair: cheap); distances, which cost more, are computed only for the poses
+whose clearance is reported.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Largest joint step between the checked samples of a move, rad (m for prismatic joints).
+SEGMENT_STEP = np.radians(1.0)
+
+
+@dataclass(frozen=True)
+class Clearance:
+    """The pair closest to its required distance at one pose.
+
+    Attributes
+    ----------
+    distance : float
+        Its distance, m; ≤ 0 when the pair touches or overlaps.
+    pair : str
+        In words, ``"forearm_link vs marker A"``.
+    required : float
+        The distance it must keep, m (the clearance; the self-clearance
+        between two links of the robot).
+    """
+
+    distance: float
+    pair: str
+    required: float = 0.0
+
+    @property
+    def free(self) -> bool:
+        """Whether the pair keeps its required distance (then every checked pair does)."""
+        return self.distance >= self.required
+
+    @property
+    def mm(self) -> float:
+        return 1000.0 * self.distance
+
+
+@dataclass(frozen=True)
+class SegmentCheck:
+    """A move from ``qa`` to ``qb`` checked at joint steps of at most :data:`SEGMENT_STEP`.
+
+    Attributes
+    ----------
+    samples : int
+        Poses checked, both ends included.
+    first : float or None
+        Fraction of the move (0 … 1) at the first pose closer than the margin; None when free.
+    pair : str or None
+        The pair found too close there.
+    """
+
+    samples: int
+    first: float | None
+    pair: str | None
+
+    @property
+    def free(self) -> bool:
+        return self.first is None
+
+
+class Workspace:
+    """Scratch for one thread: Pinocchio data and geometry data of a collision model.
+
+    Create one per thread with ``Workspace(cm)`` and pass it to the functions
+    of this module; they create a fresh one when none is given.
+    """
+
+    def __init__(self, cm):
+        self.data = cm.model.createData()
+        self.geometry = cm.geometry.createData()
+        self.margins = None
+
+    def set_margins(self, margins) -> None:
+        """Make the collision tests report each pair closer than its margin (m)."""
+        margins = tuple(float(m) for m in margins)
+        if margins != self.margins:
+            for request, m in zip(self.geometry.collisionRequests, margins):
+                request.security_margin = m
+            self.margins = margins
+
+
+def clearance(cm, q, workspace: Workspace | None = None) -> Clearance:
+    """The pair with the least distance to spare at pose q (N,), rad/m: its distance and name.
+
+    Every checked pair keeps its required distance when the returned one does.
+
+    Examples
+    --------
+    >>> from doe_calib import Robot, Tool, example
+    >>> from doe_calib.collision import build_collision_model
+    >>> cm = build_collision_model(Robot.from_urdf(example.ROBOT_URDF),
+    ...                            Tool.from_yaml(example.TOOL_YAML))
+    >>> clearance(cm, [0, -1.57, 1.57, 0, 0.5, 0]).mm > 20
+    True
+    """
+    import pinocchio as pin
+
+    ws = Workspace(cm) if workspace is None else workspace
+    if not len(cm.geometry.collisionPairs):
+        return Clearance(float("inf"), "no pair checked")
+    pin.computeDistances(cm.model, ws.data, cm.geometry, ws.geometry,
+                         cm.configurations(q)[:, 0])
+    d = np.array([r.min_distance for r in ws.geometry.distanceResults])
+    k = int(np.argmin(d - np.asarray(cm.margins)))
+    return Clearance(float(d[k]), cm.pair_name(k), float(cm.margins[k]))
+
+
+def too_close(cm, q, margin: float | None = None, workspace: Workspace | None = None):
+    """For each pose of q (M, N), the first checked pair closer than ``margin``; −1 when none.
+
+    Parameters
+    ----------
+    margin : float, optional
+        Distance every pair must keep, m; default each pair's
+        (:attr:`CollisionModel.margins`).
+
+    Returns
+    -------
+    ndarray of int, shape (M,)
+        Index of the pair (:meth:`CollisionModel.pair_name`), or −1.
+    """
+    import pinocchio as pin
+
+    ws = Workspace(cm) if workspace is None else workspace
+    ws.set_margins(cm.margins if margin is None else [margin] * len(cm.margins))
+    configurations = cm.configurations(q)
+    out = np.full(configurations.shape[1], -1)
+    results = ws.geometry.collisionResults
+    for i, x in enumerate(configurations.T):
+        if pin.computeCollisions(cm.model, ws.data, cm.geometry, ws.geometry, x, True):
+            # pairs are tested in order and the test stops at the first one touching
+            out[i] = next(k for k, r in enumerate(results) if r.isCollision())
+    return out
+
+
+def contacts(cm, q, workspace: Workspace | None = None) -> tuple:
+    """Every checked pair closer than its required distance at pose q (N,), in words."""
+    import pinocchio as pin
+
+    ws = Workspace(cm) if workspace is None else workspace
+    ws.set_margins(cm.margins)
+    pin.computeCollisions(cm.model, ws.data, cm.geometry, ws.geometry,
+                          cm.configurations(q)[:, 0], False)
+    return tuple(cm.pair_name(k) for k, r in enumerate(ws.geometry.collisionResults)
+                 if r.isCollision())
+
+
+def check_segment(cm, qa, qb, margin: float | None = None, step: float = SEGMENT_STEP,
+                  workspace: Workspace | None = None) -> SegmentCheck:
+    """Check the straight joint-space move qa → qb (N,) at joint steps of at most ``step``.
+
+    Parameters
+    ----------
+    margin : float, optional
+        Distance every pair keeps along the move, m; default each pair's.
+    step : float
+        Largest change of any joint between checked poses, rad (m).
+    """
+    qa, qb = np.asarray(qa, float), np.asarray(qb, float)
+    t = np.linspace(0.0, 1.0, max(2, int(np.ceil(np.max(np.abs(qb - qa)) / step)) + 1))
+    hit = too_close(cm, qa + t[:, None] * (qb - qa), margin, workspace)
+    bad = np.flatnonzero(hit >= 0)
+    if not len(bad):
+        return SegmentCheck(len(t), None, None)
+    return SegmentCheck(len(t), float(t[bad[0]]), cm.pair_name(int(hit[bad[0]])))

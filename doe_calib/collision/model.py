@@ -1,0 +1,219 @@
+"""The collision model: the URDF's collision geometry, the tool, the payloads and the cell.
+
+A :class:`CollisionModel` is what is checked (Pinocchio model reduced to the
+chain, coal geometry, the active pairs named in words) and how closely
+(``clearance``); it never changes. Evaluations take a
+:class:`~doe_calib.collision.clearance.Workspace` the caller owns.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ModelError
+from . import pairs as pair_rules
+from .shapes import cell_shapes, load_shapes, tool_shapes
+
+log = logging.getLogger(__name__)
+
+#: Clearance kept between bodies by default, m.
+DEFAULT_CLEARANCE = 0.02
+#: Random configurations sampled to find the pairs always in contact.
+SAMPLES = 400
+
+
+@dataclass(frozen=True, eq=False)
+class CollisionModel:
+    """Bodies of a robot cell and the pairs of them that must keep apart.
+
+    Attributes
+    ----------
+    model : pinocchio.Model
+        The URDF reduced to the chain's joints (others locked at neutral).
+    geometry : pinocchio.GeometryModel
+        Collision geometry with only the checked pairs.
+    names : tuple of str
+        Name in words of each geometry object: its link, or the shape's name.
+    joint_names : tuple of str
+        The chain's joints, in the order of the design's q.
+    clearance : float
+        Distance the robot must keep from the tool, the payloads, the floor
+        and the keep-out boxes, m (0: only contact is refused).
+    self_clearance : float
+        Distance the robot's own links must keep from one another, m (default
+        0: links built to pass each other with gaps of millimetres may).
+    margins : tuple of float
+        Distance each checked pair must keep, m.
+    disabled : tuple of (str, str)
+        Pairs never checked, in words, and why.
+    source : str
+        URDF file.
+    """
+
+    model: object
+    geometry: object
+    names: tuple
+    joint_names: tuple
+    clearance: float
+    self_clearance: float
+    margins: tuple
+    disabled: tuple
+    source: str
+
+    @property
+    def pairs(self) -> tuple:
+        """Each checked pair in words, ``"upper_arm_link vs floor"``, in checking order."""
+        return tuple(self.pair_name(k) for k in range(len(self.geometry.collisionPairs)))
+
+    def pair_name(self, k: int) -> str:
+        """Collision pair ``k`` in words."""
+        return _words(self.names, self.geometry.collisionPairs[int(k)])
+
+    def configurations(self, q) -> np.ndarray:
+        """Pinocchio configurations of the chain's joint values q (M, N) rad/m: shape (nq, M)."""
+        return _configurations(self.model, self.joint_names, q)
+
+    def summary(self) -> dict:
+        """JSON-able description: clearances (mm), pairs checked and those never checked."""
+        return {"clearance_mm": 1000.0 * self.clearance,
+                "self_clearance_mm": 1000.0 * self.self_clearance,
+                "pairs_checked": len(self.pairs),
+                "pairs_not_checked": [f"{p} ({why})" for p, why in self.disabled]}
+
+
+def _words(names, pair) -> str:
+    return f"{names[pair.first]} vs {names[pair.second]}"
+
+
+def _configurations(model, joint_names, q) -> np.ndarray:
+    """Pinocchio configurations (nq, M) of chain joint values q (M, N); continuous: cos, sin."""
+    import pinocchio as pin
+
+    q = np.atleast_2d(np.asarray(q, float))
+    out = np.tile(pin.neutral(model)[:, None], (1, len(q)))
+    for k, name in enumerate(joint_names):
+        jm = model.joints[model.getJointId(name)]
+        if jm.nq == 2:
+            out[jm.idx_q] = np.cos(q[:, k])
+            out[jm.idx_q + 1] = np.sin(q[:, k])
+        else:
+            out[jm.idx_q] = q[:, k]
+    return out
+
+
+def _robot_geometry(robot, package_dirs):
+    """Pinocchio model and collision geometry of the URDF, reduced to the chain."""
+    import pinocchio as pin
+
+    path = Path(robot.source)
+    if not path.is_file():
+        raise ModelError(f"collision check: the robot's URDF {path} is not found; give the URDF "
+                         f"the design is for")
+    dirs = [str(p) for p in (*package_dirs, *path.resolve().parents)]
+    model = pin.buildModelFromUrdf(str(path))
+    try:
+        geometry = pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.COLLISION,
+                                         package_dirs=dirs)
+    except (RuntimeError, ValueError) as exc:
+        raise ModelError(f"{path}: cannot load the collision geometry ({exc}); name the "
+                         f"folders holding its meshes' packages") from exc
+    chain = set(robot.joint_names)
+    lock = [j for j in range(1, model.njoints) if model.names[j] not in chain]
+    if lock:
+        model, geometry = pin.buildReducedModel(model, geometry, lock, pin.neutral(model))
+    return model, geometry
+
+
+def build_collision_model(robot, tool=None, loads=(), constraints=None,
+                          clearance: float = DEFAULT_CLEARANCE, self_clearance: float = 0.0,
+                          srdf=None, package_dirs=(),
+                          samples: int = SAMPLES, rng=None) -> CollisionModel:
+    """The collision model of a robot with its tool, payloads and cell.
+
+    Parameters
+    ----------
+    robot : Robot
+        Read from a URDF (``robot.source``) whose ``<collision>`` tags give the links' shapes.
+    tool : Tool, optional
+        Spheres at its markers and rods to them (:func:`.shapes.tool_shapes`).
+    loads : sequence of LoadCase
+        A sphere at each centre of mass (:func:`.shapes.load_shapes`).
+    constraints : DesignConstraints, optional
+        Its keep-out boxes and floor; without, the floor is the base plane z = 0.
+    clearance : float
+        Distance the robot keeps from tool, payloads and cell, m.
+    self_clearance : float
+        Distance the robot's links keep from one another, m.
+    srdf : path-like, optional
+        Its ``<disable_collisions>`` pairs of links are not checked; without
+        one, adjacent links and pairs closer than their clearance in ≥ 95 %
+        of ``samples`` random configurations are not (pairs with a tool,
+        payload or cell shape are always judged so).
+    package_dirs : sequence of path-like
+        Folders holding the packages of ``package://`` meshes (the URDF's own
+        folders are searched too).
+
+    Examples
+    --------
+    >>> from doe_calib import Robot, Tool, example
+    >>> cm = build_collision_model(Robot.from_urdf(example.ROBOT_URDF),
+    ...                            Tool.from_yaml(example.TOOL_YAML))
+    >>> "link_2 vs floor" in cm.pairs
+    True
+    """
+    import pinocchio as pin
+
+    if clearance < 0 or self_clearance < 0:
+        raise ModelError(f"a clearance must not be negative, got "
+                         f"{1000 * min(clearance, self_clearance):g} mm")
+    model, geometry = _robot_geometry(robot, package_dirs)
+    links = [model.frames[g.parentFrame].name for g in geometry.geometryObjects]
+    robot_objects = set(range(len(links)))
+    flange_id = model.getFrameId(robot.flange)
+    flange = model.frames[flange_id]
+    rod = tool.rod_radius if tool is not None else 0.0
+    shapes = (tool_shapes(tool) if tool is not None else []) + load_shapes(loads, rod) \
+        + cell_shapes(constraints)
+    for s in shapes:
+        where = pin.SE3(s.placement)
+        joint, frame = (flange.parentJoint, flange_id) if s.on_flange else (0, 0)
+        if s.on_flange:
+            where = flange.placement * where
+        geometry.addGeometryObject(pin.GeometryObject(s.name, joint, frame, where, s.geometry))
+    names = tuple(links + [s.name for s in shapes])
+    links += [None] * len(shapes)
+    geometry.addAllCollisionPairs()
+    pairs = [pin.CollisionPair(p.first, p.second) for p in geometry.collisionPairs]
+    margins = np.array([self_clearance if p.first in robot_objects and p.second in robot_objects
+                        else clearance for p in pairs])
+    reasons = {}
+    if srdf is not None:
+        reasons.update({k: f"disabled in {Path(srdf).name}" for k in
+                        pair_rules.srdf_pairs(geometry, links, srdf)})
+    else:
+        reasons.update({k: "adjacent links" for k in
+                        pair_rules.adjacent(model, geometry, robot_objects)})
+    rng = np.random.default_rng(0) if rng is None else rng
+    lo = np.where(np.isfinite(robot.lower), robot.lower, -np.pi)
+    hi = np.where(np.isfinite(robot.upper), robot.upper, np.pi)
+    sample = _configurations(model, robot.joint_names,
+                             rng.uniform(lo, hi, (samples, robot.n_joints)))
+    rates = pair_rules.contact_rates(model, geometry, sample, margins)
+    for k in np.flatnonzero(rates >= pair_rules.ALWAYS):
+        robot_pair = pairs[k].first in robot_objects and pairs[k].second in robot_objects
+        if k not in reasons and (srdf is None or not robot_pair):
+            reasons[k] = (f"closer than {1000 * margins[k]:g} mm in {rates[k]:.0%} of "
+                          f"{samples} random poses")
+    disabled = tuple((_words(names, pairs[k]), reasons[k]) for k in sorted(reasons))
+    for pair, why in disabled:
+        log.info("collision pair %s not checked: %s", pair, why)
+    # checked most-often-touching first: screening stops at the first pair too close
+    keep = sorted(set(range(len(pairs))) - set(reasons), key=lambda k: -rates[k])
+    geometry.removeAllCollisionPairs()
+    for k in keep:
+        geometry.addCollisionPair(pairs[k])
+    return CollisionModel(model, geometry, names, tuple(robot.joint_names), float(clearance),
+                          float(self_clearance), tuple(margins[keep]), disabled, str(robot.source))
