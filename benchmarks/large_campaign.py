@@ -91,7 +91,7 @@ def run(quick: bool = False) -> Section:
 
         cold = _run(command("identify", "--out", str(tmp / "r.json")), env, tmp / "o.txt")
         warm = _run(command("identify", "--out", str(tmp / "r.json")), env, tmp / "o.txt")
-        diag = _run(command("diagnose", "--json"), env, tmp / "d.json")
+        diag = _run(command("diagnose", "--out", str(tmp / "d.json")), env, tmp / "o.txt")
         ratio = json.loads((tmp / "r.json").read_text())["sigma_ratio"]
         verdict = json.loads((tmp / "d.json").read_text())
     rows = (Row("doe-calib identify, native code compiled first", cold[0], "s",
