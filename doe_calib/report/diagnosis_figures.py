@@ -38,3 +38,64 @@ def error_falling(steps, noise_floor_mm: float):
     ax.set_title("The error falls as effects are added")
     ax.legend(fontsize=8)
     return fig
+
+
+def added_variable_panels(plots, ncols: int = 2):
+    """Each candidate's residual (points) and its fitted effect (red) against the variable
+    the effect follows: a step, a sine or a slope shows (see
+    :mod:`doe_calib.diagnosis.added_variable`)."""
+    nrows = max(1, -(-len(plots) // ncols))
+    fig = _figure(4.2 * ncols, 3.0 * nrows)
+    axes = fig.subplots(nrows, ncols, squeeze=False)
+    for ax, av in zip(axes.flat, plots):
+        ax.scatter(av.x, av.partial, s=7, alpha=0.45, color="tab:blue", label="residual")
+        ax.scatter(av.x, av.fitted, s=5, color="tab:red", label="fitted effect")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_title(f"{av.effect}   (r = {av.correlation:.2f})", fontsize=8)
+        ax.set_xlabel(f"{av.variable} ({av.variable_unit})" if av.variable_unit
+                      else av.variable, fontsize=8)
+        ax.set_ylabel(av.unit, fontsize=8)
+        plain_ticks(ax)
+    for ax in list(axes.flat)[len(plots):]:
+        ax.set_visible(False)
+    if plots:
+        axes.flat[0].legend(fontsize=7, loc="best")
+    return fig
+
+
+def residuals_by_direction(error_mm, columns):
+    """Signed residual components (mm, tracker x, y, z; rows) against a few variables
+    (columns): a step or a sine keeps its sign here.
+
+    Parameters
+    ----------
+    error_mm : ndarray, shape (K, 3)
+    columns : sequence of (str, ndarray of shape (K,))
+        Axis label with unit and the variable at each reading.
+    """
+    ncols = max(1, len(columns))
+    fig = _figure(3.2 * ncols, 6.6)
+    axes = fig.subplots(3, ncols, squeeze=False, sharey="row")
+    for j, (label, x) in enumerate(columns):
+        for i, axis in enumerate("xyz"):
+            ax = axes[i, j]
+            ax.scatter(np.asarray(x, float), error_mm[:, i], s=5, alpha=0.5, color="tab:blue")
+            ax.axhline(0.0, color="k", lw=0.5)
+            plain_ticks(ax)
+            if j == 0:
+                ax.set_ylabel(f"residual {axis} (mm)", fontsize=8)
+            if i == 2:
+                ax.set_xlabel(label, fontsize=8)
+    return fig
+
+
+def plain_ticks(ax) -> None:
+    """Small tick labels, no offset like "1e-13" above the axis, at most 5 per axis."""
+    from matplotlib.ticker import MaxNLocator, ScalarFormatter
+
+    for axis in (ax.xaxis, ax.yaxis):
+        formatter = ScalarFormatter(useOffset=False)
+        formatter.set_powerlimits((-3, 4))
+        axis.set_major_formatter(formatter)
+        axis.set_major_locator(MaxNLocator(5))
+    ax.tick_params(labelsize=7)

@@ -1,0 +1,168 @@
+"""Added-variable plots: the shape a candidate effect has in the residual.
+
+The size of a residual hides its sign: a backlash step, a cyclic sine or a
+compliance slope all look like clouds. Here, for a fitted model (weighted
+residual ``r``, free Jacobian ``J``) and a candidate effect with columns
+``Z``, the part the model cannot already absorb is ``Z⊥ = (I − QQᵀ)Z``
+(``Q`` an orthonormal basis of ``J``, as the candidate tests use), its
+least-squares fit to the residual ``θ̂ = Z⊥⁺ r`` and the displacement it
+explains ``f = Z⊥ θ̂``. Each configuration c is then reduced to one signed
+number, two ways:
+
+* an effect on joint k is read as an equivalent joint error: on the joint's
+  own direction ``g_c = ∂x_c/∂q_k`` (a central difference of the model's
+  marker positions), the fitted curve ``g_cᵀ f_c / g_cᵀ g_c`` and the
+  residual ``g_cᵀ r_c / g_cᵀ g_c`` (mdeg, or µm for a prismatic joint);
+* any other effect (thermal, a user effect on no joint) along the fitted
+  displacement itself: ``‖f_c‖`` and ``f_cᵀ r_c / ‖f_c‖`` (mm): its size,
+  not its sign.
+
+``r`` is the residual of the model without the candidate, so it already
+holds what the candidate would explain: the points scatter about the curve
+when the candidate has the right shape.
+
+The variable on the horizontal axis is the configuration variable
+(:func:`~doe_calib.diagnosis.variables.configuration_variables`) that the
+fitted curve follows best (adjusted R² of the same smooth fit as
+:func:`~doe_calib.diagnosis.variables.follows`): the joint angle for a sine,
+the torque or approach side for backlash, the torque for a compliance.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..effects import joint_index
+from ..evaluation import marker_positions
+from ..weighted import weighted_residual
+from .candidates import _basis, augmented
+from .variables import _basis as _smooth_basis
+
+_STEP = 1e-6  # rad or m: central difference of the marker positions along one joint
+
+
+@dataclass(frozen=True)
+class AddedVariable:
+    """One candidate's partial residual and fitted curve per configuration.
+
+    Attributes
+    ----------
+    effect : str
+        The candidate's model string.
+    variable, variable_unit : str
+        What the horizontal axis is, and its unit.
+    x : ndarray, shape (M,)
+        The variable at each configuration.
+    partial, fitted : ndarray, shape (M,)
+        The residual reduced as above and the fitted effect, both in ``unit``.
+    unit : str
+        ``mdeg`` or ``µm`` (equivalent joint error), else ``mm``.
+    quantity : str
+        What ``partial`` and ``fitted`` are, in words.
+    correlation : float
+        Pearson correlation of ``partial`` with ``fitted``.
+    """
+
+    effect: str
+    variable: str
+    variable_unit: str
+    x: np.ndarray
+    partial: np.ndarray
+    fitted: np.ndarray
+    unit: str
+    quantity: str
+    correlation: float
+
+
+def added_variable(model, measurements, params, effect, variables: dict) -> AddedVariable:
+    """The added-variable plot data of ``effect`` for the fit ``params`` of ``model``.
+
+    Parameters
+    ----------
+    model : Model
+        The fitted model.
+    measurements : Measurements
+    params : ParameterSet
+        Fitted values and free flags.
+    effect : Effect
+        A candidate not in the model.
+    variables : dict
+        :func:`~doe_calib.diagnosis.variables.configuration_variables` of the
+        measured configurations.
+    """
+    r, jac = weighted_residual(model, measurements, params.values)
+    q_basis = _basis(jac[:, params.free])
+    big, bp = augmented(model, params, effect)
+    new = ~np.isin(bp.names, params.names)
+    _, z = weighted_residual(big, measurements, bp.values)
+    zp = z[:, new] - q_basis @ (q_basis.T @ z[:, new])
+    theta = np.linalg.lstsq(zp, r, rcond=None)[0]
+    f = (zp @ theta).reshape(-1, 3)
+    res = r.reshape(-1, 3)
+    m = len(measurements.configurations)
+    c = measurements.config
+    if effect.joint is not None:
+        k = joint_index(model.robot, effect.joint)
+        g = _joint_direction(model, measurements, params.values, k)
+        gg = _per_config(np.sum(g * g, axis=1), c, m)
+        gg = np.where(gg > 0, gg, np.nan)
+        fitted = _per_config(np.sum(g * f, axis=1), c, m) / gg
+        partial = _per_config(np.sum(g * res, axis=1), c, m) / gg
+        prismatic = model.robot.joints[k].kind == "prismatic"
+        factor, unit = (1e6, "µm") if prismatic else (np.degrees(1.0) * 1e3, "mdeg")
+        quantity = f"equivalent error of joint {model.robot.joints[k].name}"
+    else:
+        sigma_mm = measurements.sigma[:, None] * 1e3
+        ff = _per_config(np.sum((f * sigma_mm) ** 2, axis=1), c, m)
+        size = np.sqrt(ff)
+        fitted = size
+        partial = _per_config(np.sum(f * res * sigma_mm ** 2, axis=1), c, m) / \
+            np.where(size > 0, size, np.nan)
+        factor, unit, quantity = 1.0, "mm", "residual along the fitted effect (size only)"
+    fitted, partial = fitted * factor, partial * factor
+    name, (x, x_unit, _) = _best_variable(fitted, variables)
+    ok = np.isfinite(partial) & np.isfinite(fitted)
+    corr = float(np.corrcoef(partial[ok], fitted[ok])[0, 1]) \
+        if ok.sum() > 2 and np.ptp(fitted[ok]) > 0 and np.ptp(partial[ok]) > 0 else 0.0
+    return AddedVariable(effect.spec(), name, x_unit, np.asarray(x, float), partial, fitted,
+                         unit, quantity, corr)
+
+
+def _per_config(values, config, m) -> np.ndarray:
+    return np.bincount(config, values, minlength=m)
+
+
+def _joint_direction(model, measurements, values, k) -> np.ndarray:
+    """∂x/∂q_k of every reading, weighted by 1/σ like the residual, shape (K, 3)."""
+    cfg = measurements.configurations
+    shifted = []
+    for sign in (1.0, -1.0):
+        q = cfg.q.copy()
+        q[:, k] += sign * _STEP
+        shifted.append(marker_positions(model, values, cfg.__class__(cfg.pose, q, cfg.wrench,
+                                                                     cfg.env)))
+    d = (shifted[0] - shifted[1]) / (2 * _STEP)
+    return d[measurements.config, measurements.marker] / measurements.sigma[:, None]
+
+
+def _best_variable(fitted, variables):
+    """The configuration variable the fitted curve follows best (adjusted R²)."""
+    ok = np.isfinite(fitted)
+    y = fitted[ok]
+    best, best_r2 = None, -np.inf
+    for name, (v, _, is_angle) in variables.items():
+        if name == "measurement order":
+            continue
+        x = _smooth_basis(np.asarray(v, float)[ok], is_angle)
+        k = np.linalg.matrix_rank(x)
+        tot = float(((y - y.mean()) ** 2).sum())
+        if tot == 0 or len(y) <= k + 1:
+            continue
+        fit = x @ np.linalg.lstsq(x, y, rcond=None)[0]
+        r2 = 1 - (1 - (1 - float(((y - fit) ** 2).sum()) / tot)) * (len(y) - 1) / (len(y) - k)
+        if r2 > best_r2:
+            best, best_r2 = name, r2
+    if best is None:
+        best = "measurement order"
+    return best, variables[best]
