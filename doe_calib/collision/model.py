@@ -21,6 +21,8 @@ log = logging.getLogger(__name__)
 
 #: Clearance kept between bodies by default, m.
 DEFAULT_CLEARANCE = 0.02
+#: Clearance kept between the robot's own links by default, m.
+DEFAULT_SELF_CLEARANCE = 0.005
 #: Random configurations sampled to find the pairs always in contact.
 SAMPLES = 400
 
@@ -128,7 +130,8 @@ def _robot_geometry(robot, package_dirs):
 
 
 def build_collision_model(robot, tool=None, loads=(), constraints=None,
-                          clearance: float = DEFAULT_CLEARANCE, self_clearance: float = 0.0,
+                          clearance: float = DEFAULT_CLEARANCE,
+                          self_clearance: float = DEFAULT_SELF_CLEARANCE,
                           srdf=None, package_dirs=(),
                           samples: int = SAMPLES, rng=None) -> CollisionModel:
     """The collision model of a robot with its tool, payloads and cell.
