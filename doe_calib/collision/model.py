@@ -46,7 +46,9 @@ class CollisionModel:
         and the keep-out boxes, m (0: only contact is refused).
     self_clearance : float
         Distance the robot's own links must keep from one another, m (default
-        0: links built to pass each other with gaps of millimetres may).
+        5 mm, :data:`DEFAULT_SELF_CLEARANCE`: less than the clearance, since
+        links built to pass each other may do so with gaps of millimetres —
+        the UR10's forearm and wrist 2 sit 19–21 mm apart in most poses).
     margins : tuple of float
         Distance each checked pair must keep, m.
     disabled : tuple of (str, str)

@@ -12,9 +12,11 @@ The program is taken to start at its first position: the move to it, from
 wherever the robot stands, is not checked; the first position itself is.
 
 A move into a visit that collides is routed through one or two
-intermediate positions when some pass the check: one of the program's own
-poses (each free at the design's clearance), or a retract–swing–extend: the
-previous position and the next with the arm joints (2 and 3) of such a pose.
+intermediate positions when some pass the check: the wrist joints (4 on)
+turned first or last; one of the program's own poses (each free at the
+design's clearance); a retract–swing–extend, the previous position and the
+next with the arm joints (2 and 3) of such a pose; or the wrist turned as at
+such a pose for the move.
 The candidates are tried in order of their joint travel, at most
 :data:`MAX_ROUTES`. A move from a pre-pose into its pose is never routed (the
 side it arrives from is its purpose).
@@ -32,7 +34,7 @@ from .program import Waypoint, ascii_text, load_words
 from .sequence import NO_LOAD
 
 #: Candidate routes tried for one colliding move, shortest first.
-MAX_ROUTES = 24
+MAX_ROUTES = 40
 #: Joints (0-based) a retract sets from a free pose: the arm's second and third.
 ARM = (1, 2)
 
@@ -152,14 +154,25 @@ def _travel(path) -> float:
 def _routes(a, b, safe) -> list:
     """Candidate routes a → b (URDF values): (words, intermediate positions), shortest first."""
     arm = [k for k in ARM if k < len(a)]
+    wrist = list(range(max(ARM) + 1, len(a)))
     out = []
+    if wrist:
+        first = a.copy()
+        first[wrist] = b[wrist]
+        out.append(("turning the wrist first", [first]))
+        first = b.copy()
+        first[wrist] = a[wrist]
+        out.append(("moving the arm first", [first]))
     for name, p in safe:
         if np.allclose(p, a) or np.allclose(p, b):
             continue
         out.append((f"through pose {name}", [p]))
-        ra, rb = a.copy(), b.copy()
-        ra[arm], rb[arm] = p[arm], p[arm]
-        out.append((f"retract with the arm joints of pose {name}", [ra, rb]))
+        for joints, how in ((arm, "retract with the arm joints"),
+                            (wrist, "turn the wrist as")):
+            if joints:
+                ra, rb = a.copy(), b.copy()
+                ra[joints], rb[joints] = p[joints], p[joints]
+                out.append((f"{how} of pose {name}", [ra, rb]))
     return sorted(out, key=lambda r: _travel([a, *r[1], b]))[:MAX_ROUTES]
 
 
