@@ -86,7 +86,13 @@ def _constraints(args, design):
 
 
 def _checked(args, design, visits, axis_map):
-    """The program's moves checked for collisions and routed (None with ``--no-collision``)."""
+    """The program's moves checked for collisions and routed.
+
+    None with ``--no-collision`` and for the design CSV, which lists the
+    measurements in the program's order but moves nothing.
+    """
+    if args.format == "csv":
+        return None
     constraints = _constraints(args, design)
     build = collision_builder(args, design.robot, design.tool, constraints,
                               design.constraints.get("collision"))
@@ -128,4 +134,8 @@ def run(args):
     if args.json:
         print(strict_json({"design": args.design, "format": args.format, "name": args.name,
                           "poses": n_poses, "measurements": len(design.configurations),
-                          "cycle_time": cycle.to_dict(), "files": [str(p) for p in paths]}))
+                          "cycle_time": cycle.to_dict(), "files": [str(p) for p in paths],
+                          "collision": None if checked is None else {
+                              "moves": checked.moves, "poses_checked": checked.samples,
+                              "routed": list(checked.routed),
+                              "collisions": [str(c) for c in checked.collisions]}}))
