@@ -14,8 +14,9 @@ from . import example
 from .covariance import CovariancePrediction, point_covariance, predict_covariance
 from .data import Configurations, Measurements
 from .effects import DEFAULT_MODEL, REGISTRY
-from .errors import (ConditioningWarning, ConvergenceWarning, DataError, DoeCalibError,
-                     IdentifiabilityWarning, ModelError, OptionError, SolverError)
+from .errors import (CollisionError, ConditioningWarning, ConvergenceWarning, DataError,
+                     DoeCalibError, IdentifiabilityWarning, ModelError, OptionError,
+                     SolverError)
 from .evaluation import marker_positions, observation_matrix
 from .identify import identify
 from .measurement import Model, ModelDescription, build_model, describe_model, for_workload
@@ -33,6 +34,6 @@ __all__ = [
     "Measurements", "marker_positions", "observation_matrix", "identify",
     "IdentificationResult", "predict_covariance", "point_covariance", "CovariancePrediction",
     "simulate", "example", "DEFAULT_MODEL", "REGISTRY", "DoeCalibError", "DataError",
-    "ModelError", "OptionError", "SolverError", "IdentifiabilityWarning", "ConditioningWarning",
-    "ConvergenceWarning",
+    "ModelError", "OptionError", "SolverError", "CollisionError", "IdentifiabilityWarning",
+    "ConditioningWarning", "ConvergenceWarning",
 ]

@@ -48,6 +48,10 @@ class SolverError(DoeCalibError):
     """An estimation or design problem that could not be solved."""
 
 
+class CollisionError(DoeCalibError):
+    """A robot program whose moves would collide (naming the move and the pair)."""
+
+
 class IdentifiabilityWarning(UserWarning):
     """Some parameters cannot be separated by the data and were fixed."""
 

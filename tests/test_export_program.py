@@ -179,7 +179,8 @@ def test_cli_options(backlash, tmp_path, capsys):
     backlash.to_json(path)
     assert main(["export", str(path), "--format", "urscript", "--out", str(tmp_path / "p"),
                  "--axis-map", "a1:-1:0", "--group-by", "none", "--order", "design",
-                 "--approach-step", "3", "--load-change-time", "60", "--json"]) == 0
+                 "--approach-step", "3", "--load-change-time", "60", "--json",
+                 "--no-collision"]) == 0  # a design made without the collision check
     out = capsys.readouterr()
     doc = json.loads(out.out)
     assert "estimated cycle time" in out.err

@@ -87,8 +87,8 @@ def test_design_report_structure(design, design_html):
     text = design_html.read_text(encoding="utf-8")
     images = _images(text)
     alts = [a for a, _ in images]
-    assert len(images) == 3
-    for word in ("joint positions", "3-D view", "predicted standard deviation"):
+    assert len(images) == 4
+    for word in ("joint positions", "3-D view", "predicted standard deviation", "stick figure"):
         assert sum(word in a for a in alts) == 1, word
     for alt, img in images:
         assert 150 <= img.shape[0] <= 3000 and 300 <= img.shape[1] <= 3000, alt
@@ -99,6 +99,7 @@ def test_design_report_structure(design, design_html):
         assert f'<td class="text">{name}</td>' in text
     assert "red: the tracker" in text and "line_of_sight / tracker" in text
     assert "certified bound" in text and "design_efficiency_at_least" in text
+    assert "Robot in each pose" in text and 'alt="the robot as a stick figure' in text
 
 
 def test_text_is_escaped_and_figures_embedded(tmp_path):
@@ -119,7 +120,7 @@ def test_design_command_writes_report(tmp_path, capsys):
                  "--model", "joint_offset", "--poses", "6", "--candidates", "200", "--no-refine",
                  "--seed", "3", "--out", str(out), "--report", str(report)]) == 0
     assert f"report: {report}" in capsys.readouterr().err
-    assert len(_images(report.read_text(encoding="utf-8"))) == 3
+    assert len(_images(report.read_text(encoding="utf-8"))) == 4
 
 
 def _render(html_path, tmp_path):

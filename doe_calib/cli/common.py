@@ -12,6 +12,7 @@ from ..io import read_measurements
 from ..measurement import build_model
 from ..robot import Robot
 from ..tool import Tool
+from .options import at_least
 
 
 def effect_file_argument(c):
@@ -206,3 +207,52 @@ def report_warnings(caught):
     """Print recorded warnings to stderr, one line each."""
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
+
+
+def collision_arguments(c, defaults_from: str | None = None):
+    """Add ``--clearance``, ``--self-clearance``, ``--srdf``, ``--no-collision``.
+
+    ``defaults_from``: what the clearances default to when not given (e.g.
+    ``"the design's"``); None: the collision model's defaults.
+    """
+    from ..collision import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE
+
+    clear, self_clear = 1000.0 * DEFAULT_CLEARANCE, 1000.0 * DEFAULT_SELF_CLEARANCE
+    said = f"{defaults_from}, else " if defaults_from else ""
+    c.add_argument("--clearance", type=at_least("--clearance", 0.0, "mm"),
+                   default=None if defaults_from else clear, metavar="MM",
+                   help=f"distance the robot keeps from the tool, payloads, floor and keep-out "
+                        f"boxes, mm (default {said}{clear:g}; 0: no contact)")
+    c.add_argument("--self-clearance", type=at_least("--self-clearance", 0.0, "mm"),
+                   default=None if defaults_from else self_clear, metavar="MM",
+                   help=f"distance the robot's links keep from one another, mm "
+                        f"(default {said}{self_clear:g})")
+    c.add_argument("--srdf", help="SRDF whose <disable_collisions> pairs are not checked "
+                                  "(default: adjacent links and pairs always in contact)")
+    c.add_argument("--no-collision", action="store_true",
+                   help="skip the collision check (not recommended)")
+
+
+def collision_builder(args, robot, tool, constraints, recorded: dict | None = None):
+    """``build(loads)`` → the collision model the options ask for; None with ``--no-collision``.
+
+    Parameters
+    ----------
+    recorded : dict, optional
+        A design's ``constraints["collision"]`` (``clearance_mm``,
+        ``self_clearance_mm``): the clearances when the options give none.
+    """
+    from ..collision import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE, build_collision_model
+
+    if args.no_collision:
+        return None
+    recorded = recorded or {}
+    clear = args.clearance if args.clearance is not None else recorded.get(
+        "clearance_mm", 1000.0 * DEFAULT_CLEARANCE)
+    self_clear = args.self_clearance if args.self_clearance is not None else recorded.get(
+        "self_clearance_mm", 1000.0 * DEFAULT_SELF_CLEARANCE)
+
+    def build(loads):
+        return build_collision_model(robot, tool, loads, constraints, clearance=clear / 1000.0,
+                                     self_clearance=self_clear / 1000.0, srdf=args.srdf)
+    return build

@@ -6,15 +6,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..collision import build_collision_model
 from ..errors import DoeCalibError, OptionError
 from ..design import CRITERIA, LoadCase, read_constraints
 from ..design.optimal import optimal_design
 from ..io import read_design, write_design
 from ..jsonfile import strict_json
 from ..measurement import build_model
-from .common import load_robot_tool, parse_floats, parse_load, robot_arguments, stage_progress
-from .options import at_least, count, positive
+from .common import (collision_arguments, collision_builder, load_robot_tool, parse_floats,
+                     parse_load, robot_arguments, stage_progress)
+from .options import count, positive
 
 HELP = "choose optimal measurement poses (D, A, E or task criterion; constraints; loads)"
 EXAMPLE = ("doe-calib design --robot kr270.urdf --tool tool.yaml --poses 15 "
@@ -42,16 +42,7 @@ def add_arguments(c):
                    help="X,Y,Z of the task point in the flange frame, mm (default the flange)")
     c.add_argument("--constraints", help="constraints YAML: joint limits, margin, Cartesian boxes "
                                          "and floor, line of sight, load torques, coverage")
-    c.add_argument("--clearance", type=at_least("--clearance", 0.0, "mm"), default=20.0,
-                   metavar="MM", help="distance the robot keeps from the tool, payloads, floor "
-                                      "and keep-out boxes, mm (default 20; 0: no contact)")
-    c.add_argument("--self-clearance", type=at_least("--self-clearance", 0.0, "mm"),
-                   default=0.0, metavar="MM",
-                   help="distance the robot's links keep from one another, mm (default 0)")
-    c.add_argument("--srdf", help="SRDF whose <disable_collisions> pairs are not checked "
-                                  "(default: adjacent links and pairs always in contact)")
-    c.add_argument("--no-collision", action="store_true",
-                   help="skip the collision check (not recommended)")
+    collision_arguments(c)
     c.add_argument("--no-refine", action="store_true",
                    help="skip the continuous IPOPT refinement of the exact design")
     c.add_argument("--sigma", type=positive("--sigma", "mm"), default=0.02,
@@ -88,12 +79,8 @@ def run(args):
         raise DoeCalibError("--criterion task needs --task TASK.csv (a design CSV of task poses)")
     task = read_design(args.task, robot) if args.task else None
     constraints = read_constraints(args.constraints, robot, tool) if args.constraints else None
-    collision = None
-    if not args.no_collision:
-        collision = build_collision_model(robot, tool, loads, constraints,
-                                          clearance=args.clearance / 1000.0,
-                                          self_clearance=args.self_clearance / 1000.0,
-                                          srdf=args.srdf)
+    build = collision_builder(args, robot, tool, constraints)
+    collision = None if build is None else build(loads)
     progress = stage_progress()
     result = optimal_design(model, args.poses, loads, candidates=args.candidates,
                             sigma=args.sigma / 1000.0, criterion=args.criterion, task=task,

@@ -1,14 +1,22 @@
-"""``doe-calib export``: a design as a robot program (KRL, RAPID, URScript) or design CSV."""
+"""``doe-calib export``: a design as a robot program (KRL, RAPID, URScript) or design CSV.
+
+Every move of the program is checked for collisions with the collision model
+the design was made with (its clearances, loads and constraints file) and
+routed round them when it can be (:mod:`doe_calib.export.safety`).
+"""
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
+from ..design import LoadCase, read_constraints
 from ..design.result import DesignResult
-from ..errors import DataError
-from ..export import FORMATS, AxisMap, Plan, cycle_time, export_design, moves
+from ..errors import DataError, OptionError
+from ..export import (FORMATS, AxisMap, Plan, check_program, cycle_time, export_design, moves,
+                      program_models)
 from ..export.sequence import GROUPINGS, ORDERS
 from ..jsonfile import strict_json
+from .common import collision_arguments, collision_builder, parse_load
 from .options import at_least, count, positive
 
 HELP = "write a design as a KUKA KRL, ABB RAPID or URScript program, or a design CSV"
@@ -49,11 +57,50 @@ def add_arguments(c):
     c.add_argument("--load-change-time", type=at_least("--load-change-time", 0.0, "s"),
                    default=300.0, metavar="S",
                    help="seconds to change the load, for the cycle-time estimate (default 300)")
+    c.add_argument("--constraints", metavar="CELL.yaml",
+                   help="constraints YAML whose floor and keep-out boxes the moves keep clear of "
+                        "(default: the file the design names, if any)")
+    collision_arguments(c, defaults_from="the design's")
+    c.add_argument("--allow-collisions", action="store_true",
+                   help="write the program even if a move collides (each is listed as a "
+                        "warning); default: refuse, naming the move and the pair")
     c.add_argument("--json", action="store_true", help="print the poses, measurements and "
                                                        "files written as JSON")
 
 
 OUTPUTS = {"out": "folder"}
+
+
+def _constraints(args, design):
+    """The ``--constraints`` file, else the one the design names (beside it or as written)."""
+    named = args.constraints or design.constraints.get("source") or None
+    if named is None:
+        return None
+    path = Path(named)
+    if args.constraints is None and not path.is_file():
+        path = Path(args.design).parent / path
+        if not path.is_file():
+            raise OptionError(f"the design was made under the constraints file {named}, which "
+                              f"is not found; give it with --constraints (or --no-collision)")
+    return read_constraints(path, design.robot, design.tool)
+
+
+def _checked(args, design, visits, axis_map):
+    """The program's moves checked for collisions and routed.
+
+    None with ``--no-collision`` and for the design CSV, which lists the
+    measurements in the program's order but moves nothing.
+    """
+    if args.format == "csv":
+        return None
+    constraints = _constraints(args, design)
+    build = collision_builder(args, design.robot, design.tool, constraints,
+                              design.constraints.get("collision"))
+    if build is None:
+        return None
+    loads = [LoadCase(kg, com, r) for kg, com, r in
+             (parse_load(spec) for spec in design.constraints.get("loads", []))]
+    return check_program(visits, program_models(loads, build), design.robot, axis_map)
 
 
 def run(args):
@@ -63,9 +110,19 @@ def run(args):
         plan = Plan(args.group_by, args.order, args.approach_step, args.alternate != "none",
                     axis_map)
         out = args.out if args.out is not None else Path(args.design).parent
+        visits = moves(design, plan)
+        checked = _checked(args, design, visits, axis_map)
+        if checked is not None:
+            print(checked.summary(), file=sys.stderr)
+            if not args.allow_collisions:
+                checked.raise_if_colliding()
+            visits = checked.visits
+            for c in checked.collisions:
+                print(f"warning: written with a colliding move (--allow-collisions): {c}",
+                      file=sys.stderr)
         paths = export_design(design, args.format, out, name=args.name, dwell=args.dwell,
-                              handshake=args.handshake, plan=plan)
-        cycle = cycle_time(moves(design, plan), design.robot, args.dwell, args.load_change_time)
+                              handshake=args.handshake, plan=plan, visits=visits)
+        cycle = cycle_time(visits, design.robot, args.dwell, args.load_change_time)
     except DataError as exc:
         if exc.path is not None:
             raise
@@ -77,4 +134,8 @@ def run(args):
     if args.json:
         print(strict_json({"design": args.design, "format": args.format, "name": args.name,
                           "poses": n_poses, "measurements": len(design.configurations),
-                          "cycle_time": cycle.to_dict(), "files": [str(p) for p in paths]}))
+                          "cycle_time": cycle.to_dict(), "files": [str(p) for p in paths],
+                          "collision": None if checked is None else {
+                              "moves": checked.moves, "poses_checked": checked.samples,
+                              "routed": list(checked.routed),
+                              "collisions": [str(c) for c in checked.collisions]}}))

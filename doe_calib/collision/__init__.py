@@ -8,8 +8,9 @@ screens many poses and checks a joint-space move at ≤ 1° steps.
 """
 from .clearance import (SEGMENT_STEP, Clearance, SegmentCheck, Workspace, check_segment,
                         clearance, contacts, too_close)
-from .model import DEFAULT_CLEARANCE, CollisionModel, build_collision_model
+from .model import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE, CollisionModel, build_collision_model
 
 __all__ = ["SEGMENT_STEP", "Clearance", "SegmentCheck", "Workspace", "check_segment",
-           "clearance", "contacts", "too_close", "DEFAULT_CLEARANCE", "CollisionModel",
+           "clearance", "contacts", "too_close", "DEFAULT_CLEARANCE", "DEFAULT_SELF_CLEARANCE",
+           "CollisionModel",
            "build_collision_model"]

@@ -21,6 +21,8 @@ log = logging.getLogger(__name__)
 
 #: Clearance kept between bodies by default, m.
 DEFAULT_CLEARANCE = 0.02
+#: Clearance kept between the robot's own links by default, m.
+DEFAULT_SELF_CLEARANCE = 0.005
 #: Random configurations sampled to find the pairs always in contact.
 SAMPLES = 400
 
@@ -44,7 +46,9 @@ class CollisionModel:
         and the keep-out boxes, m (0: only contact is refused).
     self_clearance : float
         Distance the robot's own links must keep from one another, m (default
-        0: links built to pass each other with gaps of millimetres may).
+        5 mm, :data:`DEFAULT_SELF_CLEARANCE`: less than the clearance, since
+        links built to pass each other may do so with gaps of millimetres —
+        the UR10's forearm and wrist 2 sit 19–21 mm apart in most poses).
     margins : tuple of float
         Distance each checked pair must keep, m.
     disabled : tuple of (str, str)
@@ -128,7 +132,8 @@ def _robot_geometry(robot, package_dirs):
 
 
 def build_collision_model(robot, tool=None, loads=(), constraints=None,
-                          clearance: float = DEFAULT_CLEARANCE, self_clearance: float = 0.0,
+                          clearance: float = DEFAULT_CLEARANCE,
+                          self_clearance: float = DEFAULT_SELF_CLEARANCE,
                           srdf=None, package_dirs=(),
                           samples: int = SAMPLES, rng=None) -> CollisionModel:
     """The collision model of a robot with its tool, payloads and cell.

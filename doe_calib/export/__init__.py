@@ -6,7 +6,9 @@ reaches each pose from the side the design or the backlash model asks for
 through a pre-pose (:mod:`.approach`), stops for the operator where the load
 changes and waits for the measurement at each pose
 (:class:`.program.Settings`). Joint limits are checked again before anything
-is written. :func:`.cycle.cycle_time` estimates how long the program runs.
+is written. :func:`.safety.check_program` checks every move for collisions
+and routes a colliding one round through intermediate positions;
+:func:`.cycle.cycle_time` estimates how long the program runs.
 """
 from __future__ import annotations
 
@@ -20,7 +22,8 @@ from ..io import write_design
 from . import krl, rapid, urscript
 from .axis_map import AxisMap
 from .cycle import CycleTime, cycle_time
-from .program import Move, Settings, moves, realised_approach
+from .program import Move, Settings, Waypoint, moves, realised_approach
+from .safety import Collision, ProgramCheck, check_program, program_models
 from .sequence import Plan
 
 
@@ -69,7 +72,8 @@ def program_configurations(design, visits) -> Configurations:
 
 
 def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float = 3.0,
-                  handshake: int | None = None, plan: Plan | None = None) -> list[Path]:
+                  handshake: int | None = None, plan: Plan | None = None,
+                  visits=None) -> list[Path]:
     """Write ``design`` as a robot program (or design CSV); return the files written.
 
     Parameters
@@ -92,6 +96,10 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
         lists the configurations in the program's order with the approach
         directions the program realises (:func:`program_configurations`), in
         the URDF's joint values (no axis map). Default ``Plan()``.
+    visits : sequence of Move, optional
+        The program's visits made with ``plan`` (:func:`moves`), e.g. checked
+        for collisions and routed by :func:`.safety.check_program`; default
+        ``moves(design, plan)``.
 
     Raises
     ------
@@ -122,7 +130,7 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
     if form.render is None and plan is not None and plan.axis_map is not None:
         raise OptionError("--axis-map: the design CSV keeps the URDF's joint values; the axis "
                           "map is for robot programs (krl, rapid, urscript)")
-    visits = moves(design, plan)
+    visits = moves(design, plan) if visits is None else list(visits)
     if form.render is None:
         stem.parent.mkdir(parents=True, exist_ok=True)
         write_design(stem.with_suffix(".csv"), program_configurations(design, visits),
@@ -135,5 +143,7 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
         path.write_text(texts[path.suffix], encoding="ascii")
     return paths
 
-__all__ = ["FORMATS", "AxisMap", "CycleTime", "Format", "Move", "Plan", "Settings",
-           "cycle_time", "export_design", "moves", "program_configurations", "realised_approach"]
+__all__ = ["FORMATS", "AxisMap", "Collision", "CycleTime", "Format", "Move", "Plan",
+           "ProgramCheck", "Settings", "Waypoint", "check_program", "cycle_time",
+           "export_design", "moves", "program_configurations", "program_models",
+           "realised_approach"]

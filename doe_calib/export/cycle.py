@@ -1,6 +1,6 @@
 """An estimate of how long a measurement program runs.
 
-Model: every PTP move (pre-poses included) takes
+Model: every PTP move (pre-poses and intermediate positions included) takes
 
     t = max_j |Δq_j| / (f · v_j) + t_ramp
 
@@ -33,7 +33,7 @@ class CycleTime:
     Attributes
     ----------
     travel : float
-        Time moving, pre-poses included.
+        Time moving, pre-poses and intermediate positions included.
     moves : int
         Number of PTP moves counted.
     dwell : float
@@ -90,8 +90,9 @@ def cycle_time(visits, robot, dwell: float, load_change: float) -> CycleTime:
     >>> cycle_time(moves(design), design.robot, 3.0, 300.0).total  # doctest: +SKIP
     1342.7
     """
-    path = [q for m in visits for q in ((m.urdf_q,) if m.urdf_pre is None
-                                        else (m.urdf_pre, m.urdf_q))]
+    path = [q for m in visits for q in (*(w.urdf for w in m.via),
+                                        *(() if m.urdf_pre is None else (m.urdf_pre,)),
+                                        m.urdf_q)]
     speed = SPEED_FRACTION * axis_speeds(robot)
     steps = [float(move_times(a, b, speed)[0, 0]) for a, b in zip(path[:-1], path[1:])]
     moving = [t for t in steps if t > 0]

@@ -3,7 +3,8 @@
 Each visit is ``PTP XP<i>`` (exact positioning) to the pose's axis values,
 A1..A6 in deg (mm for a linear axis), declared in the ``.dat``; E1..E6 are 0.
 A visit whose joints must arrive from a given side is preceded by
-``PTP XA<n>``, its pre-pose (n: the visit's number in the program).
+``PTP XA<n>``, its pre-pose (n: the visit's number in the program). A move
+routed round a collision (:mod:`.safety`) first visits ``XV<n>_<k>``.
 Before a visit whose load differs from the previous one the program HALTs
 with a comment telling the operator which load to hang (restart with Start).
 At each pose it waits ``dwell`` s (``WAIT SEC``, which also stops the
@@ -62,6 +63,8 @@ def render(design, visits, settings) -> dict:
         src += ["", f"  ; {m.comment()}"]
         if change:
             src += [f"  ; OPERATOR: {m.instruction()}, then press Start", "  HALT"]
+        for k, w in enumerate(m.via, start=1):
+            src += [f"  ; {w.why}", f"  PTP XV{m.number}_{k}"]
         if m.pre is not None:
             src += [f"  ; {m.approach_words(design.robot.joint_names)}", f"  PTP XA{m.number}"]
         src += [f"  PTP XP{m.index}", *_wait(settings)]
@@ -77,5 +80,8 @@ def render(design, visits, settings) -> dict:
         if m.pre is not None:
             dat += ["  ; " + ascii_text(f"pre-pose of pose {m.pose}, visit {m.number}"),
                     f"  DECL E6AXIS XA{m.number}={_axis(m.pre)}"]
+    for m in visits:
+        for k, w in enumerate(m.via, start=1):
+            dat += [f"  ; {w.why}", f"  DECL E6AXIS XV{m.number}_{k}={_axis(w.q)}"]
     dat += ["ENDDAT", ""]
     return {".src": "\n".join(src), ".dat": "\n".join(dat)}

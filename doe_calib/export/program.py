@@ -50,6 +50,26 @@ class Settings:
 
 
 @dataclass(frozen=True)
+class Waypoint:
+    """An intermediate position a move passes through to keep clear of collisions.
+
+    Attributes
+    ----------
+    q, q_si : ndarray, shape (N,)
+        Controller joint values, deg (mm) and rad (m).
+    urdf : ndarray, shape (N,)
+        The same as URDF values, rad (m).
+    why : str
+        In words, for the program's comment.
+    """
+
+    q: np.ndarray
+    q_si: np.ndarray
+    urdf: np.ndarray
+    why: str
+
+
+@dataclass(frozen=True)
 class Move:
     """One visit of a pose under one load case, with its pre-pose.
 
@@ -81,6 +101,10 @@ class Move:
         joint has a side to arrive from.
     urdf_q, urdf_pre : ndarray, shape (N,), or None
         Target and pre-pose as URDF values, rad (m).
+    via : tuple of Waypoint
+        Intermediate positions visited first, on the way from the previous
+        position (:mod:`.safety`: a move that would collide, routed); empty
+        when the move goes straight.
     """
 
     pose: str
@@ -97,6 +121,7 @@ class Move:
     pre_si: np.ndarray | None
     urdf_q: np.ndarray
     urdf_pre: np.ndarray | None
+    via: tuple = ()
 
     def comment(self) -> str:
         """``pose 3, load case 2 of 2: 250 kg at 0,0,200 mm (flange frame)``."""
@@ -141,7 +166,7 @@ def check_limits(design) -> None:
                                 f"{unit}")
 
 
-def _load_words(spec: str) -> str:
+def load_words(spec: str) -> str:
     """``250@0,0,200`` → ``250 kg at 0,0,200 mm (flange frame)``."""
     mass, _, com = spec.partition("@")
     return f"{mass} kg at {com or '0,0,0'} mm (flange frame)"
@@ -157,7 +182,7 @@ def _wrench_words(wrench) -> str:
 
 
 def _loads(design) -> list:
-    """The load of each configuration in words.
+    """The load of each configuration in words (:func:`load_words`).
 
     Named from the design's load cases (``constraints["loads"]``) when the
     pose has one unloaded visit followed by one per load case; otherwise from
@@ -169,7 +194,7 @@ def _loads(design) -> list:
         rows = [i for i, p in enumerate(cfg.pose) if p == cfg.pose[r]]
         case = rows.index(r)
         named = len(rows) == len(specs) + 1 and not np.any(cfg.wrench[rows[0]])
-        out.append(_load_words(specs[case - 1]) if named and case > 0 else _wrench_words(w))
+        out.append(load_words(specs[case - 1]) if named and case > 0 else _wrench_words(w))
     return out
 
 
@@ -223,8 +248,9 @@ def realised_approach(visits: list[Move], robot) -> np.ndarray:
     """The side from which each joint reaches each visit's pose when the program runs.
 
     The sign of the last motion of each joint into the target, through the
-    pre-poses (:func:`doe_calib.data.approach_from_order`; 0 for a joint
-    that has not moved since the program started), in the URDF's sense, as
+    intermediate positions and pre-poses
+    (:func:`doe_calib.data.approach_from_order`; 0 for a joint that has not
+    moved since the program started), in the URDF's sense, as
     a measurement file's ``approach`` columns and the ``backlash`` effect
     read it.
 
@@ -235,6 +261,7 @@ def realised_approach(visits: list[Move], robot) -> np.ndarray:
     """
     path, target = [], []
     for m in visits:
+        path += [w.urdf for w in m.via]
         if m.urdf_pre is not None:
             path.append(m.urdf_pre)
         target.append(len(path))

@@ -3,7 +3,9 @@
 Each visit is ``MoveAbsJ jp<i>\\NoEOffs, v100, fine, tool0;`` to robax in deg
 (mm for a linear axis), extax 9E9 (no external axes). A visit whose joints
 must arrive from a given side is preceded by ``MoveAbsJ ja<n>...`` to its
-pre-pose (n: the visit's number in the program), also ``fine``. Before a visit whose
+pre-pose (n: the visit's number in the program), also ``fine``; a move
+routed round a collision (:mod:`.safety`) first by ``MoveAbsJ jv<n>_<k>``
+to its intermediate positions. Before a visit whose
 load differs from the previous one: ``TPWrite`` the load to hang, then
 ``Stop;`` (restart with Start). At each pose ``WaitTime dwell;`` and, with a
 handshake, ``SetDO doCalibReady, 1; WaitDI diCalibDone, 1; SetDO doCalibReady,
@@ -59,11 +61,17 @@ def render(design, visits, settings) -> dict:
         if m.pre is not None:
             out.append(f"  CONST jointtarget ja{m.number}:={_target(m.pre)}; ! "
                        + ascii_text(f"pre-pose of pose {m.pose}, visit {m.number}"))
+    for m in visits:
+        for k, w in enumerate(m.via, start=1):
+            out.append(f"  CONST jointtarget jv{m.number}_{k}:={_target(w.q)}; ! {w.why}")
     out += ["", "  PROC main()"]
     for m, change in zip(visits, load_changes(visits)):
         out.append(f"    ! {m.comment()}")
         if change:
             out += [f'    TPWrite "{m.instruction()[:TPWRITE_MAX]}";', "    Stop;"]
+        for k, w in enumerate(m.via, start=1):
+            out += [f"    ! {w.why}",
+                    f"    MoveAbsJ jv{m.number}_{k}\\NoEOffs, {SPEED}, fine, tool0;"]
         if m.pre is not None:
             out += [f"    ! {m.approach_words(design.robot.joint_names)}",
                     f"    MoveAbsJ ja{m.number}\\NoEOffs, {SPEED}, fine, tool0;"]

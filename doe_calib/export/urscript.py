@@ -3,9 +3,11 @@
 Joint positions are in rad (URScript's unit), written to 1e-10 rad. Before a
 visit whose load differs from the previous one a blocking ``popup`` tells the
 operator which load to hang. A visit whose joints must arrive from a given
-side is preceded by a ``movej`` to its pre-pose. At each pose ``sleep(dwell)`` and, with a
-handshake n, standard digital output n is set, the program waits for
-standard digital input n, resets the output and waits for the input to drop.
+side is preceded by a ``movej`` to its pre-pose, a move routed round a
+collision (:mod:`.safety`) by ``movej`` to its intermediate positions. At
+each pose ``sleep(dwell)`` and, with a handshake n, standard digital output
+n is set, the program waits for standard digital input n, resets the output
+and waits for the input to drop.
 Only 6 revolute joints are supported.
 """
 from __future__ import annotations
@@ -56,6 +58,8 @@ def render(design, visits, settings) -> dict:
         out += ["", f"  # {m.comment()}"]
         if change:
             out.append(f'  popup("{m.instruction()}", title="doe_calib", blocking=True)')
+        for w in m.via:
+            out += [f"  # {w.why}", _movej(w.q_si)]
         if m.pre is not None:
             out += [f"  # {m.approach_words(design.robot.joint_names)}", _movej(m.pre_si)]
         out += [_movej(m.q_si), *_wait(settings)]

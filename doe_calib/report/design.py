@@ -6,6 +6,7 @@ import numpy as np
 from ..evaluation import evaluate, marker_positions
 from ..measurement import build_model
 from . import figures
+from .figures import to_png as png
 from .html import figure, paragraph, preformatted, section, table, write_report
 
 
@@ -57,6 +58,43 @@ def pose_geometry(design):
     return t.reshape(len(sub), 3) * 1000.0, marker_positions(model, values, sub) * 1000.0
 
 
+#: Poses drawn in the report's robot figure at most.
+MAX_DRAWN = 16
+
+
+def robot_drawing(design, dpi: int = 90):
+    """The robot as a stick figure in each pose (the first :data:`MAX_DRAWN`), with its cell.
+
+    Returns the report blocks (figure and caption) of the design report's "Robot in each pose".
+    """
+    from ..skeleton import skeleton_points
+
+    cfg, robot = design.configurations, design.robot
+    first = sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())[:MAX_DRAWN]
+    ids = [cfg.pose[i] for i in first]
+    skeletons = skeleton_points(robot, cfg.q[first]) * 1000.0
+    _, markers = pose_geometry(design)
+    clear = list(design.clearances)
+    titles = [f"pose {p}" + (f"\n{clear[k][0]:.0f} mm: {clear[k][1]}" if k < len(clear) else "")
+              for k, p in enumerate(ids)]
+    cell = design.constraints.get("cartesian") or {}
+    floor = cell.get("floor") or 0.0
+    boxes = [(b["min"], b["max"]) for b in cell.get("keep_out") or []]
+    tracker = (design.constraints.get("line_of_sight") or {}).get("tracker")
+    n = len(dict.fromkeys(cfg.pose))
+    shown = "every pose" if n <= MAX_DRAWN else f"the first {MAX_DRAWN} of the {n} poses"
+    return figure(
+        png(figures.robot_poses(skeletons, markers[:len(first)], titles, tracker, floor, boxes),
+            dpi),
+        "the robot as a stick figure in each pose with floor, keep-out boxes and tracker",
+        f"The robot in {shown} (design order): a stick figure through its joint frames "
+        f"(nominal model) to the flange, markers in green, the floor (z = {floor:g} mm) grey"
+        + (", keep-out boxes red" if boxes else "") + (", the tracker a red triangle"
+                                                       if tracker is not None else "")
+        + "; same scale and view in every panel" + ("; under each pose its clearance and "
+                                                    "closest pair." if clear else "."))
+
+
 def _pose_rows(design):
     rows = []
     for p in design.poses():
@@ -96,6 +134,7 @@ def design_sections(design, dpi: int = 90) -> list:
         "3-D view of flange and marker positions of each pose",
         "Flange (numbered by pose) and markers on the nominal model, robot base frame (mm)"
         + ("; red: the tracker." if tracker is not None else "."))))
+    sections.append(section("Robot in each pose", robot_drawing(design, dpi)))
     met = [table(["constraint", "value"], flatten(design.constraints))]
     if design.candidates:
         met += ["Candidate poses drawn and removed by each constraint:",

@@ -189,3 +189,72 @@ def std_bars(names, std, units, title: str = "predicted standard deviation") -> 
     ax.set_ylabel("std (unit in brackets)")
     ax.set_title(title)
     return fig
+
+
+def _box_edges(ax, lower, upper, **style) -> None:
+    """The 12 edges of an axis-aligned box."""
+    lo, hi = np.asarray(lower, float), np.asarray(upper, float)
+    corners = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]]
+                        for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    for a in range(8):
+        for b in range(a + 1, 8):
+            if bin(a ^ b).count("1") == 1:
+                ax.plot(*corners[[a, b]].T, **style)
+
+
+def robot_poses(skeletons_mm, markers_mm, titles, tracker_mm=None, floor_mm=0.0, boxes=(),
+                ncols: int = 4) -> Figure:
+    """A grid of small 3-D panels: the robot as a stick figure in each pose, with its cell.
+
+    Every panel has the same equal-scaled axes and view, so that poses compare at a glance.
+
+    Parameters
+    ----------
+    skeletons_mm : array_like, shape (M, K, 3)
+        Points of each pose's stick figure, base to flange, robot base frame, mm.
+    markers_mm : array_like, shape (M, n, 3)
+        Marker positions, drawn with a line from the flange.
+    titles : sequence of str, length M
+        Each panel's title (pose id, closest pair).
+    tracker_mm : array_like, shape (3,), optional
+        Tracker position (red triangle).
+    floor_mm : float
+        Height of the floor, drawn as a grey square.
+    boxes : sequence of (lower, upper)
+        Keep-out boxes, mm, drawn as red wireframes.
+    """
+    s = np.asarray(skeletons_mm, float)
+    x = np.asarray(markers_mm, float)
+    pts = [s.reshape(-1, 3), x.reshape(-1, 3)] + [np.asarray(b, float) for box in boxes
+                                                  for b in box]
+    if tracker_mm is not None:
+        pts.append(np.asarray(tracker_mm, float)[None, :])
+    pts = np.vstack(pts)
+    pts = np.vstack([pts, [pts[0, 0], pts[0, 1], floor_mm]])
+    centre = (pts.max(axis=0) + pts.min(axis=0)) / 2
+    half = max(float(np.max(pts.max(axis=0) - pts.min(axis=0))) / 2, 1.0) * 1.05
+    m = len(s)
+    nrows = -(-m // ncols)
+    fig = _figure(2.6 * min(m, ncols), 2.7 * nrows)
+    lim = [(c - half, c + half) for c in centre]
+    square = np.array([[lim[0][0], lim[1][0]], [lim[0][1], lim[1][0]], [lim[0][1], lim[1][1]],
+                       [lim[0][0], lim[1][1]], [lim[0][0], lim[1][0]]])
+    for i in range(m):
+        ax = fig.add_subplot(nrows, min(m, ncols), i + 1, projection="3d")
+        ax.plot(square[:, 0], square[:, 1], floor_mm, color="0.6", lw=0.8)
+        ax.plot_trisurf(square[:4, 0], square[:4, 1], np.full(4, floor_mm), color="0.85",
+                        alpha=0.4)
+        for lower, upper in boxes:
+            _box_edges(ax, lower, upper, color="tab:red", lw=0.7)
+        ax.plot(*s[i].T, "-o", color="tab:blue", lw=2.0, ms=2.5)
+        for p in x[i]:
+            ax.plot(*np.column_stack([s[i, -1], p]), color="0.4", lw=0.6)
+        ax.scatter(*x[i].T, s=6, color="tab:green")
+        if tracker_mm is not None:
+            ax.scatter(*np.asarray(tracker_mm, float), marker="^", s=30, color="tab:red")
+        ax.set(xlim=lim[0], ylim=lim[1], zlim=lim[2])
+        ax.set_box_aspect((1, 1, 1))
+        ax.view_init(elev=20, azim=-60)
+        ax.tick_params(labelsize=5, pad=0)
+        ax.set_title(titles[i], fontsize=7)
+    return fig

@@ -1,0 +1,275 @@
+"""Programs that move safely: every move checked for collisions, routed round them when it can be.
+
+A program is the chain of positions its moves reach: for each visit its
+intermediate positions, its pre-pose and its pose. Each move — straight in
+joint space, as ``PTP``, ``MoveAbsJ`` and ``movej`` move — is checked from
+where the previous one ended at joint steps of at most 1°
+(:func:`doe_calib.collision.check_segment`), with the collision model of the
+load hung during it: a payload is on the flange only while its load case
+runs, and the move after a load change starts from the previous position
+with the new load on (the robot stands there while the operator changes it).
+The program is taken to start at its first position: the move to it, from
+wherever the robot stands, is not checked; the first position itself is.
+
+A move into a visit that collides is routed through one or two
+intermediate positions when some pass the check: the wrist joints (4 on)
+turned first or last; one of the program's own poses (each free at the
+design's clearance); a retract–swing–extend, the previous position and the
+next with the arm joints (2 and 3) of such a pose; or the wrist turned as at
+such a pose for the move.
+The candidates are tried in order of their joint travel, at most
+:data:`MAX_ROUTES`. A move from a pre-pose into its pose is never routed (the
+side it arrives from is its purpose).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..collision import Workspace, check_segment
+from ..errors import CollisionError
+from .axis_map import AxisMap
+from .program import Waypoint, ascii_text, load_words
+from .sequence import NO_LOAD
+
+#: Candidate routes tried for one colliding move, shortest first.
+MAX_ROUTES = 40
+#: Joints (0-based) a retract sets from a free pose: the arm's second and third.
+ARM = (1, 2)
+
+
+@dataclass(frozen=True)
+class Collision:
+    """A move of a program that collides.
+
+    Attributes
+    ----------
+    move : int
+        1-based number of the move among those checked: the first position is
+        move 1, each move into a pre-pose or a pose one more (a routed move
+        counts once).
+    words : str
+        Where from and where to, under which load.
+    fraction : float
+        Fraction of the move (0 … 1) at the first pose closer than the clearance.
+    q : tuple of float
+        The URDF joint values there, deg (mm for prismatic joints).
+    pair : str
+        The pair found too close, ``"upper_arm_link vs floor"``.
+    joint_names : tuple of str
+    """
+
+    move: int
+    words: str
+    fraction: float
+    q: tuple
+    pair: str
+    joint_names: tuple
+
+    def __str__(self) -> str:
+        at = ", ".join(f"{n} {v:.1f}" for n, v in zip(self.joint_names, self.q))
+        return (f"move {self.move}, {self.words}: {self.pair} at {self.fraction:.0%} of the "
+                f"move ({at})")
+
+
+@dataclass(frozen=True)
+class ProgramCheck:
+    """The collision check of a program's moves.
+
+    Attributes
+    ----------
+    visits : tuple of Move
+        The program's visits, routed moves with their intermediate positions
+        (:attr:`.program.Move.via`).
+    moves : int
+        Moves checked (the first position counts as one).
+    samples : int
+        Poses checked along them.
+    routed : tuple of str
+        Each routed move in words.
+    collisions : tuple of Collision
+        Moves that still collide.
+    """
+
+    visits: tuple
+    moves: int
+    samples: int
+    routed: tuple
+    collisions: tuple
+
+    @property
+    def free(self) -> bool:
+        return not self.collisions
+
+    def summary(self) -> str:
+        """One line per finding: how much was checked, each routed move, each collision."""
+        lines = [f"collision check of the program: {self.moves} moves, {self.samples} poses "
+                 f"checked at ≤ 1° steps; {len(self.routed)} routed, "
+                 f"{len(self.collisions)} colliding"]
+        lines += [f"routed: {r}" for r in self.routed]
+        lines += [f"collides: {c}" for c in self.collisions]
+        return "\n".join(lines)
+
+    def raise_if_colliding(self) -> None:
+        """Raise :class:`CollisionError` naming every move that collides and its pair."""
+        if self.collisions:
+            raise CollisionError(
+                f"the program would collide in {len(self.collisions)} move(s): "
+                + "; ".join(str(c) for c in self.collisions)
+                + " — change the design (more clearance, a constraints file) or write it anyway "
+                  "with --allow-collisions")
+
+
+def program_models(loads, build) -> dict:
+    """The collision model of each load case of a program, keyed by the load in words.
+
+    Parameters
+    ----------
+    loads : sequence of LoadCase
+        The design's load cases (``design.constraints["loads"]``).
+    build : callable
+        ``build(loads)`` → :class:`~doe_calib.collision.CollisionModel` with
+        those payloads on the flange.
+
+    Returns
+    -------
+    dict
+        :data:`.sequence.NO_LOAD` → the model without payload; each load's
+        words (:func:`.program.load_words`) → the model with that payload only.
+    """
+    models = {NO_LOAD: build(())}
+    models.update({load_words(load.spec()): build((load,)) for load in loads})
+    return models
+
+
+def _label(m) -> str:
+    return f"pose {m.pose}" + (f" (load case {m.case} of {m.n_cases})" if m.n_cases > 1 else "")
+
+
+def _travel(path) -> float:
+    return float(sum(np.max(np.abs(b - a)) for a, b in zip(path[:-1], path[1:])))
+
+
+def _routes(a, b, safe) -> list:
+    """Candidate routes a → b (URDF values): (words, intermediate positions), shortest first."""
+    arm = [k for k in ARM if k < len(a)]
+    wrist = list(range(max(ARM) + 1, len(a)))
+    out = []
+    if wrist:
+        first = a.copy()
+        first[wrist] = b[wrist]
+        out.append(("turning the wrist first", [first]))
+        first = b.copy()
+        first[wrist] = a[wrist]
+        out.append(("moving the arm first", [first]))
+    for name, p in safe:
+        if np.allclose(p, a) or np.allclose(p, b):
+            continue
+        out.append((f"through pose {name}", [p]))
+        for joints, how in ((arm, "retract with the arm joints"),
+                            (wrist, "turn the wrist as")):
+            if joints:
+                ra, rb = a.copy(), b.copy()
+                ra[joints], rb[joints] = p[joints], p[joints]
+                out.append((f"{how} of pose {name}", [ra, rb]))
+    return sorted(out, key=lambda r: _travel([a, *r[1], b]))[:MAX_ROUTES]
+
+
+def _route(cm, a, b, safe, ws):
+    """The first candidate route whose every move passes, and the poses checked; None when none."""
+    samples = 0
+    for words, via in _routes(a, b, safe):
+        path = [a, *via, b]
+        for qa, qb in zip(path[:-1], path[1:]):
+            check = check_segment(cm, qa, qb, workspace=ws)
+            samples += check.samples
+            if not check.free:
+                break
+        else:
+            return words, via, samples
+    return None, None, samples
+
+
+def check_program(visits, models, robot, axis_map: AxisMap | None = None,
+                  route: bool = True) -> ProgramCheck:
+    """Check every move of a program for collisions; route the colliding ones when possible.
+
+    Parameters
+    ----------
+    visits : sequence of Move
+        The program (:func:`.program.moves`).
+    models : dict
+        Load in words → :class:`~doe_calib.collision.CollisionModel`
+        (:func:`program_models`); a load it does not name (a wrench given
+        without its shape, as a compensated program's) is checked with the
+        :data:`.sequence.NO_LOAD` model, without a payload shape.
+    robot : Robot
+    axis_map : AxisMap, optional
+        Controller values of the intermediate positions from the URDF's.
+    route : bool
+        Look for intermediate positions round a colliding move.
+
+    Returns
+    -------
+    ProgramCheck
+
+    Examples
+    --------
+    >>> checked = check_program(moves(design), program_models(loads, build), design.robot)
+    ... # doctest: +SKIP
+    >>> checked.raise_if_colliding()  # doctest: +SKIP
+    """
+    axis_map = AxisMap.identity(robot.n_joints) if axis_map is None else axis_map
+    factors = robot.display_factors
+    names = tuple(robot.joint_names)
+    workspaces = {id(cm): Workspace(cm) for cm in models.values()}
+    safe = list({m.pose: m.urdf_q for m in visits}.items())
+    out, routed, collisions = [], [], []
+    n_moves = n_samples = 0
+    previous, where = None, None
+
+    def checked(cm, qa, qb):
+        nonlocal n_moves, n_samples
+        n_moves += 1
+        result = check_segment(cm, qa, qb, workspace=workspaces[id(cm)])
+        n_samples += result.samples
+        return result
+
+    def collision(result, qa, qb, words):
+        q = (qa + result.first * (qb - qa)) * factors
+        return Collision(n_moves, words, result.first, tuple(float(v) for v in q),
+                         result.pair, names)
+
+    for m in visits:
+        cm = models.get(m.load, models[NO_LOAD])
+        first = m.urdf_q if m.urdf_pre is None else m.urdf_pre
+        to = _label(m) if m.urdf_pre is None else f"pre-pose of {_label(m)}"
+        start = first if previous is None else previous
+        words = (f"first position, {to}" if previous is None else f"from {where} to {to}") \
+            + f", {m.load}"
+        result = checked(cm, start, first)
+        if not result.free and route and previous is not None:
+            how, via, samples = _route(cm, start, first, safe, workspaces[id(cm)])
+            n_samples += samples
+            if via is not None:
+                why = ascii_text(f"on the way from {where} to {to}, {how} (straight: "
+                                 f"{result.pair})")
+                points = []
+                for k, u in enumerate(via, start=1):
+                    ctrl = axis_map.to_controller(u * factors)
+                    points.append(Waypoint(ctrl, ctrl / factors, u,
+                                           f"intermediate {k} of {len(via)} {why}"))
+                m = replace(m, via=tuple(points))
+                routed.append(f"move {n_moves}, {words}: {how} (straight: {result.pair})")
+                result = None
+        if result is not None and not result.free:
+            collisions.append(collision(result, start, first, words))
+        if m.urdf_pre is not None:
+            words = f"from {to} into {_label(m)}, {m.load}"
+            result = checked(cm, m.urdf_pre, m.urdf_q)
+            if not result.free:
+                collisions.append(collision(result, m.urdf_pre, m.urdf_q, words))
+        previous, where = m.urdf_q, _label(m)
+        out.append(m)
+    return ProgramCheck(tuple(out), n_moves, n_samples, tuple(routed), tuple(collisions))
