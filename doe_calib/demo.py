@@ -1,11 +1,13 @@
 """The main job on the built-in example, end to end, through the user's own files.
 
-Design 15 poses for the KR 270-class robot in its cell → export them to KRL
-→ simulate the campaign (tracker anywhere, noise, unloaded and 250 kg, and a
-gravity compensator on A2 that the starting model lacks) → identify →
-diagnose → add the missing effect → the error falls → one HTML report.
-Every step reads and writes the files a user would (design JSON/CSV, KRL,
-measurement CSV, result JSON), exactly as the corresponding commands do.
+Design 15 poses for the KR 270-class robot in its cell, clear of collisions
+→ export them to KRL, every move checked → simulate the campaign (tracker
+anywhere, noise, unloaded and 250 kg, and a gravity compensator on A2 that
+the starting model lacks) → identify → diagnose → add the missing effect →
+the error falls → compensate a held-out program → one HTML report, told in
+that order. Every step reads and writes the files a user would (design
+JSON/CSV, KRL, measurement CSV, result JSON, compensated CSV and KRL),
+exactly as the corresponding commands do.
 """
 from __future__ import annotations
 
@@ -14,11 +16,16 @@ from pathlib import Path
 import numpy as np
 
 from . import example
+from .collision import build_collision_model
+from .compensation import compensate
+from .compensation.program import export_compensated
+from .compensation.targets import read_targets
 from .design import LoadCase, read_constraints
 from .design.optimal import optimal_design
 from .diagnosis import diagnose, validation_rms
 from .diagnosis.refine import refine
-from .export import export_design
+from .export import export_design, moves
+from .export.safety import check_program, program_models
 from .identify import identify_quietly
 from .io import read_design, read_measurements, write_design, write_measurements
 from .loads import unloaded_and_loaded
@@ -44,6 +51,15 @@ def tracker_base() -> np.ndarray:
     return np.concatenate([-rot @ TRACKER_POSITION, TRACKER_TURN])
 
 
+def _first_lines(path, n: int = 25):
+    """The first ``n`` lines of a program file, preformatted for the report."""
+    from .report.html import preformatted
+
+    lines = Path(path).read_text().splitlines()
+    more = f"\n… ({len(lines) - n} more lines in {Path(path).name})" if len(lines) > n else ""
+    return preformatted("\n".join(lines[:n]) + more)
+
+
 def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> dict:
     """Run the whole story into folder ``out``; return its key figures.
 
@@ -56,6 +72,7 @@ def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> 
     from .report import design_sections, refine_sections, write_report
     from .report.diagnosis import diagnosis_sections
     from .report.html import paragraph, section
+    from .report.identification import parameters_section
 
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
@@ -67,15 +84,22 @@ def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> 
     say(f"2. Designing 15 poses for '{START}' under the cell's constraints, each pose "
         f"unloaded and with {LOAD.mass:g} kg, from {candidates} candidates…")
     constraints = read_constraints(example.CELL_YAML, robot, tool)
+
+    def collision(loads):
+        return build_collision_model(robot, tool, loads, constraints)
+
     design = optimal_design(start, 15, [LOAD], candidates=candidates, sigma=SIGMA_MM / 1e3,
-                            constraints=constraints, rng=rng)
+                            constraints=constraints, rng=rng, collision=collision([LOAD]))
     design.to_json(out / "design.json")
     write_design(out / "design.csv", design.configurations, robot)
     say(f"   D-efficiency {design.efficiency:.3f} against the certified bound; {design.notes[0]}"
         f" → {out / 'design.json'}, {out / 'design.csv'}")
 
-    programs = export_design(design, "krl", out, name="calib_poses")
-    say(f"3. Exported to KUKA KRL → {', '.join(str(p) for p in programs)}")
+    checked = check_program(moves(design), program_models([LOAD], collision), robot)
+    checked.raise_if_colliding()
+    programs = export_design(design, "krl", out, name="calib_poses", visits=checked.visits)
+    say(f"3. Exported to KUKA KRL, every move checked for collisions ({checked.summary()}) → "
+        f"{', '.join(str(p) for p in programs)}")
 
     true = build_model(robot, tool, f"{START}+{HIDDEN}")
     truth = true.nominal().with_values(random_truth(true, rng, base=tracker_base()))
@@ -114,17 +138,31 @@ def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> 
     say(f"   stopped: {grown.stopped}")
 
     final = build_model(robot, tool, grown.fit.model)
+    write_design(out / "program.csv", held.subset(np.arange(0, len(held), 2)), robot)
+    compensated = compensate(final, grown.fit, read_targets(out / "program.csv", robot), "A")
+    compensated.to_csv(out / "compensated.csv")
+    comp_programs = export_compensated(compensated, tool, "krl", out, name="compensated")
+    say(f"8. Compensated a program of {len(compensated.pose)} held-out poses with the refined "
+        f"model (TCP: marker A): joints move by up to {float(np.max(compensated.shift)):.3f}° → "
+        f"{out / 'compensated.csv'}, {', '.join(str(p) for p in comp_programs)}")
+
     story = [section("What the demo did", *[paragraph(t) for t in (
-        f"Designed 15 poses for {START} under the cell's constraints (D-efficiency "
-        f"{design.efficiency:.3f}), exported them to KRL, simulated the campaign with a "
-        f"gravity compensator on A2 ({HIDDEN}) the starting model lacks, identified, diagnosed "
-        f"and refined.", f"Diagnosis of the starting model: {d.verdict}",
-        f"Refinement stopped: {grown.stopped}")])]
+        f"Designed 15 poses for {START} under the cell's constraints and clear of collisions "
+        f"(D-efficiency {design.efficiency:.3f}), exported them to KRL with every move "
+        f"checked, simulated the campaign with a gravity compensator on A2 ({HIDDEN}) the "
+        f"starting model lacks, identified, diagnosed, refined, and compensated a program of "
+        f"held-out poses with the refined model.", f"Refinement stopped: {grown.stopped}")])]
+    story += design_sections(design)
+    story.append(section("The measurement program", paragraph(checked.summary()),
+                         _first_lines(programs[0])))
+    story += diagnosis_sections(d, start, meas, fit, title="Starting model: ")
+    story += refine_sections(grown, final, meas)
+    story.append(parameters_section(grown.fit, "Identified parameters of the final model"))
+    story.append(section("The compensated program", paragraph(compensated.summary()),
+                         _first_lines(comp_programs[0])))
     report = write_report(out / "report.html", "doe_calib demo: design → measure → identify → "
-                          "diagnose → refine", story + refine_sections(grown, final, meas)
-                          + diagnosis_sections(d, start, meas, fit, title="Starting model: ")
-                          + design_sections(design))
-    say(f"8. Report → {report}. Files are in {out}/: design.json/csv, calib_poses.src/.dat, "
+                          "diagnose → refine → compensate", story)
+    say(f"9. Report → {report}. Files are in {out}/: design.json/csv, calib_poses.src/.dat, "
         f"campaign.csv, validation.csv, result.json (doe-calib predict --result "
         f"{out / 'result.json'} --data {out / 'validation.csv'} --out predicted.csv), "
         f"diagnosis.json, refine.json")

@@ -90,8 +90,14 @@ def _reason(status: str, pos: float, rot: float, at_limit: list, condition: floa
     return "; ".join(words)
 
 
+#: Largest joint change a compensation may make (deg; mm for a prismatic joint): a
+#: calibration corrects by hundredths of a degree, so a solution farther away is another
+#: arm configuration (e.g. the wrist turned round), not a correction.
+MAX_SHIFT = 5.0
+
+
 def compensate(model, result, targets, tcp, problem: CompensationProblem | None = None,
-               position_only: bool = False) -> CompensationResult:
+               position_only: bool = False, max_shift: float = MAX_SHIFT) -> CompensationResult:
     """Joint values that make the identified model reach each target.
 
     Parameters
@@ -107,6 +113,9 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
         Built by :func:`~.problem.build_problem` (built here when not given).
     position_only : bool
         Leave the orientation free (ignored when ``problem`` is given).
+    max_shift : float
+        Each joint stays within this of its programmed value (deg; mm for a
+        prismatic joint), so that the solution is the nearest one.
 
     Returns
     -------
@@ -127,16 +136,19 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
     values = result.parameters.values
     robot = model.robot
     lower, upper = robot.lower, robot.upper
+    reach = max_shift / robot.display_factors
     q_out, notes, ok = np.empty_like(cfg.q), [], np.zeros(len(cfg), bool)
     pos_err, rot_err = np.empty(len(cfg)), np.empty(len(cfg))
     for i in range(len(cfg)):
         p = problem.nlp_parameters(x_t[i], r_nom[i], cfg.wrench[i], cfg.env[i], values, point,
                                    cfg.q[i])
-        sol = problem.solver(x0=np.clip(cfg.q[i], lower, upper), p=p, lbx=lower, ubx=upper,
+        lo = np.maximum(lower, cfg.q[i] - reach)
+        hi = np.minimum(upper, cfg.q[i] + reach)
+        sol = problem.solver(x0=np.clip(cfg.q[i], lo, hi), p=p, lbx=lo, ubx=hi,
                              lbg=0.0, ubg=0.0)
         status = problem.solver.stats()["return_status"]
         # IPOPT relaxes the bounds by ~1e-8: the program must stay inside them
-        q_out[i] = np.clip(np.asarray(sol["x"]).ravel(), lower, upper)
+        q_out[i] = np.clip(np.asarray(sol["x"]).ravel(), lo, hi)
         e_pos, e_rot = problem.error(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
                                      x_t[i], r_nom[i])
         pos_err[i] = float(np.linalg.norm(np.asarray(e_pos)))
@@ -144,6 +156,10 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
             float(np.arcsin(min(1.0, np.linalg.norm(np.asarray(e_rot)))))
         at_limit = [j.name for j, v in zip(robot.joints, q_out[i])
                     if min(v - j.lower, j.upper - v) < 1e-9]
+        at_limit += [f"{j.name} (moved the largest compensation allowed, {max_shift:g} "
+                     f"{j.display_unit}: the target needs another arm configuration)"
+                     for j, v, q0, r in zip(robot.joints, q_out[i], cfg.q[i], reach)
+                     if abs(v - q0) > r - 1e-9 and j.name not in at_limit]
         jac = np.asarray(problem.jacobian(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
                                           x_t[i], r_nom[i]))
         notes.append(_reason(status, pos_err[i], rot_err[i], at_limit, np.linalg.cond(jac)))

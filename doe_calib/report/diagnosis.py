@@ -13,8 +13,8 @@ from ..errors import DoeCalibError
 from . import figures
 from .diagnosis_figures import (added_variable_panels, candidate_bars, error_falling,
                                 residuals_by_direction)
-from .html import figure, paragraph, preformatted, section, table, write_report
-from .identification import reading_columns, residual_norms_mm
+from .html import collapsible, figure, paragraph, preformatted, section, table, write_report
+from .identification import parameters_section, reading_columns, residual_norms_mm
 
 #: Candidates drawn as added-variable plots, strongest evidence first.
 ADDED_VARIABLE_PLOTS = 4
@@ -61,21 +61,38 @@ def _by_direction(diagnosis, model, measurements, fit, top: int = 3):
     return error, [(n, columns[n]) for n in names if n in columns][:top]
 
 
-def diagnosis_sections(diagnosis, model, measurements, fit, dpi: int = 90,
-                       title: str = "") -> list:
-    """The sections of one diagnosis: verdict, adequacy, ranked effects, residual plots.
-
-    ``title`` prefixes every section heading (e.g. "Starting model: ").
-    """
-    c = diagnosis.chi2
-    held = paragraph(f"Cross-validation: {diagnosis.cv_grouping or 'folds of whole poses'}. "
-                     + " ".join(diagnosis.notes))
-    out = [section(f"{title}Verdict", paragraph(diagnosis.verdict), table(
-        ["model", "fit RMS (mm)", "CV RMS (mm)", "noise floor (mm)", "σ̂/σ", "χ²", "dof", "p",
-         "adequate"],
+def failure_sections(diagnosis, model, measurements, fit, dpi: int = 90,
+                     title: str = "") -> list:
+    """Where the model fails: its fit, what the residual follows, signed and sized residuals,
+    and poses far outside the noise."""
+    follow = ", ".join(f"{f.variable} (adjusted R² {f.r2:.2f})" for f in diagnosis.follows[:5])
+    error, strongest = _by_direction(diagnosis, model, measurements, fit)
+    by_direction = [figure(_png(residuals_by_direction(error, strongest), dpi),
+                           "signed residual components against the strongest variables",
+                           "Residual x, y, z (mm, tracker frame) of each reading against the "
+                           "variables its size follows most: signed, so a step or a sine keeps "
+                           "its shape.")] if strongest else []
+    norms = residual_norms_mm(model, measurements, fit.parameters.values)
+    out = [section(f"{title}Where the model fails", table(
+        ["model", "fit RMS (mm)", "CV RMS (mm)", "noise floor (mm)", "σ̂/σ"],
         [[diagnosis.model, diagnosis.rms_mm, diagnosis.cv_rms_mm, diagnosis.noise_floor_mm,
-          c.get("sigma_ratio", float("nan")), c["statistic"], c["dof"], c["p_value"],
-          "yes" if diagnosis.adequate else "no"]], 4), held)]
+          diagnosis.chi2.get("sigma_ratio", float("nan"))]], 4), paragraph(
+        f"The residual size follows: {follow or 'nothing in particular'}."), *by_direction,
+        figure(_png(figures.residual_scatter(norms, reading_columns(model, measurements)), dpi),
+               "residual of each reading against every variable",
+               "3-D residual norm (mm) of each reading against the joint positions, loads, "
+               "joint torques, temperature and measurement order."))]
+    if diagnosis.flagged:
+        out.append(section(f"{title}Poses far outside the noise (kept in the fit)", table(
+            ["pose", "RMS (mm)", "χ²/dof", "p"],
+            [[p["pose"], p["rms_mm"], p["chi2_per_dof"], p["p_value"]]
+             for p in diagnosis.flagged], 4)))
+    return out
+
+
+def evidence_section(diagnosis, model, measurements, fit, dpi: int = 90, title: str = ""):
+    """Which effect is missing: added-variable plots of the strongest candidates, their
+    tests and the share of the residual each explains."""
     plots = _added_variables(diagnosis, model, measurements, fit)
     shapes = [figure(_png(added_variable_panels(plots), dpi),
                      "added-variable plots of the strongest candidates",
@@ -85,62 +102,89 @@ def diagnosis_sections(diagnosis, model, measurements, fit, dpi: int = 90,
                      "(red), against the variable that part follows. A step (backlash), a sine "
                      "(cyclic error) or a slope (compliance) shows here; r is their "
                      "correlation.")] if plots else []
-    out.append(section(f"{title}Which effect is missing", *shapes, _candidates_table(diagnosis),
-                       figure(_png(candidate_bars(diagnosis), dpi),
-                              "share of the residual each candidate explains",
-                              "Share of the remaining residual (after projecting out what the "
-                              "model already absorbs) each candidate effect explains; green ones "
-                              "are significant.")))
-    norms = residual_norms_mm(model, measurements, fit.parameters.values)
-    follow = ", ".join(f"{f.variable} (adjusted R² {f.r2:.2f})" for f in diagnosis.follows[:5])
-    error, strongest = _by_direction(diagnosis, model, measurements, fit)
-    by_direction = [figure(_png(residuals_by_direction(error, strongest), dpi),
-                           "signed residual components against the strongest variables",
-                           "Residual x, y, z (mm, tracker frame) of each reading against the "
-                           "variables its size follows most: signed, so a step or a sine keeps "
-                           "its shape.")] if strongest else []
-    out.append(section(f"{title}Where the model fails", paragraph(
-        f"The residual size follows: {follow or 'nothing in particular'}."), *by_direction,
-        figure(
-        _png(figures.residual_scatter(norms, reading_columns(model, measurements)), dpi),
-        "residual of each reading against every variable",
-        "3-D residual norm (mm) of each reading against the joint positions, loads, joint "
-        "torques, temperature and measurement order.")))
-    if diagnosis.flagged:
-        out.append(section(f"{title}Poses far outside the noise (kept in the fit)", table(
-            ["pose", "RMS (mm)", "χ²/dof", "p"],
-            [[p["pose"], p["rms_mm"], p["chi2_per_dof"], p["p_value"]]
-             for p in diagnosis.flagged], 4)))
-    return out
+    return section(f"{title}Which effect is missing", *shapes, _candidates_table(diagnosis),
+                   figure(_png(candidate_bars(diagnosis), dpi),
+                          "share of the residual each candidate explains",
+                          "Share of the remaining residual (after projecting out what the "
+                          "model already absorbs) each candidate effect explains; green ones "
+                          "are significant."))
+
+
+def verdict_section(diagnosis, title: str = ""):
+    """The verdict in words with the adequacy test's figures."""
+    c = diagnosis.chi2
+    return section(f"{title}Verdict", paragraph(diagnosis.verdict), table(
+        ["model", "fit RMS (mm)", "CV RMS (mm)", "noise floor (mm)", "σ̂/σ", "χ²", "dof", "p",
+         "adequate"],
+        [[diagnosis.model, diagnosis.rms_mm, diagnosis.cv_rms_mm, diagnosis.noise_floor_mm,
+          c.get("sigma_ratio", float("nan")), c["statistic"], c["dof"], c["p_value"],
+          "yes" if diagnosis.adequate else "no"]], 4),
+        paragraph(f"Cross-validation: {diagnosis.cv_grouping or 'folds of whole poses'}. "
+                  + " ".join(diagnosis.notes)))
+
+
+def diagnosis_sections(diagnosis, model, measurements, fit, dpi: int = 90,
+                       title: str = "") -> list:
+    """One diagnosis as a story: where the model fails → which effect is missing → verdict.
+
+    ``title`` prefixes every section heading (e.g. "Starting model: ").
+    """
+    return (failure_sections(diagnosis, model, measurements, fit, dpi, title)
+            + [evidence_section(diagnosis, model, measurements, fit, dpi, title),
+               verdict_section(diagnosis, title)])
 
 
 def diagnosis_report(diagnosis, model, measurements, fit, path, dpi: int = 90):
-    """Write the HTML report of one diagnosis (see :func:`doe_calib.diagnosis.diagnose`)."""
+    """Write the HTML report of one diagnosis (see :func:`doe_calib.diagnosis.diagnose`):
+    the story, then the identified parameters and the summary (folded)."""
     sections = diagnosis_sections(diagnosis, model, measurements, fit, dpi)
-    sections.append(section("Summary", preformatted(diagnosis.summary())))
+    sections += [parameters_section(fit), section("Summary", collapsible(
+        "the diagnosis as text", preformatted(diagnosis.summary())))]
     return write_report(path, f"Diagnosis of {diagnosis.model}", sections)
 
 
-def refine_sections(result, model, measurements, dpi: int = 90) -> list:
-    """Sections of a refinement: the error at each step, then the final model's diagnosis.
+def _fitted_words(step) -> str:
+    return "; ".join(f"{f['name']} = {f['value']:.4g} ± {f['std']:.2g} {f['unit']}".strip()
+                     for f in step.fitted if f.get("free", True)) or "–"
 
-    ``model`` is the final model (``result.fit`` is its identification).
-    """
+
+def steps_section(result, dpi: int = 90):
+    """Each added effect with its fitted size ± std and unit and the error it removed."""
     steps = result.steps
-    rows = [[i, s.model, s.rms_mm, s.cv_rms_mm,
-             "–" if s.validation_rms_mm is None else s.validation_rms_mm,
-             "yes" if s.adequate else "no", s.reason] for i, s in enumerate(steps)]
-    sections = [section("The error falls step by step", figure(
+    rows = []
+    for i, s in enumerate(steps):
+        before = steps[i - 1].cv_rms_mm if i else None
+        rows.append([i, "start: " + s.model if s.added is None else f"+ {s.added}",
+                     _fitted_words(s) if s.added else "–",
+                     f"{s.cv_rms_mm:.4f}" if before is None else
+                     f"{before:.4f} → {s.cv_rms_mm:.4f}",
+                     "–" if s.validation_rms_mm is None else s.validation_rms_mm,
+                     "yes" if s.adequate else "no", s.reason])
+    return section("Each added effect and the error it removed", figure(
         _png(error_falling(steps, result.noise_floor_mm), dpi),
         "fit, cross-validated and validation RMS at each step",
         "RMS per coordinate (mm) after each added effect; dashed: the noise floor."), table(
-        ["step", "model", "fit RMS (mm)", "CV RMS (mm)", "validation RMS (mm)", "adequate",
-         "why"], rows, 4), paragraph(f"Stopped: {result.stopped}"))]
-    return sections + diagnosis_sections(result.diagnosis, model, measurements, result.fit, dpi)
+        ["step", "effect", "fitted size ± std", "CV RMS (mm)", "validation RMS (mm)",
+         "adequate", "why"], rows, 4), paragraph(f"Stopped: {result.stopped}"))
+
+
+def refine_sections(result, model, measurements, dpi: int = 90) -> list:
+    """A refinement as a story: each added effect and the error it removed, then where the
+    final model still fails, what could still be missing, and the final verdict.
+
+    ``model`` is the final model (``result.fit`` is its identification).
+    """
+    d, fit = result.diagnosis, result.fit
+    return ([steps_section(result, dpi)]
+            + failure_sections(d, model, measurements, fit, dpi, "Final model: ")
+            + [evidence_section(d, model, measurements, fit, dpi, "Final model: "),
+               verdict_section(d, "Final verdict: ")])
 
 
 def refine_report(result, model, measurements, path, dpi: int = 90):
-    """Write the HTML report of a refinement (:func:`refine_sections` and the final fit)."""
+    """Write the HTML report of a refinement (:func:`refine_sections`, then the final
+    model's parameters and its identification summary, folded)."""
     sections = refine_sections(result, model, measurements, dpi)
-    sections.append(section("Final identification", preformatted(result.fit.summary())))
+    sections += [parameters_section(result.fit), section("Final identification", collapsible(
+        "the identification as text", preformatted(result.fit.summary())))]
     return write_report(path, f"Refinement to {result.fit.model}", sections)

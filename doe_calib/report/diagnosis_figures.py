@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figures import _figure
+from .figures import _figure, plain_ticks
 
 
 def candidate_bars(diagnosis, top: int = 12):
@@ -88,14 +88,3 @@ def residuals_by_direction(error_mm, columns):
                 ax.set_xlabel(label, fontsize=8)
     return fig
 
-
-def plain_ticks(ax) -> None:
-    """Small tick labels, no offset like "1e-13" above the axis, at most 5 per axis."""
-    from matplotlib.ticker import MaxNLocator, ScalarFormatter
-
-    for axis in (ax.xaxis, ax.yaxis):
-        formatter = ScalarFormatter(useOffset=False)
-        formatter.set_powerlimits((-3, 4))
-        axis.set_major_formatter(formatter)
-        axis.set_major_locator(MaxNLocator(5))
-    ax.tick_params(labelsize=7)

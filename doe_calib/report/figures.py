@@ -19,6 +19,18 @@ def _figure(width: float, height: float) -> Figure:
     return fig
 
 
+def plain_ticks(ax) -> None:
+    """Small tick labels, no offset like "1e-13" above the axis, at most 5 per axis."""
+    from matplotlib.ticker import MaxNLocator, ScalarFormatter
+
+    for axis in (ax.xaxis, ax.yaxis):
+        formatter = ScalarFormatter(useOffset=False)
+        formatter.set_powerlimits((-3, 4))
+        axis.set_major_formatter(formatter)
+        axis.set_major_locator(MaxNLocator(5))
+    ax.tick_params(labelsize=7)
+
+
 def to_png(fig: Figure, dpi: int = 90) -> bytes:
     """PNG bytes of ``fig`` at ``dpi`` dots per inch."""
     buf = io.BytesIO()
@@ -70,7 +82,7 @@ def residual_scatter(norm_mm, columns, ncols: int = 4) -> Figure:
     for ax, (label, x) in zip(axes.flat, columns):
         ax.scatter(np.asarray(x, float), norm_mm, s=6, alpha=0.6, color="tab:blue")
         ax.set_xlabel(label, fontsize=8)
-        ax.tick_params(labelsize=7)
+        plain_ticks(ax)
     for ax in axes[:, 0]:
         ax.set_ylabel("|residual| (mm)", fontsize=8)
     for ax in list(axes.flat)[n:]:

@@ -77,6 +77,12 @@ def figure(png: bytes, alt: str, caption: str = "") -> Html:
                 f'alt="{html.escape(alt, quote=True)}">{cap}</figure>')
 
 
+def collapsible(summary, *blocks) -> Html:
+    """Blocks folded under a one-line ``summary`` the reader can open (``<details>``)."""
+    body = "\n".join(b if isinstance(b, Html) else paragraph(b) for b in blocks)
+    return Html(f"<details><summary>{escape(summary)}</summary>\n{body}\n</details>")
+
+
 def section(heading, *blocks) -> Html:
     """A ``<section>`` with an ``<h2>`` and blocks (fragments, or text made paragraphs)."""
     body = "\n".join(b if isinstance(b, Html) else paragraph(b) for b in blocks)

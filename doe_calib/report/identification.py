@@ -6,7 +6,7 @@ import numpy as np
 from ..diagnosis.residuals import residuals
 from ..diagnosis.variables import configuration_variables
 from . import figures
-from .html import figure, paragraph, preformatted, section, table, write_report
+from .html import collapsible, figure, paragraph, preformatted, section, table, write_report
 
 def parameter_rows(result) -> list[list]:
     """One row per parameter: name, unit, nominal, value, std (a priori, a posteriori), status.
@@ -23,6 +23,28 @@ def parameter_rows(result) -> list[list]:
                      s * k if free else "—", sp * k if free else "—",
                      "free" if free else f"fixed: {why or 'by request'}"])
     return rows
+
+
+def parameters_section(result, heading: str = "Identified parameters"):
+    """The free parameters with std and unit; the fixed ones in one sentence, listed folded."""
+    rows = parameter_rows(result)
+    free = [r[:6] for r, f in zip(rows, result.parameters.free) if f]
+    fixed = [[r[0], r[1], r[3], r[6].removeprefix("fixed: ")]
+             for r, f in zip(rows, result.parameters.free) if not f]
+    blocks = [paragraph("Display units; std a priori from the stated σ, a posteriori scaled by "
+                        "σ̂/σ."),
+              table(["parameter", "unit", "nominal", "value", "std", "std a posteriori"], free)]
+    if fixed:
+        by_block = {}
+        for par, f in zip(result.parameters.parameters, result.parameters.free):
+            if not f:
+                by_block[par.block] = by_block.get(par.block, 0) + 1
+        counts = ", ".join(f"{n} {b}" for b, n in by_block.items())
+        blocks += [paragraph(f"{len(fixed)} parameters fixed ({counts}), held at the value "
+                             f"shown: mostly ones these data cannot separate from others."),
+                   collapsible(f"the {len(fixed)} fixed parameters and why",
+                               table(["parameter", "unit", "value", "why"], fixed))]
+    return section(heading, *blocks)
 
 
 def reading_columns(model, measurements) -> list[tuple]:
@@ -87,12 +109,7 @@ def identification_report(result, model, measurements, path, dpi: int = 90):
         ["σ̂ a posteriori (mm)", result.sigma_ratio * result.sigma_mm],
         ["converged", str(result.convergence.get("converged"))],
         ["solver", result.convergence.get("message", "")]], 5)
-    sections = [section("Fit", fit)]
-    sections.append(section(
-        "Parameters", "Display units; std a priori from the stated σ, a posteriori scaled "
-        "by σ̂/σ. Fixed parameters were held at the value shown, for the reason given.",
-        table(["parameter", "unit", "nominal", "value", "std", "std a posteriori", "status"],
-              parameter_rows(result))))
+    sections = [section("Fit", fit), parameters_section(result, "Parameters")]
     sections.append(section("Warnings", *([paragraph(w) for w in result.warnings]
                                           or ["No numerical trouble was reported."])))
     if result.free_names:
