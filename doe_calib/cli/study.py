@@ -16,7 +16,8 @@ STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__mai
            "tiago_refine": "studies.tiago_refine.__main__",
            "table2": "studies.table2.__main__", "diagnosis": "studies.diagnosis.__main__",
            "design_sweep": "studies.design_sweep.__main__",
-           "compensation": "studies.compensation.__main__"}
+           "compensation": "studies.compensation.__main__",
+           "tiago_compensation": "studies.tiago_compensation.__main__"}
 
 HELP = "run a study and write its results"
 EXAMPLE = "doe-calib study table1 --out results [--scheduler tcp://host:8786]"
