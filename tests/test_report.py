@@ -78,8 +78,12 @@ def test_identification_report_structure(identification, identification_html):
         assert img[..., :3].std() > 0.01, alt  # not blank
     for name in result.parameters.names:
         assert f'<td class="text">{name}</td>' in text
+    # the fixed ones: one sentence, then every reason in a folded table
+    n_fixed = int((~result.parameters.free).sum())
+    assert f"{n_fixed} parameters fixed (" in text and "<details><summary>" in text
+    folded = text.split("<details>", 1)[1].split("</details>", 1)[0]
     for reason in (r for r in result.parameters.fixed_reason if r):
-        assert escape(f"fixed: {reason}") in text
+        assert escape(reason) in folded
     assert "Levenberg" in text and "per coordinate" in text
 
 

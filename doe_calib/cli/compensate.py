@@ -31,8 +31,10 @@ def add_arguments(c):
                    help="a marker of the result, or a point in the flange frame (mm)")
     c.add_argument("--out", required=True, help="compensated CSV to write")
     c.add_argument("--max-shift", type=positive("--max-shift", "deg"), default=MAX_SHIFT,
-                   help=f"largest joint change, deg (mm for prismatic joints; default "
-                        f"{MAX_SHIFT:g}): a target farther away is reported, not reached")
+                   help=f"first trust region, deg (mm for prismatic joints; default "
+                        f"{MAX_SHIFT:g}): each joint is kept this close to its programmed "
+                        f"value, then twice as close … until the target is reached, so the "
+                        f"nearest solution is found")
     c.add_argument("--position-only", action="store_true",
                    help="reach the target positions only, the orientation free")
     c.add_argument("--format", choices=list(FORMATS),

@@ -90,9 +90,10 @@ def _reason(status: str, pos: float, rot: float, at_limit: list, condition: floa
     return "; ".join(words)
 
 
-#: Largest joint change a compensation may make (deg; mm for a prismatic joint): a
-#: calibration corrects by hundredths of a degree, so a solution farther away is another
-#: arm configuration (e.g. the wrist turned round), not a correction.
+#: First trust region of a compensation (deg; mm for a prismatic joint): each joint is
+#: first kept this close to its programmed value, then twice as close, … until the target
+#: is reached, so the solution is the nearest one (an unbounded solver may settle on
+#: another arm configuration, the wrist turned round by 80°).
 MAX_SHIFT = 5.0
 
 
@@ -114,8 +115,9 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
     position_only : bool
         Leave the orientation free (ignored when ``problem`` is given).
     max_shift : float
-        Each joint stays within this of its programmed value (deg; mm for a
-        prismatic joint), so that the solution is the nearest one.
+        First trust region (deg; mm for a prismatic joint): each joint stays
+        this close to its programmed value, the region doubling until the
+        target is reached or it covers the joint limits (:data:`MAX_SHIFT`).
 
     Returns
     -------
@@ -142,24 +144,26 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
     for i in range(len(cfg)):
         p = problem.nlp_parameters(x_t[i], r_nom[i], cfg.wrench[i], cfg.env[i], values, point,
                                    cfg.q[i])
-        lo = np.maximum(lower, cfg.q[i] - reach)
-        hi = np.minimum(upper, cfg.q[i] + reach)
-        sol = problem.solver(x0=np.clip(cfg.q[i], lo, hi), p=p, lbx=lo, ubx=hi,
-                             lbg=0.0, ubg=0.0)
-        status = problem.solver.stats()["return_status"]
-        # IPOPT relaxes the bounds by ~1e-8: the program must stay inside them
-        q_out[i] = np.clip(np.asarray(sol["x"]).ravel(), lo, hi)
-        e_pos, e_rot = problem.error(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
-                                     x_t[i], r_nom[i])
-        pos_err[i] = float(np.linalg.norm(np.asarray(e_pos)))
-        rot_err[i] = 0.0 if problem.position_only else \
-            float(np.arcsin(min(1.0, np.linalg.norm(np.asarray(e_rot)))))
+        region = reach
+        while True:  # the trust region doubles until the target is reached
+            lo, hi = np.maximum(lower, cfg.q[i] - region), np.minimum(upper, cfg.q[i] + region)
+            sol = problem.solver(x0=np.clip(cfg.q[i], lo, hi), p=p, lbx=lo, ubx=hi,
+                                 lbg=0.0, ubg=0.0)
+            status = problem.solver.stats()["return_status"]
+            # IPOPT relaxes the bounds by ~1e-8: the program must stay inside them
+            q_out[i] = np.clip(np.asarray(sol["x"]).ravel(), lo, hi)
+            e_pos, e_rot = problem.error(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
+                                         x_t[i], r_nom[i])
+            pos_err[i] = float(np.linalg.norm(np.asarray(e_pos)))
+            rot_err[i] = 0.0 if problem.position_only else \
+                float(np.arcsin(min(1.0, np.linalg.norm(np.asarray(e_rot)))))
+            reached = status in _SOLVED and pos_err[i] <= POSITION_TOLERANCE and \
+                rot_err[i] <= ROTATION_TOLERANCE
+            if reached or (np.all(lo <= lower) and np.all(hi >= upper)):
+                break
+            region = 2.0 * region
         at_limit = [j.name for j, v in zip(robot.joints, q_out[i])
                     if min(v - j.lower, j.upper - v) < 1e-9]
-        at_limit += [f"{j.name} (moved the largest compensation allowed, {max_shift:g} "
-                     f"{j.display_unit}: the target needs another arm configuration)"
-                     for j, v, q0, r in zip(robot.joints, q_out[i], cfg.q[i], reach)
-                     if abs(v - q0) > r - 1e-9 and j.name not in at_limit]
         jac = np.asarray(problem.jacobian(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
                                           x_t[i], r_nom[i]))
         notes.append(_reason(status, pos_err[i], rot_err[i], at_limit, np.linalg.cond(jac)))
