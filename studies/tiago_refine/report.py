@@ -58,4 +58,8 @@ def markdown(summary: dict) -> str:
     for c in d["candidates"]:
         cv = "–" if c["cv_rms_mm"] is None else f"{c['cv_rms_mm']:.3f}"
         lines.append(f"| {c['spec']} | {c['p_value']:.2g} | {cv} | {c['implausible']} |")
+    if summary.get("diagnosis_screenshot"):
+        lines += ["", "The diagnosis report (`doe-calib diagnose --report`, its added-variable "
+                  "plots first), as rendered by headless Chromium:", "",
+                  f"![diagnosis report]({summary['diagnosis_screenshot']})"]
     return "\n".join(lines) + "\n"

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from doe_calib.cli import main as cli
+from studies.screenshot import screenshot
 
 START = "joint_offset+geometry"
 SIGMA_MM = 0.3  # typical marker jitter of the sessions (their _meta.csv files)
@@ -72,11 +73,12 @@ def pooled_rms_3d(folds, tag: str) -> float:
     return float(np.sqrt((n * rms ** 2).sum() / n.sum()))
 
 
-def diagnosis(urdf, data_dir, work: Path) -> dict:
-    """``doe-calib diagnose`` of the starting model on all four sessions (CV by session)."""
+def diagnosis(urdf, data_dir, work: Path, report: Path) -> dict:
+    """``doe-calib diagnose`` of the starting model on all four sessions (CV by session),
+    with its HTML report written to ``report``."""
     d = json.loads(_run(["diagnose", *_common(urdf, data_dir), "--model", START, "--data",
                          *map(str, sessions(data_dir)), "--out", str(work / "diagnosis.json"),
-                         "--json"]))
+                         "--report", str(report), "--json"]))
     return {"verdict": d["verdict"], "cv_grouping": d["cv_grouping"], "proposed": d["proposed"],
             "follows": d["follows"][:6], "candidates": [
                 {k: c[k] for k in ("spec", "p_value", "cv_rms_mm", "implausible")}
@@ -87,11 +89,14 @@ def run(urdf, data_dir, out_dir, work: Path, max_steps: int = 5) -> dict:
     """The whole study; writes ``tiago_refine.{json,md,png}`` to ``out_dir``."""
     folds = [held_out_session(urdf, data_dir, i, work, max_steps)
              for i in range(len(sessions(data_dir)))]
-    summary = {"start_model": START, "sigma_mm": SIGMA_MM, "folds": folds,
-               "pooled_rms_3d_mm": {t: pooled_rms_3d(folds, t) for t in ("start", "refined")},
-               "diagnosis_all_sessions": diagnosis(urdf, data_dir, work)}
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    report = work / "tiago_diagnosis.html"
+    summary = {"start_model": START, "sigma_mm": SIGMA_MM, "folds": folds,
+               "pooled_rms_3d_mm": {t: pooled_rms_3d(folds, t) for t in ("start", "refined")},
+               "diagnosis_all_sessions": diagnosis(urdf, data_dir, work, report)}
+    summary["diagnosis_screenshot"] = "tiago_diagnosis.png" if screenshot(
+        report, out_dir / "tiago_diagnosis.png") else None
     (out_dir / "tiago_refine.json").write_text(json.dumps(summary, indent=1, ensure_ascii=False),
                                                encoding="utf-8")
     from .report import markdown, plot
