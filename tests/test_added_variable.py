@@ -68,3 +68,42 @@ def test_angle_dependent_compliance_shows_its_slope(kr270, tmp_path):
     av = _plot_of(kr270, tmp_path, sim.SmoothAngleCompliance(1, 0.0, 4e-6, phase=0.3), 33,
                   "compliance_by_angle(j2")
     assert av.correlation >= 0.9, av
+
+
+COUPLING = '''
+import casadi as ca
+NAME = "coupling_av"
+PARAMETERS = [("a", "rad", 1e-4, "error of joint 3 with the sine of joint 2")]
+
+def joint_correction(q, env, p, joint=None):
+    out = ca.SX.zeros(q.numel(), 1)
+    out[2] = p["a"] * ca.sin(q[1])
+    return out
+'''
+
+
+def test_a_user_effect_file_gets_its_plot_too(kr270, tmp_path):
+    """An effect on no joint is drawn along its own fitted displacement (its size)."""
+    from doe_calib.effects import REGISTRY
+    from doe_calib.effects.user import load_effect_file
+
+    chain, robot, tool = kr270
+    rng = np.random.default_rng(34)
+    truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng,
+                             effects=(sim.CrossCoupling(2, 1, np.radians(0.05)),))
+    q = sim.random_configurations(chain, 60, rng)
+    q, w = sim.unloaded_and_loaded(chain, q, 250.0, [0.0, 0.0, 0.1])
+    sim.write_campaign(tmp_path / "c.csv", chain, truth, q, w, list(MARKERS), 0.02, rng)
+    meas = read_measurements(tmp_path / "c.csv", robot, tool)
+    (tmp_path / "coupling.py").write_text(COUPLING, encoding="utf-8")
+    load_effect_file(tmp_path / "coupling.py")
+    try:
+        model = build_model(robot, tool, START)
+        fit = identify_quietly(model, meas)
+        effect = REGISTRY["coupling_av"]()
+        av = added_variable(model, meas, fit.parameters, effect,
+                            configuration_variables(robot, meas.configurations))
+    finally:
+        del REGISTRY["coupling_av"]
+    assert av.unit == "mm" and "size only" in av.quantity
+    assert av.correlation >= 0.9, av
