@@ -36,7 +36,7 @@ import numpy as np
 from ..effects import joint_index
 from ..evaluation import marker_positions
 from ..weighted import weighted_residual
-from .candidates import _basis, augmented
+from .candidates import _basis, projected_columns
 from .variables import _basis as _smooth_basis
 
 _STEP = 1e-6  # rad or m: central difference of the marker positions along one joint
@@ -93,10 +93,7 @@ def added_variable(model, measurements, params, effect, variables: dict) -> Adde
     """
     r, jac = weighted_residual(model, measurements, params.values)
     q_basis = _basis(jac[:, params.free])
-    big, bp = augmented(model, params, effect)
-    new = ~np.isin(bp.names, params.names)
-    _, z = weighted_residual(big, measurements, bp.values)
-    zp = z[:, new] - q_basis @ (q_basis.T @ z[:, new])
+    _, zp = projected_columns(model, measurements, params, effect, q_basis)
     theta = np.linalg.lstsq(zp, r, rcond=None)[0]
     f = (zp @ theta).reshape(-1, 3)
     res = r.reshape(-1, 3)

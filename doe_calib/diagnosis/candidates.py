@@ -102,6 +102,15 @@ def augmented(model, params, effect):
     return big, replace(start, values=values, free=free, fixed_reason=tuple(reasons))
 
 
+def projected_columns(model, measurements, params, effect, q_basis):
+    """The candidate's weighted columns Z (3K, q) and Z⊥ = (I − QQᵀ)Z, what the fitted
+    model (orthonormal basis ``q_basis`` of its free Jacobian) cannot already absorb."""
+    big, bp = augmented(model, params, effect)
+    _, z = weighted_residual(big, measurements, bp.values)
+    z = z[:, ~np.isin(bp.names, params.names)]
+    return z, z - q_basis @ (q_basis.T @ z)
+
+
 def _basis(jac: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     u, s, _ = np.linalg.svd(jac, full_matrices=False)
     return u[:, s > tol * (s[0] if s.size else 1.0)]
@@ -133,14 +142,10 @@ def test_candidates(model, measurements, params, effects=None) -> list[Candidate
     raw = []
     for e in effects:
         try:
-            big, bp = augmented(model, params, e)
+            z, zp = projected_columns(model, measurements, params, e, q_basis)
         except (ModelError, ValueError):
             continue
-        new = ~np.isin(bp.names, params.names)
-        _, z = weighted_residual(big, measurements, bp.values)
-        z = z[:, new]
         norm2 = float((z ** 2).sum())
-        zp = z - q_basis @ (q_basis.T @ z)
         absorbed = 1.0 - float((zp ** 2).sum()) / norm2 if norm2 > 0 else 1.0
         scale = np.sqrt(max(norm2, 1e-300) / max(z.shape[1], 1))
         u, s, _ = np.linalg.svd(zp, full_matrices=False)
@@ -148,14 +153,14 @@ def test_candidates(model, measurements, params, effects=None) -> list[Candidate
         q = int(keep.sum())
         dof = len(r) - rank_j - q
         if q == 0 or dof <= 0:
-            raw.append((e, int(new.sum()), 0, 0.0, 0.0, 0.0, absorbed))
+            raw.append((e, z.shape[1], 0, 0.0, 0.0, 0.0, absorbed))
             continue
         dss = float(((u[:, keep].T @ r) ** 2).sum())
         f = (dss / q) / max((ss - dss) / dof, 1e-300)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             log_p = float(stats.f.logsf(f, q, dof))
-        raw.append((e, int(new.sum()), q, f, log_p, dss / ss if ss > 0 else 0.0, absorbed))
+        raw.append((e, z.shape[1], q, f, log_p, dss / ss if ss > 0 else 0.0, absorbed))
     n = max(len(raw), 1)
     out = [CandidateTest(e.name, e.spec(),
                          None if e.joint is None else joint_index(model.robot, e.joint) + 1,

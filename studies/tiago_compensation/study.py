@@ -13,15 +13,13 @@ every figure about them is a prediction of the model.
 """
 from __future__ import annotations
 
-import io
 import json
-from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 import numpy as np
 
 from doe_calib import Configurations, IdentificationResult, build_model
-from doe_calib.cli import main as cli
+from studies.commands import run_command
 from doe_calib.compensation import read_targets
 from doe_calib.evaluation import evaluate
 from doe_calib.io import read_measurements, write_design
@@ -31,15 +29,6 @@ from studies.tiago_refine.study import SIGMA_MM, sessions
 #: own-weight compliance of arm_6, a cyclic error of arm_3: one to three harmonics by fold,
 #: two in two of the four), fixed here so that every fold compensates with the same model.
 MODEL = "joint_offset+geometry+backlash(j7)+gravity_compliance(j7)+cyclic(j4,harmonics=2)"
-
-
-def _run(argv) -> str:
-    out, err = io.StringIO(), io.StringIO()
-    with redirect_stdout(out), redirect_stderr(err):
-        rc = cli(argv)
-    if rc != 0:
-        raise RuntimeError(f"doe-calib {' '.join(map(str, argv))} failed: {err.getvalue()}")
-    return out.getvalue()
 
 
 def _stats(values) -> dict:
@@ -83,17 +72,19 @@ def held_out_session(urdf, data_dir, held: int, work: Path, postures: int | None
     train = [str(f) for i, f in enumerate(files) if i != held]
     name = files[held].stem
     result_json, targets_csv = work / f"{name}_result.json", work / f"{name}_targets.csv"
-    _run(["identify", "--robot", str(urdf), "--tool", str(Path(data_dir) / "tool.yaml"),
-          "--sigma", str(SIGMA_MM), "--model", MODEL, "--data", *train, "--out",
-          str(result_json)])
+    run_command(["identify", "--robot", str(urdf), "--tool", str(Path(data_dir) / "tool.yaml"),
+                 "--sigma", str(SIGMA_MM), "--model", MODEL, "--data", *train, "--out",
+                 str(result_json)])
     result = IdentificationResult.from_json(result_json)
     clipped = write_targets(result, files[held], targets_csv, postures)
     tcp = body_centre(result)
-    comp = json.loads(_run(["compensate", "--result", str(result_json), "--targets",
-                            str(targets_csv), "--tcp", ",".join(f"{v * 1000:.17g}" for v in tcp),
-                            "--out", str(work / f"{name}_compensated.csv"), "--json"]))
-    pred = json.loads(_run(["predict", "--result", str(result_json), "--data", str(files[held]),
-                            "--out", str(work / f"{name}_predicted.csv"), "--json"]))
+    comp = json.loads(run_command(["compensate", "--result", str(result_json), "--targets",
+                                   str(targets_csv), "--tcp",
+                                   ",".join(f"{v * 1000:.17g}" for v in tcp),
+                                   "--out", str(work / f"{name}_compensated.csv"), "--json"]))
+    pred = json.loads(run_command(["predict", "--result", str(result_json), "--data",
+                                   str(files[held]), "--out", str(work / f"{name}_predicted.csv"),
+                                   "--json"]))
     q, q_c = np.array(comp["q"]), np.array(comp["q_compensated"])
     target, ok = np.array(comp["target"]), np.array(comp["converged"], bool)
     model = build_model(result.robot, result.tool, result.model)

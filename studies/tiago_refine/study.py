@@ -9,14 +9,12 @@ starting model on all four sessions says what its residual follows.
 """
 from __future__ import annotations
 
-import io
 import json
-from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 import numpy as np
 
-from doe_calib.cli import main as cli
+from studies.commands import run_command
 from studies.screenshot import screenshot
 
 START = "joint_offset+geometry"
@@ -26,15 +24,6 @@ SIGMA_MM = 0.3  # typical marker jitter of the sessions (their _meta.csv files)
 def sessions(data_dir) -> list[Path]:
     """The session CSVs in recording order (not the *_meta.csv files)."""
     return sorted(p for p in Path(data_dir).glob("mocap_*.csv") if not p.stem.endswith("_meta"))
-
-
-def _run(argv) -> str:
-    out, err = io.StringIO(), io.StringIO()
-    with redirect_stdout(out), redirect_stderr(err):
-        rc = cli(argv)
-    if rc != 0:
-        raise RuntimeError(f"doe-calib {' '.join(map(str, argv))} failed: {err.getvalue()}")
-    return out.getvalue()
 
 
 def _common(urdf, data_dir):
@@ -48,15 +37,17 @@ def held_out_session(urdf, data_dir, held: int, work: Path, max_steps: int = 5) 
     train = [str(f) for i, f in enumerate(files) if i != held]
     name = files[held].stem
     result = work / f"{name}_result.json"
-    _run(["refine", *_common(urdf, data_dir), "--model", START, "--data", *train,
-          "--validation", str(files[held]), "--max-steps", str(max_steps), "--out", str(result)])
+    run_command(["refine", *_common(urdf, data_dir), "--model", START, "--data", *train,
+                 "--validation", str(files[held]), "--max-steps", str(max_steps), "--out",
+                 str(result)])
     history = json.loads((work / f"{name}_result_refine.json").read_text())
-    _run(["identify", *_common(urdf, data_dir), "--model", START, "--data", *train,
-          "--out", str(work / f"{name}_start.json")])
+    run_command(["identify", *_common(urdf, data_dir), "--model", START, "--data", *train,
+                 "--out", str(work / f"{name}_start.json")])
     errors = {}
     for tag, path in (("start", work / f"{name}_start.json"), ("refined", result)):
-        out = json.loads(_run(["predict", "--result", str(path), "--data", str(files[held]),
-                               "--out", str(work / f"{name}_{tag}_predicted.csv"), "--json"]))
+        out = json.loads(run_command(["predict", "--result", str(path), "--data",
+                                      str(files[held]), "--out",
+                                      str(work / f"{name}_{tag}_predicted.csv"), "--json"]))
         errors[tag] = {**out["error"], "readings": out["readings"]}
     steps = [{"model": s["model"], "added": s["added"], "cv_rms_mm": s["cv_rms_mm"],
               "held_out_rms_3d_mm": s["validation_rms_mm"] * np.sqrt(3), "reason": s["reason"]}
@@ -76,9 +67,10 @@ def pooled_rms_3d(folds, tag: str) -> float:
 def diagnosis(urdf, data_dir, work: Path, report: Path) -> dict:
     """``doe-calib diagnose`` of the starting model on all four sessions (CV by session),
     with its HTML report written to ``report``."""
-    d = json.loads(_run(["diagnose", *_common(urdf, data_dir), "--model", START, "--data",
-                         *map(str, sessions(data_dir)), "--out", str(work / "diagnosis.json"),
-                         "--report", str(report), "--json"]))
+    d = json.loads(run_command(["diagnose", *_common(urdf, data_dir), "--model", START,
+                                "--data", *map(str, sessions(data_dir)), "--out",
+                                str(work / "diagnosis.json"), "--report", str(report),
+                                "--json"]))
     return {"verdict": d["verdict"], "cv_grouping": d["cv_grouping"], "proposed": d["proposed"],
             "follows": d["follows"][:6], "candidates": [
                 {k: c[k] for k in ("spec", "p_value", "cv_rms_mm", "implausible")}
