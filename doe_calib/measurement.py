@@ -181,6 +181,7 @@ class Model:
 _BUILT: OrderedDict = OrderedDict()  # (robot, tool, effects, native) -> Model
 _BUILT_SIZE = 24
 _BUILT_LOCK = threading.Lock()
+_BUILDING: dict = {}  # key -> Event set when the build under way ends
 
 
 def _key(description, native: bool):
@@ -225,17 +226,43 @@ def build_model(robot, tool=None, model: str | tuple = DEFAULT_MODEL,
     description = robot if isinstance(robot, ModelDescription) else \
         describe_model(robot, tool, model)
     key = _key(description, compile)
-    with _BUILT_LOCK:
-        built = _BUILT.get(key)
-        if built is not None:
-            _BUILT.move_to_end(key)
-            return built
-    built = _build(description, compile)
-    with _BUILT_LOCK:
-        built = _BUILT.setdefault(key, built)
-        while len(_BUILT) > _BUILT_SIZE:
-            _BUILT.popitem(last=False)
+    while True:
+        with _BUILT_LOCK:
+            built = _BUILT.get(key)
+            if built is not None:
+                _BUILT.move_to_end(key)
+                return built
+            running = _BUILDING.get(key)
+            if running is None:
+                running = _BUILDING[key] = threading.Event()
+                break
+        running.wait()  # another thread is building this very model: take its build
+    try:
+        built = _build(description, compile)
+        with _BUILT_LOCK:
+            _BUILT[key] = built
+            while len(_BUILT) > _BUILT_SIZE:
+                _BUILT.popitem(last=False)
+    finally:
+        with _BUILT_LOCK:
+            _BUILDING.pop(key).set()
     return built
+
+
+def compile_in_background(model: Model) -> threading.Thread | None:
+    """Start compiling ``model`` to native code in a background thread.
+
+    The compiler runs in its own processes, so the caller goes on (reading
+    a large measurement file, say) meanwhile; :func:`for_workload` then finds
+    the native model built, or waits for the build under way. None (nothing
+    started) when ``DOE_CALIB_COMPILE=never`` or the model is native already.
+    """
+    if model.native or os.environ.get("DOE_CALIB_COMPILE", "").strip().lower() == "never":
+        return None
+    thread = threading.Thread(target=build_model, args=(model.description, None, "", True),
+                              name="doe_calib-compile", daemon=True)
+    thread.start()
+    return thread
 
 
 #: Observation-matrix evaluations (configurations × passes) from which

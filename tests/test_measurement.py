@@ -142,3 +142,30 @@ def test_native_code_when_the_work_pays_for_it(robot6, tool6, rng, monkeypatch):
     v = model.nominal().values + rng.normal(scale=1e-3, size=model.n_parameters)
     for a, b in zip(observation_matrix(native, v, cfg), observation_matrix(model, v, cfg)):
         assert np.allclose(a, b, rtol=1e-12, atol=1e-13)
+
+
+def test_threads_asking_for_one_model_share_one_build(robot6, tool6, monkeypatch):
+    """A model being built (a compilation started in the background) is waited for, not
+    built twice."""
+    import threading
+    import time
+
+    import doe_calib.measurement as measurement
+
+    calls, real = [], measurement._build
+
+    def slow(description, compile):
+        calls.append(description.spec)
+        time.sleep(0.3)
+        return real(description, compile)
+
+    monkeypatch.setattr(measurement, "_build", slow)
+    measurement._BUILT.clear()
+    got = []
+    threads = [threading.Thread(target=lambda: got.append(
+        build_model(robot6, tool6, "joint_offset+cyclic(a3)"))) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(calls) == 1 and len(got) == 3 and got[0] is got[1] is got[2]

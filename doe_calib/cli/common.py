@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -9,7 +10,7 @@ from ..effects import DEFAULT_MODEL
 from ..effects.user import load_effect_files
 from ..errors import OptionError
 from ..io import read_measurements
-from ..measurement import build_model
+from ..measurement import build_model, compile_in_background
 from ..robot import Robot
 from ..tool import Tool
 from .options import at_least
@@ -112,6 +113,21 @@ def stage_progress():
     return show
 
 
+#: Measurement files larger than this (≈ 30 000 readings) are fitted with native code
+#: (:func:`~doe_calib.measurement.for_workload`), compiled while they are read.
+LARGE_DATA_BYTES = 2_500_000
+
+
+def _data_bytes(paths) -> int:
+    total = 0
+    for path in paths if isinstance(paths, (list, tuple)) else [paths]:
+        try:
+            total += Path(path).stat().st_size
+        except OSError:
+            pass  # the reader names the file
+    return total
+
+
 def model_and_measurements(args, estimate_sigma: bool = True):
     """The model (``--model``) and the measurements (``--data``, ``--sigma``, ``--skip-bad``,
     ``--exclude-poses``).
@@ -121,6 +137,8 @@ def model_and_measurements(args, estimate_sigma: bool = True):
     """
     robot, tool = load_robot_tool(args)
     model = build_model(robot, tool, args.model)
+    if _data_bytes(args.data) > LARGE_DATA_BYTES:  # the fit will run native code: compile
+        compile_in_background(model)               # it while the file is read
     meas = read_data(args.data, robot, tool, args.sigma, args.skip_bad)
     meas = excluding(meas, getattr(args, "exclude_poses", None))
     if estimate_sigma and meas.sigma_estimated:
