@@ -7,14 +7,12 @@ from pathlib import Path
 
 from ..compensation import build_problem, compensate, read_targets
 from ..compensation.program import export_compensated
-from ..compensation.solve import MAX_SHIFT
 from ..errors import ConvergenceWarning, DataError, OptionError
 from ..export import FORMATS
 from ..jsonfile import strict_json
 from ..measurement import build_model
 from ..results import IdentificationResult
 from .common import effect_file_argument, load_effect_files, parse_floats, report_warnings
-from .options import positive
 
 HELP = ("compensate a program: joint values that put the TCP on its targets with the "
         "identified model")
@@ -30,11 +28,6 @@ def add_arguments(c):
     c.add_argument("--tcp", required=True, metavar="MARKER|X,Y,Z",
                    help="a marker of the result, or a point in the flange frame (mm)")
     c.add_argument("--out", required=True, help="compensated CSV to write")
-    c.add_argument("--max-shift", type=positive("--max-shift", "deg"), default=MAX_SHIFT,
-                   help=f"first trust region, deg (mm for prismatic joints; default "
-                        f"{MAX_SHIFT:g}): each joint is kept this close to its programmed "
-                        f"value, then twice as close … until the target is reached, so the "
-                        f"nearest solution is found")
     c.add_argument("--position-only", action="store_true",
                    help="reach the target positions only, the orientation free")
     c.add_argument("--format", choices=list(FORMATS),
@@ -69,8 +62,7 @@ def run(args):
     model = build_model(result.robot, result.tool, result.model)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        out = compensate(model, result, targets, tcp, build_problem(model, args.position_only),
-                         max_shift=args.max_shift)
+        out = compensate(model, result, targets, tcp, build_problem(model, args.position_only))
     report_warnings([w for w in caught if not issubclass(w.category, ConvergenceWarning)])
     for pose, ok, note in zip(out.pose, out.converged, out.note):
         if not ok:

@@ -90,15 +90,8 @@ def _reason(status: str, pos: float, rot: float, at_limit: list, condition: floa
     return "; ".join(words)
 
 
-#: First trust region of a compensation (deg; mm for a prismatic joint): each joint is
-#: first kept this close to its programmed value, then twice as close, … until the target
-#: is reached, so the solution is the nearest one (an unbounded solver may settle on
-#: another arm configuration, the wrist turned round by 80°).
-MAX_SHIFT = 5.0
-
-
 def compensate(model, result, targets, tcp, problem: CompensationProblem | None = None,
-               position_only: bool = False, max_shift: float = MAX_SHIFT) -> CompensationResult:
+               position_only: bool = False) -> CompensationResult:
     """Joint values that make the identified model reach each target.
 
     Parameters
@@ -114,10 +107,6 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
         Built by :func:`~.problem.build_problem` (built here when not given).
     position_only : bool
         Leave the orientation free (ignored when ``problem`` is given).
-    max_shift : float
-        First trust region (deg; mm for a prismatic joint): each joint stays
-        this close to its programmed value, the region doubling until the
-        target is reached or it covers the joint limits (:data:`MAX_SHIFT`).
 
     Returns
     -------
@@ -138,30 +127,21 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
     values = result.parameters.values
     robot = model.robot
     lower, upper = robot.lower, robot.upper
-    reach = max_shift / robot.display_factors
     q_out, notes, ok = np.empty_like(cfg.q), [], np.zeros(len(cfg), bool)
     pos_err, rot_err = np.empty(len(cfg)), np.empty(len(cfg))
     for i in range(len(cfg)):
         p = problem.nlp_parameters(x_t[i], r_nom[i], cfg.wrench[i], cfg.env[i], values, point,
                                    cfg.q[i])
-        region = reach
-        while True:  # the trust region doubles until the target is reached
-            lo, hi = np.maximum(lower, cfg.q[i] - region), np.minimum(upper, cfg.q[i] + region)
-            sol = problem.solver(x0=np.clip(cfg.q[i], lo, hi), p=p, lbx=lo, ubx=hi,
-                                 lbg=0.0, ubg=0.0)
-            status = problem.solver.stats()["return_status"]
-            # IPOPT relaxes the bounds by ~1e-8: the program must stay inside them
-            q_out[i] = np.clip(np.asarray(sol["x"]).ravel(), lo, hi)
-            e_pos, e_rot = problem.error(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
-                                         x_t[i], r_nom[i])
-            pos_err[i] = float(np.linalg.norm(np.asarray(e_pos)))
-            rot_err[i] = 0.0 if problem.position_only else \
-                float(np.arcsin(min(1.0, np.linalg.norm(np.asarray(e_rot)))))
-            reached = status in _SOLVED and pos_err[i] <= POSITION_TOLERANCE and \
-                rot_err[i] <= ROTATION_TOLERANCE
-            if reached or (np.all(lo <= lower) and np.all(hi >= upper)):
-                break
-            region = 2.0 * region
+        sol = problem.solver(x0=np.clip(cfg.q[i], lower, upper), p=p, lbx=lower, ubx=upper,
+                             lbg=0.0, ubg=0.0)
+        status = problem.solver.stats()["return_status"]
+        # IPOPT relaxes the bounds by ~1e-8: the program must stay inside them
+        q_out[i] = np.clip(np.asarray(sol["x"]).ravel(), lower, upper)
+        e_pos, e_rot = problem.error(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
+                                     x_t[i], r_nom[i])
+        pos_err[i] = float(np.linalg.norm(np.asarray(e_pos)))
+        rot_err[i] = 0.0 if problem.position_only else \
+            float(np.arcsin(min(1.0, np.linalg.norm(np.asarray(e_rot)))))
         at_limit = [j.name for j, v in zip(robot.joints, q_out[i])
                     if min(v - j.lower, j.upper - v) < 1e-9]
         jac = np.asarray(problem.jacobian(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
