@@ -107,8 +107,9 @@ def residual_bars(stats: dict, what: str) -> Figure:
     ax = fig.add_subplot()
     ax.bar(x - 0.2, [stats[k]["rms_mm"] for k in names], 0.4, label="RMS per coordinate")
     ax.bar(x + 0.2, [stats[k]["max_3d_mm"] for k in names], 0.4, label="max 3-D")
-    ax.set_xticks(x, names, rotation=90 if len(names) > 12 else 0, fontsize=7)
-    ax.set_xlabel(what)
+    step = -(-len(names) // 40)  # at most 40 labels: hundreds of poses would overlap
+    ax.set_xticks(x[::step], names[::step], rotation=90 if len(names) > 12 else 0, fontsize=7)
+    ax.set_xlabel(what if step == 1 else f"{what} (every {step}th labelled)")
     ax.set_ylabel("residual (mm)")
     ax.legend(fontsize=8)
     return fig
