@@ -35,8 +35,7 @@ import numpy as np
 
 from ..effects import joint_index
 from ..evaluation import marker_positions
-from ..weighted import weighted_residual
-from .candidates import _basis, projected_columns
+from .candidates import fitted_basis, projected_columns
 from .variables import _basis as _smooth_basis
 
 _STEP = 1e-6  # rad or m: central difference of the marker positions along one joint
@@ -75,7 +74,8 @@ class AddedVariable:
     correlation: float
 
 
-def added_variable(model, measurements, params, effect, variables: dict) -> AddedVariable:
+def added_variable(model, measurements, params, effect, variables: dict,
+                   basis=None) -> AddedVariable:
     """The added-variable plot data of ``effect`` for the fit ``params`` of ``model``.
 
     Parameters
@@ -90,9 +90,10 @@ def added_variable(model, measurements, params, effect, variables: dict) -> Adde
     variables : dict
         :func:`~doe_calib.diagnosis.variables.configuration_variables` of the
         measured configurations.
+    basis : tuple, optional
+        :func:`~.candidates.fitted_basis` of the fit, when several candidates share it.
     """
-    r, jac = weighted_residual(model, measurements, params.values)
-    q_basis = _basis(jac[:, params.free])
+    r, q_basis = fitted_basis(model, measurements, params) if basis is None else basis
     _, zp = projected_columns(model, measurements, params, effect, q_basis)
     theta = np.linalg.lstsq(zp, r, rcond=None)[0]
     f = (zp @ theta).reshape(-1, 3)

@@ -102,6 +102,12 @@ def augmented(model, params, effect):
     return big, replace(start, values=values, free=free, fixed_reason=tuple(reasons))
 
 
+def fitted_basis(model, measurements, params):
+    """Weighted residual r (3K,) of the fit and an orthonormal basis Q of its free Jacobian."""
+    r, jac = weighted_residual(model, measurements, params.values)
+    return r, _basis(jac[:, params.free])
+
+
 def projected_columns(model, measurements, params, effect, q_basis):
     """The candidate's weighted columns Z (3K, q) and Z⊥ = (I − QQᵀ)Z, what the fitted
     model (orthonormal basis ``q_basis`` of its free Jacobian) cannot already absorb."""
@@ -135,8 +141,7 @@ def test_candidates(model, measurements, params, effects=None) -> list[Candidate
     """
     effects = candidate_effects(model, measurements.configurations) if effects is None \
         else effects
-    r, jac = weighted_residual(model, measurements, params.values)
-    q_basis = _basis(jac[:, params.free])
+    r, q_basis = fitted_basis(model, measurements, params)
     rank_j = q_basis.shape[1]
     ss = float(r @ r)
     raw = []

@@ -6,7 +6,7 @@ import warnings
 import numpy as np
 
 from ..diagnosis.added_variable import added_variable
-from ..diagnosis.candidates import candidate_effects
+from ..diagnosis.candidates import candidate_effects, fitted_basis
 from ..diagnosis.residuals import residuals
 from ..diagnosis.variables import configuration_variables
 from ..errors import DoeCalibError
@@ -14,7 +14,7 @@ from . import figures
 from .diagnosis_figures import (added_variable_panels, candidate_bars, error_falling,
                                 residuals_by_direction)
 from .html import collapsible, figure, paragraph, preformatted, section, table, write_report
-from .identification import parameters_section, reading_columns, residual_norms_mm
+from .identification import parameters_section, reading_columns
 
 #: Candidates drawn as added-variable plots, strongest evidence first.
 ADDED_VARIABLE_PLOTS = 4
@@ -36,6 +36,7 @@ def _added_variables(diagnosis, model, measurements, fit) -> list:
     """Added-variable data of the strongest candidates (those that can be rebuilt)."""
     effects = {e.spec(): e for e in candidate_effects(model, measurements.configurations)}
     variables = configuration_variables(model.robot, measurements.configurations)
+    basis = fitted_basis(model, measurements, fit.parameters)  # shared by every candidate
     out = []
     for c in diagnosis.candidates:
         if len(out) == ADDED_VARIABLE_PLOTS:
@@ -47,18 +48,17 @@ def _added_variables(diagnosis, model, measurements, fit) -> list:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 out.append(added_variable(model, measurements, fit.parameters, effect,
-                                          variables))
+                                          variables, basis))
         except (DoeCalibError, ValueError, np.linalg.LinAlgError):
             continue
     return out
 
 
-def _by_direction(diagnosis, model, measurements, fit, top: int = 3):
-    """Signed residual components (mm) and the strongest variables, per reading."""
-    error = residuals(model, measurements, fit.parameters.values).error * 1e3
-    columns = dict(reading_columns(model, measurements))
+def _by_direction(diagnosis, columns, top: int = 3):
+    """The strongest variables' (label, values per reading) among ``columns``."""
+    columns = dict(columns)
     names = [f"{f.variable} ({f.unit})" if f.unit else f.variable for f in diagnosis.follows]
-    return error, [(n, columns[n]) for n in names if n in columns][:top]
+    return [(n, columns[n]) for n in names if n in columns][:top]
 
 
 def failure_sections(diagnosis, model, measurements, fit, dpi: int = 90,
@@ -66,19 +66,21 @@ def failure_sections(diagnosis, model, measurements, fit, dpi: int = 90,
     """Where the model fails: its fit, what the residual follows, signed and sized residuals,
     and poses far outside the noise."""
     follow = ", ".join(f"{f.variable} (adjusted R² {f.r2:.2f})" for f in diagnosis.follows[:5])
-    error, strongest = _by_direction(diagnosis, model, measurements, fit)
+    error = residuals(model, measurements, fit.parameters.values).error * 1e3
+    columns = reading_columns(model, measurements)
+    strongest = _by_direction(diagnosis, columns)
     by_direction = [figure(_png(residuals_by_direction(error, strongest), dpi),
                            "signed residual components against the strongest variables",
                            "Residual x, y, z (mm, tracker frame) of each reading against the "
                            "variables its size follows most: signed, so a step or a sine keeps "
                            "its shape.")] if strongest else []
-    norms = residual_norms_mm(model, measurements, fit.parameters.values)
+    norms = np.linalg.norm(error, axis=1)
     out = [section(f"{title}Where the model fails", table(
         ["model", "fit RMS (mm)", "CV RMS (mm)", "noise floor (mm)", "σ̂/σ"],
         [[diagnosis.model, diagnosis.rms_mm, diagnosis.cv_rms_mm, diagnosis.noise_floor_mm,
           diagnosis.chi2.get("sigma_ratio", float("nan"))]], 4), paragraph(
         f"The residual size follows: {follow or 'nothing in particular'}."), *by_direction,
-        figure(_png(figures.residual_scatter(norms, reading_columns(model, measurements)), dpi),
+        figure(_png(figures.residual_scatter(norms, columns), dpi),
                "residual of each reading against every variable",
                "3-D residual norm (mm) of each reading against the joint positions, loads, "
                "joint torques, temperature and measurement order."))]
