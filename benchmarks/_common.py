@@ -12,8 +12,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from doe_calib import Configurations, Robot, Tool, build_model, example
-from doe_calib.simulate import random_configurations
+from doe_calib import Configurations, Robot, Tool, build_model, examples
+from doe_calib.model.simulate import random_configurations
 
 #: The full 6R model of every 6R benchmark: all parameter blocks.
 MODEL_6R = "joint_offset+geometry+joint_compliance"
@@ -70,9 +70,9 @@ def models() -> Models:
     The compile time (cold cache) and the reload time (same model, warm cache)
     are recorded here and kept out of every other timing.
     """
-    robot6, tool6 = Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML)
-    robot3 = Robot.from_urdf(example.THREE_DOF_URDF)
-    tool3 = Tool.from_yaml(example.THREE_DOF_TOOL_YAML)
+    robot6, tool6 = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
+    robot3 = Robot.from_urdf(examples.THREE_DOF_URDF)
+    tool3 = Tool.from_yaml(examples.THREE_DOF_TOOL_YAML)
     old = os.environ.get("DOE_CALIB_CACHE")
     with tempfile.TemporaryDirectory(prefix="doe_calib_bench_") as cache:
         os.environ["DOE_CALIB_CACHE"] = cache

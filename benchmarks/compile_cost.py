@@ -6,7 +6,7 @@ import platform
 
 import casadi as ca
 
-from doe_calib.compiled import FLAGS, find_compiler
+from doe_calib.model.compiled import FLAGS, find_compiler
 
 from ._common import Row, Section, models
 

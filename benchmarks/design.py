@@ -44,8 +44,8 @@ class Run:
 
 
 def _model():
-    from doe_calib import Robot, Tool, build_model, example
-    return build_model(Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML),
+    from doe_calib import Robot, Tool, build_model, examples
+    return build_model(Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML),
                        MODEL_6R, compile=True)
 
 

@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from doe_calib import identify, simulate
-from doe_calib.simulate import random_truth
+from doe_calib.model.simulate import random_truth
 
 from ._common import Row, Section, loaded_design, models, quiet
 

@@ -22,11 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
-from doe_calib import Configurations, Robot, Tool, build_model, example
-from doe_calib.io import write_measurements
-from doe_calib.loads import hanging_mass_wrench
-from doe_calib.simulate import random_configurations, random_truth, simulate
-from doe_calib.weighted import residual_norm2
+from doe_calib import Configurations, Robot, Tool, build_model, examples
+from doe_calib.estimation.weighted_residuals import residual_norm2
+from doe_calib.io.csv_files import write_measurements
+from doe_calib.model.loads import hanging_mass_wrench
+from doe_calib.model.simulate import random_configurations, random_truth, simulate
 
 from ._common import MODEL_6R, Row, Section
 
@@ -73,7 +73,7 @@ def _target_note(step, seconds, mb) -> str:
 
 
 def run(quick: bool = False) -> Section:
-    robot, tool = Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML)
+    robot, tool = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
     model = build_model(robot, tool, MODEL_6R)
     n_poses = 3334 if quick else 16667  # × 2 load cases × 3 markers: 20 004 or 100 002
     meas, truth = _campaign(robot, model, n_poses, np.random.default_rng(100))
@@ -85,8 +85,8 @@ def run(quick: bool = False) -> Section:
         env = dict(os.environ, DOE_CALIB_CACHE=str(tmp / "cache"))
 
         def command(name, *more):
-            return [sys.executable, "-m", "doe_calib", name, "--robot", str(example.ROBOT_URDF),
-                    "--tool", str(example.TOOL_YAML), "--data", str(data), "--model", MODEL_6R,
+            return [sys.executable, "-m", "doe_calib", name, "--robot", str(examples.ROBOT_URDF),
+                    "--tool", str(examples.TOOL_YAML), "--data", str(data), "--model", MODEL_6R,
                     *more]
 
         cold = _run(command("identify", "--out", str(tmp / "r.json")), env, tmp / "o.txt")

@@ -14,8 +14,8 @@ import time
 import numpy as np
 
 from doe_calib import Configurations, identify, predict_covariance, simulate
-from doe_calib.identify import fix_unidentifiable, register_base
-from doe_calib.simulate import random_truth
+from doe_calib.estimation.preparation import fix_unidentifiable, register_base
+from doe_calib.model.simulate import random_truth
 
 from ._common import Row, Section, loaded_design, models, quiet
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib import Configurations, observation_matrix
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.model.simulate import random_configurations, random_truth
 
 from ._common import Row, Section, median_seconds, models
 
@@ -41,7 +41,7 @@ def _pinocchio_us(robot_urdf, q, repeats):
 
 def run(quick: bool = False, n_poses: int = 1000) -> Section:
     """Observation-matrix cost per pose (µs) for ``n_poses`` random loaded poses."""
-    from doe_calib import example
+    from doe_calib import examples
 
     ms = models()
     rng = np.random.default_rng(2024)
@@ -55,7 +55,7 @@ def run(quick: bool = False, n_poses: int = 1000) -> Section:
     figures = {tag: _per_pose_us(model, values, cfg, repeats)
                for tag, model in (("SX virtual machine", ms.vm6), ("compiled", ms.compiled6))}
     figures["Pinocchio FK + 6×6 frame Jacobian, Python loop (scale only)"] = \
-        _pinocchio_us(example.ROBOT_URDF, q, repeats)
+        _pinocchio_us(examples.ROBOT_URDF, q, repeats)
     ref = figures["compiled"]
     out = tuple(Row(case, us, "µs/pose", us / ref) for case, us in figures.items())
     pin_us = figures["Pinocchio FK + 6×6 frame Jacobian, Python loop (scale only)"]

@@ -1,6 +1,6 @@
 """``python -m doe_calib`` is ``doe-calib``."""
 import sys
 
-from .cli import main
+from doe_calib.cli import main
 
 sys.exit(main())

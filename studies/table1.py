@@ -18,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from doe_calib import Configurations, Robot, Tool, build_model, example, identify, simulate
-from doe_calib.covariance import predict_covariance
-from doe_calib.parallel import run_tasks, task_seeds
-from doe_calib.pose_estimator import default_normalisation, predict_pose_covariance
-from doe_calib.progress import Progress
+from doe_calib import Configurations, Robot, Tool, build_model, examples, identify, simulate
+from doe_calib.estimation.covariance import predict_covariance
+from doe_calib.estimation.pose_estimator import default_normalisation, predict_pose_covariance
+from doe_calib.runtime.parallel import run_tasks, task_seeds
+from doe_calib.runtime.progress import Progress
 
 NAMES = ("dl1", "dl2", "dl3", "dq1", "dq2", "dq3")
 OURS = ("g_q2_tz", "g_q3_tx", "g_flange_tx", "dq_q1", "dq_q2", "dq_q3")
@@ -37,8 +37,8 @@ SWEEP = np.logspace(-2, 1, 15)  # m/rad
 
 def setup():
     """Model and true parameters (only the six of the paper free)."""
-    robot = Robot.from_urdf(example.THREE_DOF_URDF)
-    tool = Tool.from_yaml(example.THREE_DOF_TOOL_YAML)
+    robot = Robot.from_urdf(examples.THREE_DOF_URDF)
+    tool = Tool.from_yaml(examples.THREE_DOF_TOOL_YAML)
     model = build_model(robot, tool, "joint_offset+geometry")
     truth = model.nominal().only(list(OURS)).updated(**TRUTH)
     return model, truth
@@ -86,7 +86,7 @@ def monte_carlo(cfg, reps, seed, lam, approaches=("pose", "point"), scheduler=No
     """Estimates of the six parameters (mm, mdeg) over ``reps`` noisy repetitions.
 
     The repetitions run in chunks of :data:`_CHUNK`, each with its own seed,
-    through :func:`doe_calib.parallel.run_tasks` (local processes, or a Dask
+    through :func:`doe_calib.runtime.parallel.run_tasks` (local processes, or a Dask
     cluster at ``scheduler``): the figures do not depend on the engine.
     """
     sizes = [min(_CHUNK, reps - i) for i in range(0, reps, _CHUNK)]
@@ -101,7 +101,7 @@ def run(out_dir="results", repetitions=1000, spread_sets=20, seed=2024, progress
     """The whole study; writes table1.json, table1.md and table1.png to ``out_dir``.
 
     ``scheduler`` (a Dask address) or ``workers`` (local processes) run the
-    Monte Carlo in parallel (:mod:`doe_calib.parallel`).
+    Monte Carlo in parallel (:mod:`doe_calib.runtime.parallel`).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -4,8 +4,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from doe_calib import Robot, Tool, build_model, example
-from doe_calib.threads import single_threaded_blas
+from doe_calib import Robot, Tool, build_model, examples
+from doe_calib.runtime.threads import single_threaded_blas
 
 _BLAS = single_threaded_blas()  # pytest -n 2 on 2 cores: no BLAS threads fighting for them
 
@@ -15,12 +15,12 @@ ODD_CHAIN_URDF = DATA / "odd_chain.urdf"
 
 @pytest.fixture(scope="session")
 def robot6():
-    return Robot.from_urdf(example.ROBOT_URDF)
+    return Robot.from_urdf(examples.ROBOT_URDF)
 
 
 @pytest.fixture(scope="session")
 def tool6():
-    return Tool.from_yaml(example.TOOL_YAML)
+    return Tool.from_yaml(examples.TOOL_YAML)
 
 
 @pytest.fixture(scope="session")

@@ -1,15 +1,15 @@
 """Added-variable plots show a hidden effect's shape: step, sine, slope (data from an
 independent simulator, ``independent_sim``)."""
+import independent_sim as sim
 import numpy as np
 import pytest
 
-import independent_sim as sim
-from doe_calib import Robot, Tool, build_model, example
+from doe_calib import Robot, Tool, build_model, examples
+from doe_calib.diagnosis import effect_tests as candidates
 from doe_calib.diagnosis.added_variable import added_variable
-from doe_calib.diagnosis import candidates
 from doe_calib.diagnosis.variables import configuration_variables
-from doe_calib.identify import identify_quietly
-from doe_calib.io import read_measurements
+from doe_calib.estimation.identify import identify_quietly
+from doe_calib.io.csv_files import read_measurements
 
 MARKERS = {"A": [0.15, 0.0, 0.08], "B": [-0.075, 0.13, 0.08], "C": [-0.075, -0.13, 0.08]}
 START = "joint_offset+geometry+joint_compliance"
@@ -19,8 +19,8 @@ START = "joint_offset+geometry+joint_compliance"
 def kr270():
     tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()},
                              flange="tool0")
-    return (sim.Chain.from_urdf(example.ROBOT_URDF, "tool0"),
-            Robot.from_urdf(example.ROBOT_URDF, flange="tool0"), tool)
+    return (sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0"),
+            Robot.from_urdf(examples.ROBOT_URDF, flange="tool0"), tool)
 
 
 def _plot_of(kr270, tmp_path, hidden, seed, prefix):
@@ -84,8 +84,8 @@ def joint_correction(q, env, p, joint=None):
 
 def test_a_user_effect_file_gets_its_plot_too(kr270, tmp_path):
     """An effect on no joint is drawn along its own fitted displacement (its size)."""
-    from doe_calib.effects import REGISTRY
-    from doe_calib.effects.user import load_effect_file
+    from doe_calib.model.effects import REGISTRY
+    from doe_calib.model.effects.user import load_effect_file
 
     chain, robot, tool = kr270
     rng = np.random.default_rng(34)

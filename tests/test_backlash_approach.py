@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 from doe_calib import Configurations, DataError, build_model, identify, simulate
-from doe_calib.data import approach_from_order, env_fields
 from doe_calib.diagnosis import diagnose
 from doe_calib.diagnosis.variables import configuration_variables
-from doe_calib.evaluation import marker_positions, observation_matrix
-from doe_calib.identify import fix_unidentifiable, register_base
-from doe_calib.io import read_design, read_measurements, write_design, write_measurements
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.estimation.preparation import fix_unidentifiable, register_base
+from doe_calib.io.csv_files import read_design, read_measurements, write_design, write_measurements
+from doe_calib.io.measurements import approach_from_order, env_fields
+from doe_calib.model.evaluation import marker_positions, observation_matrix
+from doe_calib.model.simulate import random_configurations, random_truth
 
 Q = "q1,q2,q3,q4,q5,q6"
 APPROACH = "approach1,approach2,approach3,approach4,approach5,approach6"

@@ -4,14 +4,14 @@ import json
 import numpy as np
 import pytest
 
-from doe_calib import IdentificationResult, example
+from doe_calib import IdentificationResult, examples
 from doe_calib.cli import main
 
 
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory):
     d = tmp_path_factory.mktemp("campaign")
-    common = ["--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+    common = ["--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
               "--model", "joint_offset+geometry+joint_compliance", "--load", "250@0,0,200",
               "--sigma", "0.02", "--tracker", "2500,-800,300,0,0,120"]
     assert main(["simulate", *common, "--poses", "40", "--seed", "1", "--out",
@@ -24,7 +24,7 @@ def campaign(tmp_path_factory):
 @pytest.fixture(scope="module")
 def identified(campaign):
     out = campaign / "result.json"
-    assert main(["identify", "--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+    assert main(["identify", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
                  "--data", str(campaign / "train.csv"), "--sigma", "0.02", "--out",
                  str(out)]) == 0
     return out
@@ -53,7 +53,7 @@ def test_identify_reports_bad_input_and_exits_2(campaign, tmp_path, capsys):
     row[cols.index("x")] = "abc"
     lines[header_at + 1] = ",".join(row)
     bad.write_text("\n".join(lines) + "\n")
-    code = main(["identify", "--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+    code = main(["identify", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
                  "--data", str(bad), "--sigma", "0.02", "--out", str(tmp_path / "r.json")])
     err = capsys.readouterr().err
     assert code == 2
@@ -63,7 +63,7 @@ def test_identify_reports_bad_input_and_exits_2(campaign, tmp_path, capsys):
 def test_pose_and_two_step_estimators_from_cli(campaign, tmp_path):
     for est in ("two-step", "pose"):
         out = tmp_path / f"{est}.json"
-        assert main(["identify", "--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+        assert main(["identify", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
                      "--data", str(campaign / "train.csv"), "--sigma", "0.02",
                      "--model", "joint_offset", "--estimator", est, "--out", str(out)]) == 0
         assert json.loads(out.read_text())["estimator"] == est

@@ -3,10 +3,10 @@ import json
 
 import pytest
 
-from doe_calib import example
+from doe_calib import examples
 from doe_calib.cli import main
 
-ROBOT = ["--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML]
+ROBOT = ["--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML]
 
 
 @pytest.fixture(scope="module")
@@ -246,7 +246,7 @@ def test_implausible_temperature_names_line_and_column(files, tmp_path, capsys):
 
 
 def test_compare_sigma_in_the_library_names_the_option_in_mm(files):
-    from doe_calib.compare import compare, load_source
+    from doe_calib.design.comparison import compare, load_source
     from doe_calib.errors import OptionError
     with pytest.raises(OptionError, match=r"--sigma\) must be positive, got 0 mm"):
         compare([load_source(files / "d.json")], ["d"], 0.0)

@@ -6,11 +6,11 @@ from pathlib import Path
 
 import pytest
 
-from doe_calib import example
+from doe_calib import examples
 from doe_calib.cli import COMMANDS, build_parser, main
 from doe_calib.cli import study as study_cli
 
-ROBOT = ["--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML]
+ROBOT = ["--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML]
 MODEL = ["--model", "joint_offset+joint_compliance"]
 
 

@@ -7,16 +7,15 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from doe_calib import Robot, Tool, example
-from doe_calib.collision import (build_collision_model, check_segment, clearance, contacts,
-                                 too_close)
+from doe_calib import Robot, Tool, examples
+from doe_calib.collision import build_collision_model, check_segment, clearance, contacts, too_close
 from doe_calib.collision.shapes import load_radius
 from doe_calib.design import LoadCase, read_constraints
-from doe_calib.design.candidates import feasible_candidates
+from doe_calib.design.candidate_poses import feasible_candidates
 from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.optimal import optimal_design
 from doe_calib.errors import SolverError
-from doe_calib.measurement import build_model
+from doe_calib.model.marker_model import build_model
 
 UR10_IN_PACKAGE = "robots/ur_description/urdf/ur10_robot.urdf"
 UR10_TOOL = {"A": [100.0, 0.0, 60.0], "B": [-50.0, 86.6, 60.0], "C": [-50.0, -86.6, 60.0]}
@@ -84,9 +83,9 @@ def _free_independently(model, geom, q_chain):
 
 
 def test_builtin_robots_only_adjacent_links_disabled_and_home_free():
-    for urdf, tool, home in [(example.ROBOT_URDF, example.TOOL_YAML,
+    for urdf, tool, home in [(examples.ROBOT_URDF, examples.TOOL_YAML,
                               [0, -np.pi / 2, np.pi / 2, 0, 0, 0]),
-                             (example.THREE_DOF_URDF, example.THREE_DOF_TOOL_YAML,
+                             (examples.THREE_DOF_URDF, examples.THREE_DOF_TOOL_YAML,
                               [0, 0.3, -0.6])]:
         robot = Robot.from_urdf(urdf)
         cm = build_collision_model(robot, Tool.from_yaml(tool), [LoadCase(250.0, (0, 0, 0.2))])
@@ -156,8 +155,8 @@ def test_ur10_design_poses_are_free_independently(ur10):
 
 
 def test_kr270_design_without_cell_is_free_independently():
-    robot = Robot.from_urdf(example.ROBOT_URDF)
-    tool = Tool.from_yaml(example.TOOL_YAML)
+    robot = Robot.from_urdf(examples.ROBOT_URDF)
+    tool = Tool.from_yaml(examples.TOOL_YAML)
     load = LoadCase(250.0, (0.0, 0.0, 0.2))
     cm = build_collision_model(robot, tool, [load])
     design = _design(build_model(robot, tool, "joint_offset"), [load], cm)
@@ -171,8 +170,8 @@ def test_kr270_design_without_cell_is_free_independently():
 
 
 def test_impossible_cell_names_the_pair(tmp_path):
-    robot = Robot.from_urdf(example.ROBOT_URDF)
-    tool = Tool.from_yaml(example.TOOL_YAML)
+    robot = Robot.from_urdf(examples.ROBOT_URDF)
+    tool = Tool.from_yaml(examples.TOOL_YAML)
     cell = tmp_path / "cell.yaml"
     # the flange must be above a slab the arm cannot pass
     cell.write_text("cartesian:\n  keep_in: {min: [-4000, -4000, 1500], max: [4000, 4000, 4000]}\n"

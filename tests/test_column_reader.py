@@ -2,15 +2,16 @@
 import numpy as np
 import pytest
 
-from doe_calib import Configurations, Robot, Tool, build_model, example, simulate
-from doe_calib.column_reader import read_columns
-from doe_calib.io import _read_table, read_measurements, write_measurements
-from doe_calib.simulate import random_configurations
+from doe_calib import Configurations, Robot, Tool, build_model, examples, simulate
+from doe_calib.io.column_reader import read_columns
+from doe_calib.io.csv_files import read_measurements, write_measurements
+from doe_calib.io.table import read_table
+from doe_calib.model.simulate import random_configurations
 
 
 @pytest.fixture(scope="module")
 def rt():
-    return Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML)
+    return Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
 
 
 def _same(a, b):
@@ -54,7 +55,7 @@ def _rich_file(rt, tmp_path):
 
 def test_a_rich_file_reads_the_same_both_ways(rt, tmp_path):
     path = _rich_file(rt, tmp_path)
-    table = _read_table(path)
+    table = read_table(path)
     assert read_columns(table, *rt, 0.02, True, False, "rich") is not None  # the fast path ran
     fast = read_measurements(path, *rt, sigma_mm=0.02)
     rows = read_measurements(path, *rt, sigma_mm=0.02, skip_bad=True)  # row by row
@@ -71,7 +72,7 @@ def test_semicolons_decimal_commas_and_approach_columns(rt, tmp_path):
         lines.append(f"p{i};10,5;-9{i},25;90;0;30;0;{m};1000,5;20,25;1500;1;-1;0;1;1;-1")
     path = tmp_path / "semi.csv"
     path.write_text("\n".join(lines) + "\n")
-    assert read_columns(_read_table(path), *rt, 0.02, True, True, "semi") is not None
+    assert read_columns(read_table(path), *rt, 0.02, True, True, "semi") is not None
     fast = read_measurements(path, *rt, sigma_mm=0.02)
     _same(fast, read_measurements(path, *rt, sigma_mm=0.02, skip_bad=True))
     assert np.allclose(fast.configurations.q[1, :2], np.radians([10.5, -91.25]))
@@ -90,7 +91,7 @@ def test_anything_unusual_goes_to_the_row_reader(rt, tmp_path, row, why):
     path = tmp_path / "odd.csv"
     path.write_text("pose,q1,q2,q3,q4,q5,q6,marker,x,y,z\n"
                     "p1,10,-90,90,0,30,0,A,1000.5,20.25,1500\n" + row + "\n")
-    assert read_columns(_read_table(path), *rt, 0.02, True, False, "odd") is None, why
+    assert read_columns(read_table(path), *rt, 0.02, True, False, "odd") is None, why
 
 
 def test_a_reading_past_a_limit_keeps_its_warning(rt, tmp_path):

@@ -7,12 +7,12 @@ import pytest
 
 from doe_calib import build_model, identify, simulate
 from doe_calib.cli import main
-from doe_calib.compare import compare, load_source
 from doe_calib.design import LoadCase, load_configurations
+from doe_calib.design.comparison import compare, load_source
 from doe_calib.design.optimal import optimal_design
-from doe_calib.evaluation import evaluate, marker_positions
-from doe_calib.io import write_design
-from doe_calib.simulate import random_configurations
+from doe_calib.io.csv_files import write_design
+from doe_calib.model.evaluation import evaluate, marker_positions
+from doe_calib.model.simulate import random_configurations
 
 SIGMA = 2e-5  # m
 MODEL = "joint_offset+joint_compliance"

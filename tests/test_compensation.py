@@ -6,17 +6,29 @@ import warnings
 import numpy as np
 import pytest
 
-from doe_calib import (Configurations, DataError, IdentificationResult, build_model, identify,
-                       simulate)
+from doe_calib import (
+    Configurations,
+    DataError,
+    IdentificationResult,
+    build_model,
+    identify,
+    simulate,
+)
 from doe_calib.cli import main
-from doe_calib.compensation import (CompensationResult, Targets, build_problem, compensate,
-                                    read_compensated_csv, read_targets)
-from doe_calib.errors import ConvergenceWarning, ModelError
+from doe_calib.compensation import (
+    CompensationResult,
+    Targets,
+    build_problem,
+    compensate,
+    read_compensated_csv,
+    read_targets,
+)
 from doe_calib.compensation.program import compensated_design
-from doe_calib.evaluation import evaluate
-from doe_calib.io import write_design
-from doe_calib.loads import hanging_mass_wrench, unloaded_and_loaded
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.errors import ConvergenceWarning, ModelError
+from doe_calib.io.csv_files import write_design
+from doe_calib.model.evaluation import evaluate
+from doe_calib.model.loads import hanging_mass_wrench, unloaded_and_loaded
+from doe_calib.model.simulate import random_configurations, random_truth
 
 MODEL = "joint_offset+geometry+joint_compliance"
 LOAD = (250.0, (0.0, 0.0, 0.2))

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from doe_calib import Configurations, build_model, marker_positions, observation_matrix
-from doe_calib import compiled
-from doe_calib.compiled import CompilationWarning, compile_function, find_compiler
-from doe_calib.evaluation import evaluate
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.model import compiled
+from doe_calib.model.compiled import CompilationWarning, compile_function, find_compiler
+from doe_calib.model.evaluation import evaluate
+from doe_calib.model.simulate import random_configurations, random_truth
 
 needs_compiler = pytest.mark.skipif(find_compiler() is None, reason="no C compiler")
 

@@ -2,13 +2,12 @@
 refine → report, checked against the truth it simulated."""
 import json
 
-
 from doe_calib import build_model
-from doe_calib.demo import HIDDEN, SIGMA_MM, run_demo
-from doe_calib.diagnosis import validation_rms
-from doe_calib.io import read_measurements
 from doe_calib.design.result import DesignResult
-from doe_calib.results import IdentificationResult
+from doe_calib.diagnosis import validation_rms
+from doe_calib.estimation.result import IdentificationResult
+from doe_calib.examples.demo import HIDDEN, SIGMA_MM, run_demo
+from doe_calib.io.csv_files import read_measurements
 
 
 def test_demo_finds_the_hidden_effect_and_reaches_the_noise(tmp_path):

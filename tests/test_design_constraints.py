@@ -4,13 +4,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from doe_calib import example
+from doe_calib import examples
 from doe_calib.design import LoadCase, read_constraints
 from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.optimal import optimal_design
 from doe_calib.errors import DataError
-from doe_calib.loads import GRAVITY
-from doe_calib.simulate import random_configurations
+from doe_calib.model.loads import GRAVITY
+from doe_calib.model.simulate import random_configurations
 
 LOAD = LoadCase(250.0, (0.0, 0.0, 0.2))
 CELL = """\
@@ -45,7 +45,7 @@ class Independent:
     """Every constraint of ``CELL`` evaluated with Pinocchio and numpy (nominal robot)."""
 
     def __init__(self, robot, tool):
-        self.model = pin.buildModelFromUrdf(example.ROBOT_URDF)
+        self.model = pin.buildModelFromUrdf(examples.ROBOT_URDF)
         self.data = self.model.createData()
         self.frame = self.model.getFrameId(robot.flange)
         self.markers = tool.position_array
@@ -161,6 +161,6 @@ def test_cli_reports_a_bad_constraints_file(tmp_path, capsys):
 
     bad = tmp_path / "cell.yaml"
     bad.write_text("coverage: {joint: a2, bins: 5}\nload_torque:\n  a7: 100\n")
-    assert main(["design", "--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+    assert main(["design", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
                  "--constraints", str(bad), "--out", str(tmp_path / "d.json")]) == 2
     assert f"{bad}, line 3, column 3: no joint 'a7'" in capsys.readouterr().err

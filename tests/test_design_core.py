@@ -3,9 +3,18 @@ import numpy as np
 import pytest
 
 from doe_calib import build_model, predict_covariance
-from doe_calib.design import (LoadCase, blocks_for, design_parameters, exact_d_design,
-                              information, load_configurations, log_det, relax_d, variances)
-from doe_calib.simulate import random_configurations
+from doe_calib.design import (
+    LoadCase,
+    blocks_for,
+    design_parameters,
+    exact_d_design,
+    information,
+    load_configurations,
+    log_det,
+    relax_d,
+    variances,
+)
+from doe_calib.model.simulate import random_configurations
 
 N = 8
 
@@ -62,19 +71,19 @@ def test_design_information_is_the_covariance_prediction(problem):
 
 
 def test_design_command_writes_json_and_csv(tmp_path):
-    from doe_calib import Robot, example
+    from doe_calib import Robot, examples
     from doe_calib.cli import main
     from doe_calib.design.result import DesignResult
-    from doe_calib.io import read_design
+    from doe_calib.io.csv_files import read_design
 
     out = tmp_path / "design.json"
-    assert main(["design", "--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+    assert main(["design", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
                  "--model", "joint_offset", "--poses", "6", "--load", "250@0,0,200",
                  "--candidates", "300", "--seed", "3", "--out", str(out)]) == 0
     design = DesignResult.from_json(out)
     assert len(design.poses()) == 6 and all(len(p["wrenches"]) == 2 for p in design.poses())
     assert 0 < design.efficiency <= 1
-    robot = Robot.from_urdf(example.ROBOT_URDF)
+    robot = Robot.from_urdf(examples.ROBOT_URDF)
     cfg = read_design(out.with_suffix(".csv"), robot)  # limits checked on reading
     assert np.allclose(cfg.q, design.configurations.q, atol=1e-12)
     assert np.all((cfg.q >= robot.lower) & (cfg.q <= robot.upper))

@@ -4,14 +4,21 @@ import cvxpy as cp
 import numpy as np
 import pytest
 
-from doe_calib import Configurations, example
-from doe_calib.design import (CRITERIA, LoadCase, efficiency, evaluate_criterion,
-                              exact_design, information, relax)
+from doe_calib import Configurations, examples
+from doe_calib.design import (
+    CRITERIA,
+    LoadCase,
+    efficiency,
+    evaluate_criterion,
+    exact_design,
+    information,
+    relax,
+)
 from doe_calib.design.criteria import sensitivity
 from doe_calib.design.optimal import optimal_design
 from doe_calib.design.updates import added_values
-from doe_calib.io import write_design
-from doe_calib.simulate import random_configurations
+from doe_calib.io.csv_files import write_design
+from doe_calib.model.simulate import random_configurations
 
 LOAD = LoadCase(250.0, (0.0, 0.0, 0.2))
 
@@ -127,7 +134,7 @@ def test_task_criterion_from_the_command_line(tmp_path, robot6):
 
     write_design(tmp_path / "task.csv", _task(robot6), robot6)
     out = tmp_path / "design.json"
-    assert main(["design", "--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+    assert main(["design", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
                  "--model", "joint_offset+joint_compliance", "--poses", "8", "--load",
                  "250@0,0,200", "--candidates", "500", "--criterion", "task", "--task",
                  str(tmp_path / "task.csv"), "--task-point", "0,0,250", "--seed", "1",
@@ -135,5 +142,5 @@ def test_task_criterion_from_the_command_line(tmp_path, robot6):
     d = DesignResult.from_json(out)
     assert d.criterion == "task" and d.criteria["task"] < 0 and d.efficiency <= 1
     assert "task: predicted RMS position std" in d.summary()
-    assert main(["design", "--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+    assert main(["design", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
                  "--criterion", "task", "--out", str(out)]) == 2

@@ -7,7 +7,7 @@ import pytest
 from doe_calib import identify
 from doe_calib.design import LoadCase
 from doe_calib.design.optimal import optimal_design
-from doe_calib.simulate import simulate
+from doe_calib.model.simulate import simulate
 
 SIGMA = 2e-5
 RUNS = 200

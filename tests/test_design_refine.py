@@ -4,11 +4,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from doe_calib.design import (LoadCase, blocks_for, design_parameters, information, log_det,
-                              relax)
+from doe_calib.design import LoadCase, blocks_for, design_parameters, information, log_det, relax
 from doe_calib.design.optimal import optimal_design
 from doe_calib.design.symbolic import log_criterion, pose_information
-from doe_calib.simulate import random_configurations
+from doe_calib.model.simulate import random_configurations
 
 SIGMA = 2e-5
 LOAD = LoadCase(250.0, (0.0, 0.0, 0.2))

@@ -5,9 +5,9 @@ import numpy as np
 from doe_calib import Configurations, build_model, simulate
 from doe_calib.diagnosis import diagnose
 from doe_calib.diagnosis.variables import configuration_variables
-from doe_calib.evaluation import evaluate
-from doe_calib.loads import hanging_mass_wrench
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.model.evaluation import evaluate
+from doe_calib.model.loads import hanging_mass_wrench
+from doe_calib.model.simulate import random_configurations, random_truth
 
 SIGMA = 3e-5  # m, stated
 

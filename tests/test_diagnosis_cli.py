@@ -5,14 +5,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from doe_calib import Configurations, build_model, example, simulate
+from doe_calib import Configurations, build_model, examples, simulate
 from doe_calib.cli import main
-from doe_calib.data import concatenate
 from doe_calib.diagnosis import diagnose
 from doe_calib.diagnosis.residuals import repeatability_sigma
-from doe_calib.io import write_measurements
-from doe_calib.loads import unloaded_and_loaded
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.io.csv_files import write_measurements
+from doe_calib.io.measurements import concatenate
+from doe_calib.model.loads import unloaded_and_loaded
+from doe_calib.model.simulate import random_configurations, random_truth
 
 
 @pytest.fixture(scope="module")
@@ -31,7 +31,7 @@ def files(tmp_path_factory, robot6, tool6):
 
 def test_diagnose_command_writes_json_plot_and_report(files, capsys):
     out = files
-    args = ["--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML, "--data",
+    args = ["--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML, "--data",
             str(out / "m.csv"), "--sigma", "0.03", "--model", "joint_offset+joint_compliance"]
     assert main(["diagnose", *args, "--out", str(out / "d.json"), "--report",
                  str(out / "d.html")]) == 0
@@ -47,7 +47,7 @@ def test_diagnose_command_writes_json_plot_and_report(files, capsys):
 
 def test_refine_result_is_what_predict_takes(files):
     out = files
-    assert main(["refine", "--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+    assert main(["refine", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
                  "--data", str(out / "m.csv"), "--sigma", "0.03", "--model", "joint_offset",
                  "--validation", str(out / "v.csv"), "--out", str(out / "r.json")]) == 0
     steps = json.loads((out / "r_refine.json").read_text())["steps"]
@@ -77,7 +77,7 @@ def test_noise_from_repeated_readings_overrides_a_wrong_sigma(robot6, tool6):
 
 def test_exclude_poses_is_reported_and_cv_by_region(files, capsys):
     out = files
-    args = ["--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML, "--data",
+    args = ["--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML, "--data",
             str(out / "m.csv"), "--sigma", "0.03", "--model", "joint_offset+joint_compliance"]
     assert main(["diagnose", *args, "--exclude-poses", "1,2", "--cv-by", "region",
                  "--out", str(out / "x.json")]) == 0

@@ -6,17 +6,17 @@ a user would bring. The reference is the held-out error of a model that
 knows the true form of the effect (a catalogue shape that can express it, or
 a user effect file); refine, starting without it, must come within 1.25× of it.
 """
+import independent_sim as sim
 import numpy as np
 import pytest
 
-import independent_sim as sim
-from doe_calib import Robot, Tool, build_model, example
+from doe_calib import Robot, Tool, build_model, examples
 from doe_calib.diagnosis import diagnose, validation_rms
-from doe_calib.diagnosis.refine import refine
-from doe_calib.effects import REGISTRY
-from doe_calib.effects.user import load_effect_file
-from doe_calib.identify import identify_quietly
-from doe_calib.io import read_measurements
+from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.estimation.identify import identify_quietly
+from doe_calib.io.csv_files import read_measurements
+from doe_calib.model.effects import REGISTRY
+from doe_calib.model.effects.user import load_effect_file
 
 SIGMA_MM = 0.02
 MARKERS = {"A": [0.15, 0.0, 0.08], "B": [-0.075, 0.13, 0.08], "C": [-0.075, -0.13, 0.08]}
@@ -76,7 +76,7 @@ def test_smooth_angle_compliance_on_a_robot_with_360_degree_joints(tmp_path):
 
 
 def test_backlash_set_by_the_load_torque_with_meaningless_row_order(tmp_path):
-    chain, robot, tool = _robot(example.ROBOT_URDF, "tool0")
+    chain, robot, tool = _robot(examples.ROBOT_URDF, "tool0")
     rng = np.random.default_rng(22)
     hidden = sim.TorqueSignBacklash(2, np.radians(0.02))
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng, effects=(hidden,))
@@ -116,7 +116,7 @@ def joint_correction(q, env, p, joint=None):
 
 
 def test_effect_outside_the_catalogue_then_fixed_with_a_user_effect(tmp_path):
-    chain, robot, tool = _robot(example.ROBOT_URDF, "tool0")
+    chain, robot, tool = _robot(examples.ROBOT_URDF, "tool0")
     rng = np.random.default_rng(24)
     hidden = sim.CrossCoupling(2, 1, np.radians(0.05))
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng, effects=(hidden,))
@@ -136,7 +136,7 @@ def test_effect_outside_the_catalogue_then_fixed_with_a_user_effect(tmp_path):
 
 
 def test_gross_outliers_are_named_as_such(tmp_path):
-    chain, robot, tool = _robot(example.ROBOT_URDF, "tool0")
+    chain, robot, tool = _robot(examples.ROBOT_URDF, "tool0")
     rng = np.random.default_rng(25)
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng)
     bad = ((17, [2.0, 0.0, 0.0]), (95, [0.0, -2.0, 0.0]), (160, [0.0, 0.0, 2.0]))

@@ -1,11 +1,11 @@
 """The diagnosis study's pieces on two cases: one hidden effect and the out-of-catalogue drift."""
-from doe_calib import Robot, Tool, example
+from doe_calib import Robot, Tool, examples
 from studies.diagnosis.report import markdown
 from studies.diagnosis.study import one_case
 
 
 def test_study_case_finds_the_hidden_effect_and_reports_the_drift():
-    robot, tool = Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML)
+    robot, tool = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
     found = one_case(robot, tool, "gear_ratio(j3)", "joint_offset+joint_compliance", seed=5)
     assert found["rank_of_hidden"] == 1 and found["top"] == "gear_ratio(j3)"
     assert found["validation_rms_with_top_mm"] <= 1.2 * found["validation_rms_true_model_mm"]

@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 from doe_calib import build_model, identify, simulate
-from doe_calib.effects import parse_model
 from doe_calib.errors import ModelError
-from doe_calib.evaluation import marker_positions, observation_matrix
-from doe_calib.identify import fix_unidentifiable, register_base
-from doe_calib.loads import unloaded_and_loaded
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.estimation.preparation import fix_unidentifiable, register_base
+from doe_calib.model.effects import parse_model
+from doe_calib.model.evaluation import marker_positions, observation_matrix
+from doe_calib.model.loads import unloaded_and_loaded
+from doe_calib.model.simulate import random_configurations, random_truth
 
 BINNED = "compliance_by_angle(j2,edges_deg=-110;-80;-50;-20)"
 

@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 
 from doe_calib import Robot, Tool, build_model, identify, simulate
-from doe_calib.data import Configurations
-from doe_calib.effects import parse_model
-from doe_calib.effects.cyclic import Cyclic
-from doe_calib.effects.link_compliance import LinkCompliance
 from doe_calib.errors import ModelError
-from doe_calib.evaluation import evaluate, marker_positions, observation_matrix
-from doe_calib.identify import fix_unidentifiable, register_base
-from doe_calib.loads import unloaded_and_loaded
-from doe_calib.simulate import random_configurations
+from doe_calib.estimation.preparation import fix_unidentifiable, register_base
+from doe_calib.io.measurements import Configurations
+from doe_calib.model.effects import parse_model
+from doe_calib.model.effects.cyclic import Cyclic
+from doe_calib.model.effects.link_compliance import LinkCompliance
+from doe_calib.model.evaluation import evaluate, marker_positions, observation_matrix
+from doe_calib.model.loads import unloaded_and_loaded
+from doe_calib.model.simulate import random_configurations
 
 NEW = ["gear_ratio(j2)", "cyclic(j3,harmonics=2)", "backlash(j2)", "thermal", "link_compliance"]
 BLOCK = {spec: spec.split("(")[0] for spec in NEW}

@@ -7,11 +7,11 @@ import pytest
 
 from doe_calib import DataError, ModelError, build_model
 from doe_calib.cli import main
-from doe_calib.data import Configurations
 from doe_calib.design import LoadCase
 from doe_calib.design.optimal import optimal_design
 from doe_calib.export import FORMATS, Plan, export_design, moves
-from doe_calib.io import read_design
+from doe_calib.io.csv_files import read_design
+from doe_calib.io.measurements import Configurations
 
 N_POSES = 5
 LOAD_WORDS = "250 kg at 0,0,200 mm"

@@ -5,8 +5,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from doe_calib.export.ordering import (DEFAULT_SPEED, axis_speeds, move_times, path_time,
-                                       short_path)
+from doe_calib.export.ordering import DEFAULT_SPEED, axis_speeds, move_times, path_time, short_path
 
 
 def _brute_force(times, start):

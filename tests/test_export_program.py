@@ -9,13 +9,12 @@ from test_export import PARSERS
 
 from doe_calib import DataError, OptionError, build_model
 from doe_calib.cli import main
-from doe_calib.data import Configurations, approach_from_order
 from doe_calib.design import LoadCase
 from doe_calib.design.optimal import optimal_design
 from doe_calib.design.result import DesignResult
-from doe_calib.export import (AxisMap, Plan, cycle_time, export_design, moves,
-                              realised_approach)
-from doe_calib.io import read_design
+from doe_calib.export import AxisMap, Plan, cycle_time, export_design, moves, realised_approach
+from doe_calib.io.csv_files import read_design
+from doe_calib.io.measurements import Configurations, approach_from_order
 
 N_POSES = 6
 LOADS = [LoadCase(250.0, (0.0, 0.0, 0.2)), LoadCase(100.0, (0.0, 0.1, 0.1))]

@@ -12,14 +12,14 @@ import pinocchio as pin
 import pytest
 from test_collision import KR270_ADJACENT, UR10_ADJACENT, UR10_LOAD, UR10_TOOL, _ur10_urdf
 
-from doe_calib import CollisionError, Robot, Tool, build_model, example
+from doe_calib import CollisionError, Robot, Tool, build_model, examples
 from doe_calib.cli import main
 from doe_calib.collision import build_collision_model
-from doe_calib.data import Configurations
 from doe_calib.design import LoadCase, read_constraints
 from doe_calib.design.optimal import optimal_design
 from doe_calib.design.result import DesignResult
 from doe_calib.export import Plan, check_program, moves, program_models
+from doe_calib.io.measurements import Configurations
 
 KR270_LOAD = LoadCase(250.0, (0.0, 0.0, 0.2), 0.1)
 # two free KR 270 poses whose straight joint move takes marker A through the floor, with no way
@@ -109,7 +109,7 @@ def _design_json(tmp_path, model, loads, cm, n=6, seed=2, constraints=None):
 
 
 def test_kr270_program_moves_are_free_independently(tmp_path, capsys):
-    robot, tool = Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML)
+    robot, tool = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
     cm = build_collision_model(robot, tool, [KR270_LOAD])
     design, path = _design_json(tmp_path, build_model(robot, tool, "joint_offset"),
                                 [KR270_LOAD], cm)
@@ -151,7 +151,7 @@ def test_ur10_program_moves_are_free_independently(tmp_path, capsys):
 
 def _constructed(tmp_path, poses_deg, name):
     """A KR 270 design visiting the given poses (deg) unloaded, in this order, as JSON."""
-    robot, tool = Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML)
+    robot, tool = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
     q = np.radians(np.array(poses_deg))
     cfg = Configurations.from_arrays(q, np.zeros((len(q), 6)),
                                      pose=[str(k + 1) for k in range(len(q))])

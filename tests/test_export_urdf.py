@@ -8,13 +8,23 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from doe_calib import (Configurations, IdentificationResult, build_model, identify,
-                       marker_positions, simulate)
-from doe_calib.calibrated_urdf import (export_urdf, matrix_to_rpy, pinocchio_configuration,
-                                       rpy_to_matrix)
+from doe_calib import (
+    Configurations,
+    IdentificationResult,
+    build_model,
+    identify,
+    marker_positions,
+    simulate,
+)
 from doe_calib.cli import main
-from doe_calib.loads import unloaded_and_loaded
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.export.calibrated_urdf import (
+    export_urdf,
+    matrix_to_rpy,
+    pinocchio_configuration,
+    rpy_to_matrix,
+)
+from doe_calib.model.loads import unloaded_and_loaded
+from doe_calib.model.simulate import random_configurations, random_truth
 
 MODEL = "joint_offset+geometry+joint_compliance"
 

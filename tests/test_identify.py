@@ -4,21 +4,30 @@ import warnings
 import numpy as np
 import pytest
 
-from doe_calib import (Configurations, DataError, IdentifiabilityWarning, build_model, identify,
-                       marker_positions, point_covariance, predict_covariance, simulate)
-from doe_calib.evaluation import evaluate
-from doe_calib import Tool, example
-from doe_calib.identify import fix_unidentifiable, register_base
-from doe_calib.loads import unloaded_and_loaded
-from doe_calib.simulate import random_configurations, random_truth
-
+from doe_calib import (
+    Configurations,
+    DataError,
+    IdentifiabilityWarning,
+    Tool,
+    build_model,
+    examples,
+    identify,
+    marker_positions,
+    point_covariance,
+    predict_covariance,
+    simulate,
+)
+from doe_calib.estimation.preparation import fix_unidentifiable, register_base
+from doe_calib.model.evaluation import evaluate
+from doe_calib.model.loads import unloaded_and_loaded
+from doe_calib.model.simulate import random_configurations, random_truth
 
 MC_REPETITIONS = 800
 
 
 def _loaded_design(robot, m, rng, mass=250.0, com=(0.0, 0.1, 0.3)):
     """m random poses, each unloaded and with a 250 kg mass hanging from the flange."""
-    model = build_model(robot, Tool.from_yaml(example.TOOL_YAML), "")
+    model = build_model(robot, Tool.from_yaml(examples.TOOL_YAML), "")
     q = random_configurations(robot, m, rng)
     return unloaded_and_loaded(model, model.nominal().values, q, mass, com)
 
@@ -178,7 +187,7 @@ def test_rounding_only_column_is_not_identifiable(robot6, tool6):
     model = build_model(robot6, tool6, "joint_compliance")
     rng = np.random.default_rng(8)
     q = random_configurations(robot6, 15, rng)
-    from doe_calib.evaluation import evaluate
+    from doe_calib.model.evaluation import evaluate
 
     rot, _ = evaluate(model.flange, Configurations.from_arrays(q), model.nominal().values)
     axis6 = rot[:, :, 2]  # tool0 z is the a6 axis direction (up to sign)

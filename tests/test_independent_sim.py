@@ -3,15 +3,14 @@ against formats.md §3; and (one test) against doe_calib's own conventions."""
 import csv
 from pathlib import Path
 
+import independent_sim as sim
 import numpy as np
 import pinocchio as pin
 import pytest
 
-import independent_sim as sim
-
 MARKERS_M = np.array([[0.15, 0.0, 0.12], [-0.075, 0.1299, 0.12], [-0.075, -0.1299, 0.12]])
 NAMES = ["A", "B", "C"]
-DOE_DATA = Path(__file__).parent.parent / "doe_calib" / "data"
+DOE_DATA = Path(__file__).parent.parent / "doe_calib" / "examples"
 
 # A tree: base → j1 (revolute) → j2 (prismatic) → tip, and a branch j_side off link1.
 TREE_URDF = """<?xml version="1.0"?>
@@ -257,8 +256,8 @@ def test_doe_calib_agrees(tmp_path, rng):
     dq_a6 at 0, so the base and markers are compared with the truth turned accordingly."""
     from doe_calib import Robot, Tool, build_model, identify
     from doe_calib.errors import IdentifiabilityWarning
-    from doe_calib.io import read_measurements
-    from doe_calib.kinematics import nominal_torque_function
+    from doe_calib.io.csv_files import read_measurements
+    from doe_calib.model.kinematics import nominal_torque_function
 
     chain = sim.Chain.from_urdf(DOE_DATA / "kr270.urdf", "tool0")
     robot = Robot.from_urdf(DOE_DATA / "kr270.urdf", flange="tool0")

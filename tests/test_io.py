@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from doe_calib import Configurations, DataError, Robot, Tool, build_model, example, simulate
-from doe_calib.io import read_design, read_measurements, write_design, write_measurements
-from doe_calib.simulate import random_configurations
+from doe_calib import Configurations, DataError, Robot, Tool, build_model, examples, simulate
+from doe_calib.io.csv_files import read_design, read_measurements, write_design, write_measurements
+from doe_calib.model.simulate import random_configurations
 
 HEADER = "pose,q1,q2,q3,q4,q5,q6,marker,x,y,z"
 GOOD = "p1,10,-90,90,0,30,0,A,1000.5,20.25,1500"
@@ -12,7 +12,7 @@ GOOD = "p1,10,-90,90,0,30,0,A,1000.5,20.25,1500"
 
 @pytest.fixture(scope="module")
 def rt():
-    return Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML)
+    return Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
 
 
 def _write(tmp_path, *lines, name="m.csv"):
@@ -163,8 +163,8 @@ def test_a_joint_a_hair_past_its_limit_is_a_warning_far_past_an_error(rt, tmp_pa
 
 
 def test_sessions_from_a_column_or_from_several_files(rt, tmp_path):
-    from doe_calib.data import concatenate
     from doe_calib.diagnosis.cross_validation import make_folds
+    from doe_calib.io.measurements import concatenate
 
     robot, tool = rt
     rows = [f"p{i},10,{-90 + i},90,0,30,0,{m},1000.5,20.25,1500,{'s1' if i < 3 else 's2'}"

@@ -1,13 +1,13 @@
 """The CasADi chain against Pinocchio's own forward kinematics, at zero errors."""
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from doe_calib import Configurations, Robot, example
-from doe_calib.evaluation import evaluate
-from doe_calib.simulate import random_configurations
-
-from pathlib import Path
+from doe_calib import Configurations, Robot, examples
+from doe_calib.model.evaluation import evaluate
+from doe_calib.model.simulate import random_configurations
 
 ODD_CHAIN_URDF = Path(__file__).parent / "data" / "odd_chain.urdf"
 
@@ -30,8 +30,8 @@ def _pinocchio_flange(urdf, flange, robot, q_chain):
     return np.array(out)
 
 
-@pytest.mark.parametrize("urdf, flange", [(example.ROBOT_URDF, "tool0"),
-                                          (example.THREE_DOF_URDF, "flange"),
+@pytest.mark.parametrize("urdf, flange", [(examples.ROBOT_URDF, "tool0"),
+                                          (examples.THREE_DOF_URDF, "flange"),
                                           (ODD_CHAIN_URDF, "tip")])
 def test_flange_pose_matches_pinocchio(urdf, flange, rng):
     from doe_calib import Tool, build_model
@@ -49,7 +49,7 @@ def test_flange_pose_matches_pinocchio(urdf, flange, rng):
 
 
 def test_default_flange_is_last_link():
-    assert Robot.from_urdf(example.ROBOT_URDF).flange == "tool0"
+    assert Robot.from_urdf(examples.ROBOT_URDF).flange == "tool0"
     assert Robot.from_urdf(ODD_CHAIN_URDF).flange == "tip"
 
 

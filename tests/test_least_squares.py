@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from doe_calib.least_squares import levenberg_marquardt, reduce_blocks
+from doe_calib.estimation.least_squares import levenberg_marquardt, reduce_blocks
 
 
 @pytest.mark.parametrize("cut", [[100], [1, 2, 3, 50], [7, 14, 21, 28, 35]])

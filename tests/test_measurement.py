@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from doe_calib import Configurations, build_model, marker_positions, observation_matrix
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.model.simulate import random_configurations, random_truth
 
 
 def _central_differences(model, values, cfg, h):
@@ -66,7 +66,7 @@ def test_compliance_deflects_as_k_tau(robot6, tool6, rng):
     k6 = 2e-6
     loaded = p.updated(k_a6=k6)
     q = random_configurations(robot6, 1, rng)
-    from doe_calib.evaluation import evaluate
+    from doe_calib.model.evaluation import evaluate
 
     cfg0 = Configurations.from_arrays(q)
     flange_rot, _ = evaluate(model.flange, cfg0, p.values)
@@ -84,7 +84,7 @@ def test_compliance_deflects_as_k_tau(robot6, tool6, rng):
 
 
 def test_one_build_per_model_and_a_description_without_one(robot6, tool6, monkeypatch):
-    import doe_calib.measurement as measurement
+    import doe_calib.model.marker_model as measurement
     from doe_calib import describe_model
 
     a = build_model(robot6, tool6, "joint_offset+joint_compliance")
@@ -103,10 +103,10 @@ def test_one_build_per_model_and_a_description_without_one(robot6, tool6, monkey
 
 
 def test_a_result_is_read_without_building_its_model(model6, tmp_path, monkeypatch):
-    import doe_calib.measurement as measurement
+    import doe_calib.model.marker_model as measurement
     from doe_calib import IdentificationResult, simulate
-    from doe_calib.identify import identify_quietly
-    from doe_calib.simulate import random_configurations
+    from doe_calib.estimation.identify import identify_quietly
+    from doe_calib.model.simulate import random_configurations
 
     rng = np.random.default_rng(2)
     cfg = Configurations.from_arrays(random_configurations(model6.robot, 12, rng))
@@ -119,9 +119,9 @@ def test_a_result_is_read_without_building_its_model(model6, tmp_path, monkeypat
 
 def test_native_code_when_the_work_pays_for_it(robot6, tool6, rng, monkeypatch):
     from doe_calib import OptionError, for_workload
-    from doe_calib.compiled import find_compiler
-    from doe_calib.evaluation import observation_matrix
-    from doe_calib.measurement import NATIVE_WORKLOAD
+    from doe_calib.model.compiled import find_compiler
+    from doe_calib.model.evaluation import observation_matrix
+    from doe_calib.model.marker_model import NATIVE_WORKLOAD
 
     model = build_model(robot6, tool6, "joint_offset")
     monkeypatch.delenv("DOE_CALIB_COMPILE", raising=False)
@@ -150,7 +150,7 @@ def test_threads_asking_for_one_model_share_one_build(robot6, tool6, monkeypatch
     import threading
     import time
 
-    import doe_calib.measurement as measurement
+    import doe_calib.model.marker_model as measurement
 
     calls, real = [], measurement._build
 

@@ -1,9 +1,9 @@
 """Model strings: effects with arguments, joint selectors, clear errors."""
 import pytest
 
-from doe_calib.effects import joint_index, parse_model
-from doe_calib.effects.base import Effect
 from doe_calib.errors import ModelError
+from doe_calib.model.effects import joint_index, parse_model
+from doe_calib.model.effects.base import Effect
 
 
 def test_plain_model_string_round_trips():
@@ -18,7 +18,7 @@ def test_arguments_are_written_back_into_the_spec():
         def __init__(self, joint, harmonics=1):
             super().__init__(joint, harmonics=harmonics)
 
-    from doe_calib import effects
+    from doe_calib.model import effects
     effects.REGISTRY["probe"] = Probe
     try:
         (e,) = parse_model("probe( j3 , harmonics=2 )")

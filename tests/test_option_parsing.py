@@ -7,9 +7,9 @@ from hypothesis import strategies as st
 
 from doe_calib.cli.common import MAX_LOAD_KG, model_option, parse_floats, parse_load
 from doe_calib.cli.options import at_least, count, positive
-from doe_calib.effects import parse_model
 from doe_calib.errors import DataError, DoeCalibError
-from doe_calib.io import _read_table
+from doe_calib.io.table import read_table
+from doe_calib.model.effects import parse_model
 
 QUICK = settings(max_examples=300, deadline=None,
                  suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -77,11 +77,11 @@ LINES = st.lists(ROW, max_size=6)
 
 @QUICK
 @given(LINES, st.sampled_from(["utf-8", "latin-1"]), st.binary(max_size=20))
-def test_read_table(tmp_path, lines, encoding, tail):
+def testread_table(tmp_path, lines, encoding, tail):
     path = tmp_path / "t.csv"
     path.write_bytes("\n".join(lines).encode(encoding, errors="replace") + tail)
     try:
-        table = _read_table(path)
+        table = read_table(path)
     except DataError:
         return
     assert table.columns and table.rows
@@ -91,7 +91,7 @@ def test_read_table(tmp_path, lines, encoding, tail):
 def test_read_table_semicolons_with_decimal_commas(tmp_path):
     path = tmp_path / "t.csv"
     path.write_text("# exported by a spreadsheet\npose;x\n1;2,5\n", encoding="utf-8")
-    table = _read_table(path)
+    table = read_table(path)
     assert table.columns == ["pose", "x"] and table.rows == [(3, ["1", "2,5"])]
     assert table.decimal_comma
 
@@ -100,4 +100,4 @@ def test_read_table_reports_the_first_bad_byte(tmp_path):
     path = tmp_path / "t.csv"
     path.write_bytes("pose,x\n1,2\nGrüße,3\n".encode("latin-1"))
     with pytest.raises(DataError, match=r"t.csv, line 3, column 3: byte 0xfc is not UTF-8"):
-        _read_table(path)
+        read_table(path)

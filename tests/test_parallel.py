@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from doe_calib.errors import DoeCalibError
-from doe_calib.parallel import run_tasks, task_seeds
+from doe_calib.runtime.parallel import run_tasks, task_seeds
 from studies import table1
 
 
@@ -66,8 +66,8 @@ def test_threads_evaluating_one_model_at_once_get_their_own_numbers(robot6, tool
     from concurrent.futures import ThreadPoolExecutor
 
     from doe_calib import Configurations, build_model
-    from doe_calib.evaluation import marker_positions
-    from doe_calib.simulate import random_configurations
+    from doe_calib.model.evaluation import marker_positions
+    from doe_calib.model.simulate import random_configurations
 
     rng = np.random.default_rng(6)
     model = build_model(robot6, tool6, "joint_offset")

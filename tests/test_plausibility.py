@@ -9,12 +9,12 @@ import doe_calib
 from doe_calib import Configurations, Robot, Tool, build_model, simulate
 from doe_calib.cli import main
 from doe_calib.errors import ModelError
-from doe_calib.identify import identify_quietly
-from doe_calib.io import read_measurements, write_measurements
-from doe_calib.plausibility import marker_condition, marker_layout_finding
-from doe_calib.simulate import random_configurations
+from doe_calib.estimation.identify import identify_quietly
+from doe_calib.estimation.plausibility import marker_condition, marker_layout_finding
+from doe_calib.io.csv_files import read_measurements, write_measurements
+from doe_calib.model.simulate import random_configurations
 
-DATA = Path(doe_calib.__file__).parent / "data"
+DATA = Path(doe_calib.__file__).parent / "examples"
 URDF, TOOL = DATA / "three_dof.urdf", DATA / "three_dof_tool.yaml"
 SIGMA = 2e-5
 

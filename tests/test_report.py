@@ -1,24 +1,24 @@
 """HTML reports: structure, embedded figures, and rendering in headless Chromium."""
 import base64
 import io
-from html import escape
 import re
 import shutil
 import subprocess
 import warnings
+from html import escape
 
 import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from doe_calib import build_model, example, identify, simulate
+from doe_calib import build_model, examples, identify, simulate
 from doe_calib.cli import main
 from doe_calib.design import DesignConstraints, LineOfSight, LoadCase
 from doe_calib.design.optimal import optimal_design
-from doe_calib.loads import unloaded_and_loaded
+from doe_calib.model.loads import unloaded_and_loaded
+from doe_calib.model.simulate import random_configurations, random_truth
 from doe_calib.report import design_report, identification_report, write_report
 from doe_calib.report.html import figure, table
-from doe_calib.simulate import random_configurations, random_truth
 
 IMG = re.compile(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)" alt="([^"]*)"')
 CHROMIUM = shutil.which("chromium")
@@ -120,7 +120,7 @@ def test_text_is_escaped_and_figures_embedded(tmp_path):
 
 def test_design_command_writes_report(tmp_path, capsys):
     out, report = tmp_path / "design.json", tmp_path / "design.html"
-    assert main(["design", "--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+    assert main(["design", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
                  "--model", "joint_offset", "--poses", "6", "--candidates", "200", "--no-refine",
                  "--seed", "3", "--out", str(out), "--report", str(report)]) == 0
     assert f"report: {report}" in capsys.readouterr().err
@@ -141,7 +141,7 @@ def _render(html_path, tmp_path):
 @pytest.fixture(scope="module")
 def refine_html(robot6, tool6, tmp_path_factory):
     """A refine report (error falling, diagnosis sections) on data with a hidden cyclic error."""
-    from doe_calib.diagnosis.refine import refine
+    from doe_calib.diagnosis.effect_selection import refine
     from doe_calib.report import refine_report
 
     rng = np.random.default_rng(3)
@@ -168,7 +168,7 @@ def test_report_renders_in_chromium(which, request, tmp_path):
 
 
 def test_identify_command_writes_report(tmp_path, capsys):
-    common = ["--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML,
+    common = ["--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
               "--model", "joint_offset", "--sigma", "0.02"]
     data, report = tmp_path / "meas.csv", tmp_path / "identification.html"
     assert main(["simulate", *common, "--poses", "10", "--seed", "1", "--out", str(data)]) == 0

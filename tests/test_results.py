@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from doe_calib import Configurations, IdentificationResult, build_model, identify, simulate
-from doe_calib.data import Measurements
 from doe_calib.errors import DataError, OptionError
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.io.measurements import Measurements
+from doe_calib.model.simulate import random_configurations, random_truth
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +87,7 @@ def test_subset_by_pose_keeps_configurations(robot6, tool6):
 
 
 def test_concatenate_sessions(robot6, tool6):
-    from doe_calib.data import concatenate
+    from doe_calib.io.measurements import concatenate
 
     model = build_model(robot6, tool6, "joint_offset")
     rng = np.random.default_rng(2)

@@ -7,18 +7,17 @@ import numpy as np
 import pytest
 
 import doe_calib
-from doe_calib import (Configurations, IdentificationResult, Robot, Tool, build_model,
-                       simulate)
+from doe_calib import Configurations, IdentificationResult, Robot, Tool, build_model, simulate
 from doe_calib.cli import main
 from doe_calib.cli.predict import predicted_markers
-from doe_calib.compare import compare
+from doe_calib.design.comparison import compare
 from doe_calib.design.optimal import optimal_design
 from doe_calib.design.result import DesignResult
-from doe_calib.identify import identify_quietly
-from doe_calib.io import read_measurements, write_measurements
-from doe_calib.simulate import random_configurations
+from doe_calib.estimation.identify import identify_quietly
+from doe_calib.io.csv_files import read_measurements, write_measurements
+from doe_calib.model.simulate import random_configurations
 
-DATA = Path(doe_calib.__file__).parent / "data"
+DATA = Path(doe_calib.__file__).parent / "examples"
 URDF, TOOL = DATA / "three_dof.urdf", DATA / "three_dof_tool.yaml"
 SIGMA = 2e-5  # m: the true simulated σ
 

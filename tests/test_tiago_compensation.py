@@ -8,9 +8,9 @@ import pytest
 import yaml
 
 from doe_calib import IdentificationResult
-from doe_calib.calibrated_urdf import pinocchio_configuration
 from doe_calib.cli import main
 from doe_calib.compensation import read_compensated_csv, read_targets
+from doe_calib.export.calibrated_urdf import pinocchio_configuration
 from studies.tiago_compensation.study import MODEL, held_out_session
 from studies.tiago_mocap.robot import DEFAULT_DATA, tiago_urdf
 

@@ -6,15 +6,15 @@ import warnings
 import numpy as np
 import pytest
 
-from doe_calib import Configurations, build_model, example, identify, simulate
+from doe_calib import Configurations, build_model, examples, identify, simulate
 from doe_calib.diagnosis import diagnose
-from doe_calib.effects import REGISTRY, parse_model
-from doe_calib.effects.user import EXAMPLE_FILE, load_effect_file
 from doe_calib.errors import DataError, DoeCalibError, ModelError
-from doe_calib.evaluation import marker_positions, observation_matrix
-from doe_calib.identify import fix_unidentifiable, register_base
-from doe_calib.loads import hanging_mass_wrench, unloaded_and_loaded
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.estimation.preparation import fix_unidentifiable, register_base
+from doe_calib.model.effects import REGISTRY, parse_model
+from doe_calib.model.effects.user import EXAMPLE_FILE, load_effect_file
+from doe_calib.model.evaluation import marker_positions, observation_matrix
+from doe_calib.model.loads import hanging_mass_wrench, unloaded_and_loaded
+from doe_calib.model.simulate import random_configurations, random_truth
 
 # A joint-angle error growing with the square of the angle (rad).
 QUADRATIC = '''
@@ -164,8 +164,8 @@ def test_design_predicts_finite_std_for_user_parameters(robot6, tool6, user_effe
 
 def test_identify_and_predict_commands_with_an_effect_file(tmp_path, robot6, tool6):
     from doe_calib.cli import main
-    from doe_calib.io import write_measurements
-    from doe_calib.results import IdentificationResult
+    from doe_calib.estimation.result import IdentificationResult
+    from doe_calib.io.csv_files import write_measurements
 
     path = _write(tmp_path, QUADRATIC)
     load_effect_file(path)
@@ -177,7 +177,7 @@ def test_identify_and_predict_commands_with_an_effect_file(tmp_path, robot6, too
     write_measurements(data, meas, robot6, tool6)
     del REGISTRY["quad_scale"]   # the command must load it itself
     out = tmp_path / "result.json"
-    common = ["--robot", example.ROBOT_URDF, "--tool", example.TOOL_YAML]
+    common = ["--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML]
     assert main(["identify", *common, "--effect-file", str(path), "--model",
                  "joint_offset+quad_scale(j3)", "--data", str(data), "--out", str(out)]) == 0
     assert json.loads(out.read_text())["model"] == "joint_offset+quad_scale(j3)"
@@ -231,7 +231,7 @@ def test_bad_file_is_reported_with_its_name(tmp_path, case):
     with pytest.raises(kind, match=words) as err:
         load_effect_file(path)
     assert "mine_bad.py" in str(err.value)
-    assert REGISTRY["joint_offset"].__module__ == "doe_calib.effects.joint_offset"
+    assert REGISTRY["joint_offset"].__module__ == "doe_calib.model.effects.joint_offset"
 
 
 def test_missing_file_is_reported(tmp_path):

@@ -3,9 +3,13 @@ import numpy as np
 import pytest
 
 from doe_calib import Configurations, build_model, simulate
-from doe_calib.identify import identify_quietly
-from doe_calib.simulate import random_configurations, random_truth
-from doe_calib.weighted import reduce_jacobian, residual_norm2, weighted_residual
+from doe_calib.estimation.identify import identify_quietly
+from doe_calib.estimation.weighted_residuals import (
+    reduce_jacobian,
+    residual_norm2,
+    weighted_residual,
+)
+from doe_calib.model.simulate import random_configurations, random_truth
 
 
 @pytest.fixture(scope="module")

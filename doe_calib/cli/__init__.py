@@ -10,16 +10,28 @@ import argparse
 import sys
 from pathlib import Path
 
-from .. import example
-from ..errors import DoeCalibError
-from ..threads import single_threaded_blas
-from . import (compare, compensate, demo, design, diagnose, export, export_urdf, identify,
-               predict, refine, simulate, study)
-from .options import check_outputs
+from doe_calib import examples
+from doe_calib.cli import (
+    compare,
+    compensate,
+    demo,
+    design,
+    diagnose,
+    export,
+    export_urdf,
+    identify,
+    predict,
+    refine,
+    simulate,
+    study,
+)
+from doe_calib.cli.options import check_outputs
+from doe_calib.errors import DoeCalibError
+from doe_calib.runtime.threads import single_threaded_blas
 
 #: Where ``--help`` sends the user for file formats and examples.
 FORMATS_NOTE = ("file formats: docs/formats.md in the doe_calib repository; example robot, tool, "
-                f"constraints and effect files: {Path(example.ROBOT_URDF).parent}")
+                f"constraints and effect files: {Path(examples.ROBOT_URDF).parent}")
 
 #: Command name → module, in the order ``--help`` lists them.
 COMMANDS = {

@@ -6,20 +6,20 @@ from pathlib import Path
 
 import numpy as np
 
-from ..effects import DEFAULT_MODEL
-from ..effects.user import load_effect_files
-from ..errors import OptionError
-from ..io import read_measurements
-from ..measurement import build_model, compile_in_background
-from ..robot import Robot
-from ..tool import Tool
-from .options import at_least
+from doe_calib.cli.options import at_least
+from doe_calib.errors import OptionError
+from doe_calib.io.csv_files import read_measurements
+from doe_calib.model.effects import DEFAULT_MODEL
+from doe_calib.model.effects.user import load_effect_files
+from doe_calib.model.marker_model import build_model, compile_in_background
+from doe_calib.model.robot import Robot
+from doe_calib.model.tool import Tool
 
 
 def effect_file_argument(c):
     """Add ``--effect-file`` (repeatable): user effects a model or a result may name."""
     c.add_argument("--effect-file", action="append", metavar="FILE.py",
-                   help="Python file declaring a user effect (doe_calib.effects.user); "
+                   help="Python file declaring a user effect (doe_calib.model.effects.user); "
                         "repeat for several")
 
 
@@ -70,7 +70,7 @@ def read_data(paths, robot, tool, sigma_mm=None, skip_bad=False, require_xyz=Tru
     Rows dropped on request are reported one line each; joint readings a hair
     past a limit (accepted) are summarised.
     """
-    from ..data import concatenate
+    from doe_calib.io.measurements import concatenate
 
     paths = [paths] if isinstance(paths, str) else list(paths)
     meas = concatenate([read_measurements(p, robot, tool, sigma_mm=sigma_mm, skip_bad=skip_bad,
@@ -114,7 +114,7 @@ def stage_progress():
 
 
 #: Measurement files larger than this (≈ 30 000 readings) are fitted with native code
-#: (:func:`~doe_calib.measurement.for_workload`), compiled while they are read.
+#: (:func:`~doe_calib.model.marker_model.for_workload`), compiled while they are read.
 LARGE_DATA_BYTES = 2_500_000
 
 
@@ -150,7 +150,7 @@ def with_estimated_sigma(model, meas):
     """``meas`` with σ set to the σ̂ of one identification of ``model``, said on stderr."""
     from dataclasses import replace
 
-    from ..identify import identify_quietly
+    from doe_calib.estimation.identify import identify_quietly
 
     sigma_mm = identify_quietly(model, meas).sigma_mm
     print(f"σ not given: estimated from the residuals of the starting model, {sigma_mm:.3g} mm",
@@ -233,7 +233,7 @@ def collision_arguments(c, defaults_from: str | None = None):
     ``defaults_from``: what the clearances default to when not given (e.g.
     ``"the design's"``); None: the collision model's defaults.
     """
-    from ..collision import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE
+    from doe_calib.collision import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE
 
     clear, self_clear = 1000.0 * DEFAULT_CLEARANCE, 1000.0 * DEFAULT_SELF_CLEARANCE
     said = f"{defaults_from}, else " if defaults_from else ""
@@ -260,7 +260,7 @@ def collision_builder(args, robot, tool, constraints, recorded: dict | None = No
         A design's ``constraints["collision"]`` (``clearance_mm``,
         ``self_clearance_mm``): the clearances when the options give none.
     """
-    from ..collision import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE, build_collision_model
+    from doe_calib.collision import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE, build_collision_model
 
     if args.no_collision:
         return None

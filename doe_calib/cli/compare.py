@@ -4,11 +4,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..compare import compare, load_source, plot_std
-from ..io import read_design
-from ..jsonfile import strict_json
-from .common import effect_file_argument, load_effect_files, parse_floats
-from .options import positive
+from doe_calib.cli.common import effect_file_argument, load_effect_files, parse_floats
+from doe_calib.cli.options import positive
+from doe_calib.design.comparison import compare, load_source, plot_std
+from doe_calib.io.csv_files import read_design
+from doe_calib.io.json_file import strict_json
 
 HELP = "compare designs and identification results: std per parameter, task-point accuracy"
 EXAMPLE = ("doe-calib compare d15.json d30.json result.json --task task.csv "
@@ -57,7 +57,7 @@ def run(args):
         plot_std(result, args.plot)
         written.append(args.plot)
     if args.report:
-        from ..report import compare_report
+        from doe_calib.report import compare_report
         written.append(str(compare_report(result, args.report)))
     if written:
         print(f"written: {', '.join(written)}", file=sys.stderr)

@@ -5,14 +5,19 @@ import sys
 import warnings
 from pathlib import Path
 
-from ..compensation import build_problem, compensate, read_targets
-from ..compensation.program import export_compensated
-from ..errors import ConvergenceWarning, DataError, OptionError
-from ..export import FORMATS
-from ..jsonfile import strict_json
-from ..measurement import build_model
-from ..results import IdentificationResult
-from .common import effect_file_argument, load_effect_files, parse_floats, report_warnings
+from doe_calib.cli.common import (
+    effect_file_argument,
+    load_effect_files,
+    parse_floats,
+    report_warnings,
+)
+from doe_calib.compensation import build_problem, compensate, read_targets
+from doe_calib.compensation.program import export_compensated
+from doe_calib.errors import ConvergenceWarning, DataError, OptionError
+from doe_calib.estimation.result import IdentificationResult
+from doe_calib.export import FORMATS
+from doe_calib.io.json_file import strict_json
+from doe_calib.model.marker_model import build_model
 
 HELP = ("compensate a program: joint values that put the TCP on its targets with the "
         "identified model")

@@ -4,7 +4,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .options import count
+from doe_calib.cli.options import count
 
 HELP = ("the main job on the built-in example: design → KRL → simulated campaign with a hidden "
         "effect → identify → diagnose → refine → HTML report")
@@ -22,7 +22,7 @@ OUTPUTS = {"out": "folder"}
 
 
 def run(args):
-    from ..demo import run_demo
+    from doe_calib.examples.demo import run_demo
 
     def say(text):
         print(text, flush=True)

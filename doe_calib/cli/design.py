@@ -6,15 +6,22 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DoeCalibError, OptionError
-from ..design import CRITERIA, LoadCase, read_constraints
-from ..design.optimal import optimal_design
-from ..io import read_design, write_design
-from ..jsonfile import strict_json
-from ..measurement import build_model
-from .common import (collision_arguments, collision_builder, load_robot_tool, parse_floats,
-                     parse_load, robot_arguments, stage_progress)
-from .options import count, positive
+from doe_calib.cli.common import (
+    collision_arguments,
+    collision_builder,
+    load_robot_tool,
+    parse_floats,
+    parse_load,
+    robot_arguments,
+    stage_progress,
+)
+from doe_calib.cli.options import count, positive
+from doe_calib.design import CRITERIA, LoadCase, read_constraints
+from doe_calib.design.optimal import optimal_design
+from doe_calib.errors import DoeCalibError, OptionError
+from doe_calib.io.csv_files import read_design, write_design
+from doe_calib.io.json_file import strict_json
+from doe_calib.model.marker_model import build_model
 
 HELP = "choose optimal measurement poses (D, A, E or task criterion; constraints; loads)"
 EXAMPLE = ("doe-calib design --robot kr270.urdf --tool tool.yaml --poses 15 "
@@ -95,6 +102,6 @@ def run(args):
     print(strict_json(result.to_dict()) if args.json else result.summary())
     print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
     if args.report:
-        from ..report import design_report
+        from doe_calib.report import design_report
         design_report(result, args.report)
         print(f"report: {args.report}", file=sys.stderr)

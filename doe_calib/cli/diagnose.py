@@ -4,12 +4,12 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..diagnosis import diagnose
-from ..diagnosis.cross_validation import GROUPINGS
-from ..identify import identify_quietly
-from ..jsonfile import strict_json
-from .common import data_argument, model_and_measurements, robot_arguments
-from .options import positive
+from doe_calib.cli.common import data_argument, model_and_measurements, robot_arguments
+from doe_calib.cli.options import positive
+from doe_calib.diagnosis import diagnose
+from doe_calib.diagnosis.cross_validation import GROUPINGS
+from doe_calib.estimation.identify import identify_quietly
+from doe_calib.io.json_file import strict_json
 
 HELP = "test the model against the measurements and rank the effects it is missing"
 EXAMPLE = ("doe-calib diagnose --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -55,8 +55,8 @@ OUTPUTS = {"out": "file", "plot": "file", "report": "file"}
 
 def residual_figure(model, meas, fit, path):
     """Save the residual of every reading against every variable (PNG)."""
-    from ..report.figures import residual_scatter
-    from ..report.identification import reading_columns, residual_norms_mm
+    from doe_calib.report.figures import residual_scatter
+    from doe_calib.report.identification import reading_columns, residual_norms_mm
 
     fig = residual_scatter(residual_norms_mm(model, meas, fit.parameters.values),
                            reading_columns(model, meas))
@@ -76,7 +76,7 @@ def run(args):
     plot = args.plot or str(Path(args.out).with_suffix("")) + "_residuals.png"
     residual_figure(model, meas, fit, plot)
     if args.report:
-        from ..report import diagnosis_report
+        from doe_calib.report import diagnosis_report
         print(f"report: {diagnosis_report(d, model, meas, fit, args.report)}", file=sys.stderr)
     print(strict_json(d.to_dict()) if args.json else d.summary())
     print(f"\nwritten: {args.out}, {plot}", file=sys.stderr)

@@ -9,15 +9,23 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..design import LoadCase, read_constraints
-from ..design.result import DesignResult
-from ..errors import DataError, OptionError
-from ..export import (FORMATS, AxisMap, Plan, check_program, cycle_time, export_design, moves,
-                      program_models)
-from ..export.sequence import GROUPINGS, ORDERS
-from ..jsonfile import strict_json
-from .common import collision_arguments, collision_builder, parse_load
-from .options import at_least, count, positive
+from doe_calib.cli.common import collision_arguments, collision_builder, parse_load
+from doe_calib.cli.options import at_least, count, positive
+from doe_calib.design import LoadCase, read_constraints
+from doe_calib.design.result import DesignResult
+from doe_calib.errors import DataError, OptionError
+from doe_calib.export import (
+    FORMATS,
+    AxisMap,
+    Plan,
+    check_program,
+    cycle_time,
+    export_design,
+    moves,
+    program_models,
+)
+from doe_calib.export.sequence import GROUPINGS, ORDERS
+from doe_calib.io.json_file import strict_json
 
 HELP = "write a design as a KUKA KRL, ABB RAPID or URScript program, or a design CSV"
 EXAMPLE = ("doe-calib export design.json --format krl --out programs/ --name calib --handshake 5 "

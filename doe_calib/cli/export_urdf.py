@@ -4,10 +4,10 @@ from __future__ import annotations
 import sys
 import warnings
 
-from ..calibrated_urdf import export_urdf
-from ..jsonfile import strict_json
-from ..results import IdentificationResult
-from .common import effect_file_argument, load_effect_files, report_warnings
+from doe_calib.cli.common import effect_file_argument, load_effect_files, report_warnings
+from doe_calib.estimation.result import IdentificationResult
+from doe_calib.export.calibrated_urdf import export_urdf
+from doe_calib.io.json_file import strict_json
 
 HELP = ("write a calibrated URDF (offsets, geometry and base folded into the joint origins) "
         "and a YAML of the parameters a URDF cannot hold")

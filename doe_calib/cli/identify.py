@@ -4,11 +4,17 @@ from __future__ import annotations
 import sys
 import warnings
 
-from ..identify import ESTIMATORS, identify
-from ..jsonfile import strict_json
-from .common import (data_argument, fix_and_free, model_and_measurements,
-                     report_warnings, robot_arguments, stage_progress)
-from .options import positive
+from doe_calib.cli.common import (
+    data_argument,
+    fix_and_free,
+    model_and_measurements,
+    report_warnings,
+    robot_arguments,
+    stage_progress,
+)
+from doe_calib.cli.options import positive
+from doe_calib.estimation.identify import ESTIMATORS, identify
+from doe_calib.io.json_file import strict_json
 
 HELP = "identify parameters from a measurement CSV"
 EXAMPLE = ("doe-calib identify --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -58,6 +64,6 @@ def run(args):
     print(strict_json(result.to_dict()) if args.json else result.summary())
     print(f"\nwritten: {args.out}", file=sys.stderr)
     if args.report:
-        from ..report import identification_report
+        from doe_calib.report import identification_report
         identification_report(result, model, meas, args.report)
         print(f"report: {args.report}", file=sys.stderr)

@@ -15,7 +15,7 @@ import math
 import os
 from pathlib import Path
 
-from ..errors import OptionError
+from doe_calib.errors import OptionError
 
 
 def _number(option: str, text: str, kind, what: str):

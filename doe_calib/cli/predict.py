@@ -6,12 +6,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..evaluation import observation_matrix
-from ..io import write_measurements
-from ..jsonfile import strict_json
-from ..measurement import build_model
-from ..results import IdentificationResult
-from .common import effect_file_argument, load_effect_files, read_data
+from doe_calib.cli.common import effect_file_argument, load_effect_files, read_data
+from doe_calib.estimation.result import IdentificationResult
+from doe_calib.io.csv_files import write_measurements
+from doe_calib.io.json_file import strict_json
+from doe_calib.model.evaluation import observation_matrix
+from doe_calib.model.marker_model import build_model
 
 HELP = "marker positions predicted by a result, for validation"
 EXAMPLE = "doe-calib predict --result result.json --data held_out.csv --out predicted.csv"

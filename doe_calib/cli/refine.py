@@ -6,12 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..diagnosis.refine import refine
-from ..jsonfile import strict_json
-from ..measurement import build_model
-from ..report.diagnosis_figures import error_falling
-from .common import model_and_measurements, read_data, robot_arguments
-from .diagnose import measurement_arguments
+from doe_calib.cli.common import model_and_measurements, read_data, robot_arguments
+from doe_calib.cli.diagnose import measurement_arguments
+from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.io.json_file import strict_json
+from doe_calib.model.marker_model import build_model
+from doe_calib.report.diagnosis_figures import error_falling
 
 HELP = "grow the model by the best significant effect until it is adequate; write the fit"
 EXAMPLE = ("doe-calib refine --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -54,7 +54,7 @@ def run(args):
     out.to_json(history)
     error_falling(out.steps, out.noise_floor_mm).savefig(plot, dpi=90)
     if args.report:
-        from ..report import refine_report
+        from doe_calib.report import refine_report
         final = build_model(model.robot, model.tool, out.fit.model)
         print(f"report: {refine_report(out, final, meas, args.report)}", file=sys.stderr)
     print(strict_json(out.to_dict()) if args.json else out.summary())

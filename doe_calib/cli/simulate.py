@@ -5,16 +5,16 @@ import sys
 
 import numpy as np
 
-from ..data import Configurations
-from ..errors import OptionError
-from ..io import read_design, write_measurements
-from ..jsonfile import strict_json
-from ..loads import unloaded_and_loaded
-from ..measurement import build_model
-from ..results import load_parameters, save_parameters
-from ..simulate import random_configurations, random_truth, simulate
-from .common import load_robot_tool, parse_floats, parse_load, robot_arguments
-from .options import count, positive
+from doe_calib.cli.common import load_robot_tool, parse_floats, parse_load, robot_arguments
+from doe_calib.cli.options import count, positive
+from doe_calib.errors import OptionError
+from doe_calib.estimation.result import load_parameters, save_parameters
+from doe_calib.io.csv_files import read_design, write_measurements
+from doe_calib.io.json_file import strict_json
+from doe_calib.io.measurements import Configurations
+from doe_calib.model.loads import unloaded_and_loaded
+from doe_calib.model.marker_model import build_model
+from doe_calib.model.simulate import random_configurations, random_truth, simulate
 
 HELP = "simulate a measurement campaign"
 EXAMPLE = ("doe-calib simulate --robot kr270.urdf --tool tool.yaml --poses 40 "

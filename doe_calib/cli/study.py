@@ -8,8 +8,8 @@ import time
 from contextlib import redirect_stdout
 from pathlib import Path
 
-from ..jsonfile import read_json, strict_json
-from .options import count
+from doe_calib.cli.options import count
+from doe_calib.io.json_file import read_json, strict_json
 
 #: Study name → module in the ``studies`` package (each has ``main(argv)``).
 STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__main__",

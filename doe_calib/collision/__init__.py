@@ -6,9 +6,22 @@ floor); :mod:`.pairs` decides which pairs are never checked (SRDF, adjacent
 links, always in contact); :mod:`.clearance` gives the clearance at a pose,
 screens many poses and checks a joint-space move at ≤ 1° steps.
 """
-from .clearance import (SEGMENT_STEP, Clearance, SegmentCheck, Workspace, check_segment,
-                        clearance, contacts, too_close)
-from .model import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE, CollisionModel, build_collision_model
+from doe_calib.collision.clearance import (
+                        SEGMENT_STEP,
+                        Clearance,
+                        SegmentCheck,
+                        Workspace,
+                        check_segment,
+                        clearance,
+                        contacts,
+                        too_close,
+)
+from doe_calib.collision.model import (
+                        DEFAULT_CLEARANCE,
+                        DEFAULT_SELF_CLEARANCE,
+                        CollisionModel,
+                        build_collision_model,
+)
 
 __all__ = ["SEGMENT_STEP", "Clearance", "SegmentCheck", "Workspace", "check_segment",
            "clearance", "contacts", "too_close", "DEFAULT_CLEARANCE", "DEFAULT_SELF_CLEARANCE",

@@ -95,10 +95,10 @@ def clearance(cm, q, workspace: Workspace | None = None) -> Clearance:
 
     Examples
     --------
-    >>> from doe_calib import Robot, Tool, example
+    >>> from doe_calib import Robot, Tool, examples
     >>> from doe_calib.collision import build_collision_model
-    >>> cm = build_collision_model(Robot.from_urdf(example.ROBOT_URDF),
-    ...                            Tool.from_yaml(example.TOOL_YAML))
+    >>> cm = build_collision_model(Robot.from_urdf(examples.ROBOT_URDF),
+    ...                            Tool.from_yaml(examples.TOOL_YAML))
     >>> clearance(cm, [0, -1.57, 1.57, 0, 0.5, 0]).mm > 20
     True
     """

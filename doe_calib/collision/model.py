@@ -13,9 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ModelError
-from . import pairs as pair_rules
-from .shapes import cell_shapes, load_shapes, tool_shapes
+from doe_calib.collision import pairs as pair_rules
+from doe_calib.collision.shapes import cell_shapes, load_shapes, tool_shapes
+from doe_calib.errors import ModelError
 
 log = logging.getLogger(__name__)
 
@@ -163,9 +163,9 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
 
     Examples
     --------
-    >>> from doe_calib import Robot, Tool, example
-    >>> cm = build_collision_model(Robot.from_urdf(example.ROBOT_URDF),
-    ...                            Tool.from_yaml(example.TOOL_YAML))
+    >>> from doe_calib import Robot, Tool, examples
+    >>> cm = build_collision_model(Robot.from_urdf(examples.ROBOT_URDF),
+    ...                            Tool.from_yaml(examples.TOOL_YAML))
     >>> "link_2 vs floor" in cm.pairs
     True
     """

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from ..errors import ModelError
+from doe_calib.errors import ModelError
 
 #: Default length (m) weighting the rotation error: 1 mrad counts as 1 mm.
 ORIENTATION_LENGTH = 1.0
@@ -80,7 +80,7 @@ def build_problem(model, position_only: bool = False,
     Parameters
     ----------
     model : Model
-        The identified model (:func:`~doe_calib.measurement.build_model`);
+        The identified model (:func:`~doe_calib.model.marker_model.build_model`);
         its ``flange`` Function is called on symbols.
     position_only : bool
         Leave the orientation free.
@@ -101,8 +101,8 @@ def build_problem(model, position_only: bool = False,
 
     Examples
     --------
-    >>> from doe_calib import Robot, Tool, build_model, example
-    >>> m = build_model(Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML),
+    >>> from doe_calib import Robot, Tool, build_model, examples
+    >>> m = build_model(Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML),
     ...                 "joint_offset")
     >>> build_problem(m).solver.name()
     'compensate'

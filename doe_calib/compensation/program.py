@@ -6,9 +6,9 @@ from collections import Counter
 
 import numpy as np
 
-from ..data import Configurations
-from ..design.result import DesignResult
-from ..export import Plan, export_design
+from doe_calib.design.result import DesignResult
+from doe_calib.export import Plan, export_design
+from doe_calib.io.measurements import Configurations
 
 #: A compensated program keeps the targets' order and adds no pre-poses.
 AS_GIVEN = Plan(group_by="none", order="design", alternate=False)

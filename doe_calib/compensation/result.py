@@ -12,11 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data import Configurations
-from ..errors import DataError
-from ..io import WRENCH
-from ..jsonfile import read_json, write_json
-from ..robot import Robot
+from doe_calib.errors import DataError
+from doe_calib.io.columns import WRENCH
+from doe_calib.io.json_file import read_json, write_json
+from doe_calib.io.measurements import Configurations
+from doe_calib.model.robot import Robot
 
 FORMAT = "doe_calib.compensation"
 

@@ -9,10 +9,10 @@ import warnings
 
 import numpy as np
 
-from ..errors import ConvergenceWarning, OptionError
-from ..evaluation import evaluate
-from .problem import CompensationProblem, build_problem
-from .result import CompensationResult
+from doe_calib.compensation.problem import CompensationProblem, build_problem
+from doe_calib.compensation.result import CompensationResult
+from doe_calib.errors import ConvergenceWarning, OptionError
+from doe_calib.model.evaluation import evaluate
 
 log = logging.getLogger(__name__)
 

@@ -3,7 +3,7 @@
 A targets CSV is a design CSV (docs/formats.md §4: ``pose``, ``q1``…``qN`` in
 deg/mm, optional wrench, temperature and approach columns) that may carry
 ``x``, ``y``, ``z`` (mm, tracker frame): where the TCP must go for that row.
-The design columns are read by :func:`doe_calib.io.read_design`; this module
+The design columns are read by :func:`doe_calib.io.csv_files.read_design`; this module
 only reads the three extra columns (and hands ``read_design`` the file
 without them, line numbers kept).
 """
@@ -18,9 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data import Configurations
-from ..errors import DataError
-from ..io import XYZ, _delimiter, _read_table, read_design
+from doe_calib.errors import DataError
+from doe_calib.io.columns import XYZ
+from doe_calib.io.csv_files import read_design
+from doe_calib.io.measurements import Configurations
+from doe_calib.io.table import delimiter, read_table
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,7 +80,7 @@ def read_targets(path, robot) -> Targets:
     Raises
     ------
     DataError
-        Anything :func:`~doe_calib.io.read_design` refuses (with the file's
+        Anything :func:`~doe_calib.io.csv_files.read_design` refuses (with the file's
         own line and column), only some of ``x,y,z``, or a value there that
         is not a finite number.
 
@@ -88,7 +90,7 @@ def read_targets(path, robot) -> Targets:
     >>> targets.positions is None                       # doctest: +SKIP
     True
     """
-    table = _read_table(path)
+    table = read_table(path)
     present = [c for c in XYZ if c in table.columns]
     if not present:
         return Targets(read_design(path, robot))
@@ -111,10 +113,10 @@ def read_targets(path, robot) -> Targets:
             if not np.isfinite(value):
                 raise DataError(f"{text!r} is not a finite number", path, line, table.col(c))
             xyz[r, a] = value / 1000.0
-    delimiter = _delimiter(_first_line(path))
+    sep = delimiter(_first_line(path))
     text = Path(path).read_text(encoding="utf-8-sig")
     lines = [ln if not ln.strip() or ln.lstrip().startswith("#") else
-             _split_line(ln, delimiter, drop) for ln in text.splitlines()]
+             _split_line(ln, sep, drop) for ln in text.splitlines()]
     with tempfile.TemporaryDirectory() as tmp:
         stripped = Path(tmp) / Path(path).name
         stripped.write_text("\n".join(lines) + "\n", encoding="utf-8")

@@ -10,12 +10,31 @@ refinement (:mod:`.refine`, on the expressions of :mod:`.symbolic`), and the
 pipeline (:mod:`.optimal`) behind ``doe-calib design`` with its result
 (:mod:`.result`).
 """
-from .constraint_file import read_constraints
-from .constraints import Box, Coverage, DesignConstraints, LineOfSight
-from .criteria import CRITERIA, d_efficiency, efficiency, evaluate_criterion, log_det
-from .exchange import exact_d_design, exact_design
-from .problem import LoadCase, blocks_for, design_parameters, load_configurations, task_matrix
-from .relaxation import Relaxation, equivalence_ratio, information, relax, relax_d, variances
+from doe_calib.design.constraint_file import read_constraints
+from doe_calib.design.constraints import Box, Coverage, DesignConstraints, LineOfSight
+from doe_calib.design.criteria import (
+           CRITERIA,
+           d_efficiency,
+           efficiency,
+           evaluate_criterion,
+           log_det,
+)
+from doe_calib.design.exchange import exact_d_design, exact_design
+from doe_calib.design.problem import (
+           LoadCase,
+           blocks_for,
+           design_parameters,
+           load_configurations,
+           task_matrix,
+)
+from doe_calib.design.relaxation import (
+           Relaxation,
+           equivalence_ratio,
+           information,
+           relax,
+           relax_d,
+           variances,
+)
 
 __all__ = ["read_constraints", "Box", "Coverage", "DesignConstraints", "LineOfSight", "CRITERIA",
            "d_efficiency", "efficiency", "evaluate_criterion", "log_det", "exact_d_design",

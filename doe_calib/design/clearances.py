@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..collision import Workspace, clearance
+from doe_calib.collision import Workspace, clearance
 
 
 def pose_clearances(collision, q: np.ndarray) -> tuple:

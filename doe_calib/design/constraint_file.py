@@ -25,8 +25,14 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from ..errors import DataError
-from .constraints import DEFAULT_MARGIN, Box, Coverage, DesignConstraints, LineOfSight
+from doe_calib.design.constraints import (
+    DEFAULT_MARGIN,
+    Box,
+    Coverage,
+    DesignConstraints,
+    LineOfSight,
+)
+from doe_calib.errors import DataError
 
 SECTIONS = ("joint_limits", "margin", "cartesian", "line_of_sight", "load_torque", "coverage")
 

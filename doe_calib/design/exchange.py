@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import SolverError
-from .criteria import evaluate_criterion, sensitivity
-from .relaxation import information, traces
-from .updates import added_values, regularised
+from doe_calib.design.criteria import evaluate_criterion, sensitivity
+from doe_calib.design.relaxation import information, traces
+from doe_calib.design.updates import added_values, regularised
+from doe_calib.errors import SolverError
 
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
 

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .batch import map_poses
-from .symbolic import flange_frame, hanging_wrench, symbolic_model
+from doe_calib.design.batch import map_poses
+from doe_calib.design.symbolic import flange_frame, hanging_wrench, symbolic_model
 
 _TOL = 1e-9  # accepted violation in the numeric check (m, cos, relative torque)
 

@@ -8,18 +8,23 @@ import time
 
 import numpy as np
 
-from ..errors import OptionError, SolverError
-from .candidates import feasible_candidates
-from .clearances import collision_note, pose_clearances
-from .constraints import DesignConstraints
-from .criteria import CRITERIA, check, efficiency, evaluate_criterion, log_det
-from .exchange import exact_design
-from .feasibility import build_feasibility
-from .problem import (blocks_for, check_enough_poses, design_parameters, load_configurations,
-                      task_matrix)
-from .refine import refine as refine_poses
-from .relaxation import equivalence_ratio, information, relax
-from .result import DesignResult
+from doe_calib.design.candidate_poses import feasible_candidates
+from doe_calib.design.clearances import collision_note, pose_clearances
+from doe_calib.design.constraints import DesignConstraints
+from doe_calib.design.criteria import CRITERIA, check, efficiency, evaluate_criterion, log_det
+from doe_calib.design.exchange import exact_design
+from doe_calib.design.feasibility import build_feasibility
+from doe_calib.design.pose_refinement import refine as refine_poses
+from doe_calib.design.problem import (
+    blocks_for,
+    check_enough_poses,
+    design_parameters,
+    load_configurations,
+    task_matrix,
+)
+from doe_calib.design.relaxation import equivalence_ratio, information, relax
+from doe_calib.design.result import DesignResult
+from doe_calib.errors import OptionError, SolverError
 
 log = logging.getLogger(__name__)
 

@@ -6,12 +6,12 @@ from math import ceil
 
 import numpy as np
 
-from ..data import Configurations
-from ..errors import OptionError
-from ..evaluation import evaluate, observation_matrix
-from ..identifiability import analyse
-from ..loads import hanging_mass_wrench
-from .batch import chunks
+from doe_calib.design.batch import chunks
+from doe_calib.errors import OptionError
+from doe_calib.estimation.identifiability import analyse
+from doe_calib.io.measurements import Configurations
+from doe_calib.model.evaluation import evaluate, observation_matrix
+from doe_calib.model.loads import hanging_mass_wrench
 
 
 @dataclass(frozen=True)

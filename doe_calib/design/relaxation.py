@@ -22,7 +22,15 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from .criteria import E_ORDER, bound_value, check, evaluate_criterion, sensitivity, smooth_value
+from doe_calib.design.criteria import (
+    E_ORDER,
+    bound_value,
+    check,
+    evaluate_criterion,
+    sensitivity,
+    smooth_value,
+)
+
 #: Exponent λ of the multiplicative step w_i ← w_i ψ_i^λ: the values known to increase
 #: the criterion monotonically (Yu 2010: 1/(1 − q) for Φ_q, q = 0 for D, −1 for A and
 #: task, −k for the E surrogate).

@@ -5,11 +5,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..data import Configurations
-from ..errors import DataError
-from ..jsonfile import read_json, write_json
-from ..robot import Robot
-from ..tool import Tool
+from doe_calib.errors import DataError
+from doe_calib.io.json_file import read_json, write_json
+from doe_calib.io.measurements import Configurations
+from doe_calib.model.robot import Robot
+from doe_calib.model.tool import Tool
 
 FORMAT = "doe_calib.design"
 

@@ -16,11 +16,10 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ..data import env_fields
-from ..loads import GRAVITY
-from ..measurement import build_model
-from .criteria import E_ORDER, check
-
+from doe_calib.design.criteria import E_ORDER, check
+from doe_calib.io.measurements import env_fields
+from doe_calib.model.loads import GRAVITY
+from doe_calib.model.marker_model import build_model
 
 
 def design_env(robot) -> ca.DM:

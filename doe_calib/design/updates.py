@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .criteria import check
+from doe_calib.design.criteria import check
 
 _RIDGE = 1e-10
 

@@ -33,10 +33,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..effects import joint_index
-from ..evaluation import marker_positions
-from .candidates import fitted_basis, projected_columns
-from .variables import _basis as _smooth_basis
+from doe_calib.diagnosis.effect_tests import fitted_basis, projected_columns
+from doe_calib.diagnosis.variables import smooth_basis
+from doe_calib.model.effects import joint_index
+from doe_calib.model.evaluation import marker_positions
 
 _STEP = 1e-6  # rad or m: central difference of the marker positions along one joint
 
@@ -91,7 +91,8 @@ def added_variable(model, measurements, params, effect, variables: dict,
         :func:`~doe_calib.diagnosis.variables.configuration_variables` of the
         measured configurations.
     basis : tuple, optional
-        :func:`~.candidates.fitted_basis` of the fit, when several candidates share it.
+        :func:`~doe_calib.diagnosis.effect_tests.fitted_basis` of the fit, when several
+        candidates share it.
     """
     r, q_basis = fitted_basis(model, measurements, params) if basis is None else basis
     _, zp = projected_columns(model, measurements, params, effect, q_basis)
@@ -152,7 +153,7 @@ def _best_variable(fitted, variables):
     for name, (v, _, is_angle) in variables.items():
         if name == "measurement order":
             continue
-        x = _smooth_basis(np.asarray(v, float)[ok], is_angle)
+        x = smooth_basis(np.asarray(v, float)[ok], is_angle)
         k = np.linalg.matrix_rank(x)
         tot = float(((y - y.mean()) ** 2).sum())
         if tot == 0 or len(y) <= k + 1:

@@ -35,9 +35,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.cluster.vq import kmeans2
 
-from ..errors import DoeCalibError
-from ..weighted import weighted_residual
-from .residuals import residuals
+from doe_calib.diagnosis.residuals import residuals
+from doe_calib.errors import DoeCalibError
+from doe_calib.estimation.weighted_residuals import weighted_residual
 
 GROUPINGS = ("auto", "pose", "session", "region")
 

@@ -11,14 +11,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import DoeCalibError
-from ..effects import parse_effect
-from ..identify import identify_quietly
-from .candidates import augmented, test_candidates
-from .cross_validation import cross_validated_rms, make_folds
-from .residuals import adequacy, flagged_poses, repeatability_sigma, residuals
-from .result import DiagnosisResult
-from .variables import configuration_variables, follows
+from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
+from doe_calib.diagnosis.effect_tests import augmented, test_candidates
+from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
+from doe_calib.diagnosis.result import DiagnosisResult
+from doe_calib.diagnosis.variables import configuration_variables, follows
+from doe_calib.errors import DoeCalibError
+from doe_calib.estimation.identify import identify_quietly
+from doe_calib.model.effects import parse_effect
 
 _PHRASES = {"cyclic": "a cyclic (transmission) error of joint {j}",
             "gear_ratio": "a gear-ratio (encoder scale) error of joint {j}",

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from ..evaluation import marker_positions
+from doe_calib.model.evaluation import marker_positions
 
 
 @dataclass(frozen=True, eq=False)

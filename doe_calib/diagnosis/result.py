@@ -3,9 +3,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..jsonfile import read_json, write_json
-from .candidates import CandidateTest
-from .variables import Follows
+from doe_calib.diagnosis.effect_tests import CandidateTest
+from doe_calib.diagnosis.variables import Follows
+from doe_calib.io.json_file import read_json, write_json
 
 FORMAT = "doe_calib.diagnosis"
 

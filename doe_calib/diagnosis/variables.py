@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kinematics import gravity_torque_function, nominal_torque_function
+from doe_calib.model.kinematics import gravity_torque_function, nominal_torque_function
 
 #: A variable varies when its spread exceeds this fraction of its family's largest value.
 RELATIVE_SPREAD = 1e-6
@@ -80,7 +80,9 @@ def _varies(v: np.ndarray, family: np.ndarray) -> bool:
     return bool(np.ptp(v) > RELATIVE_SPREAD * max(float(np.abs(family).max()), 1e-300))
 
 
-def _basis(v: np.ndarray, is_angle: bool) -> np.ndarray:
+def smooth_basis(v: np.ndarray, is_angle: bool) -> np.ndarray:
+    """Columns of a smooth fit in ``v``: harmonics of an angle in deg (``is_angle``),
+    else low-order polynomials of the standardised value."""
     if is_angle:
         a = np.radians(v)
         return np.column_stack([np.ones_like(a), a, np.sin(a), np.cos(a), np.sin(2 * a),
@@ -104,7 +106,7 @@ def follows(size: np.ndarray, variables: dict) -> list[Follows]:
     tot = float(y @ y)
     out = []
     for name, (v, unit, is_angle) in variables.items():
-        x = _basis(np.asarray(v, float), is_angle)
+        x = smooth_basis(np.asarray(v, float), is_angle)
         k = np.linalg.matrix_rank(x)
         if tot == 0 or m <= k + 1:
             continue

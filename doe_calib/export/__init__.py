@@ -16,15 +16,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from ..data import Configurations
-from ..errors import DataError, OptionError
-from ..io import write_design
-from . import krl, rapid, urscript
-from .axis_map import AxisMap
-from .cycle import CycleTime, cycle_time
-from .program import Move, Settings, Waypoint, moves, realised_approach
-from .safety import Collision, ProgramCheck, check_program, program_models
-from .sequence import Plan
+from doe_calib.errors import DataError, OptionError
+from doe_calib.export import krl, rapid, urscript
+from doe_calib.export.axis_map import AxisMap
+from doe_calib.export.cycle import CycleTime, cycle_time
+from doe_calib.export.program import Move, Settings, Waypoint, moves, realised_approach
+from doe_calib.export.safety import Collision, ProgramCheck, check_program, program_models
+from doe_calib.export.sequence import Plan
+from doe_calib.io.csv_files import write_design
+from doe_calib.io.measurements import Configurations
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,7 @@ class Format:
     """An export format: its file suffixes and how its text is made.
 
     ``render(design, visits, settings)`` returns suffix → file text; None
-    for the design CSV, written by :func:`doe_calib.io.write_design`
+    for the design CSV, written by :func:`doe_calib.io.csv_files.write_design`
     (:func:`program_configurations`).
     """
 

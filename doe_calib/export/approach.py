@@ -1,7 +1,7 @@
 """Approach directions: which side each joint must reach a pose from, and the pre-pose that does it.
 
 Convention (the one of the measurement CSV's ``approach1``…``approachN``
-columns and of :mod:`doe_calib.effects.backlash`): approach ``a_k = +1``
+columns and of :mod:`doe_calib.model.effects.backlash`): approach ``a_k = +1``
 means joint k *arrives moving up* (q_k increasing), ``−1`` moving down, 0 no
 requirement. A program realises ``a_k ≠ 0`` with a pre-pose
 
@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..effects import joint_index, parse_effect, split_model
-from ..effects.backlash import Backlash
-from ..errors import DataError
+from doe_calib.errors import DataError
+from doe_calib.model.effects import joint_index, parse_effect, split_model
+from doe_calib.model.effects.backlash import Backlash
 
 #: Share of the pre-pose step that must remain inside the joint limits.
 MIN_STEP_FRACTION = 0.5
@@ -38,10 +38,10 @@ def backlash_joints(model: str, robot) -> tuple:
 
     Examples
     --------
-    >>> from doe_calib import example
-    >>> from doe_calib.robot import Robot
+    >>> from doe_calib import examples
+    >>> from doe_calib.model.robot import Robot
     >>> backlash_joints("joint_offset+backlash(j2)+backlash(j3,mode=torque)",
-    ...                 Robot.from_urdf(example.ROBOT_URDF))
+    ...                 Robot.from_urdf(examples.ROBOT_URDF))
     (1,)
     """
     out = set()

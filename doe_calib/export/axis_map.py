@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..effects import joint_index
-from ..errors import ModelError, OptionError
+from doe_calib.errors import ModelError, OptionError
+from doe_calib.model.effects import joint_index
 
 OPTION = "--axis-map"
 
@@ -56,9 +56,9 @@ class AxisMap:
 
         Examples
         --------
-        >>> from doe_calib import example
-        >>> from doe_calib.robot import Robot
-        >>> m = AxisMap.parse("j1:-1:0,j3:1:-90", Robot.from_urdf(example.ROBOT_URDF))
+        >>> from doe_calib import examples
+        >>> from doe_calib.model.robot import Robot
+        >>> m = AxisMap.parse("j1:-1:0,j3:1:-90", Robot.from_urdf(examples.ROBOT_URDF))
         >>> m.sign[:3], m.offset[:3]
         ((-1.0, 1.0, 1.0), (0.0, 0.0, -90.0))
         """

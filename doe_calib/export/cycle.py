@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .ordering import axis_speeds, move_times
-from .program import load_changes
+from doe_calib.export.ordering import axis_speeds, move_times
+from doe_calib.export.program import load_changes
 
 #: Share of each axis's maximum speed the programs move at.
 SPEED_FRACTION = 0.1

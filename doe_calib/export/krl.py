@@ -14,8 +14,8 @@ advance run so the robot is really there) and, with a handshake n, sets
 """
 from __future__ import annotations
 
-from ..errors import ModelError
-from .program import ascii_text, check_name, load_changes
+from doe_calib.errors import ModelError
+from doe_calib.export.program import ascii_text, check_name, load_changes
 
 SUFFIXES = (".src", ".dat")
 MAX_NAME = 24  # KRL identifiers

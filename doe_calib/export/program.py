@@ -14,11 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..data import approach_from_order
-from ..errors import DataError
-from .approach import backlash_joints, default_sides, pre_pose
-from .axis_map import AxisMap
-from .sequence import NO_LOAD, Plan, visit_order
+from doe_calib.errors import DataError
+from doe_calib.export.approach import backlash_joints, default_sides, pre_pose
+from doe_calib.export.axis_map import AxisMap
+from doe_calib.export.sequence import NO_LOAD, Plan, visit_order
+from doe_calib.io.measurements import approach_from_order
 
 _LIMIT_TOL = 1e-12  # rad or m, as when a design CSV is read
 _MOVED = 1e-9  # deg or mm: a smaller change is no motion
@@ -249,7 +249,7 @@ def realised_approach(visits: list[Move], robot) -> np.ndarray:
 
     The sign of the last motion of each joint into the target, through the
     intermediate positions and pre-poses
-    (:func:`doe_calib.data.approach_from_order`; 0 for a joint that has not
+    (:func:`doe_calib.io.measurements.approach_from_order`; 0 for a joint that has not
     moved since the program started), in the URDF's sense, as
     a measurement file's ``approach`` columns and the ``backlash`` effect
     read it.

@@ -14,8 +14,8 @@ Exactly 6 axes are supported.
 """
 from __future__ import annotations
 
-from ..errors import ModelError
-from .program import ascii_text, check_name, load_changes
+from doe_calib.errors import ModelError
+from doe_calib.export.program import ascii_text, check_name, load_changes
 
 SUFFIXES = (".mod",)
 MAX_NAME = 32  # RAPID identifiers

@@ -27,11 +27,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..collision import Workspace, check_segment
-from ..errors import CollisionError
-from .axis_map import AxisMap
-from .program import Waypoint, ascii_text, load_words
-from .sequence import NO_LOAD
+from doe_calib.collision import Workspace, check_segment
+from doe_calib.errors import CollisionError
+from doe_calib.export.axis_map import AxisMap
+from doe_calib.export.program import Waypoint, ascii_text, load_words
+from doe_calib.export.sequence import NO_LOAD
 
 #: Candidate routes tried for one colliding move, shortest first.
 MAX_ROUTES = 40

@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import OptionError
-from .axis_map import AxisMap
-from .ordering import axis_speeds, move_times, short_path
+from doe_calib.errors import OptionError
+from doe_calib.export.axis_map import AxisMap
+from doe_calib.export.ordering import axis_speeds, move_times, short_path
 
 NO_LOAD = "no load"
 

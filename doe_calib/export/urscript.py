@@ -12,8 +12,8 @@ Only 6 revolute joints are supported.
 """
 from __future__ import annotations
 
-from ..errors import ModelError
-from .program import ascii_text, check_name, load_changes
+from doe_calib.errors import ModelError
+from doe_calib.export.program import ascii_text, check_name, load_changes
 
 SUFFIXES = (".script",)
 MAX_NAME = 32

@@ -10,11 +10,11 @@ side; :func:`write_report` writes any sections built with :mod:`.html`.
 Reporting code formats and plots; it computes nothing
 the library does not already provide.
 """
-from .compare import compare_report
-from .design import design_report, design_sections
-from .diagnosis import diagnosis_report, refine_report, refine_sections
-from .html import write_report
-from .identification import identification_report
+from doe_calib.report.compare import compare_report
+from doe_calib.report.design import design_report, design_sections
+from doe_calib.report.diagnosis import diagnosis_report, refine_report, refine_sections
+from doe_calib.report.html import write_report
+from doe_calib.report.identification import identification_report
 
 __all__ = ["identification_report", "design_report", "diagnosis_report", "refine_report",
            "compare_report", "design_sections", "refine_sections",

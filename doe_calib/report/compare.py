@@ -1,14 +1,14 @@
 """The comparison report: parameter std and task-point accuracy of several sources, side by side.
 
-Formats a :class:`~doe_calib.compare.Comparison` (designs and identification
+Formats a :class:`~doe_calib.design.comparison.Comparison` (designs and identification
 results) as tables and grouped bar plots; computes nothing itself.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .figures import _figure, to_png
-from .html import figure, paragraph, section, table, write_report
+from doe_calib.report.figures import new_figure, to_png
+from doe_calib.report.html import figure, paragraph, section, table, write_report
 
 
 def grouped_bars(categories, values, labels, ylabel: str, title: str = "", log: bool = False):
@@ -35,7 +35,7 @@ def grouped_bars(categories, values, labels, ylabel: str, title: str = "", log: 
         v = np.where(v > 0, v, np.nan)
     c, s = v.shape
     width = 0.8 / max(s, 1)
-    fig = _figure(min(max(6.0, 0.3 * c * max(s, 2) + 2.0), 18.0), 4.2)
+    fig = new_figure(min(max(6.0, 0.3 * c * max(s, 2) + 2.0), 18.0), 4.2)
     ax = fig.add_subplot()
     x = np.arange(c)
     for j, label in enumerate(labels):
@@ -103,7 +103,7 @@ def compare_report(comparison, path, dpi: int = 90):
     Parameters
     ----------
     comparison : Comparison
-        From :func:`doe_calib.compare.compare`.
+        From :func:`doe_calib.design.comparison.compare`.
     path : str or Path
         HTML file to write; self-contained (figures embedded as PNG).
     dpi : int
@@ -116,7 +116,7 @@ def compare_report(comparison, path, dpi: int = 90):
 
     Examples
     --------
-    >>> from doe_calib.compare import compare, load_source
+    >>> from doe_calib.design.comparison import compare, load_source
     >>> c = compare([load_source("d15.json"), load_source("d30.json")])  # doctest: +SKIP
     >>> compare_report(c, "compare.html")  # doctest: +SKIP
     """

@@ -3,11 +3,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..evaluation import evaluate, marker_positions
-from ..measurement import build_model
-from . import figures
-from .figures import to_png as png
-from .html import figure, paragraph, preformatted, section, table, write_report
+from doe_calib.model.evaluation import evaluate, marker_positions
+from doe_calib.model.marker_model import build_model
+from doe_calib.report import figures
+from doe_calib.report.figures import to_png as png
+from doe_calib.report.html import figure, paragraph, preformatted, section, table, write_report
 
 
 def _text(value) -> str:
@@ -67,7 +67,7 @@ def robot_drawing(design, dpi: int = 90):
 
     Returns the report blocks (figure and caption) of the design report's "Robot in each pose".
     """
-    from ..skeleton import skeleton_points
+    from doe_calib.model.skeleton import skeleton_points
 
     cfg, robot = design.configurations, design.robot
     first = sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())[:MAX_DRAWN]

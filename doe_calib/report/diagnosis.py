@@ -5,16 +5,28 @@ import warnings
 
 import numpy as np
 
-from ..diagnosis.added_variable import added_variable
-from ..diagnosis.candidates import candidate_effects, fitted_basis
-from ..diagnosis.residuals import residuals
-from ..diagnosis.variables import configuration_variables
-from ..errors import DoeCalibError
-from . import figures
-from .diagnosis_figures import (added_variable_panels, candidate_bars, error_falling,
-                                residuals_by_direction)
-from .html import collapsible, figure, paragraph, preformatted, section, table, write_report
-from .identification import parameters_section, reading_columns
+from doe_calib.diagnosis.added_variable import added_variable
+from doe_calib.diagnosis.effect_tests import candidate_effects, fitted_basis
+from doe_calib.diagnosis.residuals import residuals
+from doe_calib.diagnosis.variables import configuration_variables
+from doe_calib.errors import DoeCalibError
+from doe_calib.report import figures
+from doe_calib.report.diagnosis_figures import (
+    added_variable_panels,
+    candidate_bars,
+    error_falling,
+    residuals_by_direction,
+)
+from doe_calib.report.html import (
+    collapsible,
+    figure,
+    paragraph,
+    preformatted,
+    section,
+    table,
+    write_report,
+)
+from doe_calib.report.identification import parameters_section, reading_columns
 
 #: Candidates drawn as added-variable plots, strongest evidence first.
 ADDED_VARIABLE_PLOTS = 4

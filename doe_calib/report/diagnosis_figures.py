@@ -3,13 +3,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figures import _figure, plain_ticks
+from doe_calib.report.figures import new_figure, plain_ticks
 
 
 def candidate_bars(diagnosis, top: int = 12):
     """Share of the remaining residual the strongest candidate effects explain (bars, %)."""
     cands = list(diagnosis.candidates[:top])
-    fig = _figure(8, 0.35 * len(cands) + 1.2)
+    fig = new_figure(8, 0.35 * len(cands) + 1.2)
     ax = fig.subplots()
     y = np.arange(len(cands))[::-1]
     colours = ["tab:green" if c.p_value < diagnosis.level else "tab:gray" for c in cands]
@@ -22,7 +22,7 @@ def candidate_bars(diagnosis, top: int = 12):
 
 def error_falling(steps, noise_floor_mm: float):
     """Fit, cross-validated and validation RMS (mm) at each refinement step, log scale."""
-    fig = _figure(8, 4)
+    fig = new_figure(8, 4)
     ax = fig.subplots()
     x = np.arange(len(steps))
     ax.plot(x, [s.rms_mm for s in steps], "o-", label="fit residual")
@@ -45,7 +45,7 @@ def added_variable_panels(plots, ncols: int = 2):
     the effect follows: a step, a sine or a slope shows (see
     :mod:`doe_calib.diagnosis.added_variable`)."""
     nrows = max(1, -(-len(plots) // ncols))
-    fig = _figure(4.2 * ncols, 3.0 * nrows)
+    fig = new_figure(4.2 * ncols, 3.0 * nrows)
     axes = fig.subplots(nrows, ncols, squeeze=False)
     for ax, av in zip(axes.flat, plots):
         ax.scatter(av.x, av.partial, s=7, alpha=0.45, color="tab:blue", label="residual")
@@ -74,7 +74,7 @@ def residuals_by_direction(error_mm, columns):
         Axis label with unit and the variable at each reading.
     """
     ncols = max(1, len(columns))
-    fig = _figure(3.2 * ncols, 6.6)
+    fig = new_figure(3.2 * ncols, 6.6)
     axes = fig.subplots(3, ncols, squeeze=False, sharey="row")
     for j, (label, x) in enumerate(columns):
         for i, axis in enumerate("xyz"):

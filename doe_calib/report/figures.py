@@ -13,7 +13,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 
-def _figure(width: float, height: float) -> Figure:
+def new_figure(width: float, height: float) -> Figure:
+    """A Figure of ``width`` × ``height`` inches on its own Agg canvas (no pyplot state)."""
     fig = Figure(figsize=(width, height), layout="constrained")
     FigureCanvasAgg(fig)
     return fig
@@ -51,7 +52,7 @@ def correlation_heatmap(names, correlation) -> Figure:
     c = np.asarray(correlation, float)
     f = len(names)
     size = min(max(4.0, 0.18 * f + 2.0), 16.0)
-    fig = _figure(size + 1.0, size)
+    fig = new_figure(size + 1.0, size)
     ax = fig.add_subplot()
     im = ax.imshow(c, cmap="RdBu_r", vmin=-1.0, vmax=1.0, interpolation="nearest")
     font = max(4.0, min(9.0, 300.0 / max(f, 1)))
@@ -77,7 +78,7 @@ def residual_scatter(norm_mm, columns, ncols: int = 4) -> Figure:
     norm_mm = np.asarray(norm_mm, float)
     n = len(columns)
     nrows = max(1, -(-n // ncols))
-    fig = _figure(3.0 * ncols, 2.4 * nrows)
+    fig = new_figure(3.0 * ncols, 2.4 * nrows)
     axes = fig.subplots(nrows, ncols, squeeze=False, sharey=True)
     for ax, (label, x) in zip(axes.flat, columns):
         ax.scatter(np.asarray(x, float), norm_mm, s=6, alpha=0.6, color="tab:blue")
@@ -97,13 +98,13 @@ def residual_bars(stats: dict, what: str) -> Figure:
     ----------
     stats : dict
         Group name → ``{"rms_mm": float, "max_3d_mm": float, ...}`` (as in
-        :func:`doe_calib.identify.residual_statistics`).
+        :func:`doe_calib.estimation.assembly.residual_statistics`).
     what : str
         What the groups are, e.g. ``marker`` or ``pose``.
     """
     names = list(stats)
     x = np.arange(len(names))
-    fig = _figure(min(max(4.0, 0.3 * len(names) + 2.0), 16.0), 3.2)
+    fig = new_figure(min(max(4.0, 0.3 * len(names) + 2.0), 16.0), 3.2)
     ax = fig.add_subplot()
     ax.bar(x - 0.2, [stats[k]["rms_mm"] for k in names], 0.4, label="RMS per coordinate")
     ax.bar(x + 0.2, [stats[k]["max_3d_mm"] for k in names], 0.4, label="max 3-D")
@@ -129,7 +130,7 @@ def joint_angle_chart(joint_names, q, lower, upper, units) -> Figure:
     """
     q = np.atleast_2d(np.asarray(q, float))
     m, n = q.shape
-    fig = _figure(max(5.0, 1.2 * n + 2.0), 4.0)
+    fig = new_figure(max(5.0, 1.2 * n + 2.0), 4.0)
     ax = fig.add_subplot()
     for k in range(n):
         if np.isfinite(lower[k]) and np.isfinite(upper[k]):
@@ -159,7 +160,7 @@ def poses_3d(flange_mm, markers_mm, marker_names, tracker_mm=None) -> Figure:
     """
     f = np.asarray(flange_mm, float)
     x = np.asarray(markers_mm, float)
-    fig = _figure(7.0, 6.0)
+    fig = new_figure(7.0, 6.0)
     ax = fig.add_subplot(projection="3d")
     ax.scatter(0, 0, 0, marker="s", s=50, color="k", label="robot base")
     ax.scatter(*f.T, s=25, color="tab:blue", label="flange")
@@ -193,7 +194,7 @@ def std_bars(names, std, units, title: str = "predicted standard deviation") -> 
         Unit of each, shown in the tick label.
     """
     s = np.asarray(std, float)
-    fig = _figure(min(max(5.0, 0.22 * len(s) + 2.0), 16.0), 3.8)
+    fig = new_figure(min(max(5.0, 0.22 * len(s) + 2.0), 16.0), 3.8)
     ax = fig.add_subplot()
     ax.bar(range(len(s)), np.where(s > 0, s, np.nan), color="tab:green")
     ax.set_yscale("log")
@@ -248,7 +249,7 @@ def robot_poses(skeletons_mm, markers_mm, titles, tracker_mm=None, floor_mm=0.0,
     half = max(float(np.max(pts.max(axis=0) - pts.min(axis=0))) / 2, 1.0) * 1.05
     m = len(s)
     nrows = -(-m // ncols)
-    fig = _figure(2.6 * min(m, ncols), 2.7 * nrows)
+    fig = new_figure(2.6 * min(m, ncols), 2.7 * nrows)
     lim = [(c - half, c + half) for c in centre]
     square = np.array([[lim[0][0], lim[1][0]], [lim[0][1], lim[1][0]], [lim[0][1], lim[1][1]],
                        [lim[0][0], lim[1][1]], [lim[0][0], lim[1][0]]])

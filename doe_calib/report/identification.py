@@ -3,10 +3,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..diagnosis.residuals import residuals
-from ..diagnosis.variables import configuration_variables
-from . import figures
-from .html import collapsible, figure, paragraph, preformatted, section, table, write_report
+from doe_calib.diagnosis.residuals import residuals
+from doe_calib.diagnosis.variables import configuration_variables
+from doe_calib.report import figures
+from doe_calib.report.html import (
+    collapsible,
+    figure,
+    paragraph,
+    preformatted,
+    section,
+    table,
+    write_report,
+)
+
 
 def parameter_rows(result) -> list[list]:
     """One row per parameter: name, unit, nominal, value, std (a priori, a posteriori), status.

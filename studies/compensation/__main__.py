@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from doe_calib.jsonfile import write_json
+from doe_calib.io.json_file import write_json
 
 from .report import figure, markdown
 from .study import run

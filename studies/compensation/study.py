@@ -12,12 +12,12 @@ import warnings
 
 import numpy as np
 
-from doe_calib import Configurations, Robot, Tool, build_model, example, identify, simulate
+from doe_calib import Configurations, Robot, Tool, build_model, examples, identify, simulate
 from doe_calib.compensation import Targets, compensate
 from doe_calib.errors import ConvergenceWarning
-from doe_calib.evaluation import evaluate
-from doe_calib.loads import hanging_mass_wrench, unloaded_and_loaded
-from doe_calib.simulate import random_configurations, random_truth
+from doe_calib.model.evaluation import evaluate
+from doe_calib.model.loads import hanging_mass_wrench, unloaded_and_loaded
+from doe_calib.model.simulate import random_configurations, random_truth
 
 MODEL = "joint_offset+geometry+joint_compliance"
 MASS, COM = 250.0, (0.0, 0.0, 0.2)
@@ -31,7 +31,7 @@ def _true_tcp(model, truth, cfg, point):
 
 def run(seed: int = 3, poses: int = 30, targets: int = 40) -> dict:
     """The study's figures: per-target true errors (mm) and the predicted std, as a dict."""
-    robot, tool = Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML)
+    robot, tool = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
     model = build_model(robot, tool, MODEL)
     rng = np.random.default_rng(seed)
     truth = model.nominal().with_values(random_truth(model, rng))

@@ -4,6 +4,6 @@
 ``doe-calib study design_sweep`` writes ``results/design_sweep.{json,md,png}``.
 The grid and the per-point task are in :mod:`.sweep`; tables, words and the
 figure in :mod:`.report`. Every grid point is one task of
-:func:`doe_calib.parallel.run_tasks`: local processes by default, a Dask
+:func:`doe_calib.runtime.parallel.run_tasks`: local processes by default, a Dask
 cluster when a scheduler address is given.
 """

@@ -5,7 +5,7 @@ import argparse
 import json
 from pathlib import Path
 
-from doe_calib.progress import Progress
+from doe_calib.runtime.progress import Progress
 
 from .report import markdown, plot
 from .sweep import grid, run

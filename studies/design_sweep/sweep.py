@@ -4,7 +4,7 @@ A grid point is a :class:`SweepTask` (robot, tool, N, criterion, candidates,
 refinement, seed): plain picklable values. :func:`design_point` builds the
 model in the worker process (CasADi Functions do not pickle), runs
 :func:`doe_calib.design.optimal.optimal_design` and returns plain numbers.
-All tasks of one robot share one seed from :func:`doe_calib.parallel.task_seeds`
+All tasks of one robot share one seed from :func:`doe_calib.runtime.parallel.task_seeds`
 (common random numbers): the tools, pose counts and criteria of a robot are
 compared on the same candidate poses, and no result depends on the engine.
 """
@@ -17,10 +17,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from doe_calib import Robot, Tool, build_model, example
+from doe_calib import Robot, Tool, build_model, examples
 from doe_calib.design import LoadCase
 from doe_calib.design.optimal import optimal_design
-from doe_calib.parallel import run_tasks, task_seeds
+from doe_calib.runtime.parallel import run_tasks, task_seeds
 
 SIGMA = 3e-5  # tracker σ per coordinate, m (0.03 mm, as in the demo)
 CANDIDATES = 3000
@@ -48,12 +48,12 @@ SMALL_KR270_MARKERS = {"A": [100.0, 0.0, 120.0], "B": [-50.0, 86.6, 120.0],
                        "C": [-50.0, -86.6, 120.0]}
 
 ROBOTS = {
-    "kr270": RobotSetup("KR 270 (6R)", example.ROBOT_URDF, "tool0",
+    "kr270": RobotSetup("KR 270 (6R)", examples.ROBOT_URDF, "tool0",
                         "joint_offset+geometry+joint_compliance", ((250.0, (0.0, 0.0, 0.2)),),
-                        {"r150": example.TOOL_YAML, "r100": SMALL_KR270_MARKERS},
+                        {"r150": examples.TOOL_YAML, "r100": SMALL_KR270_MARKERS},
                         (8, 12, 15, 20, 30)),
-    "three_dof": RobotSetup("3-DOF of eq. (21)", example.THREE_DOF_URDF, "flange",
-                            "joint_offset+geometry", (), {"r100": example.THREE_DOF_TOOL_YAML},
+    "three_dof": RobotSetup("3-DOF of eq. (21)", examples.THREE_DOF_URDF, "flange",
+                            "joint_offset+geometry", (), {"r100": examples.THREE_DOF_TOOL_YAML},
                             (3, 5, 8)),
 }
 CRITERIA = ("D", "A")
@@ -149,7 +149,7 @@ def marker_radius_mm(robot: str, tool: str) -> float:
 def run(quick: bool = False, candidates: int | None = None, refine: bool = False,
         seed: int = 2024, scheduler: str | None = None, workers: int | None = None,
         progress=None) -> dict:
-    """The whole sweep through :func:`~doe_calib.parallel.run_tasks`; a JSON-ready dict."""
+    """The whole sweep through :func:`~doe_calib.runtime.parallel.run_tasks`; a JSON-ready dict."""
     tasks = grid(quick, candidates, refine, seed)
     start = time.perf_counter()
     points = run_tasks(design_point, tasks, scheduler, workers, progress)

@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib import Configurations, simulate
-from doe_calib.loads import hanging_mass_wrench
-from doe_calib.simulate import random_configurations
+from doe_calib.model.loads import hanging_mass_wrench
+from doe_calib.model.simulate import random_configurations
 
 SIGMA_M = 3e-5
 LOAD_KG, LOAD_COM_M = 250.0, (0.0, 0.0, 0.2)

@@ -1,15 +1,14 @@
 """The study: for every catalogue effect, hide it, diagnose, add what diagnosis proposes."""
 from __future__ import annotations
 
-
 import numpy as np
 
-from doe_calib import Robot, Tool, build_model, example
-from doe_calib.identify import identify_quietly
+from doe_calib import Robot, Tool, build_model, examples
 from doe_calib.diagnosis import diagnose, validation_rms
-from doe_calib.diagnosis.refine import refine
-from doe_calib.progress import Progress
-from doe_calib.simulate import random_truth
+from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.estimation.identify import identify_quietly
+from doe_calib.model.simulate import random_truth
+from doe_calib.runtime.progress import Progress
 
 from .campaign import SIGMA_M, campaign
 
@@ -56,7 +55,7 @@ def one_case(robot, tool, hidden, start, seed, n_train=40, n_valid=20, drift_m=0
 
 def run(seed: int = 1) -> dict:
     """Every case, the control, the out-of-catalogue case and one refinement from offsets."""
-    robot, tool = Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML)
+    robot, tool = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
     cases = list(CASES) + [(None, "joint_offset+joint_compliance")] * 2
     bar = Progress(len(cases) + 1, "diagnosis study")
     rows = []

@@ -1,6 +1,6 @@
 """The paper's Table II experiment under our model: its 15 poses against our optimised ones.
 
-KR 270-class robot (``doe_calib.example``), 250 kg hung 200 mm below the
+KR 270-class robot (``doe_calib.examples``), 250 kg hung 200 mm below the
 flange, each pose measured unloaded and loaded by the three-marker tool.
 Elastostatic model: joint-2 compliance in five q2 bins (χ2,1 … χ2,5, the
 bins centred on the paper's five q2 angles) plus χ3 … χ6; base and marker
@@ -14,12 +14,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from doe_calib import Robot, Tool, build_model, example
-from doe_calib.covariance import predict_covariance
-from doe_calib.design import (LoadCase, blocks_for, design_parameters, information,
-                              load_configurations, log_det, relax_d)
+from doe_calib import Robot, Tool, build_model, examples
+from doe_calib.design import (
+    LoadCase,
+    blocks_for,
+    design_parameters,
+    information,
+    load_configurations,
+    log_det,
+    relax_d,
+)
 from doe_calib.design.optimal import optimal_design
-from doe_calib.simulate import random_configurations
+from doe_calib.estimation.covariance import predict_covariance
+from doe_calib.model.simulate import random_configurations
 
 from .paper import Q2_GROUPS_DEG, TABLE_IV, paper_design_deg
 
@@ -55,7 +62,7 @@ class Setup:
 
 def setup() -> Setup:
     """Model with Table IV's compliances as values; k_a1 and k_a2 fixed (χ2,k replace k_a2)."""
-    robot, tool = Robot.from_urdf(example.ROBOT_URDF), Tool.from_yaml(example.TOOL_YAML)
+    robot, tool = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
     edges = ";".join(f"{e:.4f}" for e in np.degrees(bin_edges_rad()))
     model = build_model(robot, tool, f"compliance_by_angle(j2,edges_deg={edges})+joint_compliance")
     values = {PAPER_NAMES[n]: v * 1e-6 for n, (v, _) in TABLE_IV.items()}  # µrad/(N·m) → SI

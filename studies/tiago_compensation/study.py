@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 
 from doe_calib import Configurations, IdentificationResult, build_model
-from studies.commands import run_command
 from doe_calib.compensation import read_targets
-from doe_calib.evaluation import evaluate
-from doe_calib.io import read_measurements, write_design
+from doe_calib.io.csv_files import read_measurements, write_design
+from doe_calib.model.evaluation import evaluate
+from studies.commands import run_command
 from studies.tiago_refine.study import SIGMA_MM, sessions
 
 #: The effects ``refine`` added in every fold of results/tiago_refine.md (backlash and

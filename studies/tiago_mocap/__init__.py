@@ -9,7 +9,7 @@ project dependency). The study skips cleanly when either is missing.
 What it does:
 
 1. :func:`~.sessions.load_session` turns one wide file (one row = one posture, four
-   points) into SI :class:`~doe_calib.data.Measurements`: markers ``P1..P4``,
+   points) into SI :class:`~doe_calib.io.measurements.Measurements`: markers ``P1..P4``,
    pose ids ``<session>:<row>``, σ per row = ``max(marker_std_mm, 0.1 mm)``.
 2. :func:`rough_start` finds start values for the unknown marker positions in
    the flange frame and the base pose by alternation (nominal robot).
@@ -28,8 +28,15 @@ Run: ``python -m studies.tiago_mocap [--data DIR] [--out results]``.
 """
 from .drivers import repeated_postures
 from .fitting import error_stats, errors_mm, fit
-from .robot import (COLUMNS, DEFAULT_DATA, JOINTS, SIGMA_FLOOR_MM, tiago_robot, tiago_tool,
-                    tiago_urdf)
+from .robot import (
+                    COLUMNS,
+                    DEFAULT_DATA,
+                    JOINTS,
+                    SIGMA_FLOOR_MM,
+                    tiago_robot,
+                    tiago_tool,
+                    tiago_urdf,
+)
 from .sessions import load_session, read_sessions
 from .start import rough_start
 from .study import run

@@ -4,10 +4,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-
-
 from .robot import DEFAULT_DATA, missing
 from .study import run
+
 
 def main(argv=None) -> int:
     """Command line: ``python -m studies.tiago_mocap [--data DIR] [--out DIR]``."""

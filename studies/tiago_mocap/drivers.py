@@ -1,17 +1,17 @@
 """What the held-out residual follows: gravity torques, joints, time, jitter; repeated postures."""
 from __future__ import annotations
 
-
 import numpy as np
 
 from doe_calib import build_model
-from doe_calib.evaluation import evaluate
-from doe_calib.registration import register
+from doe_calib.estimation.registration import register
+from doe_calib.model.evaluation import evaluate
 
 from .fitting import GRAVITY, per_pose
 from .robot import JOINTS, tiago_tool
 from .sessions import Session
 from .validation import posture_groups
+
 
 def gravity_torques(robot, session: Session, mass_kg: float = 1.0) -> np.ndarray:
     """Torque (N·m; N for the torso) in every joint of a weight at the flange origin, (M, N).

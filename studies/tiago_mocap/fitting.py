@@ -7,11 +7,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from doe_calib import identify, marker_positions
-from doe_calib.data import concatenate
-from doe_calib.registration import register
+from doe_calib.estimation.registration import register
+from doe_calib.io.measurements import concatenate
 
 from .sessions import Session
 from .start import start_parameters
+
 
 @dataclass(frozen=True)
 class Variant:

@@ -5,7 +5,6 @@ from pathlib import Path
 
 import numpy as np
 
-
 from .drivers import posture_table
 from .fitting import VARIANTS
 

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-
 from doe_calib import Robot, Tool
 
 DEFAULT_DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "tiago-mocap"

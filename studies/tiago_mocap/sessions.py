@@ -9,7 +9,8 @@ import numpy as np
 
 from doe_calib import Configurations, DataError, Measurements
 
-from .robot import SIGMA_FLOOR_MM, COLUMNS
+from .robot import COLUMNS, SIGMA_FLOOR_MM
+
 
 @dataclass(frozen=True, eq=False)
 class Session:

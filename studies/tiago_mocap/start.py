@@ -5,8 +5,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from doe_calib.evaluation import evaluate
-from doe_calib.registration import register
+from doe_calib.estimation.registration import register
+from doe_calib.model.evaluation import evaluate
+
 
 @dataclass(frozen=True)
 class RoughStart:
@@ -53,7 +54,7 @@ def rough_start(model, measurements, iterations: int = 30) -> RoughStart:
 
 def start_parameters(model, measurements):
     """Nominal parameter set with markers and base from :func:`rough_start`."""
-    from doe_calib.rotations import matrix_to_rotation_vector
+    from doe_calib.model.rotations import matrix_to_rotation_vector
 
     rs = rough_start(model, measurements)
     params = model.nominal()

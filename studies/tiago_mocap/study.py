@@ -7,17 +7,26 @@ from pathlib import Path
 import numpy as np
 
 from doe_calib import build_model
-from doe_calib.data import concatenate
 from doe_calib.diagnosis import diagnose
+from doe_calib.io.measurements import concatenate
 
 from .drivers import correlations, repeated_postures
 from .fitting import VARIANTS, Variant, error_stats, errors_mm, fit, with_load
-from .report import plot_models, plot_residuals, markdown
-from .robot import (DEFAULT_DATA, FLANGE, JOINTS, SIGMA_FLOOR_MM, URDF_IN_PACKAGE, tiago_robot,
-                    tiago_tool, tiago_urdf)
+from .report import markdown, plot_models, plot_residuals
+from .robot import (
+    DEFAULT_DATA,
+    FLANGE,
+    JOINTS,
+    SIGMA_FLOOR_MM,
+    URDF_IN_PACKAGE,
+    tiago_robot,
+    tiago_tool,
+    tiago_urdf,
+)
 from .sessions import read_sessions
 from .start import rough_start
 from .validation import cross_validate, cv_summary, held_out_by_session, posture_groups
+
 
 def _version(dist: str) -> str:
     from importlib import metadata

@@ -6,11 +6,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from doe_calib import build_model
-from doe_calib.data import concatenate
+from doe_calib.io.measurements import concatenate
 
 from .fitting import Fit, Variant, error_stats, errors_mm, fit, with_load
 from .robot import tiago_tool
 from .sessions import Session
+
 
 def subset(session: Session, keep) -> Session:
     """The session restricted to the postures where ``keep`` (M,) is true."""

@@ -1,0 +1,161 @@
+"""Continuous refinement: IPOPT moves the N poses' joint angles together.
+
+The exact design's poses are the start; the objective is log Φ of the
+information M(q_1 … q_N) = Σ_i pose_information(q_i) (:mod:`.symbolic`,
+loads' wrenches functions of q), under the joint bounds and the pose
+constraints (:mod:`.feasibility`). Coverage is kept by holding one pose of
+each required bin inside its bin. Each refined pose is re-checked
+numerically, exactly (constraints and, with a collision model, the
+clearance); one that fails steps back toward its start (halfway, a quarter
+of the way …, else the start itself). The refined design is kept only if it
+improves the criterion.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from doe_calib.collision import too_close
+from doe_calib.design.criteria import evaluate_criterion
+from doe_calib.design.symbolic import log_criterion, pose_information
+
+log = logging.getLogger(__name__)
+
+_MARGIN = 1e-7  # rows g ≥ this in IPOPT, so its tolerance never leaves g < 0
+_STEPS_BACK = (0.5, 0.25, 0.125, 0.0625)  # fractions of the move kept when a pose fails
+
+
+@dataclass(frozen=True, eq=False)
+class Refinement:
+    """Outcome of the refinement.
+
+    Attributes
+    ----------
+    q : ndarray, shape (N, n_joints)
+        Poses kept (the refined ones if accepted, else the start), rad/m.
+    start_value, value : float
+        Criterion of the start and of the kept poses.
+    accepted : bool
+    status : str
+        IPOPT's return status, or why the result was not kept.
+    iterations : int
+    seconds : float
+    stepped_back : int
+        Refined poses that failed the re-check and were moved back toward their start.
+    """
+
+    q: np.ndarray
+    start_value: float
+    value: float
+    accepted: bool
+    status: str
+    iterations: int
+    seconds: float
+    stepped_back: int = 0
+
+    def to_dict(self) -> dict:
+        return {"accepted": self.accepted, "status": self.status, "iterations": self.iterations,
+                "seconds": self.seconds, "start_value": self.start_value, "value": self.value,
+                "stepped_back": self.stepped_back}
+
+
+def _admissible(feasibility, collision, q: np.ndarray) -> np.ndarray:
+    """Mask of the poses of q (M, N) meeting every constraint and keeping their clearance."""
+    ok, _ = feasibility.feasible(q)
+    if collision is not None:
+        ok &= too_close(collision, q) < 0
+    return ok
+
+
+def step_back(q0: np.ndarray, q1: np.ndarray, admissible) -> tuple[np.ndarray, int]:
+    """Poses q1 (M, N), each failing one moved back toward its admissible start q0.
+
+    ``admissible(q) -> mask`` re-checks poses; a failing pose is tried at
+    the fractions :data:`_STEPS_BACK` of its move, and is its start when none
+    passes. Returns the poses and how many stepped back.
+    """
+    out = q1.copy()
+    bad = np.flatnonzero(~admissible(q1))
+    for i in bad:
+        tries = q0[i] + np.array(_STEPS_BACK)[:, None] * (q1[i] - q0[i])
+        ok = np.flatnonzero(admissible(tries))
+        out[i] = tries[ok[0]] if len(ok) else q0[i]
+    return out, len(bad)
+
+
+def _bounds(q0, constraints, robot):
+    """Joint bounds of every pose; one pose per required coverage bin held in its bin."""
+    lo, hi = constraints.bounds(robot)
+    lbx, ubx = np.tile(lo, (len(q0), 1)), np.tile(hi, (len(q0), 1))
+    cov = constraints.coverage
+    if cov is not None:
+        bins = cov.bins(q0)
+        for b in cov.used(q0):
+            i = int(np.flatnonzero(bins == b)[0])
+            lbx[i, cov.joint] = max(lbx[i, cov.joint], cov.edges[b])
+            ubx[i, cov.joint] = min(ubx[i, cov.joint], cov.edges[b + 1])
+    return lbx, ubx
+
+
+def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
+           criterion: str = "D", task: np.ndarray | None = None,
+           max_iterations: int = 300, collision=None) -> Refinement:
+    """Optimise the poses q0 (N, n_joints) jointly with IPOPT (L-BFGS Hessian).
+
+    Parameters
+    ----------
+    model : Model
+    params : ParameterSet
+        Expected values and the free parameters designed for.
+    loads : sequence of LoadCase
+    sigma : float
+        Tracker σ per coordinate, m.
+    q0 : ndarray, shape (N, n_joints)
+        Start poses (the exact design), rad/m; they satisfy every constraint.
+    feasibility : Feasibility
+    criterion : {"D", "A", "E", "task"}
+    task : ndarray, optional
+        Task Jacobians (scaled), for the task criterion.
+    collision : CollisionModel, optional
+        Refined poses closer than its clearances step back (:func:`step_back`).
+    """
+    t0 = time.perf_counter()
+    n, dof = q0.shape
+    info = pose_information(model, params, loads, sigma)
+    m0 = np.array(info.map(n)(q0.T)).reshape(-1, n, info.size1_out(0)).sum(axis=1)
+    start_value = evaluate_criterion(criterion, m0, task)
+    p = m0.shape[0]
+    lam0 = float(np.linalg.eigvalsh(m0)[0]) if criterion == "E" else 1.0
+    objective = log_criterion(criterion, p, task, lam0)
+    q = ca.MX.sym("q", dof, n)
+    m = info.map(n)(q) @ ca.repmat(ca.DM.eye(p), n, 1)
+    g = ca.vertcat(*[feasibility.expressions(q[:, i], q0[i]) for i in range(n)])
+    lbx, ubx = _bounds(q0, feasibility.constraints, model.robot)
+    solver = ca.nlpsol("refine", "ipopt", {"x": ca.vec(q), "f": -objective(m), "g": g},
+                       {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
+                        "ipopt.hessian_approximation": "limited-memory",
+                        "ipopt.max_iter": max_iterations, "ipopt.tol": 1e-8,
+                        "ipopt.bound_relax_factor": 0.0})
+    sol = solver(x0=q0.ravel(), lbx=lbx.ravel(), ubx=ubx.ravel(), lbg=_MARGIN, ubg=np.inf)
+    stats = solver.stats()
+    status, iterations = str(stats["return_status"]), int(stats["iter_count"])
+    q1 = np.clip(np.array(sol["x"]).reshape(n, dof), lbx, ubx)
+    q1, stepped = step_back(q0, q1, lambda q: _admissible(feasibility, collision, q))
+    if stepped:
+        status += (f"; {stepped} pose(s) failing the re-check "
+                   f"({'constraints or clearance' if collision is not None else 'constraints'}) "
+                   f"stepped back toward the start")
+    m1 = np.array(info.map(n)(q1.T)).reshape(-1, n, p).sum(axis=1)
+    value = evaluate_criterion(criterion, m1, task)
+    accepted = bool(value > start_value)
+    if not accepted:
+        status += "; not kept: the criterion did not improve"
+    log.info("refinement: %s after %d iterations, %.6g → %.6g", status, iterations, start_value,
+             value)
+    return Refinement(q1 if accepted else q0, float(start_value),
+                      float(value if accepted else start_value), accepted, status, iterations,
+                      time.perf_counter() - t0, stepped)

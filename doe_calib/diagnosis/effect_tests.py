@@ -1,0 +1,175 @@
+"""Which missing effect explains the residual: score (F) tests on projected columns.
+
+For a fitted model with weighted residual ``r`` and weighted Jacobian ``J``
+(free parameters), a candidate effect adds columns ``Z`` (its parameters'
+Jacobian at zero, i.e. at the current model). What the current parameters
+can already absorb is removed first: ``Z⊥ = (I − Q Qᵀ) Z`` with ``Q`` an
+orthonormal basis of ``J``. The part of ``r`` in the span of ``Z⊥``,
+``ΔSS = ‖U⊥ᵀ r‖²``, is what adding the effect would remove to first order
+(the Lagrange-multiplier/score statistic), and
+
+``F = (ΔSS / q) / ((‖r‖² − ΔSS) / (3K − rank J − q))  ~  F(q, 3K − rank J − q)``
+
+under "the effect is absent", with ``q`` the rank of ``Z⊥``. The F form
+does not depend on σ being right. p-values are Bonferroni-adjusted over
+all candidates tried, so a correct model is rarely sent looking; candidates
+are ordered by ``log10 p`` (which does not underflow).
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy import stats
+
+from doe_calib.errors import ModelError
+from doe_calib.estimation.weighted_residuals import weighted_residual
+from doe_calib.model.effects import REGISTRY, joint_index
+from doe_calib.model.marker_model import build_model
+
+
+@dataclass(frozen=True)
+class CandidateTest:
+    """One candidate effect's test against the current residual."""
+
+    effect: str
+    spec: str
+    joint: int | None
+    n_parameters: int
+    rank: int
+    statistic: float
+    p_value: float
+    p_value_raw: float
+    explained_fraction: float
+    absorbed_fraction: float
+    log10_p: float
+    cv_rms_mm: float | None = None
+    fitted: tuple = ()
+    implausible: str = ""
+
+    def with_cv(self, cv_rms_mm: float, fitted: tuple = (),
+                implausible: str = "") -> "CandidateTest":
+        """This test with its cross-validated RMS (mm) and, fitted on all data, its
+        parameters (dicts of name, value, std, unit, free; display units) and a note
+        when a value is physically implausible."""
+        return replace(self, cv_rms_mm=cv_rms_mm, fitted=tuple(fitted), implausible=implausible)
+
+    def to_dict(self) -> dict:
+        return {"effect": self.effect, "spec": self.spec, "joint": self.joint,
+                "n_parameters": self.n_parameters, "rank": self.rank,
+                "statistic": self.statistic, "p_value": self.p_value,
+                "p_value_raw": self.p_value_raw, "explained_fraction": self.explained_fraction,
+                "absorbed_fraction": self.absorbed_fraction, "log10_p": self.log10_p,
+                "cv_rms_mm": self.cv_rms_mm, "fitted": list(self.fitted),
+                "implausible": self.implausible}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "CandidateTest":
+        fields = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
+        fields["fitted"] = tuple(fields.get("fitted", ()))
+        return cls(**fields)
+
+
+def candidate_effects(model, configurations=None) -> list:
+    """Every catalogue effect instance not yet in ``model`` (one per joint where it applies).
+
+    Effects with several shapes give one candidate per shape;
+    ``configurations`` (the measured ones) place data-dependent shapes.
+    """
+    robot = model.robot
+    present = {(e.name, None if e.joint is None else joint_index(robot, e.joint))
+               for e in model.effects}
+    out = []
+    for cls in REGISTRY.values():
+        for e in cls.candidates(robot, configurations):
+            j = None if e.joint is None else joint_index(robot, e.joint)
+            if (e.name, j) not in present and (e.name, None) not in present:
+                out.append(e)
+    return out
+
+
+def augmented(model, params, effect):
+    """(model + effect, its parameter set: current values and free flags, new ones free at 0)."""
+    big = build_model(model.robot, model.tool, tuple(model.effects) + (effect,))
+    start = big.nominal()
+    values = start.values.copy()
+    free = start.free.copy()
+    reasons = list(start.fixed_reason)
+    for i, name in enumerate(params.names):
+        k = start.names.index(name)
+        values[k], free[k], reasons[k] = params.values[i], params.free[i], params.fixed_reason[i]
+    return big, replace(start, values=values, free=free, fixed_reason=tuple(reasons))
+
+
+def fitted_basis(model, measurements, params):
+    """Weighted residual r (3K,) of the fit and an orthonormal basis Q of its free Jacobian."""
+    r, jac = weighted_residual(model, measurements, params.values)
+    return r, _basis(jac[:, params.free])
+
+
+def projected_columns(model, measurements, params, effect, q_basis):
+    """The candidate's weighted columns Z (3K, q) and Z⊥ = (I − QQᵀ)Z, what the fitted
+    model (orthonormal basis ``q_basis`` of its free Jacobian) cannot already absorb."""
+    big, bp = augmented(model, params, effect)
+    _, z = weighted_residual(big, measurements, bp.values)
+    z = z[:, ~np.isin(bp.names, params.names)]
+    return z, z - q_basis @ (q_basis.T @ z)
+
+
+def _basis(jac: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    u, s, _ = np.linalg.svd(jac, full_matrices=False)
+    return u[:, s > tol * (s[0] if s.size else 1.0)]
+
+
+def test_candidates(model, measurements, params, effects=None) -> list[CandidateTest]:
+    """Score/F test of every candidate effect against the residual of ``params``.
+
+    Parameters
+    ----------
+    model : Model
+        The fitted model.
+    measurements : Measurements
+    params : ParameterSet
+        The fitted values and free flags.
+    effects : list of Effect, optional
+        Candidates; default :func:`candidate_effects`.
+
+    Returns
+    -------
+    list of CandidateTest, strongest evidence (smallest p, as log10) first.
+    """
+    effects = candidate_effects(model, measurements.configurations) if effects is None \
+        else effects
+    r, q_basis = fitted_basis(model, measurements, params)
+    rank_j = q_basis.shape[1]
+    ss = float(r @ r)
+    raw = []
+    for e in effects:
+        try:
+            z, zp = projected_columns(model, measurements, params, e, q_basis)
+        except (ModelError, ValueError):
+            continue
+        norm2 = float((z ** 2).sum())
+        absorbed = 1.0 - float((zp ** 2).sum()) / norm2 if norm2 > 0 else 1.0
+        scale = np.sqrt(max(norm2, 1e-300) / max(z.shape[1], 1))
+        u, s, _ = np.linalg.svd(zp, full_matrices=False)
+        keep = s > 1e-6 * scale
+        q = int(keep.sum())
+        dof = len(r) - rank_j - q
+        if q == 0 or dof <= 0:
+            raw.append((e, z.shape[1], 0, 0.0, 0.0, 0.0, absorbed))
+            continue
+        dss = float(((u[:, keep].T @ r) ** 2).sum())
+        f = (dss / q) / max((ss - dss) / dof, 1e-300)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            log_p = float(stats.f.logsf(f, q, dof))
+        raw.append((e, z.shape[1], q, f, log_p, dss / ss if ss > 0 else 0.0, absorbed))
+    n = max(len(raw), 1)
+    out = [CandidateTest(e.name, e.spec(),
+                         None if e.joint is None else joint_index(model.robot, e.joint) + 1,
+                         npar, q, float(f), float(min(1.0, np.exp(log_p) * n)),
+                         float(np.exp(log_p)), frac, absorbed, log_p / np.log(10))
+           for e, npar, q, f, log_p, frac, absorbed in raw]
+    return sorted(out, key=lambda c: (c.log10_p, -c.statistic))

@@ -1,0 +1,2 @@
+"""Estimation: the estimators (point, two-step, pose), identifiability, covariance,
+plausibility, prediction and the identification result."""

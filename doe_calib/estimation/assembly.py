@@ -1,0 +1,64 @@
+"""What every estimator does last: the covariance σ²(BᵀWB)⁻¹, σ̂ and the residual
+statistics, assembled into an :class:`~doe_calib.estimation.result.IdentificationResult`.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from doe_calib.estimation.covariance import covariance_from_r_factor
+from doe_calib.estimation.result import IdentificationResult
+from doe_calib.estimation.weighted_residuals import reduce_jacobian
+from doe_calib.model.evaluation import marker_positions
+
+
+def residual_statistics(model, measurements, values) -> dict:
+    """Residual RMS (per coordinate) and max 3-D error, overall, per marker and per pose, mm."""
+    x = marker_positions(model, values, measurements.configurations)
+    e = (measurements.xyz - x[measurements.config, measurements.marker]) * 1000.0
+    sq, d = np.sum(e ** 2, axis=1), np.linalg.norm(e, axis=1)
+
+    def stats(groups, names):
+        n = np.bincount(groups, minlength=len(names))
+        ss = np.bincount(groups, sq, minlength=len(names))
+        worst = np.full(len(names), -np.inf)
+        np.maximum.at(worst, groups, d)
+        return {name: {"rms_mm": float(np.sqrt(ss[k] / (3 * n[k]))),
+                       "max_3d_mm": float(worst[k]), "n": int(n[k])}
+                for k, name in enumerate(names) if n[k]}
+
+    out = stats(np.zeros(len(d), int), ["all"])["all"]
+    out["per_marker"] = stats(measurements.marker, list(model.tool.names))
+    pose_names, pose_of_config = np.unique(np.asarray(measurements.configurations.pose, object),
+                                           return_inverse=True)
+    first = {}  # poses in order of first reading, as in the file
+    for p in np.asarray(pose_names)[pose_of_config[measurements.config]]:
+        first.setdefault(p, None)
+    per_pose = stats(pose_of_config[measurements.config], list(pose_names))
+    out["per_pose"] = {p: per_pose[p] for p in first}
+    return out
+
+
+def finish(model, measurements, params, estimator, convergence, notes, covariance=None,
+           norm2=None):
+    """Assemble the result: covariance σ²(BᵀWB)⁻¹, σ̂, residual statistics.
+
+    ``covariance`` (of the free parameters, SI) and ``norm2`` (‖r‖² at
+    ``params``) are computed here, a block of readings at a time, unless given.
+    """
+    n_free = int(params.free.sum())
+    if covariance is None or norm2 is None:
+        red = reduce_jacobian(model, measurements, params.values, params.free)
+        covariance = covariance_from_r_factor(red.r_factor) if covariance is None else covariance
+        norm2 = red.norm2 if norm2 is None else norm2
+    n_obs = 3 * len(measurements)
+    dof = n_obs - n_free
+    ratio = float(np.sqrt(norm2 / dof)) if dof > 0 else float("nan")
+    sigma_mm = float(np.median(measurements.sigma) * 1000.0)
+    estimated = bool(measurements.sigma_estimated and np.isfinite(ratio))
+    if estimated:  # σ unknown: σ̂ becomes σ and scales the covariance (statsmodels' scale)
+        covariance, sigma_mm, ratio = covariance * ratio ** 2, sigma_mm * ratio, 1.0
+        notes = [f"σ estimated from the residuals: {sigma_mm:.3g} mm"] + list(notes)
+    return IdentificationResult(
+        model.robot, model.tool, model.spec, estimator, params, covariance, ratio,
+        residual_statistics(model, measurements, params.values), convergence, n_obs,
+        sigma_mm, tuple(notes), estimated)

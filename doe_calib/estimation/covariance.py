@@ -1,0 +1,112 @@
+"""Covariance prediction without data: σ²(BᵀB)⁻¹ for planned configurations,
+and the covariance of any marker or tool point it implies.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from doe_calib.model.evaluation import evaluate, observation_matrix
+
+
+@dataclass(frozen=True, eq=False)
+class CovariancePrediction:
+    """Predicted parameter covariance for a set of configurations.
+
+    Attributes
+    ----------
+    parameters : ParameterSet
+        The values the prediction was made at, and which are free.
+    covariance : ndarray, shape (F, F)
+        Covariance of the free parameters, SI.
+    information : ndarray, shape (F, F)
+        The information matrix BᵀWB it inverts (SI, per σ²).
+    """
+
+    parameters: object
+    covariance: np.ndarray
+    information: np.ndarray
+
+    def std(self) -> np.ndarray:
+        """Standard deviation of every parameter (SI), 0 for fixed ones."""
+        out = np.zeros(len(self.parameters))
+        out[self.parameters.free] = np.sqrt(np.clip(np.diag(self.covariance), 0, None))
+        return out
+
+    def summary(self) -> str:
+        lines = [f"{'parameter':<22}{'predicted std':>16}  unit"]
+        for p, s, f in zip(self.parameters.parameters, self.std(), self.parameters.free):
+            if f:
+                lines.append(f"{p.name:<22}{s * p.display_factor:16.4g}  {p.display_unit}")
+        return "\n".join(lines)
+
+
+def information_matrix(model, params, configurations, sigma: float, markers=None) -> np.ndarray:
+    """BᵀB/σ² over every configuration and marker, free parameters only, shape (F, F).
+
+    Parameters
+    ----------
+    sigma : float
+        Standard deviation of each measured coordinate, metres.
+    markers : sequence of str, optional
+        Markers read at each configuration (default all).
+    """
+    _, b = observation_matrix(model, params.values, configurations)
+    if markers is not None:
+        b = b[:, [model.tool.index(n) for n in markers]]
+    b = b[..., params.free].reshape(-1, int(params.free.sum())) / sigma
+    return b.T @ b
+
+
+def predict_covariance(model, params, configurations, sigma: float,
+                       markers=None) -> CovariancePrediction:
+    """Predicted covariance σ²(BᵀB)⁻¹ of the free parameters for planned configurations.
+
+    Parameters
+    ----------
+    model : Model
+    params : ParameterSet
+        Expected values (nominal, or a previous result) and free flags.
+    configurations : Configurations
+        Planned poses with their load cases.
+    sigma : float
+        Tracker noise per coordinate, metres.
+    """
+    info = information_matrix(model, params, configurations, sigma, markers)
+    return CovariancePrediction(params, np.linalg.pinv(info), info)
+
+
+def point_covariance(model, params, covariance, configurations, point=(0.0, 0.0, 0.0),
+                     frame: str = "robot") -> np.ndarray:
+    """Covariance (m²) of a point fixed in the flange frame at each configuration.
+
+    Parameters
+    ----------
+    covariance : ndarray, shape (F, F)
+        Covariance of the free parameters (a prediction or a result).
+    point : array_like, shape (3,)
+        The point in the flange frame (TCP or a marker), metres.
+    frame : {"robot", "tracker"}
+        ``robot``: position in the robot base frame, what a robot program
+        sees; ``tracker``: in the tracker frame, with base uncertainty.
+
+    Returns
+    -------
+    ndarray, shape (M, 3, 3)
+    """
+    f = model.point_robot if frame == "robot" else model.point
+    _, jac = evaluate(f, configurations, params.values, np.asarray(point, float))
+    jf = jac[..., params.free]
+    return np.einsum("mip,pq,mjq->mij", jf, covariance, jf)
+
+
+def covariance_from_r_factor(r_factor, scale=None) -> np.ndarray:
+    """(JᵀJ)⁺ from the triangular factor R (RᵀR = JᵀJ) of a Jacobian.
+
+    ``scale`` (the column scaling the Jacobian was taken with) maps the result
+    back to unscaled units: Cov = diag(s) (RᵀR)⁺ diag(s).
+    """
+    r_inv = np.linalg.pinv(r_factor)
+    cov = r_inv @ r_inv.T
+    return cov if scale is None else cov * np.outer(scale, scale)

@@ -1,0 +1,84 @@
+"""``identify``: the model's parameters from marker readings, by any of the estimators.
+
+``point`` (all marker coordinates, the method of this toolkit), ``two-step``
+(the paper's alternation) and ``pose`` (full poses from the markers, only to
+compare); every result ends with the plausibility findings.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+from doe_calib.errors import PlausibilityWarning
+from doe_calib.estimation import plausibility
+from doe_calib.estimation.point_estimator import identify_point
+from doe_calib.estimation.pose_estimator import identify_pose
+from doe_calib.estimation.two_step import identify_two_step
+from doe_calib.model.marker_model import for_workload
+
+ESTIMATORS = ("point", "two-step", "pose")
+#: Passes over every configuration a typical fit makes (start, Jacobians, trial
+#: steps, result): what :func:`~doe_calib.model.marker_model.for_workload` is told.
+_PASSES = 10
+
+
+def identify(model, measurements, params=None, estimator: str = "point", progress=None,
+             **options):
+    """Identify the model's parameters from marker readings.
+
+    Parameters
+    ----------
+    model : Model
+        From :func:`~doe_calib.model.marker_model.build_model`.
+    measurements : Measurements
+        Readings (SI) with their σ.
+    params : ParameterSet, optional
+        Start values and which parameters are free (fix any by name or block
+        with ``ParameterSet.fixed``); default: nominal, all free.
+    estimator : {"point", "two-step", "pose"}
+        ``point``: all marker coordinates, Levenberg–Marquardt (default).
+        ``two-step``: the paper's alternation of base+markers and robot
+        parameters. ``pose``: full poses reconstructed from the markers, only
+        for comparison (``normalisation`` option, m/rad).
+    progress : callable(stage, note), optional
+        Told of long steps (compiling the model, each iteration of ``point``).
+
+    Returns
+    -------
+    IdentificationResult
+        Its ``warnings`` end with the plausibility findings (σ̂/σ far from 1,
+        units, placement errors as large as a link, collinear markers). When
+        ``measurements.sigma_estimated``, σ is estimated from the residuals:
+        ``sigma_mm`` is σ̂, the covariance is scaled to it, and the result says so.
+    """
+    model = for_workload(model, _PASSES * len(measurements.configurations), progress)
+    if estimator == "point":
+        result = identify_point(model, measurements, params, progress=progress, **options)
+    elif estimator == "two-step":
+        result = identify_two_step(model, measurements, params, **options)
+    elif estimator == "pose":
+        result = identify_pose(model, measurements, params, **options)
+    else:
+        raise ValueError(f"unknown estimator {estimator!r}; choose one of "
+                         f"{', '.join(ESTIMATORS)}")
+    return with_plausibility(model, measurements, result)
+
+
+def with_plausibility(model, measurements, result):
+    """``result`` with the :mod:`~doe_calib.estimation.plausibility` findings added to its warnings,
+    each also issued as a :class:`~doe_calib.errors.PlausibilityWarning`."""
+    findings = plausibility.check(model, measurements, result)
+    for f in findings:
+        warnings.warn(f, PlausibilityWarning, stacklevel=3)
+    return replace(result, warnings=result.warnings + findings) if findings else result
+
+
+def identify_quietly(model, measurements, params=None, **options):
+    """:func:`identify` for fits run many times (cross-validation, diagnosis, refinement).
+
+    Identifiability, conditioning and convergence trouble is not issued as
+    warnings: it stays, in words, in the result's ``warnings``.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return identify(model, measurements, params, **options)

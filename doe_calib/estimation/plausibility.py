@@ -1,0 +1,159 @@
+"""Plausibility checks after a fit: findings in words, never a failure.
+
+Each check looks for a typical mistake that a fit hides rather than reveals:
+a wrong σ, coordinates in metres or joint angles in radians, a placement
+error as large as a link, a marker layout that cannot fix the orientation.
+:func:`check` runs them all and returns what it found, one sentence each; the
+identification stores them in the result's ``warnings``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+#: σ̂/σ outside [low, high] is reported.
+SIGMA_RATIO_RANGE = (0.3, 3.0)
+#: Coordinates all below this (mm) on a robot reaching farther than REACH_FOR_UNITS (mm)
+#: were written in metres.
+METRES_LIMIT_MM = 5.0
+REACH_FOR_UNITS_MM = 100.0
+#: A placement error above this share of its link's length, and above FLOOR_MM, or above
+#: PLACEMENT_MM, is reported.
+PLACEMENT_SHARE, PLACEMENT_FLOOR_MM, PLACEMENT_MM = 0.2, 5.0, 50.0
+#: With σ estimated, a σ̂ above this (mm) is a bad fit for a laser tracker.
+BAD_SIGMA_HAT_MM = 1.0
+#: Condition number of the centred marker layout above which it is nearly collinear.
+MARKER_CONDITION_WARN = 20.0
+
+
+def robot_reach(robot) -> float:
+    """Sum of the link lengths from the base to the flange, metres (an upper bound on reach)."""
+    lengths = [np.linalg.norm(j.placement_matrix[:3, 3]) for j in robot.joints]
+    flange = np.array(robot.flange_placement, float).reshape(4, 4)[:3, 3]
+    return float(sum(lengths) + np.linalg.norm(flange))
+
+
+def xyz_in_metres(xyz, robot) -> str | None:
+    """A finding when every coordinate (m, as read from mm) is tiny for the robot's reach.
+
+    Parameters
+    ----------
+    xyz : ndarray, shape (K, 3)
+        Readings in metres (the file's mm / 1000); NaN ignored.
+    robot : Robot
+    """
+    xyz = np.asarray(xyz, float)
+    finite = xyz[np.isfinite(xyz)]
+    if finite.size == 0 or robot_reach(robot) * 1000.0 < REACH_FOR_UNITS_MM:
+        return None
+    if np.abs(finite).max() * 1000.0 < METRES_LIMIT_MM:
+        return (f"x, y, z look like metres (all within ±{METRES_LIMIT_MM:g} mm while the robot "
+                f"reaches about {robot_reach(robot) * 1000.0:.0f} mm); the file must be in mm")
+    return None
+
+
+def angles_in_radians(configurations, robot) -> str | None:
+    """A finding when every revolute joint reading is within ±π·1.05 *degrees* of zero
+    while the limits are much wider: the file was written in radians."""
+    revolute = [k for k, j in enumerate(robot.joints) if j.kind == "revolute"]
+    if not revolute:
+        return None
+    shown = np.degrees(np.abs(configurations.q[:, revolute]))
+    span = np.degrees([robot.joints[k].upper - robot.joints[k].lower for k in revolute])
+    if shown.max() <= np.pi * 1.05 and np.max(np.minimum(span, 1e6)) > 20 * np.pi:
+        return ("joint angles look like radians (every revolute joint within ±3.3 deg while the "
+                "limits span far more); the file must be in degrees")
+    return None
+
+
+def sigma_ratio_finding(ratio: float, sigma_mm: float) -> str | None:
+    """A finding when σ̂/σ is far from 1."""
+    low, high = SIGMA_RATIO_RANGE
+    if not np.isfinite(ratio) or low <= ratio <= high:
+        return None
+    side = "small" if ratio > high else "large"
+    return (f"σ̂/σ = {ratio:.3g} (σ̂ = {ratio * sigma_mm:.3g} mm for σ = {sigma_mm:g} mm) is far "
+            f"from 1: the σ given is too {side}, a unit mistake, or a missing effect "
+            f"(run doe-calib diagnose)")
+
+
+def placement_findings(params, robot) -> list[str]:
+    """Findings for geometry translations ``g_<frame>_t{x,y,z}`` comparable to their link."""
+    from doe_calib.model.effects.geometry import frame_names
+
+    frames = frame_names(robot)
+    flange = np.array(robot.flange_placement, float).reshape(4, 4)[:3, 3]
+    lengths = [np.linalg.norm(j.placement_matrix[:3, 3]) for j in robot.joints] + \
+        [np.linalg.norm(flange)]
+    out = []
+    for f, length in zip(frames, lengths):
+        names = [f"g_{f}_t{a}" for a in "xyz"]
+        if not all(n in params.names for n in names):
+            continue
+        idx = params.index(names)
+        error = float(np.linalg.norm(params.values[idx] - params.nominal_values[idx]))
+        threshold = min(PLACEMENT_MM, max(PLACEMENT_SHARE * length * 1000.0, PLACEMENT_FLOOR_MM))
+        if error * 1000.0 > threshold:
+            where = "the flange" if f == "flange" else f"joint {f}"
+            out.append(f"the identified placement error of {where} is {error * 1000.0:.3g} mm "
+                       f"for a link of {length * 1000.0:.4g} mm: "
+                       f"implausibly large; check the URDF, the joint zero positions and the "
+                       f"data's units")
+    return out
+
+
+def marker_condition(positions) -> float:
+    """Condition number σ₁/σ₂ of the centred marker positions (inf: collinear or coincident).
+
+    Examples
+    --------
+    >>> marker_condition([[0, 0, 0], [1, 0, 0], [0, 1, 0]]) < 3
+    True
+    """
+    p = np.asarray(positions, float)
+    s = np.linalg.svd(p - p.mean(axis=0), compute_uv=False)
+    if s[0] <= 1e-9 or s[1] <= 1e-9 * max(s[0], 1.0):
+        return float("inf")
+    return float(s[0] / s[1])
+
+
+def marker_layout_finding(tool) -> str | None:
+    """A finding when the markers are nearly collinear (orientation about their line is weak)."""
+    cond = marker_condition(tool.position_array)
+    if cond > MARKER_CONDITION_WARN:
+        return (f"the markers of {tool.source or 'the tool'} are nearly collinear (condition "
+                f"number of their centred positions {cond:.3g}): the rotation about their line "
+                f"is poorly fixed; spread them out")
+    return None
+
+
+def check(model, measurements, result) -> tuple:
+    """Every plausibility finding for ``result`` fitted to ``measurements``, in words.
+
+    Parameters
+    ----------
+    model : Model
+    measurements : Measurements
+    result : IdentificationResult
+
+    Returns
+    -------
+    tuple of str
+        Empty when nothing looks wrong.
+    """
+    robot = model.robot
+    found = []
+    sigma_hat_mm = result.sigma_ratio * result.sigma_mm
+    if not measurements.sigma_estimated:
+        found.append(sigma_ratio_finding(result.sigma_ratio, result.sigma_mm))
+    elif sigma_hat_mm > BAD_SIGMA_HAT_MM:
+        found.append(f"σ estimated from the residuals is {sigma_hat_mm:.3g} mm, far more than a "
+                     f"laser tracker's noise: a unit mistake or a missing effect "
+                     f"(run doe-calib diagnose)")
+    found.append(xyz_in_metres(measurements.xyz, robot))
+    bad_fit = result.sigma_ratio > SIGMA_RATIO_RANGE[1] or \
+        (measurements.sigma_estimated and sigma_hat_mm > BAD_SIGMA_HAT_MM)
+    if bad_fit:
+        found.append(angles_in_radians(measurements.configurations, robot))
+    found += placement_findings(result.parameters, robot)
+    found.append(marker_layout_finding(model.tool))
+    return tuple(f for f in found if f)

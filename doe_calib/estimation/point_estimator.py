@@ -1,0 +1,71 @@
+"""The ``point`` estimator: Levenberg–Marquardt on all 3·m·n marker coordinates.
+
+The weighted residuals and their Jacobian
+(:mod:`doe_calib.estimation.weighted_residuals`) are taken a block of
+configurations at a time and kept only as their QR factor
+(:mod:`doe_calib.estimation.least_squares`), so memory does not grow with the
+number of readings.
+"""
+from __future__ import annotations
+
+import logging
+import warnings
+
+import numpy as np
+
+from doe_calib.errors import ConvergenceWarning, SolverError
+from doe_calib.estimation.assembly import finish
+from doe_calib.estimation.covariance import covariance_from_r_factor
+from doe_calib.estimation.least_squares import levenberg_marquardt
+from doe_calib.estimation.preparation import prepare
+from doe_calib.estimation.result import IdentificationResult
+from doe_calib.estimation.weighted_residuals import reduce_jacobian, residual_norm2
+
+log = logging.getLogger(__name__)
+
+
+def identify_point(model, measurements, params=None, max_iterations: int = 200,
+                   register: bool = True, progress=None) -> IdentificationResult:
+    """Levenberg–Marquardt on all marker coordinates (the paper's approach #2).
+
+    Parameters
+    ----------
+    model : Model
+    measurements : Measurements
+    params : ParameterSet, optional
+        Start values and free/fixed flags; default nominal, all free.
+    max_iterations : int
+        Jacobian evaluations allowed.
+    register : bool
+        Start the base pose from a point-set registration.
+    progress : callable(stage, note), optional
+        Told of each iteration (weighted RMS of the residuals).
+    """
+    params, notes = prepare(model, measurements, params, register)
+    free = params.free
+    scale = params.scales[free]
+    n_obs = 3 * len(measurements)
+
+    def values(x):
+        return params.with_free_values(x).values
+
+    sol = levenberg_marquardt(
+        lambda x: residual_norm2(model, measurements, values(x)),
+        lambda x: reduce_jacobian(model, measurements, values(x), free, scale),
+        params.free_values(), scale, max_iterations=max_iterations,
+        progress=None if progress is None else lambda k, f: progress(
+            "Levenberg–Marquardt", f"iteration {k}, weighted RMS {np.sqrt(f / n_obs):.4g}"))
+    if not np.all(np.isfinite(sol.x)):
+        raise SolverError("the identification diverged (non-finite parameters); check the "
+                          "tool file and the units of the measurement file")
+    if not sol.converged:
+        msg = f"Levenberg–Marquardt stopped before converging: {sol.message}"
+        warnings.warn(msg, ConvergenceWarning, stacklevel=2)
+        notes.append(msg)
+    log.info("point estimator: %d Jacobian and %d residual passes, status %d", sol.iterations,
+             sol.evaluations, sol.status)
+    convergence = {"converged": sol.converged, "iterations": sol.iterations,
+                   "evaluations": sol.evaluations, "status": sol.status,
+                   "message": f"Levenberg–Marquardt: {sol.message}", "residual_norm2": sol.norm2}
+    return finish(model, measurements, params.with_free_values(sol.x), "point", convergence,
+                  notes, covariance_from_r_factor(sol.reduction.r_factor, scale), sol.norm2)

@@ -1,0 +1,89 @@
+"""What every estimator does first: start values, base registration, the rank analysis.
+
+The base pose starts from a point-set registration of all readings; the
+parameters the data cannot separate are fixed (at their current values) with
+the reason in words.
+"""
+from __future__ import annotations
+
+import warnings
+
+from doe_calib.errors import ConditioningWarning, DataError, IdentifiabilityWarning
+from doe_calib.estimation.identifiability import analyse
+from doe_calib.estimation.registration import register
+from doe_calib.estimation.weighted_residuals import reduce_jacobian
+from doe_calib.model.evaluation import marker_positions
+from doe_calib.model.rotations import matrix_to_rotation_vector
+
+#: Condition number of the observation matrix above which the fit warns.
+COND_WARN = 1e6
+
+
+def register_base(model, measurements, params):
+    """Start values of the base pose from a point-set registration of all readings.
+
+    The markers are placed with the current robot parameters (base at the
+    identity), then rotated and shifted onto the readings: any tracker
+    placement and any angle is found, no small-angle assumption.
+    """
+    base = params.index("base")
+    v = params.values.copy()
+    v[base] = 0.0
+    x = marker_positions(model, v, measurements.configurations)
+    robot_pts = x[measurements.config, measurements.marker]
+    rot, t = register(robot_pts, measurements.xyz, 1.0 / measurements.sigma ** 2)
+    v[base[:3]] = t
+    v[base[3:]] = matrix_to_rotation_vector(rot)
+    return params.with_values(v)
+
+
+def _fixed_sentence(params, names) -> str:
+    """One sentence: how many parameters were fixed as not separable, counted by block."""
+    blocks = [params.parameters[i].block for i in params.index(names)]
+    by_block = ", ".join(f"{blocks.count(b)} {b}" for b in dict.fromkeys(blocks))
+    return (f"{len(names)} parameters fixed as not separable by these data ({by_block}); "
+            f"the reason for each is in the result (the result JSON's \"fixed\" list; "
+            f"doe-calib identify --verbose prints them)")
+
+
+def fix_unidentifiable(model, measurements, params, tol: float = 1e-7):
+    """Fix (at their current values) the free parameters the data cannot separate.
+
+    Returns the new parameter set and the warnings issued, in words.
+    """
+    red = reduce_jacobian(model, measurements, params.values)
+    ident = analyse(red.r_factor, params, tol=tol)  # RᵀR = JᵀJ: same columns' geometry
+    notes = []
+    if ident.dependent:
+        names = [n for n, _ in ident.dependent]
+        for name, why in ident.dependent:
+            params = params.fixed([name], why + "; fixed at its current value")
+        warnings.warn(_fixed_sentence(params, names), IdentifiabilityWarning, stacklevel=3)
+        notes.append(f"{len(names)} parameters fixed as not identifiable (see the fixed list)")
+    if ident.condition_number > COND_WARN:
+        msg = (f"the observation matrix is poorly conditioned (condition number "
+               f"{ident.condition_number:.2g}); the weakest combination involves "
+               f"{', '.join(ident.weakest)}: these will have large standard deviations")
+        warnings.warn(msg, ConditioningWarning, stacklevel=3)
+        notes.append(msg)
+    return params, notes
+
+
+def check_counts(measurements, params):
+    """Raise a DataError when there are fewer observations than unknowns."""
+    n_free = int(params.free.sum())
+    if measurements.n_coordinates < n_free:
+        raise DataError(f"{measurements.n_coordinates} observed coordinates for {n_free} unknown "
+                        f"parameters: measure more poses or markers, or use a smaller model",
+                        measurements.source or "<measurements>")
+
+
+def prepare(model, measurements, params=None, register: bool = True):
+    """Common start of every estimator: start values, base registration, rank analysis."""
+    params = model.nominal() if params is None else params
+    if len(measurements) == 0:
+        raise DataError("no readings to identify from", measurements.source or "<measurements>")
+    if register and params.free[params.index("base")].all():
+        params = register_base(model, measurements, params)
+    check_counts(measurements, params)
+    return fix_unidentifiable(model, measurements, params)

@@ -1,0 +1,94 @@
+"""Weighted residuals of marker readings and their Jacobian, whole or block by block.
+
+The weighted residual of reading k (configuration c, marker j) is
+``r_k = (y_k − x_cj(p)) / σ_k``; its Jacobian is ``−B_cj / σ_k`` with ``B`` the
+model's observation matrix (CasADi, never finite differences).
+:func:`weighted_residual` returns them whole (3K × P);
+:func:`reduce_jacobian` and :func:`residual_norm2` go through the
+configurations a block at a time, so memory holds one block of B, whatever
+the number of readings.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from doe_calib.estimation.least_squares import Reduction, reduce_blocks
+from doe_calib.model.evaluation import marker_positions, observation_matrix
+
+#: Configurations evaluated at once by the blockwise functions.
+BLOCK_CONFIGURATIONS = 2048
+
+
+def weighted_residual(model, measurements, values, jacobian: bool = True):
+    """Weighted residuals r (3K,) and, if asked, ∂r/∂p (3K, P) for all P parameters."""
+    cfg = measurements.configurations
+    if jacobian:
+        x, b = observation_matrix(model, values, cfg)
+    else:
+        x, b = marker_positions(model, values, cfg), None
+    c, j, s = measurements.config, measurements.marker, measurements.sigma[:, None]
+    r = ((measurements.xyz - x[c, j]) / s).ravel()
+    if not jacobian:
+        return r, None
+    jac = -(b[c, j] / s[:, :, None]).reshape(3 * len(measurements), -1)
+    return r, jac
+
+
+def _blocks(measurements, size: int):
+    """(configurations of the block, their readings' rows, local config index) per block."""
+    order = np.argsort(measurements.config, kind="stable")
+    sorted_config = measurements.config[order]
+    n = len(measurements.configurations)
+    for c0 in range(0, n, size):
+        c1 = min(c0 + size, n)
+        lo, hi = np.searchsorted(sorted_config, [c0, c1])
+        rows = order[lo:hi]
+        yield (measurements.configurations.subset(np.arange(c0, c1)), rows,
+               measurements.config[rows] - c0)
+
+
+def residual_norm2(model, measurements, values, block: int = BLOCK_CONFIGURATIONS) -> float:
+    """‖r‖², the weighted residuals' sum of squares, one block of configurations at a time."""
+    total = 0.0
+    for cfg, rows, c in _blocks(measurements, block):
+        x = marker_positions(model, values, cfg)
+        r = (measurements.xyz[rows] - x[c, measurements.marker[rows]]) / \
+            measurements.sigma[rows, None]
+        total += float(np.sum(r * r))
+    return total
+
+
+def reduce_jacobian(model, measurements, values, columns=None, scale=None,
+                    block: int = BLOCK_CONFIGURATIONS) -> Reduction:
+    """QR factor of ``[∂r/∂p[:, columns]·diag(scale) | r]``, one block of configurations at a time.
+
+    Parameters
+    ----------
+    model : Model
+    measurements : Measurements
+    values : ndarray, shape (P,)
+        Parameter values, SI.
+    columns : array of int or bool, optional
+        Parameters to differentiate for; default all.
+    scale : ndarray, optional
+        Column scale (one per selected column); default 1.
+
+    Returns
+    -------
+    Reduction
+        ``RᵀR = JᵀJ`` for the selected, scaled columns; ``z = Qᵀr``; ``‖r‖²``.
+    """
+    columns = np.arange(len(values)) if columns is None else np.asarray(columns)
+    if columns.dtype == bool:
+        columns = np.flatnonzero(columns)
+    scale = np.ones(len(columns)) if scale is None else np.asarray(scale, float)
+
+    def blocks():
+        for cfg, rows, c in _blocks(measurements, block):
+            x, b = observation_matrix(model, values, cfg)
+            j, s = measurements.marker[rows], measurements.sigma[rows, None]
+            r = ((measurements.xyz[rows] - x[c, j]) / s).ravel()
+            jac = -(b[c, j][:, :, columns] * (scale / s[:, :, None])).reshape(r.size, -1)
+            yield jac, r
+
+    return reduce_blocks(blocks(), len(columns))

@@ -1,0 +1,16 @@
+"""Paths of the built-in example robots and tools shipped with the package."""
+from importlib.resources import files
+
+_DATA = files("doe_calib") / "examples"
+
+#: KR 270-class 6R heavy robot (datasheet figures), flange link ``tool0``.
+ROBOT_URDF = str(_DATA / "kr270.urdf")
+#: Three-marker tool for it (mm).
+TOOL_YAML = str(_DATA / "kr270_tool.yaml")
+#: The 3-DOF manipulator of eq. (21) of the seed paper, flange link ``flange``.
+THREE_DOF_URDF = str(_DATA / "three_dof.urdf")
+#: Three-marker plate for the 3-DOF robot (mm).
+THREE_DOF_TOOL_YAML = str(_DATA / "three_dof_tool.yaml")
+#: The KR 270 example cell: floor, pedestal keep-out, tracker line of sight, load torques,
+#: A2 coverage (the constraints ``doe-calib demo`` designs under).
+CELL_YAML = str(_DATA / "kr270_cell.yaml")

@@ -1,0 +1,257 @@
+"""A calibrated robot description: the identified geometry folded into the URDF.
+
+What a URDF can hold is folded into it exactly:
+
+* ``joint_offset`` and ``geometry``: the origin ``O_k`` of each chain joint
+  becomes ``O_k · E_k · X_k(dq_k)`` — the placement correction ``E_k`` the
+  model applies after the nominal placement, then the offset as a rotation
+  about (revolute) or translation along (prismatic) the joint axis, which
+  commutes with the joint's own motion;
+* the flange correction ``E_f`` on the last fixed joint to the flange link;
+* the base: a fixed joint from a new root link ``tracker`` to the URDF's root.
+
+Everything else (compliance, and any effect of the model that a URDF cannot
+hold) goes to a YAML file beside it, with the identified marker positions.
+"""
+from __future__ import annotations
+
+import warnings
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import yaml
+
+from doe_calib.errors import DataWarning, ModelError
+from doe_calib.model.effects.base import ChainSymbols, Effect
+from doe_calib.model.kinematics import joint_placement
+from doe_calib.model.rotations import rotation_vector_to_matrix
+
+#: Effects folded into the URDF (their values at zero load are rigid placements and offsets).
+FOLDED = ("joint_offset", "geometry")
+TRACKER_LINK = "tracker"
+
+
+def corrections(model) -> ca.Function:
+    """``corrections(p) -> (E_0 … E_N, dq)``: the folded effects' placements (4×4) and offsets (N).
+
+    ``E_k`` (k < N) follows joint k's nominal placement, ``E_N`` the flange's,
+    composed exactly as :mod:`doe_calib.model.kinematics` composes them.
+    """
+    robot, n = model.robot, model.robot.n_joints
+    p = ca.SX.sym("p", model.n_parameters)
+    by_name = {par.name: p[i] for i, par in enumerate(model.parameters)}
+    s = ChainSymbols(robot, ca.SX.sym("q", n), ca.SX.sym("env", 1 + n), by_name)
+    folded = [e for e in model.effects if e.name in FOLDED]
+    out = []
+    for k in range(n + 1):
+        rot, t = joint_placement(s, folded, k, np.eye(4))
+        out.append(ca.vertcat(ca.horzcat(rot, t), ca.DM([[0, 0, 0, 1]])))
+    dq = ca.SX.zeros(n)
+    for e in folded:
+        corr = e.joint_correction(s)
+        if corr is not None:
+            dq = dq + corr
+    return ca.Function("corrections", [p], out + [dq], ["p"],
+                       [f"E_{k}" for k in range(n + 1)] + ["dq"])
+
+
+def rpy_to_matrix(rpy) -> np.ndarray:
+    """URDF ``rpy`` (rad): ``Rz(yaw) Ry(pitch) Rx(roll)``."""
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def matrix_to_rpy(rot) -> np.ndarray:
+    """Inverse of :func:`rpy_to_matrix`, accurate to round-off also near pitch ±90°."""
+    rot = np.asarray(rot, float)
+    c = np.hypot(rot[0, 0], rot[1, 0])
+    pitch = np.arctan2(-rot[2, 0], c)
+    if c > 1e-12:
+        return np.array([np.arctan2(rot[2, 1], rot[2, 2]), pitch, np.arctan2(rot[1, 0], rot[0, 0])])
+    return np.array([0.0, pitch, np.arctan2(-rot[0, 1], rot[1, 1])])   # gimbal lock: roll 0
+
+
+def _origin(joint_el) -> np.ndarray:
+    o = joint_el.find("origin")
+    out = np.eye(4)
+    if o is not None:
+        out[:3, :3] = rpy_to_matrix([float(v) for v in o.get("rpy", "0 0 0").split()])
+        out[:3, 3] = [float(v) for v in o.get("xyz", "0 0 0").split()]
+    return out
+
+
+def _set_origin(joint_el, placement: np.ndarray) -> None:
+    o = joint_el.find("origin")
+    if o is None:
+        o = ET.Element("origin")
+        joint_el.insert(0, o)
+    o.set("xyz", " ".join(repr(float(v)) for v in placement[:3, 3]))
+    o.set("rpy", " ".join(repr(float(v)) for v in matrix_to_rpy(placement[:3, :3])))
+
+
+def _motion(joint, dq: float) -> np.ndarray:
+    axis = np.asarray(joint.axis, float)
+    out = np.eye(4)
+    if joint.kind == "revolute":
+        out[:3, :3] = rotation_vector_to_matrix(axis * dq)
+    else:
+        out[:3, 3] = axis * dq
+    return out
+
+
+def calibrated_urdf(model, parameters) -> tuple[ET.ElementTree, str]:
+    """The calibrated URDF tree and the name of its flange link.
+
+    Parameters
+    ----------
+    model : Model
+        The model of the result (its robot's ``source`` is the URDF read).
+    parameters : ParameterSet
+        Identified values (SI).
+
+    Raises
+    ------
+    ModelError
+        The original URDF cannot be read, misses a chain joint, or already
+        has a link named ``tracker``.
+    """
+    robot = model.robot
+    path = Path(robot.source)
+    if not path.is_file():
+        raise ModelError(f"the robot's URDF {robot.source!r} (named in the result) is not there: "
+                         f"the calibrated URDF is written from the original")
+    tree = ET.parse(path)
+    root = tree.getroot()
+    joints = {j.get("name"): j for j in root.findall("joint")}
+    links = {lk.get("name") for lk in root.findall("link")}
+    if TRACKER_LINK in links:
+        raise ModelError(f"{path}: already has a link named {TRACKER_LINK!r}")
+    out = corrections(model)(np.asarray(parameters.values, float))
+    e = [np.asarray(x) for x in out[:-1]]
+    dq = np.asarray(out[-1]).ravel()
+    for k, joint in enumerate(robot.joints):
+        if joint.name not in joints:
+            raise ModelError(f"{path}: no joint named {joint.name!r}")
+        el = joints[joint.name]
+        _set_origin(el, _origin(el) @ e[k] @ _motion(joint, dq[k]))
+    flange = _fold_flange(root, joints, robot, e[-1])
+    base = np.eye(4)
+    base[:3, :3] = rotation_vector_to_matrix(parameters.values[3:6])
+    base[:3, 3] = parameters.values[0:3]
+    children = {j.find("child").get("link") for j in joints.values()}
+    root_link = next(lk.get("name") for lk in root.findall("link")
+                     if lk.get("name") not in children)
+    root.insert(0, ET.Element("link", name=TRACKER_LINK))
+    fixed = ET.SubElement(root, "joint", name=f"{TRACKER_LINK}_to_{root_link}", type="fixed")
+    ET.SubElement(fixed, "parent", link=TRACKER_LINK)
+    ET.SubElement(fixed, "child", link=root_link)
+    _set_origin(fixed, base)
+    return tree, flange
+
+
+def _fold_flange(root, joints, robot, e_flange) -> str:
+    """Apply the flange correction on the last fixed joint to the flange link; its name."""
+    by_child = {j.find("child").get("link"): j for j in joints.values()}
+    last = joints[robot.joints[-1].name].find("child").get("link")
+    if robot.flange != last and robot.flange in by_child:
+        el = by_child[robot.flange]
+        _set_origin(el, _origin(el) @ e_flange)
+        return robot.flange
+    # The flange is the last joint's own link: hang a calibrated flange link from it.
+    name = f"{robot.flange}_calibrated"
+    root.append(ET.Element("link", name=name))
+    fixed = ET.SubElement(root, "joint", name=f"{name}_joint", type="fixed")
+    ET.SubElement(fixed, "parent", link=robot.flange)
+    ET.SubElement(fixed, "child", link=name)
+    _set_origin(fixed, e_flange)
+    return name
+
+
+def pinocchio_configuration(pin_model, robot, q) -> np.ndarray:
+    """Pinocchio's configuration vector for the chain's joint values ``q`` (N,), rad/m.
+
+    Joints off the chain stay neutral; a continuous joint is (cos q, sin q).
+    """
+    import pinocchio as pin
+
+    out = pin.neutral(pin_model)
+    for joint, v in zip(robot.joints, np.asarray(q, float)):
+        jm = pin_model.joints[pin_model.getJointId(joint.name)]
+        out[jm.idx_q:jm.idx_q + jm.nq] = [np.cos(v), np.sin(v)] if jm.nq == 2 else [v]
+    return out
+
+
+def leftovers(model, parameters, std=None) -> list[dict]:
+    """Parameters a URDF cannot hold: name, value, unit, std (display units), free, description."""
+    rows = []
+    kept = {e.name for e in model.effects if e.name not in FOLDED}
+    std = np.zeros(len(parameters)) if std is None else std
+    for par, v, s, free, why in zip(parameters.parameters, parameters.values, std,
+                                    parameters.free, parameters.fixed_reason):
+        if par.block in kept:
+            k = par.display_factor
+            rows.append({"name": par.name, "value": float(v * k), "unit": par.display_unit,
+                         "std": float(s * k), "free": bool(free),
+                         **({} if free else {"fixed_reason": why}),
+                         "description": par.description})
+    return rows
+
+
+def export_urdf(result, out, model=None) -> tuple[Path, Path]:
+    """Write the calibrated URDF and, beside it, the YAML of what it cannot hold.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+    out : path-like
+        URDF file to write; the YAML is the same name with ``.yaml``.
+    model : Model, optional
+        Built from the result when not given.
+
+    Returns
+    -------
+    (Path, Path)
+        The URDF and YAML written.
+
+    Examples
+    --------
+    >>> export_urdf(result, "robot_calibrated.urdf")   # doctest: +SKIP
+    (PosixPath('robot_calibrated.urdf'), PosixPath('robot_calibrated.yaml'))
+    """
+    from doe_calib.model.marker_model import build_model
+
+    model = build_model(result.robot, result.tool, result.model) if model is None else model
+    tree, flange = calibrated_urdf(model, result.parameters)
+    out = Path(out)
+    ET.indent(tree)
+    tree.write(out, encoding="unicode", xml_declaration=False)
+    rigid_at_rest = [e.spec() for e in model.effects if e.name not in FOLDED and
+                     (type(e).joint_correction is not Effect.joint_correction or
+                      type(e).placement is not Effect.placement)]
+    notes = [f"{TRACKER_LINK} is the tracker frame (the identified base placement); the joint "
+             f"values are the controller's, as in the original URDF",
+             "compliance and every effect listed here act on top of the URDF: the URDF alone "
+             "is the robot unloaded"]
+    if rigid_at_rest:
+        notes.append(f"not in the URDF, and changing the unloaded geometry too: "
+                     f"{', '.join(rigid_at_rest)}")
+        warnings.warn(f"effects {', '.join(rigid_at_rest)} cannot be written in a URDF; the "
+                      f"URDF leaves them out (see {out.with_suffix('.yaml')})", DataWarning,
+                      stacklevel=2)
+    params = result.parameters
+    doc = {"format": "doe_calib.calibrated_urdf", "urdf": out.name, "source": result.robot.source,
+           "model": result.model, "root_link": TRACKER_LINK, "flange_link": flange,
+           "folded_into_urdf": [e.spec() for e in model.effects if e.name in FOLDED] + ["base"],
+           "markers_mm": {m: [float(params[f"marker_{m}_{a}"] * 1000) for a in "xyz"]
+                          for m in result.tool.names},
+           "not_in_urdf": leftovers(model, params, result.std()),
+           "notes": notes}
+    yaml_path = out.with_suffix(".yaml")
+    yaml_path.write_text(yaml.safe_dump(doc, sort_keys=False, allow_unicode=True),
+                         encoding="utf-8")
+    return out, yaml_path

@@ -1,0 +1,245 @@
+"""Plain containers for what is measured: configurations and marker readings.
+
+Everything here is in SI units (m, rad, N, N·m); conversion to the files'
+units (mm, deg) happens in :mod:`doe_calib.io.csv_files`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: The environment fields every robot has, in the order they open the model's
+#: ``env`` input: temperature in °C (NaN when not measured). The full vector,
+#: with one approach direction per joint, is :func:`env_fields`.
+ENV_FIELDS = ("temperature",)
+
+
+def env_fields(n_joints: int) -> tuple:
+    """Names of the model's ``env`` input for an N-joint robot, in order.
+
+    ``("temperature", "approach1", …, "approachN")``: the temperature (°C,
+    NaN when not measured), then for each joint the direction from which it
+    reached the configuration: +1 (moving up, q increasing), −1 (moving
+    down), 0 (unknown). See :func:`approach_from_order`.
+
+    Examples
+    --------
+    >>> env_fields(2)
+    ('temperature', 'approach1', 'approach2')
+    """
+    return ENV_FIELDS + tuple(f"approach{k + 1}" for k in range(n_joints))
+
+
+def approach_from_order(q, tol: float = 0.0) -> np.ndarray:
+    """Direction from which each joint reached each configuration, visited in row order.
+
+    Configuration i gets ``sign(q_k(i) − q_k(i−1))`` for joint k; when the
+    joint did not move (``|Δq| <= tol``) it keeps the previous
+    configuration's direction; the first configuration gets 0 (unknown).
+
+    Parameters
+    ----------
+    q : array_like, shape (M, N)
+        Joint positions in measurement order (any unit; ``tol`` in the same).
+    tol : float
+        Largest change that counts as "did not move".
+
+    Returns
+    -------
+    ndarray, shape (M, N)
+        +1, −1 or 0.
+
+    Examples
+    --------
+    >>> approach_from_order([[0.0], [1.0], [1.0], [0.5]]).ravel().tolist()
+    [0.0, 1.0, 1.0, -1.0]
+    """
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    out = np.zeros_like(q)
+    for i in range(1, q.shape[0]):
+        step = q[i] - q[i - 1]
+        out[i] = np.where(np.abs(step) > tol, np.sign(step), out[i - 1])
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Configurations:
+    """Robot configurations with their load cases (a design, or what was measured).
+
+    Attributes
+    ----------
+    pose : tuple of str, length M
+        Pose id of each configuration; one pose measured under two loads gives
+        two configurations with the same id and q.
+    q : ndarray, shape (M, N)
+        Joint positions, rad (revolute) or m (prismatic).
+    wrench : ndarray, shape (M, 6)
+        Force (N) and moment (N·m) applied at the flange origin, robot base frame.
+    env : ndarray, shape (M, 1 + N)
+        Environment variables (see :func:`env_fields`): temperature (°C, NaN
+        when not measured), then each joint's approach direction (+1, −1, 0
+        unknown). An (M, 1) or (M,) temperature-only array is accepted and
+        completed with approach 0.
+    """
+
+    pose: tuple
+    q: np.ndarray
+    wrench: np.ndarray
+    env: np.ndarray
+
+    def __post_init__(self):
+        m, n = self.q.shape
+        env = np.asarray(self.env, dtype=float)
+        env = env.reshape(m, 1) if env.ndim == 1 else env
+        if env.shape[1] == len(ENV_FIELDS):
+            env = np.hstack([env, np.zeros((m, n))])
+        if env.shape != (m, len(ENV_FIELDS) + n):
+            raise ValueError(f"env has shape {env.shape}; expected ({m}, {len(ENV_FIELDS)}) "
+                             f"(temperature) or ({m}, {len(ENV_FIELDS) + n}) "
+                             f"({', '.join(env_fields(n))})")
+        if not np.isin(env[:, len(ENV_FIELDS):], (-1.0, 0.0, 1.0)).all():
+            raise ValueError("approach directions must be +1, -1 or 0")
+        object.__setattr__(self, "env", env)
+
+    @classmethod
+    def from_arrays(cls, q, wrench=None, env=None, pose=None,
+                    approach=None) -> "Configurations":
+        """Build from arrays.
+
+        Missing wrench is zero, missing env is NaN temperature and approach 0,
+        ids are 1..M. ``env`` is (M, 1) temperature or the full (M, 1 + N);
+        ``approach`` (M, N), when given, sets the approach directions.
+        """
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        m, n = q.shape
+        wrench = np.zeros((m, 6)) if wrench is None else np.asarray(wrench, float).reshape(m, 6)
+        env = np.full((m, len(ENV_FIELDS)), np.nan) if env is None else \
+            np.asarray(env, float).reshape(m, -1 if m else len(ENV_FIELDS))
+        if approach is not None:
+            env = np.hstack([env[:, :len(ENV_FIELDS)], np.asarray(approach, float).reshape(m, n)])
+        pose = tuple(str(i + 1) for i in range(m)) if pose is None else tuple(map(str, pose))
+        return cls(pose, q, wrench, env)
+
+    @property
+    def temperature(self) -> np.ndarray:
+        """Temperature of each configuration, °C (NaN when not measured), shape (M,)."""
+        return self.env[:, 0]
+
+    @property
+    def approach(self) -> np.ndarray:
+        """Approach direction of each joint (+1, −1, 0 unknown), shape (M, N)."""
+        return self.env[:, len(ENV_FIELDS):]
+
+    def __len__(self) -> int:
+        return self.q.shape[0]
+
+    def subset(self, index) -> "Configurations":
+        """The configurations at ``index`` (array of ints or booleans)."""
+        index = np.asarray(index)
+        if index.dtype == bool:
+            index = np.flatnonzero(index)
+        return Configurations(tuple(self.pose[i] for i in index), self.q[index],
+                              self.wrench[index], self.env[index])
+
+
+@dataclass(frozen=True, eq=False)
+class Measurements:
+    """Marker readings: one row per observed marker (formats.md §3), in SI.
+
+    Attributes
+    ----------
+    configurations : Configurations
+        The M distinct (pose, wrench, environment) configurations, in order of
+        first appearance in the file (the measurement order).
+    config : ndarray of int, shape (K,)
+        Configuration of each reading.
+    marker : ndarray of int, shape (K,)
+        Marker of each reading (index into the tool's names).
+    xyz : ndarray, shape (K, 3)
+        Measured marker position in the measurement-device frame, metres.
+    sigma : ndarray, shape (K,)
+        Standard deviation of each coordinate of the reading, metres.
+    line : ndarray of int, shape (K,)
+        Source line of each reading (0 when not from a file).
+    source : str
+        The file, for messages.
+    dropped : tuple of str
+        One message per input row dropped on request (``skip_bad``); never
+        dropped silently.
+    warnings : tuple of str
+        One message per reading accepted with a doubt (a joint a hair past its
+        limit), naming file, line and column.
+    session : tuple of str
+        The measurement session of each configuration (length M; empty: one
+        session). Cross-validation holds out whole sessions when there are several.
+    sigma_estimated : bool
+        True when no σ was given (no ``sigma`` column, no ``--sigma``): ``sigma``
+        then holds a provisional 1 mm and identification estimates σ from the
+        residuals (formats.md §3).
+    """
+
+    configurations: Configurations
+    config: np.ndarray
+    marker: np.ndarray
+    xyz: np.ndarray
+    sigma: np.ndarray
+    line: np.ndarray
+    source: str = ""
+    dropped: tuple = ()
+    warnings: tuple = ()
+    session: tuple = ()
+    sigma_estimated: bool = False
+
+    def __len__(self) -> int:
+        return self.config.shape[0]
+
+    @property
+    def n_coordinates(self) -> int:
+        """Number of scalar observations, 3K."""
+        return 3 * len(self)
+
+    def subset(self, rows) -> "Measurements":
+        """The readings at ``rows``, keeping only the configurations they use."""
+        rows = np.asarray(rows)
+        if rows.dtype == bool:
+            rows = np.flatnonzero(rows)
+        used, new_config = np.unique(self.config[rows], return_inverse=True)
+        return Measurements(self.configurations.subset(used), new_config, self.marker[rows],
+                            self.xyz[rows], self.sigma[rows], self.line[rows], self.source,
+                            session=tuple(self.sessions[used]),
+                            sigma_estimated=self.sigma_estimated)
+
+    @property
+    def sessions(self) -> np.ndarray:
+        """Session name of each configuration, shape (M,) (the source when none was given)."""
+        m = len(self.configurations)
+        return np.array(self.session if self.session else (self.source,) * m, dtype=object)
+
+    def split_by_pose(self, held_out_poses) -> tuple["Measurements", "Measurements"]:
+        """Split into (kept, held out) by pose id, for validation on unseen poses."""
+        held = set(map(str, held_out_poses))
+        is_held = np.array([self.configurations.pose[c] in held for c in self.config])
+        return self.subset(~is_held), self.subset(is_held)
+
+
+def concatenate(parts) -> Measurements:
+    """Join several Measurements (e.g. sessions) into one, in the given order."""
+    parts = list(parts)
+    offsets = np.cumsum([0] + [len(p.configurations) for p in parts[:-1]])
+    cfgs = [p.configurations for p in parts]
+    configurations = Configurations(sum((c.pose for c in cfgs), ()),
+                                    np.concatenate([c.q for c in cfgs]),
+                                    np.concatenate([c.wrench for c in cfgs]),
+                                    np.concatenate([c.env for c in cfgs]))
+    return Measurements(configurations,
+                        np.concatenate([p.config + o for p, o in zip(parts, offsets)]),
+                        np.concatenate([p.marker for p in parts]),
+                        np.concatenate([p.xyz for p in parts]),
+                        np.concatenate([p.sigma for p in parts]),
+                        np.concatenate([p.line for p in parts]),
+                        "; ".join(dict.fromkeys(p.source for p in parts)),
+                        sum((p.dropped for p in parts), ()),
+                        sum((p.warnings for p in parts), ()),
+                        tuple(s for p in parts for s in p.sessions),
+                        any(p.sigma_estimated for p in parts))

@@ -1,0 +1,96 @@
+"""A CSV file as a table: header, rows with their physical line numbers, the separator.
+
+UTF-8 (a bad byte is reported with its line and column); fields separated by
+commas, or by semicolons or tabs as the header shows, and then a number may
+have a decimal comma. Shared by every reader of our CSV files.
+"""
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+from doe_calib.errors import DataError
+
+#: Field separators a header may use.
+DELIMITERS = (",", ";", "\t")
+
+
+@dataclass
+class Table:
+    """Header and rows of a CSV file, each row with its physical line number.
+
+    ``decimal_comma``: the fields are separated by ``;`` or tabs, so a number
+    may be written with a decimal comma (``1,5``), as spreadsheets in many
+    European locales write it.
+    """
+
+    path: str
+    columns: list
+    rows: list  # (line, fields)
+    decimal_comma: bool = False
+
+    def col(self, name: str) -> str:
+        return f"'{name}' ({self.columns.index(name) + 1})"
+
+
+def decode(path: str, data: bytes) -> str:
+    """UTF-8 text of a file; a bad byte is reported with its line and column."""
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        start = data.rfind(b"\n", 0, exc.start) + 1
+        column = len(data[start:exc.start].decode("utf-8-sig", errors="replace")) + 1
+        raise DataError(f"byte 0x{data[exc.start]:02x} is not UTF-8 text: save the file as "
+                        f"UTF-8 (it may be Latin-1 or Windows-1252)", path,
+                        data.count(b"\n", 0, exc.start) + 1, column) from None
+
+
+def delimiter(header: str) -> str:
+    """The field separator of a file: the most frequent of , ; and tab in its header."""
+    counts = {d: header.count(d) for d in DELIMITERS}
+    best = max(counts, key=counts.get)
+    return best if counts[best] > counts[","] else ","
+
+
+def read_table(path) -> Table:
+    """Header and rows of a CSV file separated by commas, semicolons or tabs.
+
+    Raises
+    ------
+    DataError
+        An unreadable or non-UTF-8 file, no header, a bad header, no rows.
+    """
+    path = str(path)
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise DataError(f"cannot read the file: {exc.strerror}", path) from exc
+    text = decode(path, data)
+    kept = [(number, line) for number, line in enumerate(text.splitlines(), start=1)
+            if line.strip() and not line.lstrip().startswith("#")]
+    if not kept:
+        raise DataError("the file is empty: expected a header row", path, 1)
+    sep = delimiter(kept[0][1])
+    rows = []
+    # One physical line is one record. Without quotes one reader does every line;
+    # with them each line gets its own, so an open quote cannot swallow the next line.
+    one = csv.reader((line for _, line in kept), delimiter=sep) \
+        if '"' not in text else None
+    for number, line in kept:
+        try:
+            fields = next(one) if one is not None else \
+                next(csv.reader([line], delimiter=sep))
+        except csv.Error as exc:
+            raise DataError(f"cannot split the line into fields ({exc})", path, number) from None
+        rows.append((number, [f.strip() for f in fields]))
+    header, rows = rows[0], rows[1:]
+    line, columns = header
+    for i, c in enumerate(columns):
+        if not c:
+            raise DataError("empty column name in the header", path, line, i + 1)
+        if columns.index(c) != i:
+            raise DataError(f"column {c!r} appears twice in the header", path, line, i + 1)
+    if not rows:
+        raise DataError("the file has a header but no data rows", path, line)
+    return Table(path, columns, rows, sep != ",")

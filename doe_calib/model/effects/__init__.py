@@ -1,0 +1,111 @@
+"""Physical effects a model can include, and the registry that names them.
+
+A model string joins effect names with ``+``, e.g.
+``joint_offset+geometry+joint_compliance``. Base frame and marker positions
+are always part of a model and are not effects.
+"""
+from __future__ import annotations
+
+import re
+
+from doe_calib.errors import ModelError
+from doe_calib.model.effects.backlash import Backlash
+from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
+from doe_calib.model.effects.compliance_by_angle import ComplianceByAngle
+from doe_calib.model.effects.cyclic import Cyclic
+from doe_calib.model.effects.gear_ratio import GearRatio
+from doe_calib.model.effects.geometry import Geometry
+from doe_calib.model.effects.gravity_compliance import GravityCompliance
+from doe_calib.model.effects.joint_compliance import JointCompliance
+from doe_calib.model.effects.joint_offset import JointOffset
+from doe_calib.model.effects.link_compliance import LinkCompliance
+from doe_calib.model.effects.thermal import Thermal
+
+#: Effect name → class. Adding an effect: one module, one line here.
+REGISTRY = {
+    "joint_offset": JointOffset,
+    "geometry": Geometry,
+    "joint_compliance": JointCompliance,
+    "compliance_by_angle": ComplianceByAngle,
+    "gravity_compliance": GravityCompliance,
+    "gear_ratio": GearRatio,
+    "cyclic": Cyclic,
+    "backlash": Backlash,
+    "thermal": Thermal,
+    "link_compliance": LinkCompliance,
+}
+
+DEFAULT_MODEL = "joint_offset+geometry+joint_compliance"
+
+
+_WORD = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:\((.*)\))?\s*$")
+
+
+def _value(text: str):
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
+def parse_effect(word: str, spec: str = ""):
+    """One effect from its model-string word, e.g. ``cyclic(j3,harmonics=2)``."""
+    match = _WORD.match(word)
+    if not match:
+        raise ModelError(f"cannot read effect {word!r} in model {spec or word!r}: write "
+                         f"name or name(arguments), e.g. cyclic(j3)")
+    name, inside = match.group(1), match.group(2)
+    if name not in REGISTRY:
+        raise ModelError(f"unknown effect {name!r} in model {spec or word!r}; known effects: "
+                         f"{', '.join(REGISTRY)} (an effect of your own: load its file with "
+                         f"--effect-file)")
+    args, options = [], {}
+    for item in (a.strip() for a in (inside or "").split(",")):
+        if not item:
+            continue
+        key, eq, val = item.partition("=")
+        if eq:
+            options[key.strip()] = _value(val.strip())
+        else:
+            args.append(item)
+    try:
+        return REGISTRY[name](*args, **options)
+    except (TypeError, ValueError) as exc:
+        raise ModelError(f"effect {word.strip()!r} in model {spec or word!r}: wrong arguments "
+                         f"({exc}); see {name}'s documentation") from None
+
+
+def split_model(spec: str) -> list:
+    """Split at '+' outside parentheses."""
+    words, depth, cur = [], 0, ""
+    for ch in spec:
+        depth += (ch == "(") - (ch == ")")
+        if ch == "+" and depth == 0:
+            words.append(cur)
+            cur = ""
+        else:
+            cur += ch
+    return [w for w in words + [cur] if w.strip()]
+
+
+def parse_model(spec: str) -> tuple:
+    """Effects named by a model string, in the string's order.
+
+    Examples
+    --------
+    >>> [e.name for e in parse_model("joint_offset+joint_compliance")]
+    ['joint_offset', 'joint_compliance']
+    """
+    effects = []
+    for word in split_model(spec):
+        effect = parse_effect(word, spec)
+        if any(e.spec() == effect.spec() for e in effects):
+            raise ModelError(f"effect {effect.spec()!r} appears twice in model {spec!r}")
+        effects.append(effect)
+    return tuple(effects)
+
+
+__all__ = ["ChainSymbols", "Effect", "REGISTRY", "DEFAULT_MODEL", "joint_index", "parse_effect",
+           "parse_model", "split_model"]

@@ -1,0 +1,202 @@
+"""Parameters are first-class: name, unit, nominal, value, free or fixed.
+
+A :class:`ParameterSet` is immutable; fixing, freeing or updating values
+returns a new set. Vectors are packed and unpacked only here.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from difflib import get_close_matches
+
+import numpy as np
+
+from doe_calib.errors import OptionError
+
+# SI unit → (display unit, factor SI→display). Files and reports use display units.
+DISPLAY_UNITS = {
+    "m": ("mm", 1e3),
+    "rad": ("deg", float(np.degrees(1.0))),
+    "rad/(N·m)": ("µrad/(N·m)", 1e6),
+    "m/N": ("µm/N", 1e6),
+    "1": ("1", 1.0),
+    "1/K": ("µm/(m·K)", 1e6),
+}
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One model parameter.
+
+    Attributes
+    ----------
+    name : str
+        Unique name, e.g. ``base_x``, ``marker_A_y``, ``dq_a2``, ``k_a3``.
+    block : str
+        The effect (or ``base``/``markers``) that owns it.
+    unit : str
+        SI unit: one of the keys of :data:`DISPLAY_UNITS`.
+    nominal : float
+        Nominal value, SI.
+    scale : float
+        Typical size of its deviation, SI; used to scale the problem.
+    description : str
+        Words for reports, e.g. "offset of joint a2".
+    """
+
+    name: str
+    block: str
+    unit: str
+    nominal: float
+    scale: float
+    description: str
+
+    @property
+    def display_unit(self) -> str:
+        return DISPLAY_UNITS[self.unit][0]
+
+    @property
+    def display_factor(self) -> float:
+        return DISPLAY_UNITS[self.unit][1]
+
+
+@dataclass(frozen=True, eq=False)
+class ParameterSet:
+    """Values of every parameter of a model, and which are free.
+
+    Attributes
+    ----------
+    parameters : tuple of Parameter
+    values : ndarray, shape (P,)
+        Current values, SI.
+    free : ndarray of bool, shape (P,)
+    fixed_reason : tuple of str
+        Why each fixed parameter is fixed ("" for free ones).
+    """
+
+    parameters: tuple
+    values: np.ndarray
+    free: np.ndarray
+    fixed_reason: tuple
+
+    @classmethod
+    def nominal(cls, parameters) -> "ParameterSet":
+        """All parameters free, at their nominal values."""
+        parameters = tuple(parameters)
+        return cls(parameters, np.array([p.nominal for p in parameters], float),
+                   np.ones(len(parameters), bool), ("",) * len(parameters))
+
+    def __len__(self) -> int:
+        return len(self.parameters)
+
+    @property
+    def names(self) -> list[str]:
+        return [p.name for p in self.parameters]
+
+    @property
+    def scales(self) -> np.ndarray:
+        return np.array([p.scale for p in self.parameters])
+
+    @property
+    def nominal_values(self) -> np.ndarray:
+        return np.array([p.nominal for p in self.parameters])
+
+    def index(self, names) -> np.ndarray:
+        """Positions of ``names`` (a name, a list of names, or a block name).
+
+        Raises
+        ------
+        OptionError
+            A name that is neither a parameter nor a block (the message lists
+            the closest names).
+        """
+        if isinstance(names, str):
+            names = [names]
+        lookup = {p.name: i for i, p in enumerate(self.parameters)}
+        out = []
+        for n in names:
+            if n in lookup:
+                out.append(lookup[n])
+                continue
+            block = [i for i, p in enumerate(self.parameters) if p.block == n]
+            if not block:
+                raise OptionError(self._unknown(n))
+            out.extend(block)
+        return np.array(out, dtype=int)
+
+    def _unknown(self, name: str) -> str:
+        """Words for an unknown name, with the closest parameter and block names."""
+        blocks = list(dict.fromkeys(p.block for p in self.parameters))
+        close = get_close_matches(str(name), self.names + blocks, n=5, cutoff=0.6)
+        hint = (f"; did you mean {', '.join(close)}?" if close else
+                f"; blocks: {', '.join(blocks)}")
+        return f"no parameter or block named {name!r}{hint}"
+
+    def __getitem__(self, name: str) -> float:
+        return float(self.values[self.index(name)[0]])
+
+    def with_values(self, values) -> "ParameterSet":
+        """Same set with all P values replaced (SI)."""
+        values = np.asarray(values, float).reshape(len(self))
+        return replace(self, values=values.copy())
+
+    def updated(self, **values) -> "ParameterSet":
+        """Same set with named values changed, e.g. ``updated(dq_a2=0.01)`` (SI)."""
+        v = self.values.copy()
+        for name, x in values.items():
+            v[self.index(name)] = x
+        return replace(self, values=v)
+
+    def free_values(self) -> np.ndarray:
+        """Pack: the free values, shape (F,)."""
+        return self.values[self.free].copy()
+
+    def with_free_values(self, x) -> "ParameterSet":
+        """Unpack: same set with the free values replaced by ``x`` (shape (F,))."""
+        v = self.values.copy()
+        v[self.free] = x
+        return replace(self, values=v)
+
+    def fixed(self, names, reason: str = "fixed by the user") -> "ParameterSet":
+        """Same set with ``names`` (names or blocks) fixed at their current values."""
+        idx = self.index(names)
+        free = self.free.copy()
+        free[idx] = False
+        reasons = list(self.fixed_reason)
+        for i in idx:
+            reasons[i] = reason
+        return replace(self, free=free, fixed_reason=tuple(reasons))
+
+    def freed(self, names) -> "ParameterSet":
+        """Same set with ``names`` (names or blocks) free."""
+        idx = self.index(names)
+        free = self.free.copy()
+        free[idx] = True
+        reasons = list(self.fixed_reason)
+        for i in idx:
+            reasons[i] = ""
+        return replace(self, free=free, fixed_reason=tuple(reasons))
+
+    def only(self, names) -> "ParameterSet":
+        """Same set with exactly ``names`` (names or blocks) free."""
+        return self.fixed(self.names, "not estimated in this step").freed(names)
+
+    def to_list(self) -> list[dict]:
+        """Rows in display units (mm, deg, µrad/(N·m)) for files and reports."""
+        rows = []
+        for p, v, f, why in zip(self.parameters, self.values, self.free, self.fixed_reason):
+            k = p.display_factor
+            rows.append({"name": p.name, "block": p.block, "unit": p.display_unit,
+                         "description": p.description, "nominal": p.nominal * k,
+                         "value": float(v) * k, "free": bool(f), "fixed_reason": why})
+        return rows
+
+    def from_list(self, rows) -> "ParameterSet":
+        """Values and free flags read back from :meth:`to_list` rows (matched by name)."""
+        by_name = {r["name"]: r for r in rows}
+        missing = [n for n in self.names if n not in by_name]
+        if missing:
+            raise KeyError(f"parameters missing from the file: {', '.join(missing)}")
+        v = np.array([by_name[p.name]["value"] / p.display_factor for p in self.parameters])
+        free = np.array([bool(by_name[p.name]["free"]) for p in self.parameters])
+        why = tuple(by_name[p.name].get("fixed_reason", "") for p in self.parameters)
+        return replace(self, values=v, free=free, fixed_reason=why)

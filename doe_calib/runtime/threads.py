@@ -1,0 +1,26 @@
+"""How many threads the linear algebra library (BLAS) may use.
+
+Our matrices are small (thousands of rows, tens of columns): a second BLAS
+thread gains little, and on a machine whose other core is busy (a parallel
+test run, a Monte-Carlo worker, a shared CI runner) OpenBLAS's spinning
+threads make an SVD a hundred times slower. Commands therefore run BLAS on
+one thread unless the user has chosen (``OMP_NUM_THREADS``,
+``OPENBLAS_NUM_THREADS`` or ``MKL_NUM_THREADS`` set); parallelism comes from
+processes (:mod:`doe_calib.runtime.parallel`).
+"""
+from __future__ import annotations
+
+import os
+
+_CHOSEN = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def single_threaded_blas():
+    """Limit BLAS to one thread for this process unless the environment says otherwise.
+
+    Returns the threadpoolctl limiter (keep it alive), or None when the user chose.
+    """
+    if any(v in os.environ for v in _CHOSEN):
+        return None
+    from threadpoolctl import threadpool_limits
+    return threadpool_limits(limits=1, user_api="blas")
