@@ -9,49 +9,91 @@ Public API (SI units inside: m, rad, N, N·m; files in mm and deg):
 
 >>> from doe_calib import Robot, Tool, build_model, examples
 >>> model = build_model(Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML))
+
+Every public name is imported from its layer on first use (``doe_calib.X``
+costs only what ``X`` needs); ``__all__`` lists them and docs/api/index.md
+says where each lives.
 """
-from doe_calib import examples
-from doe_calib.errors import (
-                     CollisionError,
-                     ConditioningWarning,
-                     ConvergenceWarning,
-                     DataError,
-                     DoeCalibError,
-                     IdentifiabilityWarning,
-                     ModelError,
-                     OptionError,
-                     SolverError,
-)
-from doe_calib.estimation.covariance import (
-                     CovariancePrediction,
-                     point_covariance,
-                     predict_covariance,
-)
-from doe_calib.estimation.identify import identify
-from doe_calib.estimation.result import IdentificationResult
-from doe_calib.io.measurements import Configurations, Measurements
-from doe_calib.model.effects import DEFAULT_MODEL, REGISTRY
-from doe_calib.model.evaluation import marker_positions, observation_matrix
-from doe_calib.model.marker_model import (
-                     Model,
-                     ModelDescription,
-                     build_model,
-                     describe_model,
-                     for_workload,
-)
-from doe_calib.model.parameters import Parameter, ParameterSet
-from doe_calib.model.robot import Robot
-from doe_calib.model.simulate import simulate
-from doe_calib.model.tool import Tool
+from importlib import import_module
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "Robot", "Tool", "Model", "ModelDescription", "build_model", "describe_model",
-    "for_workload", "Parameter", "ParameterSet", "Configurations",
-    "Measurements", "marker_positions", "observation_matrix", "identify",
-    "IdentificationResult", "predict_covariance", "point_covariance", "CovariancePrediction",
-    "simulate", "examples", "DEFAULT_MODEL", "REGISTRY", "DoeCalibError", "DataError",
-    "ModelError", "OptionError", "SolverError", "CollisionError", "IdentifiabilityWarning",
-    "ConditioningWarning", "ConvergenceWarning",
-]
+#: Public name → the module that defines it.
+_PUBLIC = {
+    # model
+    "Robot": "doe_calib.model.robot",
+    "Tool": "doe_calib.model.tool",
+    "Parameter": "doe_calib.model.parameters",
+    "ParameterSet": "doe_calib.model.parameters",
+    "Model": "doe_calib.model.marker_model",
+    "ModelDescription": "doe_calib.model.marker_model",
+    "build_model": "doe_calib.model.marker_model",
+    "describe_model": "doe_calib.model.marker_model",
+    "for_workload": "doe_calib.model.marker_model",
+    "marker_positions": "doe_calib.model.evaluation",
+    "observation_matrix": "doe_calib.model.evaluation",
+    "simulate": "doe_calib.model.simulate",
+    "DEFAULT_MODEL": "doe_calib.model.effects",
+    "REGISTRY": "doe_calib.model.effects",
+    "load_effect_file": "doe_calib.model.effects.user",
+    # io
+    "Configurations": "doe_calib.io.measurements",
+    "Measurements": "doe_calib.io.measurements",
+    "read_measurements": "doe_calib.io.csv_files",
+    "write_measurements": "doe_calib.io.csv_files",
+    "read_design": "doe_calib.io.csv_files",
+    # estimation
+    "identify": "doe_calib.estimation.identify",
+    "IdentificationResult": "doe_calib.estimation.result",
+    "predict_covariance": "doe_calib.estimation.covariance",
+    "point_covariance": "doe_calib.estimation.covariance",
+    "CovariancePrediction": "doe_calib.estimation.covariance",
+    # design
+    "LoadCase": "doe_calib.design.problem",
+    "read_constraints": "doe_calib.design.constraint_file",
+    "optimal_design": "doe_calib.design.optimal",
+    "DesignResult": "doe_calib.design.result",
+    "compare": "doe_calib.design.comparison",
+    "Comparison": "doe_calib.design.comparison",
+    # diagnosis
+    "diagnose": "doe_calib.diagnosis.engine",
+    "DiagnosisResult": "doe_calib.diagnosis.result",
+    "refine": "doe_calib.diagnosis.effect_selection",
+    "RefineResult": "doe_calib.diagnosis.effect_selection",
+    # compensation and export
+    "compensate": "doe_calib.compensation.solve",
+    "CompensationResult": "doe_calib.compensation.result",
+    "read_targets": "doe_calib.compensation.targets",
+    "export_design": "doe_calib.export",
+    "calibrated_urdf": "doe_calib.export.calibrated_urdf",
+    # errors and warnings
+    "DoeCalibError": "doe_calib.errors",
+    "DataError": "doe_calib.errors",
+    "ModelError": "doe_calib.errors",
+    "OptionError": "doe_calib.errors",
+    "SolverError": "doe_calib.errors",
+    "CollisionError": "doe_calib.errors",
+    "IdentifiabilityWarning": "doe_calib.errors",
+    "ConditioningWarning": "doe_calib.errors",
+    "ConvergenceWarning": "doe_calib.errors",
+    "DataWarning": "doe_calib.errors",
+    "PlausibilityWarning": "doe_calib.errors",
+}
+
+__all__ = sorted(_PUBLIC) + ["examples"]
+
+
+def __getattr__(name: str):
+    if name == "examples":
+        return import_module("doe_calib.examples")
+    try:
+        module = _PUBLIC[name]
+    except KeyError:
+        raise AttributeError(f"module 'doe_calib' has no attribute {name!r}") from None
+    value = getattr(import_module(module), name)
+    globals()[name] = value  # looked up once
+    return value
+
+
+def __dir__():
+    return __all__

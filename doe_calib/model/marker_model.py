@@ -65,6 +65,10 @@ class ModelDescription:
     effects: tuple
     parameters: tuple
 
+    def __repr__(self) -> str:
+        return (f"ModelDescription({self.spec or '(base + markers)'!r}, {self.robot.name}, "
+                f"{self.tool.n_markers} markers, {self.n_parameters} parameters)")
+
     @property
     def spec(self) -> str:
         """The model string, e.g. ``joint_offset+geometry``."""
@@ -148,6 +152,11 @@ class Model:
     point_robot: ca.Function
     flange: ca.Function
     native: bool = False
+
+    def __repr__(self) -> str:
+        code = "native code" if self.native else "CasADi VM"
+        return (f"Model({self.spec or '(base + markers)'!r}, {self.robot.name}, "
+                f"{self.tool.n_markers} markers, {self.n_parameters} parameters, {code})")
 
     @property
     def robot(self):

@@ -99,6 +99,11 @@ class Robot:
     flange_placement: tuple
     source: str = ""
 
+    def __repr__(self) -> str:
+        kinds = "".join("P" if j.kind == "prismatic" else "R" for j in self.joints)
+        return (f"Robot({self.name!r}, {self.n_joints} joints {kinds}: "
+                f"{', '.join(self.joint_names)}; flange {self.flange!r})")
+
     @property
     def has_inertials(self) -> bool:
         """Whether the URDF gives the links' masses (self-weight effects need them)."""

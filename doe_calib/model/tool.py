@@ -42,6 +42,10 @@ class Tool:
     marker_radius: float = DEFAULT_MARKER_RADIUS
     rod_radius: float = DEFAULT_ROD_RADIUS
 
+    def __repr__(self) -> str:
+        where = f" on {self.flange!r}" if self.flange else ""
+        return f"Tool({self.n_markers} markers {', '.join(self.names)}{where})"
+
     @property
     def n_markers(self) -> int:
         return len(self.names)
