@@ -155,6 +155,15 @@ class Candidate:
         """``sizes`` as dicts of name, value, std, unit, free (the JSON rows)."""
         return tuple(s.to_dict() for s in self.sizes)
 
+    def p_words(self, adjusted: bool = False) -> str:
+        """The p-value as text; one that underflows to 0 as a power of ten (from ``log10_p``)."""
+        p = self.p_value if adjusted else self.p_value_raw
+        if p > 0:
+            return f"{p:.2g}"
+        if not np.isfinite(self.log10_p):
+            return "<1e-300"
+        return f"1e{self.log10_p:.0f}" if not adjusted else f"<1e{self.log10_p + 3:.0f}"
+
     def size_words(self, limit: int = 4) -> str:
         """The fitted sizes in words, e.g. "cyc_a3_sin1 = 0.0104 ± 0.00021 deg"."""
         words = "; ".join(str(s) for s in self.sizes[:limit])
@@ -173,8 +182,8 @@ class Candidate:
     def __str__(self) -> str:
         dof = f"({self.rank}, {self.dof})" if self.dof is not None else f"({self.rank}, ?)"
         lines = [f"{self.spec}: {self.words or self.effect}",
-                 f"  F{dof} = {self.statistic:.4g}, p = {self.p_value_raw:.3g} "
-                 f"(Bonferroni {self.p_value:.3g}); explains "
+                 f"  F{dof} = {self.statistic:.4g}, p = {self.p_words()} "
+                 f"(Bonferroni {self.p_words(adjusted=True)}); explains "
                  f"{100 * self.explained_fraction:.1f} % of the residual",
                  f"  cross-validated RMS {self.cv_words()}",
                  f"  parameters: {', '.join(self.parameters) or '–'}"]
@@ -186,7 +195,8 @@ class Candidate:
     def __repr__(self) -> str:
         gain = "" if self.cv_gain is None or not np.isfinite(self.cv_gain) else \
             f", CV {-100 * self.cv_gain:+.1f} %"
-        return (f"<Candidate {self.spec}: F = {self.statistic:.3g}, p = {self.p_value:.2g}"
+        return (f"<Candidate {self.spec}: F = {self.statistic:.3g}, "
+                f"p = {self.p_words(adjusted=True)}"
                 f"{gain}, {'proposed' if self.proposed else 'not proposed'}>")
 
     def to_dict(self) -> dict:

@@ -118,24 +118,24 @@ class DiagnosisResult:
         if ratio is not None:
             out.append(f"σ̂ = {c['sigma_hat_mm']:.4f} mm, σ̂/σ = {ratio:.3f} (95 % interval "
                        f"{interval[0]:.3f}–{interval[1]:.3f})"
-                       + (f"; adequate within {c['tolerance']:.0%}" if "tolerance" in c
+                       + (f"; tolerance {c['tolerance']:.0%}" if "tolerance" in c
                           else ""))
         return out
 
     def candidate_table(self, top: int = 8) -> list[str]:
         """The ranked candidates, one line each (F with its dofs, p, share, CV RMS, decision)."""
-        lines = [f"{'#':>3}  {'effect':<34}{'F':>9}{'dof':>11}{'p (adj.)':>10}{'explains':>9}"
-                 f"{'CV RMS mm':>18}{'gain':>8}  decision"]
+        lines = [f"{'#':>3} {'effect':<24}{'F':>8}{'dof':>9}{'p (adj.)':>9}{'explains':>9}"
+                 f"{'CV RMS (mm)':>17}{'gain':>7}  decision"]
         for i, t in enumerate(self.candidates[:top], 1):
             dof = f"{t.rank},{t.dof}" if t.dof is not None else f"{t.rank},?"
             if t.cv_rms_mm is None or not np.isfinite(t.cv_rms_mm):
-                cv, gain = f"{'–':>18}", f"{'–':>8}"
+                cv, gain = f"{'–':>17}", f"{'–':>7}"
             else:
-                cv = f"{t.cv_rms_before_mm:8.4f} → {t.cv_rms_mm:.4f}"
-                gain = f"{-100 * t.cv_gain:+7.1f}%"
-            lines.append(f"{i:>3}  {t.spec[:33]:<34}{t.statistic:9.3g}{dof:>11}"
-                         f"{t.p_value:10.2g}{100 * t.explained_fraction:8.1f}%{cv}{gain}"
-                         f"  {t.decision}")
+                cv = f"{t.cv_rms_before_mm:7.4f} → {t.cv_rms_mm:.4f}"
+                gain = f"{-100 * t.cv_gain:+6.1f}%"
+            lines.append(f"{i:>3} {t.spec[:23]:<24}{t.statistic:8.3g}{dof:>9}"
+                         f"{t.p_words(adjusted=True):>9}{100 * t.explained_fraction:8.1f}%"
+                         f"{cv}{gain}  {t.decision}")
         if len(self.candidates) > top:
             lines.append(f"     … and {len(self.candidates) - top} more (JSON)")
         return lines
