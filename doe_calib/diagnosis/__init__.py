@@ -3,10 +3,12 @@
 >>> from doe_calib.diagnosis import diagnose   # doctest: +SKIP
 >>> print(diagnose(model, measurements).summary())   # doctest: +SKIP
 """
+from doe_calib.diagnosis.candidate import Candidate, FittedSize
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, validation_rms
 from doe_calib.diagnosis.effect_tests import CandidateTest, candidate_effects, test_candidates
 from doe_calib.diagnosis.engine import describe, diagnose
 from doe_calib.diagnosis.result import DiagnosisResult
 
-__all__ = ["diagnose", "DiagnosisResult", "CandidateTest", "candidate_effects",
-           "test_candidates", "cross_validated_rms", "validation_rms", "describe"]
+__all__ = ["diagnose", "DiagnosisResult", "Candidate", "FittedSize", "CandidateTest",
+           "candidate_effects", "test_candidates", "cross_validated_rms", "validation_rms",
+           "describe"]

@@ -11,93 +11,20 @@ a validation set is given) validation RMS: the error falling step by step.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 from doe_calib.diagnosis.cross_validation import validation_rms
 from doe_calib.diagnosis.effect_tests import augmented
-from doe_calib.diagnosis.engine import describe, diagnose
-from doe_calib.diagnosis.result import DiagnosisResult
+from doe_calib.diagnosis.engine import diagnose
+from doe_calib.diagnosis.refine_result import RefineResult, RefineStep
 from doe_calib.estimation.identify import identify_quietly
-from doe_calib.io.json_file import read_json, write_json
 from doe_calib.model.effects import parse_effect
 
-FORMAT = "doe_calib.refine"
+__all__ = ["refine", "RefineResult", "RefineStep"]
 
 
-@dataclass(frozen=True)
-class RefineStep:
-    """One model along the way."""
-
-    model: str
-    added: str | None
-    rms_mm: float
-    cv_rms_mm: float
-    validation_rms_mm: float | None
-    adequate: bool
-    reason: str
-    fitted: tuple = ()
-
-    def to_dict(self) -> dict:
-        d = dict(self.__dict__)
-        d["fitted"] = list(self.fitted)
-        return d
-
-
-@dataclass(frozen=True, eq=False)
-class RefineResult:
-    """The sequence of models, the final fit and its diagnosis.
-
-    Attributes
-    ----------
-    steps : tuple of RefineStep
-    fit : IdentificationResult
-        The final model's identification (what ``predict`` takes).
-    diagnosis : DiagnosisResult
-        The final model's diagnosis.
-    noise_floor_mm : float
-    stopped : str
-        Why refinement stopped, in words.
-    """
-
-    steps: tuple
-    fit: object
-    diagnosis: DiagnosisResult
-    noise_floor_mm: float
-    stopped: str
-    notes: tuple = field(default=())
-
-    def summary(self) -> str:
-        lines = [f"{'step':<5}{'model':<58}{'fit RMS':>9}{'CV RMS':>9}{'valid.':>9}  adequate",
-                 ]
-        for i, s in enumerate(self.steps):
-            v = f"{s.validation_rms_mm:9.4f}" if s.validation_rms_mm is not None else f"{'–':>9}"
-            lines.append(f"{i:<5}{s.model[:57]:<58}{s.rms_mm:9.4f}{s.cv_rms_mm:9.4f}{v}  "
-                         f"{'yes' if s.adequate else 'no'}")
-        lines += [f"(mm per coordinate; noise floor {self.noise_floor_mm:.4f} mm)", "",
-                  *[f"step {i}: {s.reason}" for i, s in enumerate(self.steps)], "",
-                  f"stopped: {self.stopped}"]
-        return "\n".join(lines)
-
-    def to_dict(self) -> dict:
-        return {"format": FORMAT, "steps": [s.to_dict() for s in self.steps],
-                "noise_floor_mm": self.noise_floor_mm, "stopped": self.stopped,
-                "final_model": self.fit.model, "diagnosis": self.diagnosis.to_dict(),
-                "notes": list(self.notes)}
-
-    def to_json(self, path=None) -> str:
-        return write_json(self.to_dict(), path)
-
-    @staticmethod
-    def steps_from_json(path) -> list[RefineStep]:
-        """The steps of a refine file (for plots and reports)."""
-        return [RefineStep(**{**s, "fitted": tuple(s.get("fitted", ()))})
-                for s in read_json(path, FORMAT, "refine history")["steps"]]
-
-
-def _size_words(rows) -> str:
-    return "; ".join(f"{r['name']} = {r['value']:.3g}"
-                     + (f" ± {r['std']:.2g}" if r["std"] is not None else " (fixed)")
-                     + f" {r['unit']}" for r in rows)
+def _size_words(sizes) -> str:
+    return "; ".join(f"{s.name} = {s.value:.3g}"
+                     + (f" ± {s.std:.2g}" if s.std is not None else " (fixed)")
+                     + f" {s.unit}" for s in sizes)
 
 
 def refine(model, measurements, validation=None, level: float = 0.01, max_steps: int = 5,
@@ -133,13 +60,14 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
     RefineResult
     """
     fit = identify_quietly(model, measurements) if fit is None else fit
-    steps, added, reason, fitted = [], None, "starting model", ()
+    steps, added, reason, effect = [], None, "starting model", None
     while True:
         diag = diagnose(model, measurements, fit, level, folds, grouping, min_gain=min_gain)
         val = validation_rms(model, fit.parameters.values, validation) \
             if validation is not None else None
         steps.append(RefineStep(model.spec, added, diag.rms_mm, diag.cv_rms_mm, val,
-                                diag.adequate, reason, fitted))
+                                diag.adequate, reason, () if effect is None else effect.sizes,
+                                effect))
         if progress:
             progress(len(steps) - 1, f"{model.spec or '(base + markers)'}: CV RMS "
                                      f"{diag.cv_rms_mm:.4f} mm")
@@ -154,9 +82,9 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
             break
         model, start = augmented(model, fit.parameters, parse_effect(best.spec))
         fit = identify_quietly(model, measurements, start, register=False)
-        added, fitted = best.spec, best.fitted
-        reason = (f"added {best.spec}, {describe(best, model.robot)}: "
-                  f"{_size_words(best.fitted)}; cross-validated RMS {diag.cv_rms_mm:.4g} → "
+        added, effect = best.spec, best
+        reason = (f"added {best.spec}, {best.words}: "
+                  f"{_size_words(best.sizes)}; cross-validated RMS {diag.cv_rms_mm:.4g} → "
                   f"{best.cv_rms_mm:.4g} mm (p = {best.p_value:.2g})"
                   + (f"; {best.implausible}" if best.implausible else ""))
     return RefineResult(tuple(steps), fit, diag, diag.noise_floor_mm, stopped,

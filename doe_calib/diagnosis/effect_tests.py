@@ -47,6 +47,7 @@ class CandidateTest:
     cv_rms_mm: float | None = None
     fitted: tuple = ()
     implausible: str = ""
+    dof: int | None = None
 
     def with_cv(self, cv_rms_mm: float, fitted: tuple = (),
                 implausible: str = "") -> "CandidateTest":
@@ -62,7 +63,7 @@ class CandidateTest:
                 "p_value_raw": self.p_value_raw, "explained_fraction": self.explained_fraction,
                 "absorbed_fraction": self.absorbed_fraction, "log10_p": self.log10_p,
                 "cv_rms_mm": self.cv_rms_mm, "fitted": list(self.fitted),
-                "implausible": self.implausible}
+                "implausible": self.implausible, "dof": self.dof}
 
     @classmethod
     def from_dict(cls, d: dict) -> "CandidateTest":
@@ -158,18 +159,18 @@ def test_candidates(model, measurements, params, effects=None) -> list[Candidate
         q = int(keep.sum())
         dof = len(r) - rank_j - q
         if q == 0 or dof <= 0:
-            raw.append((e, z.shape[1], 0, 0.0, 0.0, 0.0, absorbed))
+            raw.append((e, z.shape[1], 0, 0.0, 0.0, 0.0, absorbed, None))
             continue
         dss = float(((u[:, keep].T @ r) ** 2).sum())
         f = (dss / q) / max((ss - dss) / dof, 1e-300)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             log_p = float(stats.f.logsf(f, q, dof))
-        raw.append((e, z.shape[1], q, f, log_p, dss / ss if ss > 0 else 0.0, absorbed))
+        raw.append((e, z.shape[1], q, f, log_p, dss / ss if ss > 0 else 0.0, absorbed, dof))
     n = max(len(raw), 1)
     out = [CandidateTest(e.name, e.spec(),
                          None if e.joint is None else joint_index(model.robot, e.joint) + 1,
                          npar, q, float(f), float(min(1.0, np.exp(log_p) * n)),
-                         float(np.exp(log_p)), frac, absorbed, log_p / np.log(10))
-           for e, npar, q, f, log_p, frac, absorbed in raw]
+                         float(np.exp(log_p)), frac, absorbed, log_p / np.log(10), dof=dof)
+           for e, npar, q, f, log_p, frac, absorbed, dof in raw]
     return sorted(out, key=lambda c: (c.log10_p, -c.statistic))

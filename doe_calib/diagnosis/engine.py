@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from doe_calib.diagnosis.candidate import candidate_records
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
 from doe_calib.diagnosis.effect_tests import augmented, test_candidates
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
@@ -281,9 +282,12 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
             "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,
             "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
             "tolerance": tolerance, "chi2_adequate": test.adequate}
+    spec = None if proposed is None else proposed.spec
+    candidates = candidate_records(ranked, model.robot, [describe(t, model.robot) for t in ranked],
+                                   cv, level, min_gain, spec)
     return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, adequate, chi2,
-                           tuple(ranked), tuple(follow), tuple(flagged), level, verdict,
-                           None if proposed is None else proposed.spec, int(res.weighted.size),
+                           candidates, tuple(follow), tuple(flagged), level, verdict,
+                           spec, int(res.weighted.size),
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
                            notes=(screened,) if screened else ())

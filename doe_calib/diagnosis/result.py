@@ -1,9 +1,12 @@
 """A diagnosis: is the model adequate, where does it fail, which effect is missing — in words."""
 from __future__ import annotations
 
+import textwrap
 from dataclasses import dataclass, field
 
-from doe_calib.diagnosis.effect_tests import CandidateTest
+import numpy as np
+
+from doe_calib.diagnosis.candidate import Candidate
 from doe_calib.diagnosis.variables import Follows
 from doe_calib.io.json_file import read_json, write_json
 
@@ -31,7 +34,7 @@ class DiagnosisResult:
         ``statistic``, ``dof``, ``p_value``, ``sigma_source``, ``sigma_hat_mm``,
         ``sigma_ratio`` (σ̂/σ) and its 95 % ``sigma_ratio_interval``,
         ``tolerance``, ``chi2_adequate`` (the χ² test alone).
-    candidates : tuple of CandidateTest
+    candidates : tuple of Candidate
         Best first: significant ones by cross-validated RMS, then by statistic.
     follows : tuple of Follows
         Variables the residual size follows, strongest first.
@@ -52,6 +55,10 @@ class DiagnosisResult:
     gross_errors : tuple of str
         Poses whose readings look like gross errors (the misfit sits there and
         follows no variable); empty otherwise.
+    n_observations : int
+        Coordinates fitted (3 per reading).
+    notes : tuple of str
+        What the reader should know besides the verdict (numbered in :meth:`summary`).
     """
 
     model: str
@@ -73,44 +80,92 @@ class DiagnosisResult:
     notes: tuple = field(default=())
 
     @property
-    def significant(self) -> list[CandidateTest]:
+    def significant(self) -> list[Candidate]:
         """Candidates significant at ``level`` (Bonferroni-adjusted), best first."""
         return [c for c in self.candidates if c.p_value < self.level]
 
     @property
-    def best(self):
+    def best(self) -> Candidate | None:
         """The proposed candidate (see ``proposed``), or None."""
         return next((c for c in self.candidates if c.spec == self.proposed), None)
 
-    def summary(self, top: int = 8) -> str:
-        """The verdict, the adequacy test, the ranked candidates and what the residual follows."""
+    def __repr__(self) -> str:
+        ratio = self.chi2.get("sigma_ratio")
+        return (f"<DiagnosisResult {self.model or '(base + markers)'}: "
+                f"{'adequate' if self.adequate else 'NOT adequate'}"
+                + (f", σ̂/σ = {ratio:.3g}" if ratio is not None else "")
+                + f", CV RMS {self.cv_rms_mm:.4g} mm, "
+                + (f"proposes {self.proposed}>" if self.proposed else "proposes nothing>"))
+
+    def __str__(self) -> str:
+        return self.summary()
+
+    def _repr_html_(self) -> str:
+        from doe_calib.report.diagnosis import diagnosis_html  # report draws; this holds data
+
+        return diagnosis_html(self)
+
+    def adequacy_lines(self) -> list[str]:
+        """The adequacy test in a few lines: RMS, σ and its source, χ², σ̂/σ and its interval."""
         c = self.chi2
-        ratio = c.get("sigma_ratio")
-        interval = c.get("sigma_ratio_interval")
-        lines = [f"Diagnosis of model {self.model or '(base + markers)'}",
-                 f"residual RMS {self.rms_mm:.4f} mm, cross-validated {self.cv_rms_mm:.4f} mm "
-                 f"({self.cv_grouping or 'by pose'}), noise floor {self.noise_floor_mm:.4f} mm "
-                 f"(σ {c['sigma_source']})",
-                 f"χ² = {c['statistic']:.1f} on {c['dof']} dof (p = {c['p_value']:.3g}); "
-                 f"σ̂ = {c['sigma_hat_mm']:.4f} mm"
-                 + (f", σ̂/σ = {ratio:.3f} [{interval[0]:.3f}, {interval[1]:.3f}]"
-                    if ratio is not None else "")
-                 + ": " + ("adequate" if self.adequate else "NOT adequate"), "", self.verdict, "",
-                 f"{'candidate':<44}{'F':>10}{'p (adj.)':>11}{'explains':>10}{'CV RMS mm':>11}"]
-        for t in self.candidates[:top]:
-            cv = f"{t.cv_rms_mm:11.4f}" if t.cv_rms_mm is not None else f"{'–':>11}"
-            lines.append(f"{t.spec:<44}{t.statistic:10.3g}{t.p_value:11.2g}"
-                         f"{100 * t.explained_fraction:9.1f}%{cv}"
-                         + ("  (implausible)" if t.implausible else ""))
+        ratio, interval = c.get("sigma_ratio"), c.get("sigma_ratio_interval")
+        out = [f"residual RMS {self.rms_mm:.4f} mm per coordinate, cross-validated "
+               f"{self.cv_rms_mm:.4f} mm ({self.cv_grouping or 'by pose'})",
+               f"noise σ {self.noise_floor_mm:.4f} mm ({c['sigma_source']})",
+               f"χ² = {c['statistic']:.1f} on {c['dof']} dof, p = {c['p_value']:.3g}"
+               + ("" if "chi2_adequate" not in c else
+                  f" (the χ² test alone: {'passes' if c['chi2_adequate'] else 'rejects'})")]
+        if ratio is not None:
+            out.append(f"σ̂ = {c['sigma_hat_mm']:.4f} mm, σ̂/σ = {ratio:.3f} (95 % interval "
+                       f"{interval[0]:.3f}–{interval[1]:.3f})"
+                       + (f"; tolerance {c['tolerance']:.0%}" if "tolerance" in c
+                          else ""))
+        return out
+
+    def candidate_table(self, top: int = 8) -> list[str]:
+        """The ranked candidates, one line each (F with its dofs, p, share, CV RMS, decision)."""
+        lines = [f"{'#':>3} {'effect':<24}{'F':>8}{'dof':>9}{'p (adj.)':>9}{'explains':>9}"
+                 f"{'CV RMS (mm)':>17}{'gain':>7}  decision"]
+        for i, t in enumerate(self.candidates[:top], 1):
+            dof = f"{t.rank},{t.dof}" if t.dof is not None else f"{t.rank},?"
+            if t.cv_rms_mm is None or not np.isfinite(t.cv_rms_mm):
+                cv, gain = f"{'–':>17}", f"{'–':>7}"
+            else:
+                cv = f"{t.cv_rms_before_mm:7.4f} → {t.cv_rms_mm:.4f}"
+                gain = f"{-100 * t.cv_gain:+6.1f}%"
+            lines.append(f"{i:>3} {t.spec[:23]:<24}{t.statistic:8.3g}{dof:>9}"
+                         f"{t.p_words(adjusted=True):>9}{100 * t.explained_fraction:8.1f}%"
+                         f"{cv}{gain}  {t.decision}")
         if len(self.candidates) > top:
-            lines.append(f"… and {len(self.candidates) - top} more (JSON)")
+            lines.append(f"     … and {len(self.candidates) - top} more (JSON)")
+        return lines
+
+    def summary(self, top: int = 8) -> str:
+        """The verdict, the adequacy test, the ranked candidates, what the residual follows,
+        and numbered notes."""
+        lines = [f"Diagnosis of model {self.model or '(base + markers)'}: "
+                 f"{'adequate' if self.adequate else 'NOT adequate'}", "",
+                 *textwrap.wrap(self.verdict, 96), "", "Adequacy",
+                 *(f"  {x}" for x in self.adequacy_lines()), "",
+                 f"Candidate effects ({len(self.candidates)} tried; p Bonferroni-adjusted; "
+                 f"proposed: significant at {self.level:g}, CV gain ≥ {self.min_gain:.0%})",
+                 *self.candidate_table(top)]
+        best = self.best
+        if best is not None:
+            lines += ["", f"Proposed: {best.spec}, {best.words or best.effect}"]
+            if best.sizes:
+                lines += [f"  {s}" for s in best.sizes]
         if self.follows:
             lines += ["", "Residual size follows (adjusted R²): " + ", ".join(
                 f"{f.variable} {f.r2:.2f}" for f in self.follows[:5])]
         if self.flagged:
             lines += ["", f"{len(self.flagged)} poses far outside the noise (kept): " + ", ".join(
                 f"{p['pose']} ({p['rms_mm']:.3f} mm)" for p in self.flagged[:10])]
-        lines += [f"note: {n}" for n in self.notes]
+        if self.notes:
+            lines += ["", "Notes"]
+            for i, n in enumerate(self.notes, 1):
+                lines += textwrap.wrap(n, 96, initial_indent=f"  {i}. ",
+                                       subsequent_indent="     ")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -129,8 +184,12 @@ class DiagnosisResult:
 
     @classmethod
     def from_dict(cls, d: dict) -> "DiagnosisResult":
+        """Inverse of :meth:`to_dict`; plain data, no model is built and no effect file read
+        (files of earlier versions too: their candidates' decisions are taken again)."""
+        level, gain, proposed = d["level"], d.get("min_gain", 0.02), d.get("proposed")
         return cls(d["model"], d["rms_mm"], d["cv_rms_mm"], d["noise_floor_mm"], d["adequate"],
-                   d["chi2"], tuple(CandidateTest.from_dict(t) for t in d["candidates"]),
+                   d["chi2"], tuple(Candidate.from_dict(t, d["cv_rms_mm"], level, gain, proposed)
+                                    for t in d["candidates"]),
                    tuple(Follows(**f) for f in d["follows"]), tuple(d["flagged_poses"]),
                    d["level"], d["verdict"], d.get("proposed"), d.get("n_observations", 0),
                    d.get("cv_grouping", ""), d.get("min_gain", 0.02),

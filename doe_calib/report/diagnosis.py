@@ -18,7 +18,9 @@ from doe_calib.report.diagnosis_figures import (
     residuals_by_direction,
 )
 from doe_calib.report.html import (
+    Html,
     collapsible,
+    escape,
     figure,
     paragraph,
     preformatted,
@@ -37,11 +39,14 @@ def _png(fig, dpi):
 
 
 def _candidates_table(diagnosis, top: int = 15):
-    rows = [[c.spec, "" if c.joint is None else c.joint, c.rank, c.statistic, c.p_value,
-             100 * c.explained_fraction, "–" if c.cv_rms_mm is None else c.cv_rms_mm]
-            for c in diagnosis.candidates[:top]]
-    return table(["effect", "joint", "columns", "F", "p (Bonferroni)", "explains (%)",
-                  "CV RMS (mm)"], rows, 4)
+    rows = [[i, c.spec, c.words or c.effect, c.statistic,
+             f"{c.rank}, {'?' if c.dof is None else c.dof}", c.p_value_raw, c.p_value,
+             100 * c.explained_fraction, c.cv_words(), c.size_words() or "–",
+             "proposed" if c.proposed else c.why_not]
+            for i, c in enumerate(diagnosis.candidates[:top], 1)]
+    return table(["#", "effect", "in words", "F", "dof", "p", "p (Bonferroni)",
+                  "explains (%)", "CV RMS before → after", "fitted size ± std",
+                  "decision"], rows, 4)
 
 
 def _added_variables(diagnosis, model, measurements, fit) -> list:
@@ -124,6 +129,35 @@ def evidence_section(diagnosis, model, measurements, fit, dpi: int = 90, title: 
                           "are significant."))
 
 
+def _notes(notes) -> Html:
+    return Html("<ol>" + "".join(f"<li>{escape(n)}</li>" for n in notes) + "</ol>")
+
+
+def diagnosis_html(diagnosis, dpi: int = 72) -> str:
+    """A diagnosis for a notebook (``DiagnosisResult._repr_html_``): the verdict, the
+    adequacy test, the candidates table, the share each candidate explains (inline PNG) and
+    the notes; the report's content without its page and without the plots that need the
+    model and the readings."""
+    blocks = [paragraph(diagnosis.verdict), table(["adequacy"], [[line] for line in
+                                                                 diagnosis.adequacy_lines()]),
+              _candidates_table(diagnosis, 10)]
+    if diagnosis.candidates:
+        blocks.append(figure(_png(candidate_bars(diagnosis), dpi),
+                             "share of the residual each candidate explains"))
+    if diagnosis.notes:
+        blocks.append(_notes(diagnosis.notes))
+    head = (f"Diagnosis of {diagnosis.model or '(base + markers)'}: "
+            f"{'adequate' if diagnosis.adequate else 'NOT adequate'}")
+    return str(section(head, *blocks))
+
+
+def refine_html(result, dpi: int = 72) -> str:
+    """A refinement for a notebook (``RefineResult._repr_html_``): each added effect with
+    its size and the error it removed, the error falling (inline PNG), the final
+    diagnosis."""
+    return str(steps_section(result, dpi)) + diagnosis_html(result.diagnosis, dpi)
+
+
 def verdict_section(diagnosis, title: str = ""):
     """The verdict in words with the adequacy test's figures."""
     c = diagnosis.chi2
@@ -133,8 +167,8 @@ def verdict_section(diagnosis, title: str = ""):
         [[diagnosis.model, diagnosis.rms_mm, diagnosis.cv_rms_mm, diagnosis.noise_floor_mm,
           c.get("sigma_ratio", float("nan")), c["statistic"], c["dof"], c["p_value"],
           "yes" if diagnosis.adequate else "no"]], 4),
-        paragraph(f"Cross-validation: {diagnosis.cv_grouping or 'folds of whole poses'}. "
-                  + " ".join(diagnosis.notes)))
+        paragraph(f"Cross-validation: {diagnosis.cv_grouping or 'folds of whole poses'}."),
+        *([_notes(diagnosis.notes)] if diagnosis.notes else []))
 
 
 def diagnosis_sections(diagnosis, model, measurements, fit, dpi: int = 90,
@@ -158,8 +192,7 @@ def diagnosis_report(diagnosis, model, measurements, fit, path, dpi: int = 90):
 
 
 def _fitted_words(step) -> str:
-    return "; ".join(f"{f['name']} = {f['value']:.4g} ± {f['std']:.2g} {f['unit']}".strip()
-                     for f in step.fitted if f.get("free", True)) or "–"
+    return "; ".join(str(f) for f in step.fitted if f.free) or "–"
 
 
 def steps_section(result, dpi: int = 90):

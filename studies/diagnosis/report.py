@@ -65,5 +65,5 @@ def plot_cases(result: dict, path) -> None:
 
 def plot_refine(result: dict, path) -> None:
     """The error falling step by step in the refine run."""
-    steps = [RefineStep(**s) for s in result["refine"]["steps"]]
+    steps = [RefineStep.from_dict(s) for s in result["refine"]["steps"]]
     error_falling(steps, result["sigma_mm"]).savefig(path, dpi=100)
