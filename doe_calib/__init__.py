@@ -59,7 +59,7 @@ _PUBLIC = {
     "diagnose": "doe_calib.diagnosis.engine",
     "DiagnosisResult": "doe_calib.diagnosis.result",
     "refine": "doe_calib.diagnosis.effect_selection",
-    "RefineResult": "doe_calib.diagnosis.effect_selection",
+    "RefineResult": "doe_calib.diagnosis.refine_result",
     # compensation and export
     "compensate": "doe_calib.compensation.solve",
     "CompensationResult": "doe_calib.compensation.result",
