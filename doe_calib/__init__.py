@@ -31,6 +31,7 @@ from doe_calib.estimation.identify import identify
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.io.measurements import Configurations, Measurements
 from doe_calib.model.effects import DEFAULT_MODEL, REGISTRY
+from doe_calib.model.effects import DEFAULT_REGISTRY, EffectRegistry, load_effect_file
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 from doe_calib.model.marker_model import (
                      Model,
@@ -55,3 +56,4 @@ __all__ = [
     "ModelError", "OptionError", "SolverError", "CollisionError", "IdentifiabilityWarning",
     "ConditioningWarning", "ConvergenceWarning",
 ]
+__all__ += ["EffectRegistry", "DEFAULT_REGISTRY", "load_effect_file"]
