@@ -35,6 +35,9 @@ _PUBLIC = {
     "simulate": "doe_calib.model.simulate",
     "DEFAULT_MODEL": "doe_calib.model.effects",
     "REGISTRY": "doe_calib.model.effects",
+    "DEFAULT_REGISTRY": "doe_calib.model.effects",
+    "EffectRegistry": "doe_calib.model.effects.registry",
+    "registry_with_files": "doe_calib.model.effects",
     "load_effect_file": "doe_calib.model.effects.user",
     # io
     "Configurations": "doe_calib.io.measurements",

@@ -84,8 +84,7 @@ def joint_correction(q, env, p, joint=None):
 
 def test_a_user_effect_file_gets_its_plot_too(kr270, tmp_path):
     """An effect on no joint is drawn along its own fitted displacement (its size)."""
-    from doe_calib.model.effects import REGISTRY
-    from doe_calib.model.effects.user import load_effect_file
+    from doe_calib.model.effects import DEFAULT_REGISTRY
 
     chain, robot, tool = kr270
     rng = np.random.default_rng(34)
@@ -96,14 +95,11 @@ def test_a_user_effect_file_gets_its_plot_too(kr270, tmp_path):
     sim.write_campaign(tmp_path / "c.csv", chain, truth, q, w, list(MARKERS), 0.02, rng)
     meas = read_measurements(tmp_path / "c.csv", robot, tool)
     (tmp_path / "coupling.py").write_text(COUPLING, encoding="utf-8")
-    load_effect_file(tmp_path / "coupling.py")
-    try:
-        model = build_model(robot, tool, START)
-        fit = identify_quietly(model, meas)
-        effect = REGISTRY["coupling_av"]()
-        av = added_variable(model, meas, fit.parameters, effect,
-                            configuration_variables(robot, meas.configurations))
-    finally:
-        del REGISTRY["coupling_av"]
+    registry = DEFAULT_REGISTRY.with_file(tmp_path / "coupling.py")
+    model = build_model(robot, tool, START)
+    fit = identify_quietly(model, meas)
+    effect = registry["coupling_av"]()
+    av = added_variable(model, meas, fit.parameters, effect,
+                        configuration_variables(robot, meas.configurations))
     assert av.unit == "mm" and "size only" in av.quantity
     assert av.correlation >= 0.9, av

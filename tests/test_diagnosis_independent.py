@@ -15,8 +15,7 @@ from doe_calib.diagnosis import diagnose, validation_rms
 from doe_calib.diagnosis.effect_selection import refine
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.io.csv_files import read_measurements
-from doe_calib.model.effects import REGISTRY
-from doe_calib.model.effects.user import load_effect_file
+from doe_calib.model.effects import DEFAULT_REGISTRY
 
 SIGMA_MM = 0.02
 MARKERS = {"A": [0.15, 0.0, 0.08], "B": [-0.075, 0.13, 0.08], "C": [-0.075, -0.13, 0.08]}
@@ -49,8 +48,8 @@ def _campaigns(tmp_path, chain, robot, tool, truth, rng, n=40, mass=10.0, shuffl
     return out
 
 
-def _held_out(robot, tool, spec, train, valid):
-    model = build_model(robot, tool, spec)
+def _held_out(robot, tool, spec, train, valid, registry=None):
+    model = build_model(robot, tool, spec, registry=registry)
     return validation_rms(model, identify_quietly(model, train).parameters.values, valid)
 
 
@@ -125,14 +124,12 @@ def test_effect_outside_the_catalogue_then_fixed_with_a_user_effect(tmp_path):
     assert not d.adequate, d.summary()
     out, got = _refined(robot, tool, train, valid, max_steps=2)
     (tmp_path / "coupling.py").write_text(COUPLING, encoding="utf-8")
-    load_effect_file(tmp_path / "coupling.py")
-    try:
-        reference = _held_out(robot, tool, START + "+coupling_23", train, valid)
-        assert got > 2 * reference, out.summary()  # the catalogue cannot express it …
-        fixed = diagnose(build_model(robot, tool, START + "+coupling_23"), train)
-        assert fixed.adequate and fixed.best is None, fixed.summary()  # … the user's effect can
-    finally:
-        del REGISTRY["coupling_23"]
+    registry = DEFAULT_REGISTRY.with_file(tmp_path / "coupling.py")
+    reference = _held_out(robot, tool, START + "+coupling_23", train, valid, registry)
+    assert got > 2 * reference, out.summary()  # the catalogue cannot express it …
+    fixed = diagnose(build_model(robot, tool, START + "+coupling_23", registry=registry), train,
+                     registry=registry)
+    assert fixed.adequate and fixed.best is None, fixed.summary()  # … the user's effect can
 
 
 def test_gross_outliers_are_named_as_such(tmp_path):

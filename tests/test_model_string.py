@@ -18,19 +18,17 @@ def test_arguments_are_written_back_into_the_spec():
         def __init__(self, joint, harmonics=1):
             super().__init__(joint, harmonics=harmonics)
 
-    from doe_calib.model import effects
-    effects.REGISTRY["probe"] = Probe
-    try:
-        (e,) = parse_model("probe( j3 , harmonics=2 )")
-        assert e.spec() == "probe(j3,harmonics=2)"
-        assert [x.spec() for x in parse_model("probe(j3)+probe(j4)")] == ["probe(j3,harmonics=1)",
-                                                                          "probe(j4,harmonics=1)"]
-        with pytest.raises(ModelError, match="appears twice"):
-            parse_model("probe(j3)+probe(j3)")
-        with pytest.raises(ModelError, match="wrong arguments"):
-            parse_model("probe(j3, colour=2)")
-    finally:
-        del effects.REGISTRY["probe"]
+    from doe_calib.model.effects import DEFAULT_REGISTRY
+    mine = DEFAULT_REGISTRY.extended([Probe])
+    (e,) = parse_model("probe( j3 , harmonics=2 )", mine)
+    assert e.spec() == "probe(j3,harmonics=2)"
+    assert [x.spec() for x in parse_model("probe(j3)+probe(j4)", mine)] == [
+        "probe(j3,harmonics=1)", "probe(j4,harmonics=1)"]
+    with pytest.raises(ModelError, match="appears twice"):
+        parse_model("probe(j3)+probe(j3)", mine)
+    with pytest.raises(ModelError, match="wrong arguments"):
+        parse_model("probe(j3, colour=2)", mine)
+    assert "probe" not in DEFAULT_REGISTRY
 
 
 def test_unknown_effect_names_the_known_ones():

@@ -10,7 +10,7 @@ from doe_calib import Configurations, build_model, examples, identify, simulate
 from doe_calib.diagnosis import diagnose
 from doe_calib.errors import DataError, DoeCalibError, ModelError
 from doe_calib.estimation.preparation import fix_unidentifiable, register_base
-from doe_calib.model.effects import REGISTRY, parse_model
+from doe_calib.model.effects import DEFAULT_REGISTRY, parse_model
 from doe_calib.model.effects.user import EXAMPLE_FILE, load_effect_file
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 from doe_calib.model.loads import hanging_mass_wrench, unloaded_and_loaded
@@ -58,16 +58,6 @@ def flange_correction(q, env, p, wrench, joint=None):
 SPECS = ["quad_scale(j3)", "wobble(j2)", "tool_droop", "progressive_stiffness(j2)"]
 
 
-@pytest.fixture(autouse=True)
-def registry():
-    """Remove every effect a test registers."""
-    before = dict(REGISTRY)
-    yield
-    for name in set(REGISTRY) - set(before):
-        del REGISTRY[name]
-    REGISTRY.update(before)
-
-
 def _write(tmp_path, text, name="effect.py"):
     path = tmp_path / name
     path.write_text(textwrap.dedent(text))
@@ -76,9 +66,10 @@ def _write(tmp_path, text, name="effect.py"):
 
 @pytest.fixture
 def user_effects(tmp_path):
-    for i, text in enumerate((QUADRATIC, WOBBLE, DROOP)):
-        load_effect_file(_write(tmp_path, text, f"effect{i}.py"))
-    load_effect_file(EXAMPLE_FILE)
+    """The catalogue plus the three test effects and the shipped example."""
+    paths = [_write(tmp_path, text, f"effect{i}.py")
+             for i, text in enumerate((QUADRATIC, WOBBLE, DROOP))]
+    return DEFAULT_REGISTRY.with_files(paths + [EXAMPLE_FILE])
 
 
 def _design(model, m, rng):
@@ -97,12 +88,12 @@ def _truth(model, rng):
 @pytest.mark.parametrize("spec", SPECS)
 def test_jacobian_matches_finite_differences(robot6, tool6, user_effects, spec):
     rng = np.random.default_rng(7)
-    model = build_model(robot6, tool6, "joint_offset+" + spec)
+    model = build_model(robot6, tool6, "joint_offset+" + spec, registry=user_effects)
     cfg = _design(model, 4, rng)
     p = _truth(model, rng).values
     _, b = observation_matrix(model, p, cfg)
     cols = model.nominal().index(spec.split("(")[0])
-    assert cols.size == len(REGISTRY[spec.split("(")[0]].parameter_specs)
+    assert cols.size == len(user_effects[spec.split("(")[0]].parameter_specs)
     for i in cols:
         h = model.parameters[i].scale * 1e-2
         dp = np.zeros_like(p)
@@ -115,7 +106,7 @@ def test_jacobian_matches_finite_differences(robot6, tool6, user_effects, spec):
 @pytest.mark.parametrize("spec", SPECS)
 def test_recovered_exactly_from_noise_free_data(robot6, tool6, user_effects, spec):
     rng = np.random.default_rng(11)
-    model = build_model(robot6, tool6, "joint_offset+" + spec)
+    model = build_model(robot6, tool6, "joint_offset+" + spec, registry=user_effects)
     cfg = _design(model, 20, rng)
     truth = _truth(model, rng)
     with warnings.catch_warnings():
@@ -134,7 +125,8 @@ def test_recovered_exactly_from_noise_free_data(robot6, tool6, user_effects, spe
 
 def test_diagnosis_ranks_the_hidden_user_effect_first(robot6, tool6, user_effects):
     rng = np.random.default_rng(3)
-    true = build_model(robot6, tool6, "joint_offset+joint_compliance+wobble(j2)")
+    true = build_model(robot6, tool6, "joint_offset+joint_compliance+wobble(j2)",
+                       registry=user_effects)
     truth = true.nominal().with_values(random_truth(true, rng))
     truth = truth.updated(wobble_a2_a=2e-4, wobble_a2_b=-2e-4, wobble_a2_r=3e-4)
     n = 30
@@ -143,7 +135,8 @@ def test_diagnosis_ranks_the_hidden_user_effect_first(robot6, tool6, user_effect
     w[1::2] = hanging_mass_wrench(true, truth.values, q[1::2], 250.0, (0.0, 0.0, 0.2))
     cfg = Configurations.from_arrays(q, w, pose=np.repeat(np.arange(n) + 1, 2))
     meas = simulate(true, truth, cfg, 3e-5, rng)
-    d = diagnose(build_model(robot6, tool6, "joint_offset+joint_compliance"), meas, cv_top=2)
+    d = diagnose(build_model(robot6, tool6, "joint_offset+joint_compliance"), meas, cv_top=2,
+                 registry=user_effects)
     assert not d.adequate
     best = d.candidates[0]
     assert (best.effect, best.spec, best.joint) == ("wobble", "wobble(j2)", 2), d.summary()
@@ -153,7 +146,8 @@ def test_design_predicts_finite_std_for_user_parameters(robot6, tool6, user_effe
     from doe_calib.design import LoadCase
     from doe_calib.design.optimal import optimal_design
 
-    model = build_model(robot6, tool6, "joint_offset+progressive_stiffness(j2)+tool_droop")
+    model = build_model(robot6, tool6, "joint_offset+progressive_stiffness(j2)+tool_droop",
+                        registry=user_effects)
     d = optimal_design(model, 8, [LoadCase(250.0, (0.0, 0.0, 0.2))], candidates=300,
                        refine=False, rng=np.random.default_rng(2))
     for name in ("progressive_stiffness_a2_a", "tool_droop_c"):
@@ -168,42 +162,42 @@ def test_identify_and_predict_commands_with_an_effect_file(tmp_path, robot6, too
     from doe_calib.io.csv_files import write_measurements
 
     path = _write(tmp_path, QUADRATIC)
-    load_effect_file(path)
-    model = build_model(robot6, tool6, "joint_offset+quad_scale(j3)")
+    model = build_model(robot6, tool6, "joint_offset+quad_scale(j3)",
+                        registry=DEFAULT_REGISTRY.with_file(path))
     rng = np.random.default_rng(5)
     truth = model.nominal().with_values(random_truth(model, rng)).updated(quad_scale_a3_a=3e-4)
     meas = simulate(model, truth, _design(model, 15, rng), 2e-5, rng)
     data = tmp_path / "meas.csv"
     write_measurements(data, meas, robot6, tool6)
-    del REGISTRY["quad_scale"]   # the command must load it itself
+    # the command must load it itself
     out = tmp_path / "result.json"
     common = ["--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML]
     assert main(["identify", *common, "--effect-file", str(path), "--model",
                  "joint_offset+quad_scale(j3)", "--data", str(data), "--out", str(out)]) == 0
     assert json.loads(out.read_text())["model"] == "joint_offset+quad_scale(j3)"
-    result = IdentificationResult.from_json(out)
+    result = IdentificationResult.from_json(out, DEFAULT_REGISTRY.with_file(path))
     i = result.parameters.index("quad_scale_a3_a")[0]
     assert abs(result.parameters.values[i] - 3e-4) < 5 * result.std()[i]
 
-    del REGISTRY["quad_scale"]
     pred = tmp_path / "pred.csv"
     assert main(["predict", "--result", str(out), "--data", str(data), "--out", str(pred)]) == 2
     assert main(["predict", "--result", str(out), "--data", str(data), "--out", str(pred),
                  "--effect-file", str(path)]) == 0 and pred.exists()
-    del REGISTRY["quad_scale"]
     assert main(["compare", str(out), "--json"]) == 2
     assert main(["compare", str(out), "--effect-file", str(path), "--json"]) == 0
 
 
 def test_loading_is_idempotent_and_specs_round_trip(tmp_path, robot6):
     path = _write(tmp_path, WOBBLE)
-    (first,) = load_effect_file(path)
-    (again,) = load_effect_file(path)
-    assert REGISTRY["wobble"] is again and again.source == first.source
+    first = DEFAULT_REGISTRY.with_file(path)
+    again = first.with_file(path)
+    assert again["wobble"] is not first["wobble"]
+    assert again["wobble"].source == first["wobble"].source
+    again = again["wobble"]
     assert [e.spec() for e in again.candidates(robot6)] == [f"wobble(j{k})" for k in range(1, 7)]
-    assert parse_model("wobble(a4)")[0].spec() == "wobble(a4)"
+    assert parse_model("wobble(a4)", first)[0].spec() == "wobble(a4)"
     with pytest.raises(ModelError, match="sits on a joint"):
-        parse_model("wobble")
+        parse_model("wobble", first)
 
 
 BAD = {
@@ -229,9 +223,9 @@ def test_bad_file_is_reported_with_its_name(tmp_path, case):
     text, kind, words = BAD[case]
     path = _write(tmp_path, text, "mine_bad.py")
     with pytest.raises(kind, match=words) as err:
-        load_effect_file(path)
+        DEFAULT_REGISTRY.with_file(path)
     assert "mine_bad.py" in str(err.value)
-    assert REGISTRY["joint_offset"].__module__ == "doe_calib.model.effects.joint_offset"
+    assert DEFAULT_REGISTRY["joint_offset"].__module__ == "doe_calib.model.effects.joint_offset"
 
 
 def test_missing_file_is_reported(tmp_path):
@@ -251,14 +245,14 @@ def test_bad_expression_is_reported_when_the_model_is_built(tmp_path, robot6, to
     text = ("NAME = 'odd'\nPARAMETERS = [('a', 'rad', 1e-4, 'x')]\n"
             f"def joint_correction(q, env, p, joint=None):\n    {body}\n")
     path = _write(tmp_path, text, "odd_effect.py")
-    load_effect_file(path)
+    registry = DEFAULT_REGISTRY.with_file(path)
     with pytest.raises(DoeCalibError, match=words) as err:
-        build_model(robot6, tool6, "odd")
+        build_model(robot6, tool6, "odd", registry=registry)
     assert "odd_effect.py" in str(err.value)
 
 
 def test_same_name_from_another_file_is_refused(tmp_path):
-    load_effect_file(_write(tmp_path, DROOP, "one.py"))
+    one = DEFAULT_REGISTRY.with_file(_write(tmp_path, DROOP, "one.py"))
     with pytest.raises(ModelError, match="already defined by .*one.py") as err:
-        load_effect_file(_write(tmp_path, DROOP, "two.py"))
+        one.with_file(_write(tmp_path, DROOP, "two.py"))
     assert "two.py" in str(err.value)

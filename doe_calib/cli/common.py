@@ -9,8 +9,7 @@ import numpy as np
 from doe_calib.cli.options import at_least
 from doe_calib.errors import OptionError
 from doe_calib.io.csv_files import read_measurements
-from doe_calib.model.effects import DEFAULT_MODEL
-from doe_calib.model.effects.user import load_effect_files
+from doe_calib.model.effects import DEFAULT_MODEL, registry_with_files
 from doe_calib.model.marker_model import build_model, compile_in_background
 from doe_calib.model.robot import Robot
 from doe_calib.model.tool import Tool
@@ -46,12 +45,14 @@ def model_option(text: str) -> str:
     return text
 
 
-def load_robot_tool(args):
-    """The Robot and Tool named by ``--robot``, ``--tool`` and ``--flange``.
+def effect_registry(args):
+    """The effects ``--model`` and result files may name: the catalogue plus the
+    ``--effect-file`` effects (a new :class:`~doe_calib.model.effects.EffectRegistry`)."""
+    return registry_with_files(getattr(args, "effect_file", None))
 
-    The ``--effect-file`` effects are registered first, so that ``--model`` may name them.
-    """
-    load_effect_files(getattr(args, "effect_file", None))
+
+def load_robot_tool(args):
+    """The Robot and Tool named by ``--robot``, ``--tool`` and ``--flange``."""
     tool = Tool.from_yaml(args.tool)
     robot = Robot.from_urdf(args.robot, flange=args.flange or tool.flange)
     return robot, tool
@@ -128,15 +129,17 @@ def _data_bytes(paths) -> int:
     return total
 
 
-def model_and_measurements(args, estimate_sigma: bool = True):
+def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
     """The model (``--model``) and the measurements (``--data``, ``--sigma``, ``--skip-bad``,
     ``--exclude-poses``).
 
     With no σ given (no ``--sigma``, no ``sigma`` column) and ``estimate_sigma``,
     σ is set to the σ̂ of the starting model (:func:`with_estimated_sigma`).
+    ``registry`` names the effects ``--model`` may use (default :func:`effect_registry`).
     """
     robot, tool = load_robot_tool(args)
-    model = build_model(robot, tool, args.model)
+    registry = effect_registry(args) if registry is None else registry
+    model = build_model(robot, tool, args.model, registry=registry)
     if _data_bytes(args.data) > LARGE_DATA_BYTES:  # the fit will run native code: compile
         compile_in_background(model)               # it while the file is read
     meas = read_data(args.data, robot, tool, args.sigma, args.skip_bad)

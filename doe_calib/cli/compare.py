@@ -4,7 +4,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from doe_calib.cli.common import effect_file_argument, load_effect_files, parse_floats
+from doe_calib.cli.common import effect_file_argument, effect_registry, parse_floats
 from doe_calib.cli.options import positive
 from doe_calib.design.comparison import compare, load_source, plot_std
 from doe_calib.io.csv_files import read_design
@@ -42,12 +42,13 @@ def _labels(files) -> list[str]:
 
 
 def run(args):
-    load_effect_files(args.effect_file)
-    sources = [load_source(f) for f in args.files]
+    registry = effect_registry(args)
+    sources = [load_source(f, registry) for f in args.files]
     task = read_design(args.task, sources[0].robot) if args.task else None
     result = compare(sources, _labels(args.files),
                      None if args.sigma is None else args.sigma / 1000.0, task,
-                     parse_floats(args.task_point, 3, "--task-point") / 1000.0)
+                     parse_floats(args.task_point, 3, "--task-point") / 1000.0,
+                     registry=registry)
     print(strict_json(result.to_dict()) if args.json else result.summary())
     written = []
     if args.out:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from doe_calib.cli.common import (
     effect_file_argument,
-    load_effect_files,
+    effect_registry,
     parse_floats,
     report_warnings,
 )
@@ -60,11 +60,11 @@ def _tcp(text: str, result):
 def run(args):
     if args.program_out is not None and args.format is None:
         raise OptionError("--program-out needs --format (krl, rapid, urscript or csv)")
-    load_effect_files(args.effect_file)
-    result = IdentificationResult.from_json(args.result)
+    registry = effect_registry(args)
+    result = IdentificationResult.from_json(args.result, registry)
     tcp = _tcp(args.tcp, result)
     targets = read_targets(args.targets, result.robot)
-    model = build_model(result.robot, result.tool, result.model)
+    model = build_model(result.robot, result.tool, result.model, registry=registry)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         out = compensate(model, result, targets, tcp, build_problem(model, args.position_only))

@@ -9,6 +9,7 @@ import numpy as np
 from doe_calib.cli.common import (
     collision_arguments,
     collision_builder,
+    effect_registry,
     load_robot_tool,
     parse_floats,
     parse_load,
@@ -80,7 +81,7 @@ def run(args):
         raise OptionError(f"--report {args.report}: the design CSV is written there; give the "
                           f"report its own name")
     robot, tool = load_robot_tool(args)
-    model = build_model(robot, tool, args.model)
+    model = build_model(robot, tool, args.model, registry=effect_registry(args))
     loads = [LoadCase(kg, com, r) for kg, com, r in args.load or [] if kg > 0]
     if args.criterion == "task" and not args.task:
         raise DoeCalibError("--criterion task needs --task TASK.csv (a design CSV of task poses)")

@@ -4,7 +4,12 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from doe_calib.cli.common import data_argument, model_and_measurements, robot_arguments
+from doe_calib.cli.common import (
+    data_argument,
+    effect_registry,
+    model_and_measurements,
+    robot_arguments,
+)
 from doe_calib.cli.options import positive
 from doe_calib.diagnosis import diagnose
 from doe_calib.diagnosis.cross_validation import GROUPINGS
@@ -64,12 +69,13 @@ def residual_figure(model, meas, fit, path):
 
 
 def run(args):
-    model, meas = model_and_measurements(args)
+    registry = effect_registry(args)
+    model, meas = model_and_measurements(args, registry=registry)
     print(f"diagnosing {model.spec or '(base + markers)'} on {len(meas)} readings…",
           file=sys.stderr)
     fit = identify_quietly(model, meas)
     d = diagnose(model, meas, fit, level=args.level, folds=args.folds, grouping=args.cv_by,
-                 min_gain=args.min_gain, tolerance=args.tolerance,
+                 min_gain=args.min_gain, tolerance=args.tolerance, registry=registry,
                  progress=lambda i, n, s: print(f"  cross-validating {s} ({i + 1}/{n})",
                                                 file=sys.stderr))
     d.to_json(args.out)
@@ -77,6 +83,7 @@ def run(args):
     residual_figure(model, meas, fit, plot)
     if args.report:
         from doe_calib.report import diagnosis_report
-        print(f"report: {diagnosis_report(d, model, meas, fit, args.report)}", file=sys.stderr)
+        print(f"report: {diagnosis_report(d, model, meas, fit, args.report, registry=registry)}",
+              file=sys.stderr)
     print(strict_json(d.to_dict()) if args.json else d.summary())
     print(f"\nwritten: {args.out}, {plot}", file=sys.stderr)

@@ -4,10 +4,11 @@ from __future__ import annotations
 import sys
 import warnings
 
-from doe_calib.cli.common import effect_file_argument, load_effect_files, report_warnings
+from doe_calib.cli.common import effect_file_argument, effect_registry, report_warnings
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.export.calibrated_urdf import export_urdf
 from doe_calib.io.json_file import strict_json
+from doe_calib.model.marker_model import build_model
 
 HELP = ("write a calibrated URDF (offsets, geometry and base folded into the joint origins) "
         "and a YAML of the parameters a URDF cannot hold")
@@ -26,11 +27,12 @@ OUTPUTS = {"out": "file"}
 
 
 def run(args):
-    load_effect_files(args.effect_file)
-    result = IdentificationResult.from_json(args.result)
+    registry = effect_registry(args)
+    result = IdentificationResult.from_json(args.result, registry)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        urdf, extra = export_urdf(result, args.out)
+        urdf, extra = export_urdf(result, args.out, build_model(
+            result.robot, result.tool, result.model, registry=registry))
     report_warnings(caught)
     if args.json:
         print(strict_json({"result": args.result, "urdf": str(urdf), "yaml": str(extra)}))

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from doe_calib.cli.common import effect_file_argument, load_effect_files, read_data
+from doe_calib.cli.common import effect_file_argument, effect_registry, read_data
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.io.csv_files import write_measurements
 from doe_calib.io.json_file import strict_json
@@ -46,9 +46,9 @@ def predicted_markers(model, result, meas):
 
 
 def run(args):
-    load_effect_files(args.effect_file)
-    result = IdentificationResult.from_json(args.result)
-    model = build_model(result.robot, result.tool, result.model)
+    registry = effect_registry(args)
+    result = IdentificationResult.from_json(args.result, registry)
+    model = build_model(result.robot, result.tool, result.model, registry=registry)
     meas = read_data(args.data, result.robot, result.tool, sigma_mm=1.0, require_xyz=False)
     predicted, std = predicted_markers(model, result, meas)
     sigma = np.full(len(meas), result.sigma_mm / 1000.0)

@@ -6,7 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from doe_calib.cli.common import model_and_measurements, read_data, robot_arguments
+from doe_calib.cli.common import (
+    effect_registry,
+    model_and_measurements,
+    read_data,
+    robot_arguments,
+)
 from doe_calib.cli.diagnose import measurement_arguments
 from doe_calib.diagnosis.effect_selection import refine
 from doe_calib.io.json_file import strict_json
@@ -37,7 +42,8 @@ OUTPUTS = {"out": "file", "history": "file", "plot": "file", "report": "file"}
 
 
 def run(args):
-    model, meas = model_and_measurements(args)
+    registry = effect_registry(args)
+    model, meas = model_and_measurements(args, registry=registry)
     val = None
     if args.validation:
         sigma_mm = args.sigma or float(np.median(meas.sigma)) * 1000.0  # σ̂ when not given
@@ -46,7 +52,8 @@ def run(args):
           file=sys.stderr)
     out = refine(model, meas, val, level=args.level, max_steps=args.max_steps,
                  min_gain=args.min_gain, folds=args.folds, grouping=args.cv_by,
-                 progress=lambda i, text: print(f"  step {i}: {text}", file=sys.stderr))
+                 progress=lambda i, text: print(f"  step {i}: {text}", file=sys.stderr),
+                 registry=registry)
     stem = str(Path(args.out).with_suffix(""))
     history = args.history or stem + "_refine.json"
     plot = args.plot or stem + "_refine.png"
@@ -55,7 +62,8 @@ def run(args):
     error_falling(out.steps, out.noise_floor_mm).savefig(plot, dpi=90)
     if args.report:
         from doe_calib.report import refine_report
-        final = build_model(model.robot, model.tool, out.fit.model)
-        print(f"report: {refine_report(out, final, meas, args.report)}", file=sys.stderr)
+        final = build_model(model.robot, model.tool, out.fit.model, registry=registry)
+        print(f"report: {refine_report(out, final, meas, args.report, registry=registry)}",
+              file=sys.stderr)
     print(strict_json(out.to_dict()) if args.json else out.summary())
     print(f"\nwritten: {args.out}, {history}, {plot}", file=sys.stderr)

@@ -5,7 +5,13 @@ import sys
 
 import numpy as np
 
-from doe_calib.cli.common import load_robot_tool, parse_floats, parse_load, robot_arguments
+from doe_calib.cli.common import (
+    effect_registry,
+    load_robot_tool,
+    parse_floats,
+    parse_load,
+    robot_arguments,
+)
 from doe_calib.cli.options import count, positive
 from doe_calib.errors import OptionError
 from doe_calib.estimation.result import load_parameters, save_parameters
@@ -47,7 +53,7 @@ OUTPUTS = {"out": "file", "truth_out": "file"}
 
 def run(args):
     robot, tool = load_robot_tool(args)
-    model = build_model(robot, tool, args.model)
+    model = build_model(robot, tool, args.model, registry=effect_registry(args))
     rng = np.random.default_rng(args.seed)
     if args.truth:
         truth = load_parameters(args.truth, model)

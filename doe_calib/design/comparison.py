@@ -124,21 +124,22 @@ class Comparison:
         return write_json(self.to_dict(), path)
 
 
-def load_source(path):
-    """A design or identification-result JSON file, by its ``format`` key."""
+def load_source(path, registry=None):
+    """A design or identification-result JSON file, by its ``format`` key (``registry``:
+    the effects a result's model may name, default the catalogue)."""
     d = read_json(path, what="design or identification result")
     kind = d.get("format") if isinstance(d, dict) else None
     if kind == "doe_calib.design":
         return DesignResult.from_dict(d)
     if kind == "doe_calib.identification":
-        return IdentificationResult.from_dict(d)
+        return IdentificationResult.from_dict(d, registry)
     raise DataError("neither a design nor an identification result (\"format\" is "
                     f"{kind!r})", path, 1, 1)
 
 
-def _covariance(source, sigma):
+def _covariance(source, sigma, registry=None):
     """(model, parameter set, covariance of the free parameters (SI), σ (m)) of a source."""
-    model = build_model(source.robot, source.tool, source.model)
+    model = build_model(source.robot, source.tool, source.model, registry=registry)
     if isinstance(source, DesignResult):
         if sigma is None:  # the design's own σ; DEFAULT_SIGMA for files that lack it
             sigma = DEFAULT_SIGMA if source.sigma_mm is None else source.sigma_mm / 1000.0
@@ -153,7 +154,7 @@ def _covariance(source, sigma):
 
 
 def compare(sources, labels=None, sigma: float | None = None, task=None,
-            task_point=(0.0, 0.0, 0.0)) -> Comparison:
+            task_point=(0.0, 0.0, 0.0), registry=None) -> Comparison:
     """Compare the precision of designs and identification results.
 
     Parameters
@@ -169,6 +170,8 @@ def compare(sources, labels=None, sigma: float | None = None, task=None,
         Task poses and their wrenches (SI), e.g. from :func:`doe_calib.io.csv_files.read_design`.
     task_point : array_like, shape (3,)
         The point in the flange frame, m.
+    registry : EffectRegistry, optional
+        The effects the sources' models may name (default the catalogue).
 
     Returns
     -------
@@ -190,7 +193,7 @@ def compare(sources, labels=None, sigma: float | None = None, task=None,
         raise DataError("the task poses and every source must have the same number of joints")
     names, units, stds, tcp, sigmas = {}, {}, [], [], []
     for source in sources:
-        model, params, cov, s = _covariance(source, sigma)
+        model, params, cov, s = _covariance(source, sigma, registry)
         sigmas.append(1000.0 * s)
         free = [p for p, f in zip(params.parameters, params.free) if f]
         d = np.sqrt(np.clip(np.diag(cov), 0, None))

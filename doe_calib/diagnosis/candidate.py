@@ -260,17 +260,17 @@ def why_not(p_value, cv_rms_mm, implausible, cv_rms_before_mm, level, min_gain, 
     return f"{proposed_spec} predicts better" if proposed_spec else "not chosen"
 
 
-def _parameters(spec, robot) -> tuple:
+def _parameters(spec, robot, registry=None) -> tuple:
     """Names and display units of the effect's parameters (cheap: no model is built)."""
     try:
-        pars = parse_effect(spec).parameters(robot)
+        pars = parse_effect(spec, registry=registry).parameters(robot)
     except (DoeCalibError, ValueError):
         return (), ()
     return tuple(p.name for p in pars), tuple(p.display_unit for p in pars)
 
 
 def candidate_records(tests, robot, words, cv_rms_before_mm: float, level: float,
-                      min_gain: float, proposed: str | None) -> tuple:
+                      min_gain: float, proposed: str | None, registry=None) -> tuple:
     """The candidates of a diagnosis, from its tests (``CandidateTest``, ranked).
 
     Parameters
@@ -286,6 +286,9 @@ def candidate_records(tests, robot, words, cv_rms_before_mm: float, level: float
         The diagnosis's significance level and material gain.
     proposed : str or None
         The proposed candidate's spec.
+    registry : EffectRegistry, optional
+        Names the effects (default the built-in ones): pass the diagnosis's own
+        registry when user effects were tested.
 
     Returns
     -------
@@ -293,7 +296,7 @@ def candidate_records(tests, robot, words, cv_rms_before_mm: float, level: float
     """
     out = []
     for t, text in zip(tests, words):
-        names, units = _parameters(t.spec, robot)
+        names, units = _parameters(t.spec, robot, registry)
         sizes = tuple(FittedSize.from_dict(r) for r in t.fitted)
         if sizes:
             names, units = tuple(s.name for s in sizes), tuple(s.unit for s in sizes)

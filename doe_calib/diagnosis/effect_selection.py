@@ -29,7 +29,7 @@ def _size_words(sizes) -> str:
 
 def refine(model, measurements, validation=None, level: float = 0.01, max_steps: int = 5,
            min_gain: float = 0.02, folds: int = 5, grouping: str = "auto", progress=None,
-           fit=None) -> RefineResult:
+           fit=None, registry=None) -> RefineResult:
     """Grow ``model`` one effect at a time while an effect predicts materially better.
 
     Parameters
@@ -54,6 +54,11 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         ``progress(step, text)`` after each step.
     fit : IdentificationResult, optional
         The starting model's fit to ``measurements``, when already at hand.
+    registry : EffectRegistry, optional
+        Whose catalogue the candidate effects come from (default the built-in one;
+        user effects: ``DEFAULT_REGISTRY.with_file(path)``). A candidate whose
+        fitted values are physically implausible (its parameters' bounds and
+        plausible ranges, :func:`~doe_calib.diagnosis.engine.diagnose`) is not added.
 
     Returns
     -------
@@ -62,7 +67,8 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
     fit = identify_quietly(model, measurements) if fit is None else fit
     steps, added, reason, effect = [], None, "starting model", None
     while True:
-        diag = diagnose(model, measurements, fit, level, folds, grouping, min_gain=min_gain)
+        diag = diagnose(model, measurements, fit, level, folds, grouping, min_gain=min_gain,
+                        registry=registry)
         val = validation_rms(model, fit.parameters.values, validation) \
             if validation is not None else None
         steps.append(RefineStep(model.spec, added, diag.rms_mm, diag.cv_rms_mm, val,
@@ -80,7 +86,8 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         if len(steps) > max_steps:
             stopped = f"stopped after {max_steps} added effects ({best.spec} would be next)"
             break
-        model, start = augmented(model, fit.parameters, parse_effect(best.spec))
+        model, start = augmented(model, fit.parameters, parse_effect(best.spec,
+                                                                     registry=registry))
         fit = identify_quietly(model, measurements, start, register=False)
         added, effect = best.spec, best
         reason = (f"added {best.spec}, {best.words}: "

@@ -25,7 +25,7 @@ from scipy import stats
 
 from doe_calib.errors import ModelError
 from doe_calib.estimation.weighted_residuals import weighted_residual
-from doe_calib.model.effects import REGISTRY, joint_index
+from doe_calib.model.effects import DEFAULT_REGISTRY, joint_index
 from doe_calib.model.marker_model import build_model
 
 
@@ -72,17 +72,19 @@ class CandidateTest:
         return cls(**fields)
 
 
-def candidate_effects(model, configurations=None) -> list:
+def candidate_effects(model, configurations=None, registry=None) -> list:
     """Every catalogue effect instance not yet in ``model`` (one per joint where it applies).
 
     Effects with several shapes give one candidate per shape;
-    ``configurations`` (the measured ones) place data-dependent shapes.
+    ``configurations`` (the measured ones) place data-dependent shapes. The
+    catalogue is ``registry``'s (default :data:`~doe_calib.model.effects.DEFAULT_REGISTRY`).
     """
+    registry = DEFAULT_REGISTRY if registry is None else registry
     robot = model.robot
     present = {(e.name, None if e.joint is None else joint_index(robot, e.joint))
                for e in model.effects}
     out = []
-    for cls in REGISTRY.values():
+    for cls in registry.catalogue():
         for e in cls.candidates(robot, configurations):
             j = None if e.joint is None else joint_index(robot, e.joint)
             if (e.name, j) not in present and (e.name, None) not in present:
@@ -123,7 +125,8 @@ def _basis(jac: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     return u[:, s > tol * (s[0] if s.size else 1.0)]
 
 
-def test_candidates(model, measurements, params, effects=None) -> list[CandidateTest]:
+def test_candidates(model, measurements, params, effects=None,
+                    registry=None) -> list[CandidateTest]:
     """Score/F test of every candidate effect against the residual of ``params``.
 
     Parameters
@@ -134,14 +137,16 @@ def test_candidates(model, measurements, params, effects=None) -> list[Candidate
     params : ParameterSet
         The fitted values and free flags.
     effects : list of Effect, optional
-        Candidates; default :func:`candidate_effects`.
+        Candidates; default :func:`candidate_effects` of ``registry``.
+    registry : EffectRegistry, optional
+        Whose catalogue the default candidates come from (default the built-in one).
 
     Returns
     -------
     list of CandidateTest, strongest evidence (smallest p, as log10) first.
     """
-    effects = candidate_effects(model, measurements.configurations) if effects is None \
-        else effects
+    if effects is None:
+        effects = candidate_effects(model, measurements.configurations, registry)
     r, q_basis = fitted_basis(model, measurements, params)
     rank_j = q_basis.shape[1]
     ss = float(r @ r)

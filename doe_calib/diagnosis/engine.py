@@ -17,25 +17,10 @@ from doe_calib.diagnosis.effect_tests import augmented, test_candidates
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.variables import configuration_variables, follows
-from doe_calib.errors import DoeCalibError
+from doe_calib.errors import DoeCalibError, ModelError
 from doe_calib.estimation.identify import identify_quietly
+from doe_calib.estimation.plausibility import beyond_plausible, out_of_bounds, value_words
 from doe_calib.model.effects import parse_effect
-
-_PHRASES = {"cyclic": "a cyclic (transmission) error of joint {j}",
-            "gear_ratio": "a gear-ratio (encoder scale) error of joint {j}",
-            "backlash": "backlash of joint {j}",
-            "compliance_by_angle": "a compliance of joint {j} that changes with its angle",
-            "gravity_compliance": "a compliance of joint {j} under the robot's own weight",
-            "joint_offset": "joint offsets", "geometry": "link geometry errors",
-            "joint_compliance": "joint compliance", "thermal": "thermal expansion of the links",
-            "link_compliance": "bending of the links under load"}
-
-#: Parameter-name prefixes of sizes that must be positive (compliances, band widths).
-_POSITIVE = ("k_", "kg_", "lc_", "backlash_")
-
-#: Largest plausible size of a transmission's cyclic error term or backlash, rad (2°);
-#: for a prismatic joint's backlash, 2 mm.
-TRANSMISSION_LIMIT = {"rad": np.radians(2.0), "m": 2e-3}
 
 #: A residual "follows" a variable when its adjusted R² reaches this.
 FOLLOWS_R2 = 0.2
@@ -59,18 +44,22 @@ def screening_set(measurements, limit: int = SCREENING_CONFIGURATIONS, seed: int
                     f"configurations); the adequacy test and the fit use every reading")
 
 
-def describe(candidate, robot) -> str:
-    """The candidate in words, e.g. "a cyclic (transmission) error of joint 3 (a3)"."""
-    j = "" if candidate.joint is None else \
-        f"{candidate.joint} ({robot.joints[candidate.joint - 1].name})"
-    return _PHRASES.get(candidate.effect, f"effect {candidate.spec}").format(j=j)
+def describe(candidate, robot, registry=None) -> str:
+    """The candidate in its effect's words (:meth:`Effect.describe`), e.g. "a cyclic
+    (transmission) error of joint 3 (a3)"; ``registry`` names the effects (default the
+    catalogue)."""
+    try:
+        return parse_effect(candidate.spec, registry=registry).describe(robot)
+    except ModelError:
+        return f"effect {candidate.spec}"
 
 
-def _fitted(fit, names) -> tuple:
-    """The new parameters' values ± a-posteriori std in display units, and implausible ones."""
+def _fitted(fit, names, effect) -> tuple:
+    """The new parameters' values ± a-posteriori std in display units, and a note on those
+    beyond their bounds or plausible range (the parameters' and ``effect``'s words)."""
     ps = fit.parameters
     std = fit.std(a_posteriori=True)
-    rows, negative, cyclic, wide = [], [], [], []
+    rows = []
     for name in names:
         i = ps.names.index(name)
         p = ps.parameters[i]
@@ -78,27 +67,19 @@ def _fitted(fit, names) -> tuple:
         rows.append({"name": name, "value": float(ps.values[i] * f),
                      "std": float(std[i] * f) if ps.free[i] else None, "unit": p.display_unit,
                      "free": bool(ps.free[i])})
-        positive = name.startswith(_POSITIVE) or (
-            name.startswith("chi_") and name.rsplit("_", 1)[1][:1] not in "sc")
-        value = f"{name} = {ps.values[i] * f:.3g} ± {std[i] * f:.2g} {p.display_unit}"
-        total = ps.values[i]
-        if name.startswith("chi_"):  # on top of the joint's constant compliance, if any
-            k = f"k_{name[4:].rsplit('_', 1)[0]}"
-            total += ps.values[ps.names.index(k)] if k in ps.names else 0.0
-        if positive and ps.free[i] and total + 2 * std[i] < 0:
-            negative.append(value)
-        limit = TRANSMISSION_LIMIT.get(p.unit, np.inf)
-        if name.startswith("cyc_") and abs(ps.values[i]) > limit:
-            cyclic.append(value)
-        if name.startswith("backlash_") and abs(ps.values[i]) > limit:
-            wide.append(value)
-    odd = [f"negative {', '.join(negative)}"] if negative else []
-    if cyclic:
-        odd.append(f"{', '.join(cyclic)}: far beyond a transmission's cyclic error (the joint "
-                   f"covers too little of a turn to separate the harmonics: a curve fit, not a "
-                   f"cyclic error)")
-    if wide:
-        odd.append(f"{', '.join(wide)}: far wider than a transmission's play")
+    odd = []
+    wrong = out_of_bounds(ps, std, names)
+    if wrong:
+        words = [value_words(p, ps[p.name], s) for p, _, s in wrong]
+        low = all(v < p.bounds[0] for p, v, _ in wrong)
+        odd.append(("negative " if low and all(p.bounds[0] == 0 for p, *_ in wrong) else
+                    "beyond physical bounds ") + ", ".join(words))
+        signs = list(dict.fromkeys(p.sign for p, *_ in wrong if p.sign))
+        odd[-1] += "".join(f" ({text})" for text in signs)
+    far = beyond_plausible(ps, names)
+    if far:
+        words = [value_words(p, v, std[ps.names.index(p.name)]) for p, v in far]
+        odd.append(f"{', '.join(words)}: {effect.implausible_words}")
     note = ("physically implausible: " + "; ".join(odd)) if odd else ""
     return tuple(rows), note
 
@@ -142,11 +123,11 @@ def _adequacy_words(test):
 
 
 def _verdict(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross, level,
-             min_gain, tolerance):
+             min_gain, tolerance, registry=None):
     ratio = _adequacy_words(test)
     cv_words = f"cross-validated RMS {cv:.3g} mm ({folds.description})"
     if proposed is not None:
-        words = describe(proposed, model.robot)
+        words = describe(proposed, model.robot, registry)
         size = "; ".join(f"{r['name']} = {r['value']:.3g}"
                          + (f" ± {r['std']:.2g}" if r["std"] is not None else "")
                          + f" {r['unit']}" for r in proposed.fitted[:4])
@@ -197,7 +178,7 @@ def _verdict(model, test, adequate, cv, folds, tests, proposed, follow, flagged,
 
 def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
              grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
-             tolerance: float = 0.05, progress=None) -> DiagnosisResult:
+             tolerance: float = 0.05, progress=None, registry=None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
 
     Parameters
@@ -224,6 +205,10 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         even when the χ² test (too sharp at large N) rejects.
     progress : callable, optional
         ``progress(done, total, note)`` while candidates are cross-validated.
+    registry : EffectRegistry, optional
+        Its :meth:`~doe_calib.model.effects.registry.EffectRegistry.catalogue` is what
+        is tested as missing (default the built-in catalogue; user effects:
+        ``DEFAULT_REGISTRY.with_file(path)``).
 
     Returns
     -------
@@ -240,20 +225,21 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     screen, screened = screening_set(measurements)
     split = make_folds(screen, folds, grouping)
     cv = cross_validated_rms(model, screen, params, split)
-    tests = test_candidates(model, screen, params)
+    tests = test_candidates(model, screen, params, registry=registry)
     chosen = _groups_to_try(tests, level, cv_top)
     scored = {}
     for i, t in enumerate(chosen):
         if progress:
             progress(i, len(chosen), t.spec)
-        big, bp = augmented(model, params, parse_effect(t.spec))
+        effect = parse_effect(t.spec, registry=registry)
+        big, bp = augmented(model, params, effect)
         try:  # folds start from the grown model's own fit: what they hold fixed is then right
             big_fit = identify_quietly(big, screen, bp, register=False)
         except DoeCalibError:
             scored[t.spec] = t.with_cv(float("nan"))
             continue
         new = [n for n in big_fit.parameters.names if n not in params.names]
-        rows, odd = _fitted(big_fit, new)
+        rows, odd = _fitted(big_fit, new, effect)
         scored[t.spec] = t.with_cv(cross_validated_rms(big, screen, big_fit.parameters, split),
                                    rows, odd)
     ranked = sorted(scored.values(), key=lambda t: (np.nan_to_num(t.cv_rms_mm, nan=np.inf),
@@ -272,7 +258,7 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     n_poses = len(set(measurements.configurations.pose))
     gross = not adequate and proposed is None and _gross_errors(test, flagged, follow, n_poses)
     verdict = _verdict(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
-                       gross, level, min_gain, tolerance)
+                       gross, level, min_gain, tolerance, registry)
     odd = next((t for t in _material(ranked, cv, level, min_gain) if t.implausible), None)
     if odd is not None and (proposed is None or odd.cv_rms_mm < proposed.cv_rms_mm):
         verdict += (f" Not proposed although it predicts better (cross-validated RMS "
@@ -283,8 +269,9 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
             "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
             "tolerance": tolerance, "chi2_adequate": test.adequate}
     spec = None if proposed is None else proposed.spec
-    candidates = candidate_records(ranked, model.robot, [describe(t, model.robot) for t in ranked],
-                                   cv, level, min_gain, spec)
+    candidates = candidate_records(ranked, model.robot,
+                                   [describe(t, model.robot, registry) for t in ranked],
+                                   cv, level, min_gain, spec, registry)
     return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, adequate, chi2,
                            candidates, tuple(follow), tuple(flagged), level, verdict,
                            spec, int(res.weighted.size),

@@ -106,10 +106,9 @@ def _explain(b, dependent, kept, params, norms) -> list[str]:
     for k, i in enumerate(dependent):
         p = params[i]
         if norms[i] == 0 or not kept:
-            no_load = (" (no load in these configurations puts a torque on that joint)"
-                       if p.unit in ("rad/(N·m)", "m/N") else "")
+            why = f" ({p.inert_when})" if p.inert_when else ""
             out.append(f"{p.description} ({p.name}) has no effect on the measured markers in "
-                       f"these configurations{no_load}")
+                       f"these configurations{why}")
             continue
         share = np.abs(alpha[:, k]) / np.abs(alpha[:, k]).sum()
         top = [kept[j] for j in np.argsort(-share)[:3] if share[j] > 0.05]

@@ -2,7 +2,9 @@
 
 Each check looks for a typical mistake that a fit hides rather than reveals:
 a wrong σ, coordinates in metres or joint angles in radians, a placement
-error as large as a link, a marker layout that cannot fix the orientation.
+error as large as a link, a marker layout that cannot fix the orientation, a
+fitted value beyond its parameter's physical bounds or plausible range (as the
+parameter declares them: :class:`~doe_calib.model.parameters.Parameter`).
 :func:`check` runs them all and returns what it found, one sentence each; the
 identification stores them in the result's ``warnings``.
 """
@@ -23,6 +25,8 @@ PLACEMENT_SHARE, PLACEMENT_FLOOR_MM, PLACEMENT_MM = 0.2, 5.0, 50.0
 BAD_SIGMA_HAT_MM = 1.0
 #: Condition number of the centred marker layout above which it is nearly collinear.
 MARKER_CONDITION_WARN = 20.0
+#: A fitted value beyond its parameter's bounds by more than this many std is reported.
+BOUND_STDS = 2.0
 
 
 def robot_reach(robot) -> float:
@@ -101,6 +105,92 @@ def placement_findings(params, robot) -> list[str]:
     return out
 
 
+def out_of_bounds(params, std, names=None) -> list:
+    """Free parameters whose fitted value lies beyond its ``bounds`` by more than
+    :data:`BOUND_STDS` standard deviations.
+
+    A parameter that ``adds_to`` another in the set is judged by the sum of the two.
+
+    Parameters
+    ----------
+    params : ParameterSet
+    std : ndarray, shape (P,)
+        Standard deviation of each value, SI (0 for fixed ones).
+    names : sequence of str, optional
+        Only these parameters (default all).
+
+    Returns
+    -------
+    list of (Parameter, value, std)
+        Value (SI) as judged, i.e. with what it adds to.
+    """
+    out = []
+    for i in params.index(params.names if names is None else list(names)):
+        p = params.parameters[i]
+        low, high = p.bounds
+        if not params.free[i] or (low == -np.inf and high == np.inf):
+            continue
+        total = params.values[i] + (params[p.adds_to] if p.adds_to in params.names else 0.0)
+        if total + BOUND_STDS * std[i] < low or total - BOUND_STDS * std[i] > high:
+            out.append((p, float(total), float(std[i])))
+    return out
+
+
+def beyond_plausible(params, names=None) -> list:
+    """Parameters whose value lies outside its ``plausible`` range.
+
+    Returns
+    -------
+    list of (Parameter, value)
+        Value in SI.
+    """
+    out = []
+    for i in params.index(params.names if names is None else list(names)):
+        p = params.parameters[i]
+        low, high = p.plausible
+        if not low <= params.values[i] <= high:
+            out.append((p, float(params.values[i])))
+    return out
+
+
+def value_words(p, value: float, std: float | None = None) -> str:
+    """``name = value ± std unit`` in display units."""
+    f = p.display_factor
+    spread = "" if std is None else f" ± {std * f:.2g}"
+    return f"{p.name} = {value * f:.3g}{spread} {p.display_unit}"
+
+
+def _range_words(p, field: str) -> str:
+    low, high = p.display_range(field)
+    if low is None:
+        return f"≤ {high:.3g} {p.display_unit}"
+    if high is None:
+        return f"≥ {low:.3g} {p.display_unit}"
+    return f"within [{low:.3g}, {high:.3g}] {p.display_unit}"
+
+
+def parameter_findings(params, std) -> list[str]:
+    """Findings for fitted values beyond their parameters' bounds or plausible ranges.
+
+    Parameters
+    ----------
+    params : ParameterSet
+        The fitted values (SI).
+    std : ndarray, shape (P,)
+        Their standard deviations, SI.
+    """
+    out = []
+    for p, value, s in out_of_bounds(params, std):
+        whose = f" (with {p.adds_to})" if p.adds_to in params.names else ""
+        sign = f"; {p.sign}" if p.sign else ""
+        out.append(f"the fitted {p.description}{whose} is {value_words(p, value, s)}, not "
+                   f"{_range_words(p, 'bounds')}: physically implausible{sign}")
+    for p, value in beyond_plausible(params):
+        out.append(f"the fitted {p.description} is {value_words(p, value)}: implausible for it "
+                   f"(expected {_range_words(p, 'plausible')})")
+    return out
+
+
 def marker_condition(positions) -> float:
     """Condition number σ₁/σ₂ of the centred marker positions (inf: collinear or coincident).
 
@@ -155,5 +245,6 @@ def check(model, measurements, result) -> tuple:
     if bad_fit:
         found.append(angles_in_radians(measurements.configurations, robot))
     found += placement_findings(result.parameters, robot)
+    found += parameter_findings(result.parameters, result.std(a_posteriori=True))
     found.append(marker_layout_finding(model.tool))
     return tuple(f for f in found if f)

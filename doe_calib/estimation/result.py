@@ -149,12 +149,14 @@ class IdentificationResult:
         return write_json(self.to_dict(), path)
 
     @classmethod
-    def from_dict(cls, d: dict) -> "IdentificationResult":
-        """Inverse of :meth:`to_dict` (the parameter set from the model's description)."""
+    def from_dict(cls, d: dict, registry=None) -> "IdentificationResult":
+        """Inverse of :meth:`to_dict` (the parameter set from the model's description;
+        ``registry`` names the effects the model may use, default the catalogue)."""
         from doe_calib.model.marker_model import describe_model
 
         robot, tool = Robot.from_dict(d["robot"]), Tool.from_dict(d["tool"])
-        params = describe_model(robot, tool, d["model"]).nominal().from_list(d["parameters"])
+        params = describe_model(robot, tool, d["model"], registry).nominal().from_list(
+            d["parameters"])
         return cls(robot, tool, d["model"], d["estimator"], params,
                    np.array(d["covariance_si"], float).reshape(int(params.free.sum()), -1),
                    float(d["sigma_ratio"]), d["residuals"], d["convergence"],
@@ -162,10 +164,11 @@ class IdentificationResult:
                    bool(d.get("sigma_estimated", False)))
 
     @classmethod
-    def from_json(cls, path) -> "IdentificationResult":
-        """Read a result file written by :meth:`to_json`."""
+    def from_json(cls, path, registry=None) -> "IdentificationResult":
+        """Read a result file written by :meth:`to_json`; ``registry``: see :meth:`from_dict`
+        (a model with user effects needs a registry holding them)."""
         return cls.from_dict(read_json(path, "doe_calib.identification",
-                                       "doe_calib identification result"))
+                                       "doe_calib identification result"), registry)
 
 
 def save_parameters(path, params, model: str) -> None:

@@ -83,7 +83,8 @@ class ModelDescription:
         return ParameterSet.nominal(self.parameters)
 
 
-def describe_model(robot, tool, model: str | tuple = DEFAULT_MODEL) -> ModelDescription:
+def describe_model(robot, tool, model: str | tuple = DEFAULT_MODEL,
+                   registry=None) -> ModelDescription:
     """The description of a model: its effects parsed and its parameters listed.
 
     Parameters
@@ -92,6 +93,10 @@ def describe_model(robot, tool, model: str | tuple = DEFAULT_MODEL) -> ModelDesc
     tool : Tool
     model : str or tuple of Effect
         Effects, e.g. ``"joint_offset+geometry+joint_compliance"``.
+    registry : EffectRegistry, optional
+        The effects a model string may name (default
+        :data:`~doe_calib.model.effects.DEFAULT_REGISTRY`; user effects:
+        ``DEFAULT_REGISTRY.with_file(path)``).
 
     Raises
     ------
@@ -107,7 +112,7 @@ def describe_model(robot, tool, model: str | tuple = DEFAULT_MODEL) -> ModelDesc
     >>> d.n_parameters   # 6 base + 9 marker + 6 offsets
     21
     """
-    effects = parse_model(model) if isinstance(model, str) else tuple(model)
+    effects = parse_model(model, registry) if isinstance(model, str) else tuple(model)
     params = base_parameters() + marker_parameters(tool)
     owner = {p.name: "the base and markers" for p in params}  # parameter → who defines it
     for e in effects:
@@ -200,7 +205,7 @@ def _key(description, native: bool):
 
 
 def build_model(robot, tool=None, model: str | tuple = DEFAULT_MODEL,
-                compile: bool = False) -> Model:
+                compile: bool = False, registry=None) -> Model:
     """Build the measurement model for a robot, a tool and a set of effects.
 
     The Functions of a model are built once per process: building the same
@@ -219,6 +224,8 @@ def build_model(robot, tool=None, model: str | tuple = DEFAULT_MODEL,
         outputs, several times faster. The first build of a model takes a few
         seconds; later builds load the cached library. Commands decide with
         :func:`for_workload`.
+    registry : EffectRegistry, optional
+        The effects a model string may name; see :func:`describe_model`.
 
     Raises
     ------
@@ -234,7 +241,7 @@ def build_model(robot, tool=None, model: str | tuple = DEFAULT_MODEL,
     21
     """
     description = robot if isinstance(robot, ModelDescription) else \
-        describe_model(robot, tool, model)
+        describe_model(robot, tool, model, registry)
     key = _key(description, compile)
     while True:
         with _BUILT_LOCK:

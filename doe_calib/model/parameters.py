@@ -41,6 +41,26 @@ class Parameter:
         Typical size of its deviation, SI; used to scale the problem.
     description : str
         Words for reports, e.g. "offset of joint a2".
+    bounds : tuple of float
+        ``(low, high)``, SI: the physical range (a compliance or a band width
+        is ≥ 0). A fitted value beyond it by more than twice its standard
+        deviation is reported as physically implausible.
+    plausible : tuple of float
+        ``(low, high)``, SI: the range beyond which a fitted value, though
+        physically possible, is implausible for the effect (a transmission's
+        cyclic error within ±2°).
+    sign : str
+        What the sign of the value means, in words, where it matters (e.g.
+        "positive: the joint yields in the direction of the torque; …");
+        quoted when a value has the wrong sign.
+    adds_to : str
+        Name of a parameter this one adds to when both are in a model; the
+        bounds then hold for the sum (a compliance bin on top of the joint's
+        constant compliance).
+    inert_when : str
+        Why the parameter may show nowhere in the markers, in words (e.g. "no
+        load in these configurations puts a torque on that joint"); "" when
+        it always shows.
     """
 
     name: str
@@ -49,6 +69,19 @@ class Parameter:
     nominal: float
     scale: float
     description: str
+    bounds: tuple = (-np.inf, np.inf)
+    plausible: tuple = (-np.inf, np.inf)
+    sign: str = ""
+    adds_to: str = ""
+    inert_when: str = ""
+
+    def __post_init__(self):
+        for field in ("bounds", "plausible"):
+            low, high = (float(v) for v in getattr(self, field))
+            if not low <= high:
+                raise ValueError(f"parameter {self.name}: {field} ({low}, {high}) must have "
+                                 f"low ≤ high")
+            object.__setattr__(self, field, (low, high))
 
     @property
     def display_unit(self) -> str:
@@ -57,6 +90,11 @@ class Parameter:
     @property
     def display_factor(self) -> float:
         return DISPLAY_UNITS[self.unit][1]
+
+    def display_range(self, field: str) -> list:
+        """``bounds`` or ``plausible`` in display units, None for an infinite end (for files)."""
+        k = self.display_factor
+        return [float(v * k) if np.isfinite(v) else None for v in getattr(self, field)]
 
 
 @dataclass(frozen=True, eq=False)
@@ -187,11 +225,18 @@ class ParameterSet:
             k = p.display_factor
             rows.append({"name": p.name, "block": p.block, "unit": p.display_unit,
                          "description": p.description, "nominal": p.nominal * k,
-                         "value": float(v) * k, "free": bool(f), "fixed_reason": why})
+                         "value": float(v) * k, "free": bool(f), "fixed_reason": why,
+                         "bounds": p.display_range("bounds"),
+                         "plausible": p.display_range("plausible"), "sign": p.sign})
         return rows
 
     def from_list(self, rows) -> "ParameterSet":
-        """Values and free flags read back from :meth:`to_list` rows (matched by name)."""
+        """Values and free flags read back from :meth:`to_list` rows (matched by name).
+
+        The parameters themselves (unit, bounds, plausible range, sign) are this
+        set's; rows of older files, without ``bounds``, ``plausible`` and
+        ``sign``, read the same.
+        """
         by_name = {r["name"]: r for r in rows}
         missing = [n for n in self.names if n not in by_name]
         if missing:

@@ -61,7 +61,10 @@ def random_truth(model, rng=None, length: float = 1e-3, angle: float = 1e-3,
     """A plausible true parameter vector: nominal plus random errors of the given sizes (SI).
 
     Parameters of other units (scale factors, 1/K) and link compliances
-    take their parameter's scale as size.
+    take their parameter's scale as size. A parameter with a physical bound
+    (:attr:`~doe_calib.model.parameters.Parameter.bounds`: compliances and band
+    widths ≥ 0) is drawn inside it, between 0.2 and 1 size from the bound; the
+    others are nominal plus a normal error of that size.
     ``base`` (6: m, rad rotation vector) places the tracker; default a random
     placement a few metres away at any angle.
     """
@@ -77,8 +80,11 @@ def random_truth(model, rng=None, length: float = 1e-3, angle: float = 1e-3,
             size = p.scale
         if p.block == "markers":
             size = marker
-        if p.unit in ("rad/(N·m)", "m/N") or p.block == "backlash":  # compliances, widths > 0
-            v[i] = size * rng.uniform(0.2, 1.0)
+        low, high = p.bounds
+        if np.isfinite(low):  # inside the physical range: compliances, band widths ≥ 0
+            v[i] = low + size * rng.uniform(0.2, 1.0)
+        elif np.isfinite(high):
+            v[i] = high - size * rng.uniform(0.2, 1.0)
         else:
             v[i] += size * rng.standard_normal()
     if base is None:

@@ -49,9 +49,10 @@ def _candidates_table(diagnosis, top: int = 15):
                   "decision"], rows, 4)
 
 
-def _added_variables(diagnosis, model, measurements, fit) -> list:
-    """Added-variable data of the strongest candidates (those that can be rebuilt)."""
-    effects = {e.spec(): e for e in candidate_effects(model, measurements.configurations)}
+def _added_variables(diagnosis, model, measurements, fit, registry=None) -> list:
+    """Added-variable data of the strongest candidates (those ``registry`` can rebuild)."""
+    effects = {e.spec(): e for e in candidate_effects(model, measurements.configurations,
+                                                      registry)}
     variables = configuration_variables(model.robot, measurements.configurations)
     basis = fitted_basis(model, measurements, fit.parameters)  # shared by every candidate
     out = []
@@ -109,10 +110,12 @@ def failure_sections(diagnosis, model, measurements, fit, dpi: int = 90,
     return out
 
 
-def evidence_section(diagnosis, model, measurements, fit, dpi: int = 90, title: str = ""):
+def evidence_section(diagnosis, model, measurements, fit, dpi: int = 90, title: str = "",
+                     registry=None):
     """Which effect is missing: added-variable plots of the strongest candidates, their
-    tests and the share of the residual each explains."""
-    plots = _added_variables(diagnosis, model, measurements, fit)
+    tests and the share of the residual each explains (``registry``: the effects the
+    diagnosis tested, default the catalogue)."""
+    plots = _added_variables(diagnosis, model, measurements, fit, registry)
     shapes = [figure(_png(added_variable_panels(plots), dpi),
                      "added-variable plots of the strongest candidates",
                      "For each of the strongest candidates: the residual of each configuration "
@@ -172,20 +175,21 @@ def verdict_section(diagnosis, title: str = ""):
 
 
 def diagnosis_sections(diagnosis, model, measurements, fit, dpi: int = 90,
-                       title: str = "") -> list:
+                       title: str = "", registry=None) -> list:
     """One diagnosis as a story: where the model fails → which effect is missing → verdict.
 
-    ``title`` prefixes every section heading (e.g. "Starting model: ").
+    ``title`` prefixes every section heading (e.g. "Starting model: "); ``registry``: the
+    effects the diagnosis tested (default the catalogue).
     """
     return (failure_sections(diagnosis, model, measurements, fit, dpi, title)
-            + [evidence_section(diagnosis, model, measurements, fit, dpi, title),
+            + [evidence_section(diagnosis, model, measurements, fit, dpi, title, registry),
                verdict_section(diagnosis, title)])
 
 
-def diagnosis_report(diagnosis, model, measurements, fit, path, dpi: int = 90):
+def diagnosis_report(diagnosis, model, measurements, fit, path, dpi: int = 90, registry=None):
     """Write the HTML report of one diagnosis (see :func:`doe_calib.diagnosis.diagnose`):
     the story, then the identified parameters and the summary (folded)."""
-    sections = diagnosis_sections(diagnosis, model, measurements, fit, dpi)
+    sections = diagnosis_sections(diagnosis, model, measurements, fit, dpi, registry=registry)
     sections += [parameters_section(fit), section("Summary", collapsible(
         "the diagnosis as text", preformatted(diagnosis.summary())))]
     return write_report(path, f"Diagnosis of {diagnosis.model}", sections)
@@ -215,23 +219,24 @@ def steps_section(result, dpi: int = 90):
          "adequate", "why"], rows, 4), paragraph(f"Stopped: {result.stopped}"))
 
 
-def refine_sections(result, model, measurements, dpi: int = 90) -> list:
+def refine_sections(result, model, measurements, dpi: int = 90, registry=None) -> list:
     """A refinement as a story: each added effect and the error it removed, then where the
     final model still fails, what could still be missing, and the final verdict.
 
-    ``model`` is the final model (``result.fit`` is its identification).
+    ``model`` is the final model (``result.fit`` is its identification); ``registry``:
+    the effects the refinement tested (default the catalogue).
     """
     d, fit = result.diagnosis, result.fit
     return ([steps_section(result, dpi)]
             + failure_sections(d, model, measurements, fit, dpi, "Final model: ")
-            + [evidence_section(d, model, measurements, fit, dpi, "Final model: "),
+            + [evidence_section(d, model, measurements, fit, dpi, "Final model: ", registry),
                verdict_section(d, "Final verdict: ")])
 
 
-def refine_report(result, model, measurements, path, dpi: int = 90):
+def refine_report(result, model, measurements, path, dpi: int = 90, registry=None):
     """Write the HTML report of a refinement (:func:`refine_sections`, then the final
     model's parameters and its identification summary, folded)."""
-    sections = refine_sections(result, model, measurements, dpi)
+    sections = refine_sections(result, model, measurements, dpi, registry)
     sections += [parameters_section(result.fit), section("Final identification", collapsible(
         "the identification as text", preformatted(result.fit.summary())))]
     return write_report(path, f"Refinement to {result.fit.model}", sections)

@@ -1,8 +1,10 @@
-"""Physical effects a model can include, and the registry that names them.
+"""Physical effects a model can include, and the default registry that names them.
 
 A model string joins effect names with ``+``, e.g.
 ``joint_offset+geometry+joint_compliance``. Base frame and marker positions
-are always part of a model and are not effects.
+are always part of a model and are not effects. Which names a string may use
+is an :class:`EffectRegistry` the caller holds (default :data:`DEFAULT_REGISTRY`,
+the catalogue; user effects: :meth:`EffectRegistry.with_file`).
 """
 from __future__ import annotations
 
@@ -19,21 +21,24 @@ from doe_calib.model.effects.gravity_compliance import GravityCompliance
 from doe_calib.model.effects.joint_compliance import JointCompliance
 from doe_calib.model.effects.joint_offset import JointOffset
 from doe_calib.model.effects.link_compliance import LinkCompliance
+from doe_calib.model.effects.registry import EffectRegistry
 from doe_calib.model.effects.thermal import Thermal
+from doe_calib.model.effects.user import load_effect_file, load_effect_files
 
-#: Effect name → class. Adding an effect: one module, one line here.
-REGISTRY = {
-    "joint_offset": JointOffset,
-    "geometry": Geometry,
-    "joint_compliance": JointCompliance,
-    "compliance_by_angle": ComplianceByAngle,
-    "gravity_compliance": GravityCompliance,
-    "gear_ratio": GearRatio,
-    "cyclic": Cyclic,
-    "backlash": Backlash,
-    "thermal": Thermal,
-    "link_compliance": LinkCompliance,
-}
+#: The catalogue: every built-in effect. Adding an effect: one module, one line here.
+DEFAULT_REGISTRY = EffectRegistry([
+    JointOffset, Geometry, JointCompliance, ComplianceByAngle, GravityCompliance, GearRatio,
+    Cyclic, Backlash, Thermal, LinkCompliance,
+])
+
+#: Read-only alias of :data:`DEFAULT_REGISTRY`, for code written when the registry was a dict.
+REGISTRY = DEFAULT_REGISTRY
+
+
+def registry_with_files(paths, registry: EffectRegistry | None = None) -> EffectRegistry:
+    """``registry`` (default :data:`DEFAULT_REGISTRY`) with the effects of the user effect
+    files ``paths`` (None or empty: none) added; a new registry, ``registry`` is unchanged."""
+    return (DEFAULT_REGISTRY if registry is None else registry).with_files(paths)
 
 DEFAULT_MODEL = "joint_offset+geometry+joint_compliance"
 
@@ -50,16 +55,20 @@ def _value(text: str):
     return text
 
 
-def parse_effect(word: str, spec: str = ""):
-    """One effect from its model-string word, e.g. ``cyclic(j3,harmonics=2)``."""
+def parse_effect(word: str, spec: str = "", registry: EffectRegistry | None = None):
+    """One effect from its model-string word, e.g. ``cyclic(j3,harmonics=2)``.
+
+    ``registry`` names the effects the word may use (default :data:`DEFAULT_REGISTRY`).
+    """
+    registry = DEFAULT_REGISTRY if registry is None else registry
     match = _WORD.match(word)
     if not match:
         raise ModelError(f"cannot read effect {word!r} in model {spec or word!r}: write "
                          f"name or name(arguments), e.g. cyclic(j3)")
     name, inside = match.group(1), match.group(2)
-    if name not in REGISTRY:
+    if name not in registry:
         raise ModelError(f"unknown effect {name!r} in model {spec or word!r}; known effects: "
-                         f"{', '.join(REGISTRY)} (an effect of your own: load its file with "
+                         f"{', '.join(registry)} (an effect of your own: load its file with "
                          f"--effect-file)")
     args, options = [], {}
     for item in (a.strip() for a in (inside or "").split(",")):
@@ -71,7 +80,7 @@ def parse_effect(word: str, spec: str = ""):
         else:
             args.append(item)
     try:
-        return REGISTRY[name](*args, **options)
+        return registry[name](*args, **options)
     except (TypeError, ValueError) as exc:
         raise ModelError(f"effect {word.strip()!r} in model {spec or word!r}: wrong arguments "
                          f"({exc}); see {name}'s documentation") from None
@@ -90,8 +99,10 @@ def split_model(spec: str) -> list:
     return [w for w in words + [cur] if w.strip()]
 
 
-def parse_model(spec: str) -> tuple:
+def parse_model(spec: str, registry: EffectRegistry | None = None) -> tuple:
     """Effects named by a model string, in the string's order.
+
+    ``registry`` names the effects the string may use (default :data:`DEFAULT_REGISTRY`).
 
     Examples
     --------
@@ -100,12 +111,13 @@ def parse_model(spec: str) -> tuple:
     """
     effects = []
     for word in split_model(spec):
-        effect = parse_effect(word, spec)
+        effect = parse_effect(word, spec, registry)
         if any(e.spec() == effect.spec() for e in effects):
             raise ModelError(f"effect {effect.spec()!r} appears twice in model {spec!r}")
         effects.append(effect)
     return tuple(effects)
 
 
-__all__ = ["ChainSymbols", "Effect", "REGISTRY", "DEFAULT_MODEL", "joint_index", "parse_effect",
-           "parse_model", "split_model"]
+__all__ = ["ChainSymbols", "Effect", "EffectRegistry", "DEFAULT_REGISTRY", "REGISTRY",
+           "DEFAULT_MODEL", "joint_index", "load_effect_file", "load_effect_files", "parse_effect",
+           "parse_model", "registry_with_files", "split_model"]

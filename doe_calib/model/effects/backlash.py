@@ -51,6 +51,7 @@ the joint reaches poses from both directions.
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
 
 from doe_calib.errors import ModelError
 from doe_calib.io.measurements import ENV_FIELDS
@@ -60,6 +61,13 @@ from doe_calib.model.parameters import Parameter
 #: Torque (N·m, or force in N) over which the dead band is crossed.
 TORQUE_SCALE = 1.0
 
+#: Largest plausible band width: 2° (rad) for a revolute joint, 2 mm (m) for a prismatic one.
+LIMIT = {"rad": float(np.radians(2.0)), "m": 2e-3}
+
+#: What the sign of the width means.
+SIGN = ("positive: a band's width; negative usually means the approach directions or the "
+        "load's sign are flipped")
+
 #: What decides the side of the band; the first is the default.
 MODES = ("both", "torque", "approach", "gravity")
 
@@ -68,6 +76,8 @@ class Backlash(Effect):
     """``θ_k = backlash_<joint> / 2 · s_k``, s_k from the load, the approach or both."""
 
     name = "backlash"
+    phrase = "backlash of joint {joint}"
+    implausible_words = "far wider than a transmission's play"
     per_joint = True
 
     def __init__(self, joint, mode: str = MODES[0]):
@@ -99,9 +109,11 @@ class Backlash(Effect):
 
     def parameters(self, robot) -> list:
         j = robot.joints[joint_index(robot, self.joint)]
-        return [Parameter(f"backlash_{j.name}", self.name,
-                          "rad" if j.kind == "revolute" else "m", 0.0, 1e-4,
-                          f"backlash (dead-band width) of joint {j.name}")]
+        unit = "rad" if j.kind == "revolute" else "m"
+        return [Parameter(f"backlash_{j.name}", self.name, unit, 0.0, 1e-4,
+                          f"backlash (dead-band width) of joint {j.name}",
+                          bounds=(0.0, np.inf), plausible=(-LIMIT[unit], LIMIT[unit]),
+                          sign=SIGN)]
 
     def _half_width(self, s: ChainSymbols, k: int):
         return 0.5 * s.p[f"backlash_{s.robot.joints[k].name}"]

@@ -12,7 +12,14 @@ to the kinematic chain (see :mod:`doe_calib.model.kinematics`):
 
 Each returns ``None`` when the effect has nothing to say there. Adding an
 effect is a new module with a subclass of :class:`Effect` and one line in
-:mod:`doe_calib.model.effects` (the registry).
+:mod:`doe_calib.model.effects` (the default registry).
+
+An effect also owns what is known about it: the words a diagnosis verdict
+uses when it finds the effect missing (:attr:`Effect.phrase`, :meth:`Effect.describe`),
+and, on each of its parameters (:class:`~doe_calib.model.parameters.Parameter`),
+the unit, the physical ``bounds`` (a compliance is ≥ 0), the ``plausible``
+range (a cyclic error within ±2°) and what the ``sign`` means. Diagnosis,
+plausibility checks, identifiability and simulated truths read them there.
 
 An effect may take arguments, written in the model string as
 ``name(arg, key=value)``, e.g. ``cyclic(j3, harmonics=2)``: they are the
@@ -87,6 +94,11 @@ class Effect:
     per_joint = False
     #: Whether the effect reads ``ChainSymbols.gravity`` (the robot's own weight).
     uses_gravity = False
+    #: What a verdict calls the effect when it is missing, e.g. "backlash of joint {joint}";
+    #: ``{joint}`` becomes "3 (a3)". Empty: "effect <spec>".
+    phrase = ""
+    #: Why a fitted value outside its parameter's ``plausible`` range is implausible.
+    implausible_words = "beyond the range plausible for it"
 
     def __init__(self, *args, **options):
         self._args = tuple(str(a) for a in args)
@@ -123,6 +135,16 @@ class Effect:
         if cls.per_joint:
             return [cls(f"j{k + 1}") for k in range(robot.n_joints)]
         return [cls()]
+
+    def describe(self, robot) -> str:
+        """The effect in a verdict's words, e.g. "a cyclic (transmission) error of joint 3 (a3)"."""
+        if not self.phrase:
+            return f"effect {self.spec()}"
+        joint = ""
+        if self.joint is not None:
+            k = joint_index(robot, self.joint)
+            joint = f"{k + 1} ({robot.joints[k].name})"
+        return self.phrase.format(joint=joint)
 
     @property
     def joint(self):

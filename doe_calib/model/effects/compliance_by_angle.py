@@ -33,6 +33,7 @@ import numpy as np
 
 from doe_calib.errors import ModelError
 from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
+from doe_calib.model.effects.joint_compliance import BOUNDS, INERT, SIGN
 from doe_calib.model.parameters import Parameter
 
 
@@ -54,6 +55,7 @@ class ComplianceByAngle(Effect):
 
     name = "compliance_by_angle"
     per_joint = True
+    phrase = "a compliance of joint {joint} that changes with its angle"
 
     def __init__(self, joint, bins: int = 5, edges_deg=None, harmonics: int = 0,
                  nodes_deg=None):
@@ -122,13 +124,18 @@ class ComplianceByAngle(Effect):
         unit = "rad/(N·m)" if j.kind == "revolute" else "m/N"
         what = f"compliance of joint {j.name}"
 
-        def par(suffix, text):
+        def par(suffix, text, bounded=True):
+            """A compliance on top of the joint's constant one, if any (``k_<joint>``); its
+            Fourier terms (``bounded=False``) take either sign."""
             return Parameter(f"chi_{j.name}_{suffix}", self.name, unit, 0.0, 1e-6,
-                             f"{what}: {text}")
+                             f"{what}: {text}", bounds=BOUNDS if bounded else (-np.inf, np.inf),
+                             sign=SIGN if bounded else "", adds_to=f"k_{j.name}" if bounded
+                             else "", inert_when=INERT)
         if self._harmonics:
             out = [par("0", "mean")]
             for h in range(1, self._harmonics + 1):
-                out += [par(f"s{h}", f"sin({h}·q) term"), par(f"c{h}", f"cos({h}·q) term")]
+                out += [par(f"s{h}", f"sin({h}·q) term", False),
+                        par(f"c{h}", f"cos({h}·q) term", False)]
             return out
         if self._nodes_deg is not None:
             return [par(f"n{i + 1}", f"at q = {v:.4g} {j.display_unit}")

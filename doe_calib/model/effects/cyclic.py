@@ -20,16 +20,24 @@ support. Revolute joints only.
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
 
 from doe_calib.errors import ModelError
 from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
 from doe_calib.model.parameters import Parameter
+
+#: Largest plausible size of one cyclic-error term, rad (2°): a transmission's cyclic error
+#: is a fraction of a degree.
+LIMIT = float(np.radians(2.0))
 
 
 class Cyclic(Effect):
     """``Δq_k = Σ_h cyc_<joint>_s<h> sin(h q_k) + cyc_<joint>_c<h> cos(h q_k)``, rad."""
 
     name = "cyclic"
+    phrase = "a cyclic (transmission) error of joint {joint}"
+    implausible_words = ("far beyond a transmission's cyclic error (the joint covers too little "
+                         "of a turn to separate the harmonics: a curve fit, not a cyclic error)")
     per_joint = True
 
     def __init__(self, joint, harmonics: int = 1):
@@ -64,7 +72,8 @@ class Cyclic(Effect):
         out = []
         for h in range(1, self._harmonics + 1):
             out += [Parameter(f"cyc_{name}_{f[0]}{h}", self.name, "rad", 0.0, 1e-4,
-                              f"cyclic error of joint {name}: {f}({h}·q) term")
+                              f"cyclic error of joint {name}: {f}({h}·q) term",
+                              plausible=(-LIMIT, LIMIT))
                     for f in ("sin", "cos")]
         return out
 

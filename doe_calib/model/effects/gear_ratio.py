@@ -18,6 +18,7 @@ class GearRatio(Effect):
     """``Δq_k = eps_<joint> · q_k``; ``eps_<joint>`` is dimensionless (unit "1")."""
 
     name = "gear_ratio"
+    phrase = "a gear-ratio (encoder scale) error of joint {joint}"
     per_joint = True
 
     def __init__(self, joint):

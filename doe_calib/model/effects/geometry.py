@@ -26,6 +26,7 @@ class Geometry(Effect):
     """
 
     name = "geometry"
+    phrase = "link geometry errors"
 
     def parameters(self, robot) -> list:
         out = []

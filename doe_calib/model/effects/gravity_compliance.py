@@ -24,7 +24,12 @@ import casadi as ca
 
 from doe_calib.errors import ModelError
 from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
+from doe_calib.model.effects.joint_compliance import BOUNDS
 from doe_calib.model.parameters import Parameter
+
+#: What the sign of a compliance under the weight means.
+SIGN = ("positive: the joint yields in the direction of its weight's torque; negative usually "
+        "means the URDF's masses or the gravity direction are wrong")
 
 
 class GravityCompliance(Effect):
@@ -33,6 +38,7 @@ class GravityCompliance(Effect):
     name = "gravity_compliance"
     per_joint = True
     uses_gravity = True
+    phrase = "a compliance of joint {joint} under the robot's own weight"
 
     def __init__(self, joint):
         super().__init__(joint)
@@ -45,7 +51,10 @@ class GravityCompliance(Effect):
         j = robot.joints[joint_index(robot, self.joint)]
         return [Parameter(f"kg_{j.name}", self.name,
                           "rad/(N·m)" if j.kind == "revolute" else "m/N", 0.0, 1e-6,
-                          f"compliance of joint {j.name} under the robot's own weight")]
+                          f"compliance of joint {j.name} under the robot's own weight",
+                          bounds=BOUNDS, sign=SIGN,
+                          inert_when="the robot's own weight puts no torque on that joint in "
+                                     "these configurations")]
 
     def deflection(self, s: ChainSymbols, tau: ca.SX):
         k = joint_index(s.robot, self.joint)

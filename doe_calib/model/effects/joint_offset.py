@@ -11,6 +11,7 @@ class JointOffset(Effect):
     """``q_true = q + dq``, one ``dq_<joint>`` per joint (rad, or m for prismatic joints)."""
 
     name = "joint_offset"
+    phrase = "joint offsets"
 
     def parameters(self, robot) -> list:
         return [Parameter(f"dq_{j.name}", self.name, "rad" if j.kind == "revolute" else "m",

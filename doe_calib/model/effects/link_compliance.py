@@ -33,8 +33,13 @@ import numpy as np
 
 from doe_calib.errors import ModelError
 from doe_calib.model.effects.base import ChainSymbols, Effect
+from doe_calib.model.effects.joint_compliance import BOUNDS
 from doe_calib.model.parameters import Parameter
 from doe_calib.model.rotations import axis_angle, rotation_vector
+
+#: What the sign of a link's bending compliance means.
+SIGN = ("positive: the link bends in the direction of the moment; negative usually means the "
+        "load's sign (or direction) is flipped")
 
 #: Default shortest link (m) given a bending compliance.
 MIN_LENGTH = 0.2
@@ -66,6 +71,7 @@ class LinkCompliance(Effect):
     """End rotation ``φ = lc_<joint> · M_⊥`` of each long link; ``lc_<joint>`` in rad/(N·m)."""
 
     name = "link_compliance"
+    phrase = "bending of the links under load"
 
     def __init__(self, min_length: float = MIN_LENGTH):
         self._min_length = float(min_length)
@@ -87,7 +93,8 @@ class LinkCompliance(Effect):
             length = np.linalg.norm(robot.joints[k].placement_matrix[:3, 3])
             out.append(Parameter(f"lc_{start}", self.name, "rad/(N·m)", 0.0, 1e-7,
                                  f"bending compliance of the link from joint {start} to {end} "
-                                 f"({length:.3g} m)"))
+                                 f"({length:.3g} m)", bounds=BOUNDS, sign=SIGN,
+                                 inert_when="no load in these configurations bends that link"))
         return out
 
     def placement(self, s: ChainSymbols, k: int):

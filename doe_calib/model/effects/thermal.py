@@ -39,6 +39,7 @@ class Thermal(Effect):
     """Translations ``t_k (1 + alpha_thermal (T − t_ref))`` for every joint and the flange."""
 
     name = "thermal"
+    phrase = "thermal expansion of the links"
 
     def __init__(self, t_ref: float = T_REF):
         self._t_ref = float(t_ref)

@@ -1,7 +1,11 @@
 """User-defined effects: a Python file declaring one effect, loaded with ``--effect-file``.
 
-A loaded effect is registered under its name and then takes part in every
-model string, identification, design and diagnosis like a built-in one.
+:func:`load_effect_file` makes the file's effect class(es) and changes
+nothing else; a registry that holds them
+(:meth:`~doe_calib.model.effects.registry.EffectRegistry.with_file`, or
+:func:`~doe_calib.model.effects.registry_with_files`) lets model strings,
+identification, design and diagnosis use the effect like a built-in one,
+wherever that registry is passed (``registry=``).
 
 The file declares::
 
@@ -13,7 +17,15 @@ The file declares::
         # doe_calib.model.parameters.DISPLAY_UNITS ("m", "rad", "rad/(N·m)", "m/N", "1", "1/K"),
         # the scale the parameter's typical size (SI). Every parameter is nominally 0;
         # its full name is f"{NAME}_{joint}_{suffix}" (URDF joint name) when per joint,
-        # f"{NAME}_{suffix}" otherwise, and its block is NAME.
+        # f"{NAME}_{suffix}" otherwise, and its block is NAME. A fifth item, optional, is a
+        # dict of what is known about the parameter (SI; default: nothing):
+        #   {"bounds": (0, inf),            # physical range: beyond it (by 2 std) a fit is
+        #                                   # reported as physically implausible
+        #    "plausible": (-0.035, 0.035),  # range beyond which a fitted value is implausible
+        #    "sign": "positive: …; negative usually means …"}   # what the sign means
+    PHRASE = "a droop of the tool"   # optional: what a diagnosis verdict calls the effect;
+                                     # "{joint}" becomes e.g. "3 (a3)" (default "effect <spec>")
+    IMPLAUSIBLE = "far beyond …"     # optional: why a value outside "plausible" is implausible
 
 and at least one of the functions::
 
@@ -51,18 +63,19 @@ the vertical load and shifts with the angle of one joint (m)::
 A per-joint deflection example ships as ``doe_calib/examples/example_effect.py``
 (:data:`EXAMPLE_FILE`). Result files name the model by its string, so
 reading back a result (``predict``, ``compare``, a report) needs the same
-``--effect-file``, or :func:`load_effect_file` before
-:meth:`IdentificationResult.from_json`.
+``--effect-file``, or a registry with the file passed to
+:meth:`IdentificationResult.from_json` (``registry=``).
 
 Examples
 --------
->>> from doe_calib.model.effects import parse_model
+>>> from doe_calib.model.effects import DEFAULT_REGISTRY, parse_model
 >>> [cls.name for cls in load_effect_file(EXAMPLE_FILE)]
 ['progressive_stiffness']
->>> parse_model("progressive_stiffness(j2)")[0].spec()
+>>> mine = DEFAULT_REGISTRY.with_file(EXAMPLE_FILE)
+>>> parse_model("progressive_stiffness(j2)", registry=mine)[0].spec()
 'progressive_stiffness(j2)'
->>> from doe_calib.model.effects import REGISTRY
->>> del REGISTRY["progressive_stiffness"]   # leave the registry as it was
+>>> "progressive_stiffness" in DEFAULT_REGISTRY   # the default registry is unchanged
+False
 """
 from __future__ import annotations
 
@@ -107,7 +120,7 @@ class UserEffect(Effect):
     name = ""
     #: Resolved path of the declaring file.
     source = ""
-    #: ((suffix, unit, scale, description), …)
+    #: ((suffix, unit, scale, description, {"bounds", "plausible", "sign"}), …)
     parameter_specs = ()
     #: Function name → callable, for the functions the file defines.
     functions = MappingProxyType({})
@@ -134,8 +147,8 @@ class UserEffect(Effect):
     def parameters(self, robot) -> list:
         k, prefix = self._prefix(robot)
         where = "" if k is None else f" (joint {robot.joints[k].name})"
-        return [Parameter(prefix + suffix, self.name, unit, 0.0, scale, text + where)
-                for suffix, unit, scale, text in self.parameter_specs]
+        return [Parameter(prefix + suffix, self.name, unit, 0.0, scale, text + where, **known)
+                for suffix, unit, scale, text, known in self.parameter_specs]
 
     def _call(self, function: str, s: ChainSymbols, extra=None):
         k, prefix = self._prefix(s.robot)
@@ -232,6 +245,33 @@ def _field(decl, key, default=None):
     return decl.get(key, default) if isinstance(decl, dict) else getattr(decl, key, default)
 
 
+#: What a PARAMETERS row's optional fifth item may say.
+KNOWN_KEYS = ("bounds", "plausible", "sign")
+
+
+def _known(extra, row, path: str, name: str) -> dict:
+    """The fifth item of a PARAMETERS row: bounds and plausible range (SI), sign words."""
+    fix = (f"; give a dict with keys among {', '.join(KNOWN_KEYS)}, e.g. "
+           f'{{"bounds": (0, float("inf")), "sign": "positive: …"}}')
+    if not isinstance(extra, dict) or set(extra) - set(KNOWN_KEYS):
+        raise ModelError(f"{path}: the fifth item of parameter {row[0]!r} of effect {name} is "
+                         f"{extra!r}{fix}")
+    out = dict(extra)
+    for key in ("bounds", "plausible"):
+        if key in out:
+            try:
+                low, high = (float(v) for v in out[key])
+            except (TypeError, ValueError):
+                low = high = float("nan")
+            if not low <= high:
+                raise ModelError(f"{path}: {key} of parameter {row[0]!r} of effect {name} must "
+                                 f"be (low, high) with low ≤ high (SI), got {out[key]!r}")
+            out[key] = (low, high)
+    if not isinstance(out.get("sign", ""), str):
+        raise ModelError(f"{path}: sign of parameter {row[0]!r} of effect {name} must be words")
+    return out
+
+
 def _parameter_specs(rows, path: str, name: str) -> tuple:
     fix = (f'; declare PARAMETERS = [("a", "rad", 1e-4, "description"), …] with units from '
            f'{", ".join(DISPLAY_UNITS)}')
@@ -241,16 +281,17 @@ def _parameter_specs(rows, path: str, name: str) -> tuple:
         raise ModelError(f"{path}: PARAMETERS of effect {name} must be a non-empty list{fix}")
     out = []
     for row in rows:
-        ok = isinstance(row, (list, tuple)) and len(row) == 4
+        ok = isinstance(row, (list, tuple)) and len(row) in (4, 5)
         if ok:
-            suffix, unit, scale, text = row
+            suffix, unit, scale, text = row[:4]
             ok = (isinstance(suffix, str) and bool(_IDENTIFIER.match(suffix))
                   and unit in DISPLAY_UNITS and isinstance(scale, (int, float))
                   and math.isfinite(scale) and scale > 0 and isinstance(text, str))
         if not ok:
             raise ModelError(f"{path}: parameter {row!r} of effect {name} is not (suffix, unit, "
-                             f"positive scale, description){fix}")
-        out.append((suffix, unit, float(scale), text))
+                             f"positive scale, description[, dict]){fix}")
+        known = _known(row[4], row, path, name) if len(row) == 5 else {}
+        out.append((suffix, unit, float(scale), text, known))
     suffixes = [r[0] for r in out]
     if len(set(suffixes)) != len(suffixes):
         raise ModelError(f"{path}: effect {name} declares a parameter suffix twice; give each "
@@ -292,7 +333,14 @@ def _effect_class(decl, path: str, module: str) -> type:
     if not isinstance(per_joint, bool):
         raise ModelError(f"{path}: PER_JOINT of effect {name} must be True or False, "
                          f"got {per_joint!r}")
-    attrs = {"name": name, "source": path, "per_joint": per_joint,
+    words = {}
+    for key, attr in (("PHRASE", "phrase"), ("IMPLAUSIBLE", "implausible_words")):
+        text = _field(decl, key)
+        if text is not None and not isinstance(text, str):
+            raise ModelError(f"{path}: {key} of effect {name} must be words, got {text!r}")
+        if text is not None:
+            words[attr] = text
+    attrs = {"name": name, "source": path, "per_joint": per_joint, **words,
              "parameter_specs": _parameter_specs(_field(decl, "PARAMETERS"), path, name),
              "functions": MappingProxyType(_functions(decl, path, name)),
              "__doc__": f"User effect {name} from {path}.", "__module__": module}
@@ -318,7 +366,11 @@ def _import(path: str):
 
 
 def load_effect_file(path) -> list[type]:
-    """Import a user effect file and register its effect(s) in the registry.
+    """Import a user effect file and make its effect class(es); nothing is registered.
+
+    To use them, make a registry that holds them:
+    ``DEFAULT_REGISTRY.with_file(path)``
+    (:meth:`~doe_calib.model.effects.registry.EffectRegistry.with_file`).
 
     Parameters
     ----------
@@ -329,19 +381,18 @@ def load_effect_file(path) -> list[type]:
     Returns
     -------
     list of type
-        The :class:`UserEffect` subclasses registered, in declaration order.
-        Loading the same file again replaces them with the file's current content.
+        The :class:`UserEffect` subclasses, in declaration order; each call
+        makes new classes from the file's current content.
 
     Raises
     ------
     DataError
         The file is missing or cannot be run (with the line).
     ModelError
-        A declaration is missing or wrong, or a name is already taken by a
-        built-in effect or by another file.
+        A declaration is missing or wrong, or two effects of the file share a
+        name. (A name already taken by a built-in effect or another file is
+        refused by the registry that would hold both.)
     """
-    from doe_calib.model.effects import REGISTRY
-
     path = Path(path)
     if not path.is_file():
         raise DataError("no such effect file; give the path of a Python file declaring NAME, "
@@ -354,14 +405,6 @@ def load_effect_file(path) -> list[type]:
     names = [c.name for c in classes]
     if len(set(names)) != len(names):
         raise ModelError(f"{source}: two effects are named the same; give each its own NAME")
-    for cls in classes:
-        known = REGISTRY.get(cls.name)
-        if known is not None and not (issubclass(known, UserEffect) and known.source == source):
-            owner = f"already defined by {known.source}" if issubclass(known, UserEffect) \
-                else "the name of a built-in effect"
-            raise ModelError(f"{source}: effect name {cls.name!r} is {owner}; choose another NAME")
-    for cls in classes:
-        REGISTRY[cls.name] = cls
     return classes
 
 
