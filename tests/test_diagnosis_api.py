@@ -15,8 +15,8 @@ from doe_calib import build_model
 from doe_calib.diagnosis import Candidate, DiagnosisResult, FittedSize, diagnose
 from doe_calib.diagnosis.effect_selection import RefineResult, refine
 from doe_calib.model import marker_model
-from doe_calib.model.effects import REGISTRY
-from doe_calib.model.effects.user import EXAMPLE_FILE, load_effect_file
+from doe_calib.model.effects import DEFAULT_REGISTRY
+from doe_calib.model.effects.user import EXAMPLE_FILE
 from doe_calib.model.simulate import random_truth
 
 START = "joint_offset+joint_compliance"
@@ -31,20 +31,17 @@ NEW_KEYS = ("words", "parameters", "units", "dof", "cv_rms_before_mm", "cv_gain_
 def case(robot6, tool6):
     """A campaign hiding a known cyclic error of joint 3, diagnosed and refined with the
     example user effect among the candidates."""
-    with pytest.MonkeyPatch.context() as mp:
-        for name in list(REGISTRY):
-            mp.setitem(REGISTRY, name, REGISTRY[name])  # restored after: the user effect goes
-        load_effect_file(EXAMPLE_FILE)
-        rng = np.random.default_rng(31)
-        true = build_model(robot6, tool6, f"{START}+{HIDDEN}")
-        truth = random_truth(true, rng)
-        for name, value in TRUE_SIZE.items():
-            truth[true.nominal().names.index(name)] = value
-        train = _campaign(true, truth, robot6, 40, rng)
-        start = build_model(robot6, tool6, START)
-        d = diagnose(start, train)
-        r = refine(start, train, max_steps=1)
-        yield d, r
+    registry = DEFAULT_REGISTRY.with_file(EXAMPLE_FILE)  # the user effect is a candidate
+    rng = np.random.default_rng(31)
+    true = build_model(robot6, tool6, f"{START}+{HIDDEN}")
+    truth = random_truth(true, rng)
+    for name, value in TRUE_SIZE.items():
+        truth[true.nominal().names.index(name)] = value
+    train = _campaign(true, truth, robot6, 40, rng)
+    start = build_model(robot6, tool6, START)
+    d = diagnose(start, train, registry=registry)
+    r = refine(start, train, max_steps=1, registry=registry)
+    return d, r
 
 
 def test_the_hidden_effect_ranks_first_with_its_true_size(case):
@@ -139,8 +136,7 @@ class _NoModel:
             for name in ("build_model", "describe_model"):
                 if getattr(module, name, None) is getattr(marker_model, name):
                     mp.setattr(module, name, refuse)
-        for name in [n for n in REGISTRY if n == "progressive_stiffness"]:
-            mp.delitem(REGISTRY, name)  # no effect file either
+        assert "progressive_stiffness" not in DEFAULT_REGISTRY  # no effect file either
 
 
 def test_diagnosis_json_round_trip_builds_no_model(case, tmp_path, monkeypatch):
