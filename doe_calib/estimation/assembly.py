@@ -8,6 +8,7 @@ import numpy as np
 from doe_calib.estimation.covariance import covariance_from_r_factor
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.estimation.weighted_residuals import reduce_jacobian
+from doe_calib.model.effects import REGISTRY, split_model
 from doe_calib.model.evaluation import marker_positions
 
 
@@ -61,4 +62,16 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
     return IdentificationResult(
         model.robot, model.tool, model.spec, estimator, params, covariance, ratio,
         residual_statistics(model, measurements, params.values), convergence, n_obs,
-        sigma_mm, tuple(notes), estimated)
+        sigma_mm, tuple(notes), estimated, "estimated" if estimated else "given",
+        effect_files(model.spec))
+
+
+def effect_files(spec: str) -> dict:
+    """File of each user effect (loaded from a file) that the model string names."""
+    out = {}
+    for word in split_model(spec):
+        name = word.split("(")[0].strip()
+        source = getattr(REGISTRY.get(name), "source", "")
+        if source:
+            out[name] = str(source)
+    return out
