@@ -28,8 +28,12 @@ from doe_calib.estimation.covariance import (
                      predict_covariance,
 )
 from doe_calib.estimation.identify import identify
+from doe_calib.estimation.fit_statistics import FitStatistics
+from doe_calib.estimation.parameter_estimate import ParameterEstimate
+from doe_calib.estimation.predict import Prediction
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.io.measurements import Configurations, Measurements
+from doe_calib.io.result_files import load
 from doe_calib.model.effects import DEFAULT_MODEL, REGISTRY
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 from doe_calib.model.marker_model import (
@@ -54,4 +58,5 @@ __all__ = [
     "simulate", "examples", "DEFAULT_MODEL", "REGISTRY", "DoeCalibError", "DataError",
     "ModelError", "OptionError", "SolverError", "CollisionError", "IdentifiabilityWarning",
     "ConditioningWarning", "ConvergenceWarning",
+    "load", "ParameterEstimate", "FitStatistics", "Prediction",
 ]

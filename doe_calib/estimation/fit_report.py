@@ -7,6 +7,7 @@ reason are one note, grouped by block; each warning is one note.
 from __future__ import annotations
 
 import re
+import textwrap
 
 import numpy as np
 
@@ -54,7 +55,7 @@ def notes(result) -> list[str]:
 def _variable_line(est, sigma_given: bool) -> str:
     k, u = est.display_factor, est.display_unit
     rel = est.relative_std
-    pct = f"({100 * rel:.2f} %)" if np.isfinite(rel) else "(value 0)"
+    pct = f"({100 * rel:.2g} %)" if np.isfinite(rel) else "(value 0)"
     line = (f"    {est.name:<20} = {est.value * k:>13.6g} ± {est.std_a_posteriori * k:<10.4g}"
             f"{pct:<12} {u:<11} (nominal {est.nominal * k:.6g})")
     if sigma_given:
@@ -108,5 +109,9 @@ def fit_report(result, min_correl: float = 0.3) -> str:
             f"{k} {s['max_3d_mm']:.4f}" for k, s in worst))
     found = notes(result)
     if found:
-        lines += ["", "[[Notes]]"] + [f"    [{i}] {n}" for i, n in enumerate(found, 1)]
+        lines += ["", "[[Notes]]"]
+        for i, n in enumerate(found, 1):
+            lines += textwrap.wrap(n, 100, initial_indent=f"    [{i}] ",
+                                   subsequent_indent=" " * (7 + len(str(i))),
+                                   break_on_hyphens=False)
     return "\n".join(lines)

@@ -37,7 +37,8 @@ class FitStatistics:
     sigma_source : str
         ``given``, ``per reading`` or ``estimated``.
     jacobian_evaluations, residual_evaluations, iterations : int or None
-        Work of the estimator (None when it did not say).
+        Work of the estimator (None when it did not say); an iteration of
+        Levenberg–Marquardt is one Jacobian evaluation.
     converged : bool
     message : str
         The solver's words.
@@ -89,7 +90,6 @@ class FitStatistics:
                     f"σ_true/σ̂ interval      = {lo:.4g} … {hi:.4g} ({100 * RATIO_LEVEL:g} %)"]
         out += [f"σ source               = {self.sigma_source}"]
         work = [f"{n} {v}" for n, v in (("iterations", self.iterations),
-                                        ("Jacobian evaluations", self.jacobian_evaluations),
                                         ("residual evaluations", self.residual_evaluations))
                 if v is not None]
         if work:
