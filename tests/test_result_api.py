@@ -160,6 +160,8 @@ def test_estimated_sigma_says_the_chi2_test_is_not_informative(model3, campaign)
     assert np.isnan(st.p_value) and st.sigma_ratio == 1.0
     text = res.fit_report()
     assert "not informative" in text and "p-value" not in text
+    doc = json.loads(res.to_json())["fit_statistics"]  # strict JSON: no NaN in the file
+    assert doc["p_value"] is None and doc["sigma_source"] == "estimated"
 
 
 def test_fit_report_sections_and_one_note_for_the_fixed(robot6, tool6):
@@ -233,6 +235,8 @@ def test_predict_readings_and_their_residuals(fit, model3, campaign):
     assert pred.error(campaign)["rms_mm"] == pytest.approx(fit.residuals["rms_mm"], rel=1e-9)
     with pytest.raises(DataError, match="not the"):
         pred.residuals(replace(campaign, config=campaign.config[::-1].copy()))
+    with pytest.raises(DataError, match="Measurements or Configurations"):
+        fit.predict(campaign.xyz)
 
 
 @pytest.fixture

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.errors import DataError, ModelError
+from doe_calib.io.measurements import Configurations, Measurements
 from doe_calib.model.evaluation import observation_matrix
 
 
@@ -98,12 +99,24 @@ def result_model(result):
                          "loaded: load the effect file first (--effect-file FILE, or "
                          "doe_calib.model.effects.user.load_effect_file(FILE))")
     model = build_model(result.robot, result.tool, result.model)
+    return model, aligned_parameters(model, result)
+
+
+def aligned_parameters(model, result):
+    """The result's parameters in ``model``'s order (they are, unless the model changed).
+
+    Raises
+    ------
+    ModelError
+        ``model`` lacks some of the result's parameters.
+    """
+    if model.nominal().names == result.parameters.names:
+        return result.parameters
     try:
-        params = model.nominal().from_list(result.parameters.to_list())
+        return model.nominal().from_list(result.parameters.to_list())
     except KeyError as exc:
-        raise ModelError(f"the model {result.model!r} built now does not have the result's "
-                         f"parameters ({exc.args[0]}); was its effect file changed?") from None
-    return model, params
+        raise ModelError(f"the model {model.spec!r} does not have the result's parameters "
+                         f"({exc.args[0]}); was its effect file changed?") from None
 
 
 def predict(result, data, model=None, *, a_posteriori: bool = True) -> Prediction:
@@ -129,16 +142,19 @@ def predict(result, data, model=None, *, a_posteriori: bool = True) -> Predictio
         observation matrix of each reading and Σ the covariance of the free
         parameters.
     """
-    if model is None:
-        model, params = result_model(result)
-    else:
-        params = model.nominal().from_list(result.parameters.to_list())
-    if hasattr(data, "xyz"):
+    if isinstance(data, Measurements):
         cfg, config, marker = data.configurations, data.config, data.marker
-    else:
+    elif isinstance(data, Configurations):
         cfg, n = data, len(result.tool.names)
         config = np.repeat(np.arange(len(cfg)), n)
         marker = np.tile(np.arange(n), len(cfg))
+    else:
+        raise DataError(f"predict takes Measurements or Configurations, not "
+                        f"{type(data).__name__}")
+    if model is None:
+        model, params = result_model(result)
+    else:
+        params = aligned_parameters(model, result)
     x, b = observation_matrix(model, params.values, cfg)
     bf = b[config, marker][..., params.free]
     cov = result.cov_params(a_posteriori=a_posteriori)

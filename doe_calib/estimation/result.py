@@ -248,9 +248,10 @@ class IdentificationResult:
 
 
 def _stats_dict(stats) -> dict:
+    """The fit statistics for the JSON file; NaN (no p-value when σ was estimated) as null."""
     d = dict(stats.__dict__)
     d["sigma_ratio_interval"] = list(stats.sigma_ratio_interval)
-    return d
+    return {k: None if isinstance(v, float) and not np.isfinite(v) else v for k, v in d.items()}
 
 
 def save_parameters(path, params, model: str) -> None:
