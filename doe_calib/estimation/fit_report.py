@@ -55,7 +55,8 @@ def notes(result) -> list[str]:
 def _variable_line(est, sigma_given: bool) -> str:
     k, u = est.display_factor, est.display_unit
     rel = est.relative_std
-    pct = f"({100 * rel:.2g} %)" if np.isfinite(rel) else "(value 0)"
+    pct = ("(value 0)" if not np.isfinite(rel) else
+           f"({100 * rel:.2g} %)" if rel < 1 else f"({100 * rel:.0f} %)")
     line = (f"    {est.name:<20} = {est.value * k:>13.6g} ± {est.std_a_posteriori * k:<10.4g}"
             f"{pct:<12} {u:<11} (nominal {est.nominal * k:.6g})")
     if sigma_given:
