@@ -61,7 +61,7 @@ def run(args):
     if args.program_out is not None and args.format is None:
         raise OptionError("--program-out needs --format (krl, rapid, urscript or csv)")
     registry = effect_registry(args)
-    result = IdentificationResult.from_json(args.result, registry)
+    result = IdentificationResult.from_json(args.result)
     tcp = _tcp(args.tcp, result)
     targets = read_targets(args.targets, result.robot)
     model = build_model(result.robot, result.tool, result.model, registry=registry)

@@ -28,7 +28,7 @@ OUTPUTS = {"out": "file"}
 
 def run(args):
     registry = effect_registry(args)
-    result = IdentificationResult.from_json(args.result, registry)
+    result = IdentificationResult.from_json(args.result)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         urdf, extra = export_urdf(result, args.out, build_model(

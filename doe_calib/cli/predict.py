@@ -7,10 +7,10 @@ from dataclasses import replace
 import numpy as np
 
 from doe_calib.cli.common import effect_file_argument, effect_registry, read_data
+from doe_calib.estimation.predict import predict
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.io.csv_files import write_measurements
 from doe_calib.io.json_file import strict_json
-from doe_calib.model.evaluation import observation_matrix
 from doe_calib.model.marker_model import build_model
 
 HELP = "marker positions predicted by a result, for validation"
@@ -35,32 +35,23 @@ OUTPUTS = {"out": "file"}
 def predicted_markers(model, result, meas):
     """Predicted marker position of each reading and its std per coordinate, both (K, 3), m.
 
-    The std propagates the result's covariance of the free parameters (for its
-    σ, a priori; σ̂ when σ was estimated): ``diag(B Σ Bᵀ)`` with ``B`` the
-    observation matrix of the reading.
+    :func:`doe_calib.estimation.predict.predict` for the result's σ (a priori;
+    σ̂ when σ was estimated), as this command writes them.
     """
-    x, b = observation_matrix(model, result.parameters.values, meas.configurations)
-    bf = b[meas.config, meas.marker][..., result.parameters.free]
-    var = np.einsum("kif,fg,kig->ki", bf, result.covariance, bf)
-    return x[meas.config, meas.marker], np.sqrt(np.clip(var, 0.0, None))
+    pred = predict(result, meas, model, a_posteriori=False)
+    return pred.xyz, pred.std
 
 
 def run(args):
     registry = effect_registry(args)
-    result = IdentificationResult.from_json(args.result, registry)
+    result = IdentificationResult.from_json(args.result)
     model = build_model(result.robot, result.tool, result.model, registry=registry)
     meas = read_data(args.data, result.robot, result.tool, sigma_mm=1.0, require_xyz=False)
-    predicted, std = predicted_markers(model, result, meas)
+    pred = predict(result, meas, model, a_posteriori=False)
     sigma = np.full(len(meas), result.sigma_mm / 1000.0)
-    write_measurements(args.out, replace(meas, xyz=predicted, sigma=sigma), result.robot,
-                       result.tool, std=std)
-    error = None
-    if np.all(np.isfinite(meas.xyz)):
-        err = (meas.xyz - predicted) * 1000.0
-        d = np.linalg.norm(err, axis=1)
-        error = {"rms_mm": float(np.sqrt(np.mean(err ** 2))),
-                 "rms_3d_mm": float(np.sqrt(np.mean(d ** 2))), "mean_3d_mm": float(d.mean()),
-                 "max_3d_mm": float(d.max())}
+    write_measurements(args.out, replace(meas, xyz=pred.xyz, sigma=sigma), result.robot,
+                       result.tool, std=pred.std)
+    error = pred.error(meas) if np.all(np.isfinite(meas.xyz)) else None
     if args.json:
         print(strict_json({"result": args.result, "model": result.model, "data": args.data,
                           "readings": len(meas), "predicted": args.out, "error": error}))

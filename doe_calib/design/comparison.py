@@ -132,7 +132,7 @@ def load_source(path, registry=None):
     if kind == "doe_calib.design":
         return DesignResult.from_dict(d)
     if kind == "doe_calib.identification":
-        return IdentificationResult.from_dict(d, registry)
+        return IdentificationResult.from_dict(d)
     raise DataError("neither a design nor an identification result (\"format\" is "
                     f"{kind!r})", path, 1, 1)
 

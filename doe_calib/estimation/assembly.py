@@ -61,4 +61,10 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
     return IdentificationResult(
         model.robot, model.tool, model.spec, estimator, params, covariance, ratio,
         residual_statistics(model, measurements, params.values), convergence, n_obs,
-        sigma_mm, tuple(notes), estimated)
+        sigma_mm, tuple(notes), estimated, "estimated" if estimated else "given",
+        effect_files(model.effects))
+
+
+def effect_files(effects) -> dict:
+    """Effect name → file of each user effect (loaded from a file) among ``effects``."""
+    return {e.name: str(e.source) for e in effects if getattr(e, "source", "")}

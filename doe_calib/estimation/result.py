@@ -6,12 +6,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from doe_calib.errors import DataError
+from doe_calib.estimation.fit_report import fit_report
+from doe_calib.estimation.fit_statistics import FitStatistics, fit_statistics
+from doe_calib.estimation.parameter_estimate import ParameterEstimate, parameter_estimate
+from doe_calib.estimation.predict import Prediction, predict
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.model.parameters import ParameterSet
 from doe_calib.model.robot import Robot
 from doe_calib.model.tool import Tool
 
 FORMAT_VERSION = 1
+SIGMA_SOURCES = ("given", "per reading", "estimated")
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,6 +50,18 @@ class IdentificationResult:
     sigma_estimated : bool
         True when no σ was given: ``sigma_mm`` is then σ̂, estimated from the
         residuals, and the covariance is for it (``sigma_ratio`` is 1).
+    sigma_source : str
+        Where σ came from: ``given``, ``per reading`` or ``estimated``
+        (default: from ``sigma_estimated``).
+    effect_files : dict
+        File of each user effect of the model (what :meth:`predict` needs).
+
+    Examples
+    --------
+    >>> result["dq_a2"]                        # doctest: +SKIP
+    <ParameterEstimate dq_a2 = 0.0123 ± 0.0004 deg>
+    >>> result.std("dq_a2", a_posteriori=True)  # doctest: +SKIP
+    >>> print(result.fit_report(min_correl=0.5))  # doctest: +SKIP
     """
 
     robot: Robot
@@ -60,17 +77,48 @@ class IdentificationResult:
     sigma_mm: float
     warnings: tuple = field(default=())
     sigma_estimated: bool = False
+    sigma_source: str = ""
+    effect_files: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if not self.sigma_source:
+            object.__setattr__(self, "sigma_source",
+                               "estimated" if self.sigma_estimated else "given")
+        if self.sigma_source not in SIGMA_SOURCES:
+            raise ValueError(f"sigma_source {self.sigma_source!r} is not one of "
+                             f"{', '.join(SIGMA_SOURCES)}")
 
     @property
     def free_names(self) -> list[str]:
         return [n for n, f in zip(self.parameters.names, self.parameters.free) if f]
 
-    def std(self, a_posteriori: bool = False) -> np.ndarray:
-        """Standard deviation of every parameter (SI); 0 for fixed ones."""
+    def __getitem__(self, name: str) -> ParameterEstimate:
+        """What the fit says of one parameter (value, std, unit, correlations).
+
+        Raises
+        ------
+        OptionError
+            ``name`` is not a parameter (the message lists the closest names).
+        """
+        return parameter_estimate(self, name)
+
+    def std(self, name: str | None = None, *, a_posteriori: bool = False):
+        """Standard deviation (SI); 0 for fixed parameters.
+
+        Parameters
+        ----------
+        name : str, optional
+            One parameter: its std as a float. Default: every parameter,
+            ndarray of shape (P,).
+        a_posteriori : bool
+            Scaled by σ̂/σ (keyword only).
+        """
         out = np.zeros(len(self.parameters))
         s = np.sqrt(np.clip(np.diag(self.covariance), 0, None))
         out[self.parameters.free] = s * (self.sigma_ratio if a_posteriori else 1.0)
-        return out
+        if name is None:
+            return out
+        return float(out[self.parameters.position(name)])
 
     def cov_params(self, a_posteriori: bool = False) -> np.ndarray:
         """Covariance of the free parameters (SI), shape (F, F)."""
@@ -82,44 +130,70 @@ class IdentificationResult:
         s[s == 0] = 1.0
         return self.covariance / np.outer(s, s)
 
-    def conf_int(self, level: float = 0.95) -> np.ndarray:
-        """Two-sided confidence intervals (SI), shape (P, 2), from the a-priori covariance."""
+    def conf_int(self, level: float = 0.95, *, a_posteriori: bool = True) -> np.ndarray:
+        """Two-sided normal confidence intervals (SI), shape (P, 2); zero width when fixed.
+
+        ``a_posteriori``: from the σ̂-scaled covariance (default) or the a-priori one.
+        """
         from scipy.stats import norm
 
         z = norm.ppf(0.5 + level / 2)
-        s = self.std()
+        s = self.std(a_posteriori=a_posteriori)
         return np.column_stack([self.parameters.values - z * s, self.parameters.values + z * s])
 
+    @property
+    def fit_statistics(self) -> FitStatistics:
+        """χ², dof, p-value, σ̂/σ with its interval, evaluations (:class:`FitStatistics`)."""
+        return fit_statistics(self)
+
+    def predict(self, data, model=None, registry=None) -> Prediction:
+        """Marker positions this result predicts (:func:`doe_calib.estimation.predict.predict`).
+
+        Builds the model (CasADi) from the robot, tool and model string unless
+        ``model`` is given; a user effect needs a ``registry`` holding its file.
+        """
+        return predict(self, data, model, registry=registry)
+
+    def fit_report(self, min_correl: float = 0.3) -> str:
+        """Fit statistics, variables, correlations above ``min_correl``, residuals, notes."""
+        return fit_report(self, min_correl)
+
+    def __repr__(self) -> str:
+        return (f"<IdentificationResult {self.model or '(base + markers)'}, {self.estimator} "
+                f"estimator, {self.n_observations // 3} readings, RMS "
+                f"{self.residuals['rms_mm']:.4g} mm, σ̂/σ {self.sigma_ratio:.3g}"
+                f"{' (σ estimated)' if self.sigma_estimated else ''}>")
+
+    def _repr_html_(self) -> str:
+        from doe_calib.report.identification import result_html
+
+        return result_html(self)
+
+    def to_dataframe(self):
+        """The parameters as a pandas DataFrame (display units), one row per parameter.
+
+        Raises
+        ------
+        ImportError
+            pandas is not installed.
+        """
+        try:
+            import pandas as pd
+        except ImportError as exc:
+            raise ImportError("to_dataframe needs pandas: pip install pandas") from exc
+        rows = []
+        for name in self.parameters.names:
+            e = self[name]
+            k = e.display_factor
+            rows.append({"name": name, "block": e.block, "value": e.value * k,
+                         "std": e.std_a_posteriori * k, "std_a_priori": e.std * k,
+                         "nominal": e.nominal * k, "unit": e.display_unit, "free": e.free,
+                         "fixed_reason": e.fixed_reason, "description": e.description})
+        return pd.DataFrame(rows).set_index("name")
+
     def summary(self) -> str:
-        """A text table of the parameters and the fit statistics."""
-        p = self.parameters
-        model = self.model or "(base + markers)"
-        lines = [f"Identification ({self.estimator} estimator), model: {model}",
-                 f"robot {self.robot.name} ({self.robot.n_joints} joints), "
-                 f"{self.tool.n_markers} markers, {self.n_observations} observations",
-                 f"residual RMS {self.residuals['rms_mm']:.4f} mm, max 3-D "
-                 f"{self.residuals['max_3d_mm']:.4f} mm; " + (
-                     f"σ estimated from the residuals: {self.sigma_mm:.4g} mm"
-                     if self.sigma_estimated else
-                     f"σ = {self.sigma_mm:g} mm a priori, "
-                     f"σ̂ = {self.sigma_ratio * self.sigma_mm:.4g} mm a posteriori"),
-                 f"{self.convergence['message']}", "",
-                 f"{'parameter':<22}{'value':>14}{'± std':>12}  {'unit':<12}{'nominal':>12}"]
-        std = self.std()
-        for par, v, s, free in zip(p.parameters, p.values, std, p.free):
-            k = par.display_factor
-            err = f"{s * k:12.4g}" if free else f"{'fixed':>12}"
-            lines.append(f"{par.name:<22}{v * k:14.6g}{err}  {par.display_unit:<12}"
-                         f"{par.nominal * k:12.6g}")
-        fixed = [(n, w) for n, f, w in zip(p.names, p.free, p.fixed_reason) if not f]
-        if fixed:
-            lines += ["", f"{len(fixed)} parameters fixed:"]
-            lines += [f"  {n}: {w}" for n, w in fixed]
-        if self.warnings:
-            lines += ["", "Warnings:"] + [f"  {w}" for w in self.warnings]
-        lines += ["", "Residual RMS per marker (mm): " + ", ".join(
-            f"{m} {s['rms_mm']:.4f}" for m, s in self.residuals["per_marker"].items())]
-        return "\n".join(lines)
+        """The :meth:`fit_report` (correlations above 0.3)."""
+        return self.fit_report()
 
     def to_dict(self) -> dict:
         """JSON-able dict (formats.md §5): parameters in display units (mm, deg, µrad/(N·m))."""
@@ -138,7 +212,9 @@ class IdentificationResult:
                                 "matrix": self.correlation().tolist()},
                 "sigma_mm": self.sigma_mm, "sigma_ratio": self.sigma_ratio,
                 "sigma_a_posteriori_mm": self.sigma_ratio * self.sigma_mm,
-                "sigma_estimated": self.sigma_estimated,
+                "sigma_estimated": self.sigma_estimated, "sigma_source": self.sigma_source,
+                "fit_statistics": _stats_dict(self.fit_statistics),
+                "effect_files": dict(self.effect_files),
                 "n_observations": self.n_observations,
                 "residuals": self.residuals, "convergence": self.convergence,
                 "warnings": list(self.warnings),
@@ -149,26 +225,33 @@ class IdentificationResult:
         return write_json(self.to_dict(), path)
 
     @classmethod
-    def from_dict(cls, d: dict, registry=None) -> "IdentificationResult":
-        """Inverse of :meth:`to_dict` (the parameter set from the model's description;
-        ``registry`` names the effects the model may use, default the catalogue)."""
-        from doe_calib.model.marker_model import describe_model
+    def from_dict(cls, d: dict) -> "IdentificationResult":
+        """Inverse of :meth:`to_dict`: the parameter set from the file's own rows.
 
+        Needs no model build and no effect file (only :meth:`predict` does).
+        """
         robot, tool = Robot.from_dict(d["robot"]), Tool.from_dict(d["tool"])
-        params = describe_model(robot, tool, d["model"], registry).nominal().from_list(
-            d["parameters"])
+        params = ParameterSet.from_rows(d["parameters"])
+        estimated = bool(d.get("sigma_estimated", False))
         return cls(robot, tool, d["model"], d["estimator"], params,
                    np.array(d["covariance_si"], float).reshape(int(params.free.sum()), -1),
                    float(d["sigma_ratio"]), d["residuals"], d["convergence"],
                    int(d["n_observations"]), float(d["sigma_mm"]), tuple(d.get("warnings", ())),
-                   bool(d.get("sigma_estimated", False)))
+                   estimated, d.get("sigma_source") or ("estimated" if estimated else "given"),
+                   dict(d.get("effect_files") or {}))
 
     @classmethod
-    def from_json(cls, path, registry=None) -> "IdentificationResult":
-        """Read a result file written by :meth:`to_json`; ``registry``: see :meth:`from_dict`
-        (a model with user effects needs a registry holding them)."""
+    def from_json(cls, path) -> "IdentificationResult":
+        """Read a result file written by :meth:`to_json` (no model build, no effect file)."""
         return cls.from_dict(read_json(path, "doe_calib.identification",
-                                       "doe_calib identification result"), registry)
+                                       "doe_calib identification result"))
+
+
+def _stats_dict(stats) -> dict:
+    """The fit statistics for the JSON file; NaN (no p-value when σ was estimated) as null."""
+    d = dict(stats.__dict__)
+    d["sigma_ratio_interval"] = list(stats.sigma_ratio_interval)
+    return {k: None if isinstance(v, float) and not np.isfinite(v) else v for k, v in d.items()}
 
 
 def save_parameters(path, params, model: str) -> None:

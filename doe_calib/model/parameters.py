@@ -10,7 +10,7 @@ from difflib import get_close_matches
 
 import numpy as np
 
-from doe_calib.errors import OptionError
+from doe_calib.errors import DataError, OptionError
 
 # SI unit → (display unit, factor SI→display). Files and reports use display units.
 DISPLAY_UNITS = {
@@ -21,6 +21,8 @@ DISPLAY_UNITS = {
     "1": ("1", 1.0),
     "1/K": ("µm/(m·K)", 1e6),
 }
+#: Display unit → SI unit (files hold display units).
+SI_UNITS = {display: si for si, (display, _) in DISPLAY_UNITS.items()}
 
 
 @dataclass(frozen=True)
@@ -95,6 +97,15 @@ class Parameter:
         """``bounds`` or ``plausible`` in display units, None for an infinite end (for files)."""
         k = self.display_factor
         return [float(v * k) if np.isfinite(v) else None for v in getattr(self, field)]
+
+
+def _si_range(display, factor: float) -> tuple:
+    """A file's ``[low, high]`` in display units (None: unbounded) in SI; absent: unbounded."""
+    if display is None:
+        return (-np.inf, np.inf)
+    low, high = display
+    return (-np.inf if low is None else float(low) / factor,
+            np.inf if high is None else float(high) / factor)
 
 
 @dataclass(frozen=True, eq=False)
@@ -227,8 +238,71 @@ class ParameterSet:
                          "description": p.description, "nominal": p.nominal * k,
                          "value": float(v) * k, "free": bool(f), "fixed_reason": why,
                          "bounds": p.display_range("bounds"),
-                         "plausible": p.display_range("plausible"), "sign": p.sign})
+                         "plausible": p.display_range("plausible"), "sign": p.sign,
+                         "scale": p.scale * k})
         return rows
+
+    @classmethod
+    def from_rows(cls, rows) -> "ParameterSet":
+        """A set rebuilt from :meth:`to_list` rows alone: no model, no effect file.
+
+        Rows in display units (``unit`` is the display unit: mm, deg, …). Files
+        written before rows held ``scale`` get one display unit as the scale,
+        before they held ``bounds``/``plausible``/``sign`` none.
+
+        Raises
+        ------
+        DataError
+            A row without a name, value or known unit, or a name given twice.
+        """
+        parameters, values, free, why = [], [], [], []
+        for i, r in enumerate(rows):
+            try:
+                unit = SI_UNITS[r["unit"]]
+                k = DISPLAY_UNITS[unit][1]
+                parameters.append(Parameter(
+                    str(r["name"]), str(r.get("block", "")), unit, float(r["nominal"]) / k,
+                    float(r.get("scale", 1.0)) / k, str(r.get("description", "")),
+                    _si_range(r.get("bounds"), k), _si_range(r.get("plausible"), k),
+                    str(r.get("sign", ""))))
+                values.append(float(r["value"]) / k)
+            except (KeyError, TypeError, ValueError) as exc:
+                raise DataError(f"parameter row {i + 1} ({r.get('name', '?')!r}) is not a "
+                                f"parameter row (missing or wrong {exc})") from None
+            free.append(bool(r.get("free", True)))
+            why.append(str(r.get("fixed_reason") or ""))
+        names = [p.name for p in parameters]
+        twice = sorted({n for n in names if names.count(n) > 1})
+        if twice:
+            raise DataError(f"parameter names given twice: {', '.join(twice)}")
+        return cls(tuple(parameters), np.array(values, float), np.array(free, bool), tuple(why))
+
+    def position(self, name: str) -> int:
+        """Position of the parameter ``name`` (a parameter, not a block).
+
+        Raises
+        ------
+        OptionError
+            Not a parameter name (the message lists the closest names).
+        """
+        for i, p in enumerate(self.parameters):
+            if p.name == name:
+                return i
+        raise OptionError(self._unknown(name))
+
+    def __repr__(self) -> str:
+        blocks = dict.fromkeys(p.block for p in self.parameters)
+        return (f"<ParameterSet: {len(self)} parameters, {int(self.free.sum())} free; "
+                f"blocks {', '.join(blocks)}>")
+
+    def __str__(self) -> str:
+        """A table of every parameter in display units (mm, deg, µrad/(N·m))."""
+        lines = [f"{'name':<22}{'value':>14}{'nominal':>14}  {'unit':<12}{'block':<18}free"]
+        for p, v, f, why in zip(self.parameters, self.values, self.free, self.fixed_reason):
+            k = p.display_factor
+            lines.append(f"{p.name:<22}{v * k:14.6g}{p.nominal * k:14.6g}  {p.display_unit:<12}"
+                         f"{p.block:<18}{'yes' if f else 'no: ' + (why or 'fixed')}")
+        return "\n".join(lines)
 
     def from_list(self, rows) -> "ParameterSet":
         """Values and free flags read back from :meth:`to_list` rows (matched by name).

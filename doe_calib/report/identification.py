@@ -83,6 +83,60 @@ def _stats_table(stats: dict, what: str):
                  [[k, s["n"], s["rms_mm"], s["max_3d_mm"]] for k, s in stats.items()], 4)
 
 
+def fit_table(result):
+    """The fit statistics (χ², dof, p, σ̂/σ, …) as a two-column table."""
+    res, p, st = result.residuals, result.parameters, result.fit_statistics
+    lo, hi = st.sigma_ratio_interval
+    rows = [["estimator", result.estimator], ["model", result.model or "(base + markers)"],
+            ["readings", st.readings], ["observations 3K", result.n_observations],
+            ["free parameters", int(p.free.sum())], ["fixed parameters", int((~p.free).sum())],
+            ["residual RMS per coordinate (mm)", res["rms_mm"]],
+            ["max 3-D residual (mm)", res["max_3d_mm"]], ["σ a priori (mm)", result.sigma_mm],
+            ["σ source", st.sigma_source],
+            ["σ̂ a posteriori (mm)", result.sigma_ratio * result.sigma_mm],
+            ["degrees of freedom", st.dof]]
+    if st.chi2_informative:
+        rows += [["χ² = ‖r_w‖²", st.chi2], ["p-value P(χ²_dof ≥ ‖r_w‖²)", st.p_value],
+                 ["σ̂/σ (95 % interval)", f"{st.sigma_ratio:.4g} ({lo:.4g} … {hi:.4g})"]]
+    else:
+        rows += [["χ² test", "not informative: σ estimated from these residuals"],
+                 ["σ_true/σ̂ (95 % interval)", f"{lo:.4g} … {hi:.4g}"]]
+    rows += [["converged", str(result.convergence.get("converged"))],
+             ["solver", result.convergence.get("message", "")]]
+    return table(["quantity", "value"], rows, 5)
+
+
+def warnings_section(result):
+    """The numerical trouble reported during the fit, each in its own paragraph."""
+    return section("Warnings", *([paragraph(w) for w in result.warnings]
+                                 or ["No numerical trouble was reported."]))
+
+
+def correlation_figure(result, dpi: int = 90):
+    """Heat map of the correlations of the free parameters (a-priori covariance)."""
+    return figure(figures.to_png(figures.correlation_heatmap(result.free_names,
+                                                             result.correlation()), dpi),
+                  "correlation heat map of the free parameters",
+                  "Correlation of the free parameters (a-priori covariance).")
+
+
+def result_html(result, dpi: int = 72) -> str:
+    """The report's tables and its key figure for a notebook, without the page chrome.
+
+    What ``IdentificationResult._repr_html_`` shows: fit statistics, parameters,
+    warnings, the correlation heat map (the residual bars per marker when no
+    parameter is free), and the text report folded.
+    """
+    key = (correlation_figure(result, dpi) if result.free_names else
+           figure(figures.to_png(figures.residual_bars(result.residuals["per_marker"], "marker"),
+                                 dpi), "residual RMS and maximum per marker",
+                  "Residual per marker (mm)."))
+    blocks = [section("Fit", fit_table(result)), parameters_section(result, "Parameters"),
+              warnings_section(result), section("Key figure", key),
+              collapsible("text report", preformatted(result.fit_report()))]
+    return f'<div class="doe-calib-result">\n{"".join(blocks)}\n</div>'
+
+
 def identification_report(result, model, measurements, path, dpi: int = 90):
     """Write an HTML report of an identification.
 
@@ -107,25 +161,12 @@ def identification_report(result, model, measurements, path, dpi: int = 90):
     --------
     >>> identification_report(result, model, meas, "report.html")  # doctest: +SKIP
     """
-    res, p = result.residuals, result.parameters
     png = figures.to_png
-    fit = table(["quantity", "value"], [
-        ["estimator", result.estimator], ["model", result.model or "(base + markers)"],
-        ["readings", len(measurements)], ["observations 3K", result.n_observations],
-        ["free parameters", int(p.free.sum())], ["fixed parameters", int((~p.free).sum())],
-        ["residual RMS per coordinate (mm)", res["rms_mm"]],
-        ["max 3-D residual (mm)", res["max_3d_mm"]], ["σ a priori (mm)", result.sigma_mm],
-        ["σ̂ a posteriori (mm)", result.sigma_ratio * result.sigma_mm],
-        ["converged", str(result.convergence.get("converged"))],
-        ["solver", result.convergence.get("message", "")]], 5)
-    sections = [section("Fit", fit), parameters_section(result, "Parameters")]
-    sections.append(section("Warnings", *([paragraph(w) for w in result.warnings]
-                                          or ["No numerical trouble was reported."])))
+    res, p = result.residuals, result.parameters
+    sections = [section("Fit", fit_table(result)), parameters_section(result, "Parameters"),
+                warnings_section(result)]
     if result.free_names:
-        sections.append(section("Correlation", figure(
-            png(figures.correlation_heatmap(result.free_names, result.correlation()), dpi),
-            "correlation heat map of the free parameters",
-            "Correlation of the free parameters (a-priori covariance).")))
+        sections.append(section("Correlation", correlation_figure(result, dpi)))
     cols = reading_columns(model, measurements)
     norms = residual_norms_mm(model, measurements, p.values)
     sections.append(section("Residuals per reading", figure(

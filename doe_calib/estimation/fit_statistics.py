@@ -1,0 +1,142 @@
+"""Fit statistics of an identification: χ², dof, p, σ̂/σ with its interval, evaluations."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Level of the σ̂/σ interval.
+RATIO_LEVEL = 0.95
+
+
+@dataclass(frozen=True)
+class FitStatistics:
+    """How well the model fits, with the a-priori σ (lmfit's and statsmodels' header).
+
+    Attributes
+    ----------
+    readings : int
+        Marker readings K.
+    observations : int
+        Scalar observations 3K.
+    free, fixed : int
+        Parameters estimated and held.
+    chi2 : float
+        ‖r_w‖², the squared norm of the residuals weighted by the a-priori σ
+        (equal to ``dof`` by construction when σ was estimated).
+    dof : int
+        Degrees of freedom 3K − free.
+    p_value : float
+        P(χ²_dof ≥ χ²): small when the residuals are larger than σ explains.
+        NaN when σ was estimated (the test is then not informative).
+    sigma_ratio : float
+        σ̂/σ = √(χ²/dof) (1 when σ was estimated).
+    sigma_ratio_interval : tuple of float
+        95 % interval of the true σ over σ (over σ̂ when σ was estimated),
+        from the χ²_dof distribution.
+    sigma_source : str
+        ``given``, ``per reading`` or ``estimated``.
+    jacobian_evaluations, residual_evaluations, iterations : int or None
+        Work of the estimator (None when it did not say); an iteration of
+        Levenberg–Marquardt is one Jacobian evaluation.
+    converged : bool
+    message : str
+        The solver's words.
+    """
+
+    readings: int
+    observations: int
+    free: int
+    fixed: int
+    chi2: float
+    dof: int
+    p_value: float
+    sigma_ratio: float
+    sigma_ratio_interval: tuple
+    sigma_source: str
+    jacobian_evaluations: int | None
+    residual_evaluations: int | None
+    iterations: int | None
+    converged: bool
+    message: str
+
+    @property
+    def reduced_chi2(self) -> float:
+        """χ²/dof = (σ̂/σ)²."""
+        return self.chi2 / self.dof if self.dof > 0 else float("nan")
+
+    @property
+    def chi2_informative(self) -> bool:
+        """False when σ was estimated from these residuals (χ² = dof by construction)."""
+        return self.sigma_source != "estimated"
+
+    def lines(self) -> list[str]:
+        """The statistics as ``name = value`` lines, for reports."""
+        lo, hi = self.sigma_ratio_interval
+        out = [f"readings               = {self.readings}",
+               f"observations (3K)      = {self.observations}",
+               f"free parameters        = {self.free}",
+               f"fixed parameters       = {self.fixed}",
+               f"degrees of freedom     = {self.dof}"]
+        if self.chi2_informative:
+            out += [f"chi-square ‖r_w‖²      = {self.chi2:.6g}",
+                    f"reduced chi-square     = {self.reduced_chi2:.6g}",
+                    f"p-value P(χ² ≥ ‖r_w‖²) = {self.p_value:.3g}",
+                    f"σ̂/σ                   = {self.sigma_ratio:.4g}  "
+                    f"({100 * RATIO_LEVEL:g} % interval of σ_true/σ: {lo:.4g} … {hi:.4g})"]
+        else:
+            out += ["chi-square test        = not informative: σ was estimated from these "
+                    "residuals (σ̂ = √(‖r‖²/dof))",
+                    f"σ_true/σ̂ interval      = {lo:.4g} … {hi:.4g} ({100 * RATIO_LEVEL:g} %)"]
+        out += [f"σ source               = {self.sigma_source}"]
+        work = [f"{n} {v}" for n, v in (("iterations", self.iterations),
+                                        ("residual evaluations", self.residual_evaluations))
+                if v is not None]
+        if work:
+            out.append(f"work                   = {', '.join(work)}")
+        out.append(f"converged              = {'yes' if self.converged else 'NO'}: "
+                   f"{self.message}")
+        return out
+
+    def __str__(self) -> str:
+        return "\n".join(self.lines())
+
+
+def ratio_interval(chi2: float, dof: int, level: float = RATIO_LEVEL) -> tuple:
+    """Interval of σ_true/σ from ‖r_w‖² ~ (σ_true/σ)² χ²_dof, two-sided at ``level``."""
+    from scipy.stats import chi2 as chi2_dist
+
+    if dof <= 0 or not np.isfinite(chi2):
+        return (float("nan"), float("nan"))
+    a = (1 - level) / 2
+    return (float(np.sqrt(chi2 / chi2_dist.ppf(1 - a, dof))),
+            float(np.sqrt(chi2 / chi2_dist.ppf(a, dof))))
+
+
+def fit_statistics(result) -> FitStatistics:
+    """The :class:`FitStatistics` of an identification result.
+
+    χ² is ``(σ̂/σ)²·dof`` with dof = 3K − free, as ``σ̂/σ`` was computed from
+    ‖r_w‖² (:func:`~doe_calib.estimation.assembly.finish`).
+    """
+    from scipy.stats import chi2 as chi2_dist
+
+    p, conv = result.parameters, result.convergence
+    n_free = int(p.free.sum())
+    dof = int(result.n_observations - n_free)
+    estimated = result.sigma_source == "estimated"
+    chi2 = float(result.sigma_ratio ** 2 * dof) if dof > 0 else float("nan")
+    p_value = (float(chi2_dist.sf(chi2, dof)) if dof > 0 and not estimated
+               else float("nan"))
+
+    def count(key):
+        v = conv.get(key)
+        return None if v is None else int(v)
+
+    return FitStatistics(
+        readings=result.n_observations // 3, observations=int(result.n_observations),
+        free=n_free, fixed=len(p) - n_free, chi2=chi2, dof=dof, p_value=p_value,
+        sigma_ratio=float(result.sigma_ratio), sigma_ratio_interval=ratio_interval(chi2, dof),
+        sigma_source=result.sigma_source, jacobian_evaluations=count("iterations"),
+        residual_evaluations=count("evaluations"), iterations=count("iterations"),
+        converged=bool(conv.get("converged", False)), message=str(conv.get("message", "")))

@@ -1,0 +1,113 @@
+"""One identified parameter, as a result answers ``result["dq_a2"]`` (lmfit's ``Parameter``)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class ParameterEstimate:
+    """What an identification says of one parameter.
+
+    Attributes
+    ----------
+    name, block, description : str
+        As in :class:`~doe_calib.model.parameters.Parameter`.
+    value, nominal : float
+        Identified and nominal value, SI.
+    std : float
+        Standard deviation for the a-priori σ, SI (0 when fixed).
+    std_a_posteriori : float
+        ``std`` scaled by σ̂/σ, SI (equal to ``std`` when σ was estimated).
+    unit, display_unit : str
+        SI and display unit (e.g. ``rad`` and ``deg``).
+    display_factor : float
+        SI → display, e.g. 1000 for m → mm.
+    free : bool
+    fixed_reason : str
+        Why it is fixed ("" when free).
+    correlations : tuple of (str, float)
+        The (at most 3) free parameters it is most correlated with, largest
+        |ρ| first.
+    """
+
+    name: str
+    block: str
+    value: float
+    std: float
+    std_a_posteriori: float
+    nominal: float
+    unit: str
+    display_unit: str
+    display_factor: float
+    free: bool
+    fixed_reason: str
+    correlations: tuple
+    description: str
+
+    @property
+    def value_display(self) -> float:
+        """Value in the display unit."""
+        return self.value * self.display_factor
+
+    @property
+    def std_display(self) -> float:
+        """σ̂-scaled std in the display unit."""
+        return self.std_a_posteriori * self.display_factor
+
+    @property
+    def relative_std(self) -> float:
+        """σ̂-scaled std over |value| (NaN when the value is 0)."""
+        return self.std_a_posteriori / abs(self.value) if self.value else float("nan")
+
+    def __str__(self) -> str:
+        k, u = self.display_factor, self.display_unit
+        head = f"{self.name} = {self.value * k:.6g}"
+        if self.free:
+            rel = self.relative_std
+            pct = f" ({100 * rel:.2g} %)" if np.isfinite(rel) else ""
+            head += f" ± {self.std_a_posteriori * k:.3g}{pct} {u}"
+            if self.std_a_posteriori != self.std:
+                head += f" (a priori ± {self.std * k:.3g})"
+        else:
+            head += f" {u}, fixed: {self.fixed_reason or 'by request'}"
+        lines = [head, f"  nominal {self.nominal * k:.6g} {u}; {self.block}: {self.description}"]
+        if self.correlations:
+            lines.append("  correlated with " + ", ".join(f"{n} ({r:+.3f})"
+                                                         for n, r in self.correlations))
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        k = self.display_factor
+        state = (f"± {self.std_a_posteriori * k:.3g}" if self.free else "fixed")
+        return (f"<ParameterEstimate {self.name} = {self.value * k:.6g} {state} "
+                f"{self.display_unit}>")
+
+
+def parameter_estimate(result, name: str) -> ParameterEstimate:
+    """The :class:`ParameterEstimate` of ``name`` in an identification result.
+
+    Raises
+    ------
+    OptionError
+        ``name`` is not a parameter of the result (the message lists the
+        closest names).
+    """
+    p = result.parameters
+    i = p.position(name)
+    par = p.parameters[i]
+    std, post = result.std(name), result.std(name, a_posteriori=True)
+    correlations = ()
+    if p.free[i]:
+        free = result.free_names
+        j = free.index(name)
+        rho = result.correlation()[j]
+        order = [k for k in np.argsort(-np.abs(rho), kind="stable") if k != j][:3]
+        correlations = tuple((free[k], float(rho[k])) for k in order)
+    return ParameterEstimate(
+        name=par.name, block=par.block, value=float(p.values[i]), std=std,
+        std_a_posteriori=post, nominal=par.nominal, unit=par.unit,
+        display_unit=par.display_unit, display_factor=par.display_factor,
+        free=bool(p.free[i]), fixed_reason=p.fixed_reason[i], correlations=correlations,
+        description=par.description)

@@ -1,0 +1,175 @@
+"""Marker positions an identification result predicts, with their std (validation, CLI)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from doe_calib.errors import DataError, ModelError
+from doe_calib.io.measurements import Configurations, Measurements
+from doe_calib.model.evaluation import observation_matrix
+
+
+@dataclass(frozen=True, eq=False)
+class Prediction:
+    """Predicted marker positions of readings, tracker frame.
+
+    Attributes
+    ----------
+    xyz : ndarray, shape (K, 3)
+        Predicted position of each reading's marker, m.
+    std : ndarray, shape (K, 3)
+        Its std per coordinate from the parameter covariance, σ̂-scaled, m.
+    config, marker : ndarray of int, shape (K,)
+        Configuration and marker index of each reading.
+    marker_names : tuple of str
+    """
+
+    xyz: np.ndarray
+    std: np.ndarray
+    config: np.ndarray
+    marker: np.ndarray
+    marker_names: tuple
+
+    @property
+    def xyz_mm(self) -> np.ndarray:
+        return self.xyz * 1000.0
+
+    @property
+    def std_mm(self) -> np.ndarray:
+        return self.std * 1000.0
+
+    def __len__(self) -> int:
+        return len(self.xyz)
+
+    def residuals(self, measurements) -> np.ndarray:
+        """Measured minus predicted position of each reading, shape (K, 3), m.
+
+        Raises
+        ------
+        DataError
+            ``measurements`` are not the readings predicted, or have no x, y, z.
+        """
+        if (len(measurements) != len(self) or not np.array_equal(measurements.config, self.config)
+                or not np.array_equal(measurements.marker, self.marker)):
+            raise DataError(f"these {len(measurements)} readings are not the {len(self)} the "
+                            "prediction was made for; predict them first")
+        if not np.all(np.isfinite(measurements.xyz)):
+            raise DataError("the readings have no measured x, y, z to compare with")
+        return measurements.xyz - self.xyz
+
+    def error(self, measurements) -> dict:
+        """RMS per coordinate, 3-D RMS, mean and max 3-D error against ``measurements``, mm."""
+        e = self.residuals(measurements) * 1000.0
+        d = np.linalg.norm(e, axis=1)
+        return {"rms_mm": float(np.sqrt(np.mean(e ** 2))),
+                "rms_3d_mm": float(np.sqrt(np.mean(d ** 2))), "mean_3d_mm": float(d.mean()),
+                "max_3d_mm": float(d.max())}
+
+    def rms_3d(self, measurements) -> float:
+        """3-D RMS error against ``measurements``, m."""
+        return self.error(measurements)["rms_3d_mm"] / 1000.0
+
+
+def result_model(result, registry=None):
+    """Build the model a result was identified with (CasADi), with its parameters in order.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+    registry : EffectRegistry, optional
+        The effects the model string may name (default the built-in ones); a
+        user effect needs a registry holding its file
+        (``DEFAULT_REGISTRY.with_file(path)``).
+
+    Returns
+    -------
+    (Model, ParameterSet)
+        The model and the result's parameters in the model's order.
+
+    Raises
+    ------
+    ModelError
+        The model names an effect the registry does not hold (the message
+        names the effect and the file it came from), or its parameters are
+        not the result's.
+    """
+    from doe_calib.model.effects import DEFAULT_REGISTRY, split_model
+    from doe_calib.model.marker_model import build_model
+
+    registry = DEFAULT_REGISTRY if registry is None else registry
+    missing = [w.split("(")[0].strip() for w in split_model(result.model)
+               if w.split("(")[0].strip() not in registry]
+    if missing:
+        files = {n: result.effect_files.get(n) for n in missing}
+        where = "; ".join(f"effect {n!r}" + (f" from file {f}" if f else "")
+                          for n, f in files.items())
+        raise ModelError(f"predicting needs the model {result.model!r}, and its {where} is not "
+                         "in the registry: give the effect file (--effect-file FILE, or "
+                         "registry=DEFAULT_REGISTRY.with_file(FILE))")
+    model = build_model(result.robot, result.tool, result.model, registry=registry)
+    return model, aligned_parameters(model, result)
+
+
+def aligned_parameters(model, result):
+    """The result's parameters in ``model``'s order (they are, unless the model changed).
+
+    Raises
+    ------
+    ModelError
+        ``model`` lacks some of the result's parameters.
+    """
+    if model.nominal().names == result.parameters.names:
+        return result.parameters
+    try:
+        return model.nominal().from_list(result.parameters.to_list())
+    except KeyError as exc:
+        raise ModelError(f"the model {model.spec!r} does not have the result's parameters "
+                         f"({exc.args[0]}); was its effect file changed?") from None
+
+
+def predict(result, data, model=None, *, registry=None,
+            a_posteriori: bool = True) -> Prediction:
+    """Marker positions ``result`` predicts for readings or configurations.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+    data : Measurements or Configurations
+        Readings (their configurations and markers are predicted), or
+        configurations (every marker at every configuration, in that order).
+    model : Model, optional
+        The model ``result`` was identified with; built from the result when
+        not given (:func:`result_model`).
+    registry : EffectRegistry, optional
+        Names the model's effects when it is built here (a user effect's file).
+    a_posteriori : bool
+        Scale the covariance by (σ̂/σ)² (default); False: for the a-priori σ
+        (what ``doe-calib predict`` writes, as it always has).
+
+    Returns
+    -------
+    Prediction
+        Positions (m) and their std ``√diag(B Σ Bᵀ)`` with ``B`` the
+        observation matrix of each reading and Σ the covariance of the free
+        parameters.
+    """
+    if isinstance(data, Measurements):
+        cfg, config, marker = data.configurations, data.config, data.marker
+    elif isinstance(data, Configurations):
+        cfg, n = data, len(result.tool.names)
+        config = np.repeat(np.arange(len(cfg)), n)
+        marker = np.tile(np.arange(n), len(cfg))
+    else:
+        raise DataError(f"predict takes Measurements or Configurations, not "
+                        f"{type(data).__name__}")
+    if model is None:
+        model, params = result_model(result, registry)
+    else:
+        params = aligned_parameters(model, result)
+    x, b = observation_matrix(model, params.values, cfg)
+    bf = b[config, marker][..., params.free]
+    cov = result.cov_params(a_posteriori=a_posteriori)
+    var = np.einsum("kif,fg,kig->ki", bf, cov, bf)
+    return Prediction(x[config, marker], np.sqrt(np.clip(var, 0.0, None)),
+                      np.asarray(config), np.asarray(marker), tuple(result.tool.names))
