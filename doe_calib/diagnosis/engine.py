@@ -18,6 +18,7 @@ from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.errors import DoeCalibError
 from doe_calib.estimation.identify import identify_quietly
+from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.model.effects import parse_effect
 
 _PHRASES = {"cyclic": "a cyclic (transmission) error of joint {j}",
@@ -196,14 +197,17 @@ def _verdict(model, test, adequate, cv, folds, tests, proposed, follow, flagged,
 
 def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
              grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
-             tolerance: float = 0.05, progress=None) -> DiagnosisResult:
+             tolerance: float = 0.05, progress=None,
+             sigma_mm: float | None = None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
 
     Parameters
     ----------
     model : Model
     measurements : Measurements
-        Readings with their σ (m).
+        Readings with their σ (m). Readings without σ are tested against the
+        σ̂ of the starting model's fit, as on the command line
+        (:func:`~doe_calib.estimation.sigma.resolve_sigma`).
     fit : IdentificationResult, optional
         The model's fit to these data; identified here when not given.
     level : float
@@ -223,11 +227,16 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         even when the χ² test (too sharp at large N) rejects.
     progress : callable, optional
         ``progress(done, total, note)`` while candidates are cross-validated.
+    sigma_mm : float, optional
+        σ per coordinate, mm, for every reading (replacing the readings' own).
 
     Returns
     -------
     DiagnosisResult
     """
+    settled = resolve_sigma(model, measurements, sigma_mm, fit=fit)
+    if settled.measurements is not measurements:  # σ settled here: fit at that σ
+        measurements, fit = settled.measurements, None
     if fit is None:
         fit = identify_quietly(model, measurements)
     params = fit.parameters
@@ -235,7 +244,7 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     rank = int(params.free.sum())
     rep = repeatability_sigma(measurements)
     sigma_mm = float(np.median(measurements.sigma) * 1e3)
-    test = adequacy(res, rank, sigma_mm, level, rep)
+    test = adequacy(res, rank, sigma_mm, level, rep, measurements.sigma_source)
     screen, screened = screening_set(measurements)
     split = make_folds(screen, folds, grouping)
     cv = cross_validated_rms(model, screen, params, split)
