@@ -17,6 +17,7 @@ from doe_calib.errors import (
                      ConvergenceWarning,
                      DataError,
                      DoeCalibError,
+                     DoeCalibWarning,
                      IdentifiabilityWarning,
                      ModelError,
                      OptionError,
@@ -29,6 +30,7 @@ from doe_calib.estimation.covariance import (
 )
 from doe_calib.estimation.identify import identify
 from doe_calib.estimation.result import IdentificationResult
+from doe_calib.estimation.sigma import SettledSigma, resolve_sigma
 from doe_calib.io.measurements import Configurations, Measurements
 from doe_calib.model.effects import DEFAULT_MODEL, REGISTRY
 from doe_calib.model.evaluation import marker_positions, observation_matrix
@@ -54,4 +56,5 @@ __all__ = [
     "simulate", "examples", "DEFAULT_MODEL", "REGISTRY", "DoeCalibError", "DataError",
     "ModelError", "OptionError", "SolverError", "CollisionError", "IdentifiabilityWarning",
     "ConditioningWarning", "ConvergenceWarning",
+    "DoeCalibWarning", "resolve_sigma", "SettledSigma",
 ]

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
-from doe_calib.diagnosis.effect_tests import augmented, test_candidates
+from doe_calib.diagnosis.effect_tests import augmented, candidate_tests
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.variables import configuration_variables, follows
@@ -248,7 +248,8 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     screen, screened = screening_set(measurements)
     split = make_folds(screen, folds, grouping)
     cv = cross_validated_rms(model, screen, params, split)
-    tests = test_candidates(model, screen, params)
+    tried = candidate_tests(model, screen, params)
+    tests = list(tried.tests)
     chosen = _groups_to_try(tests, level, cv_top)
     scored = {}
     for i, t in enumerate(chosen):
@@ -295,4 +296,4 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                            None if proposed is None else proposed.spec, int(res.weighted.size),
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
-                           notes=(screened,) if screened else ())
+                           notes=tuple(n for n in (screened, tried.note()) if n))

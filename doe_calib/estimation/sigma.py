@@ -122,8 +122,10 @@ def resolve_sigma(model, measurements, sigma_mm: float | None = None, params=Non
     median = float(np.median(measurements.sigma) * 1000.0) if len(measurements) else np.nan
     if not measurements.sigma_estimated:
         words = {GIVEN: f"σ given: {median:.3g} mm",
-                 PER_READING: f"σ per reading from the file's sigma column: median {median:.3g} mm",
-                 ESTIMATED: f"σ estimated from the residuals of the starting model, {median:.3g} mm"}
+                 PER_READING: f"σ per reading (the file's sigma column): median "
+                              f"{median:.3g} mm",
+                 ESTIMATED: f"σ estimated from the residuals of the starting model, "
+                            f"{median:.3g} mm"}
         return SettledSigma(measurements, measurements.sigma_source, median,
                             words[measurements.sigma_source])
     if in_fit:
