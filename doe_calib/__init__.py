@@ -54,6 +54,8 @@ _PUBLIC = {
     "Prediction": "doe_calib.estimation.predict",
     "predict": "doe_calib.estimation.predict",
     "predict_covariance": "doe_calib.estimation.covariance",
+    "resolve_sigma": "doe_calib.estimation.sigma",
+    "SettledSigma": "doe_calib.estimation.sigma",
     "point_covariance": "doe_calib.estimation.covariance",
     "CovariancePrediction": "doe_calib.estimation.covariance",
     # design
@@ -76,6 +78,7 @@ _PUBLIC = {
     "calibrated_urdf": "doe_calib.export.calibrated_urdf",
     # errors and warnings
     "DoeCalibError": "doe_calib.errors",
+    "DoeCalibWarning": "doe_calib.errors",
     "DataError": "doe_calib.errors",
     "ModelError": "doe_calib.errors",
     "OptionError": "doe_calib.errors",

@@ -52,15 +52,24 @@ class CollisionError(DoeCalibError):
     """A robot program whose moves would collide (naming the move and the pair)."""
 
 
-class IdentifiabilityWarning(UserWarning):
+class DoeCalibWarning(UserWarning):
+    """Base class of every warning issued by doe_calib.
+
+    ``warnings.simplefilter("ignore", DoeCalibWarning)`` silences the toolkit's
+    warnings and leaves numpy's, scipy's and CasADi's alone; ``"error"`` turns
+    them into exceptions.
+    """
+
+
+class IdentifiabilityWarning(DoeCalibWarning):
     """Some parameters cannot be separated by the data and were fixed."""
 
 
-class ConditioningWarning(UserWarning):
+class ConditioningWarning(DoeCalibWarning):
     """The observation matrix is close to rank deficient."""
 
 
-class DataWarning(UserWarning):
+class DataWarning(DoeCalibWarning):
     """Input accepted as it is, but worth a look (e.g. a joint reading a hair past its limit)."""
 
 
@@ -68,9 +77,9 @@ class PlausibilityWarning(DataWarning):
     """A fit that ran but looks implausible (σ̂/σ far from 1, units, huge placement errors)."""
 
 
-class ConvergenceWarning(UserWarning):
+class ConvergenceWarning(DoeCalibWarning):
     """An iterative solver stopped before it converged."""
 
 
-class CompilationWarning(UserWarning):
+class CompilationWarning(DoeCalibWarning):
     """A Function could not be compiled; the slower CasADi virtual machine is used."""

@@ -150,15 +150,13 @@ def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
 
 
 def with_estimated_sigma(model, meas):
-    """``meas`` with σ set to the σ̂ of one identification of ``model``, said on stderr."""
-    from dataclasses import replace
+    """``meas`` with σ settled by :func:`~doe_calib.estimation.sigma.resolve_sigma` (σ̂ of
+    the starting model when none was given), said on stderr."""
+    from doe_calib.estimation.sigma import resolve_sigma
 
-    from doe_calib.estimation.identify import identify_quietly
-
-    sigma_mm = identify_quietly(model, meas).sigma_mm
-    print(f"σ not given: estimated from the residuals of the starting model, {sigma_mm:.3g} mm",
-          file=sys.stderr)
-    return replace(meas, sigma=np.full(len(meas), sigma_mm / 1000.0), sigma_estimated=False)
+    settled = resolve_sigma(model, meas)
+    print(settled.words, file=sys.stderr)
+    return settled.measurements
 
 
 def parse_floats(text: str, n: int, what: str) -> np.ndarray:

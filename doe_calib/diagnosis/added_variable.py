@@ -29,12 +29,14 @@ the torque or approach side for backlash, the torque for a compliance.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from doe_calib.diagnosis.effect_tests import fitted_basis, projected_columns
-from doe_calib.diagnosis.variables import smooth_basis
+from doe_calib.diagnosis.effect_tests import candidate_effects, fitted_basis, projected_columns
+from doe_calib.diagnosis.variables import configuration_variables, smooth_basis
+from doe_calib.errors import DoeCalibError, DoeCalibWarning
 from doe_calib.model.effects import joint_index
 from doe_calib.model.evaluation import marker_positions
 
@@ -126,6 +128,60 @@ def added_variable(model, measurements, params, effect, variables: dict,
         if ok.sum() > 2 and np.ptp(fitted[ok]) > 0 and np.ptp(partial[ok]) > 0 else 0.0
     return AddedVariable(effect.spec(), name, x_unit, np.asarray(x, float), partial, fitted,
                          unit, quantity, corr)
+
+
+@dataclass(frozen=True)
+class AddedVariables:
+    """The added-variable plots of the strongest candidates, and those that failed.
+
+    Attributes
+    ----------
+    plots : tuple of AddedVariable
+        Strongest candidate first.
+    failed : tuple of (str, str)
+        ``(spec, reason)`` of each candidate whose plot could not be computed.
+    """
+
+    plots: tuple
+    failed: tuple = ()
+
+    def note(self) -> str:
+        """The failed plots in words (empty when none failed)."""
+        if not self.failed:
+            return ""
+        n = len(self.failed)
+        return (f"{n} added-variable plot{'s' if n > 1 else ''} could not be computed: "
+                + ", ".join(f"{s}: {why}" for s, why in self.failed))
+
+
+def strongest_added_variables(diagnosis, model, measurements, fit, top: int = 4,
+                              registry=None) -> AddedVariables:
+    """Added-variable data of the ``top`` strongest candidates of ``diagnosis`` that can be
+    rebuilt; a candidate whose plot fails is named in ``failed``, never skipped silently.
+    ``registry`` names the effects the diagnosis tested (default the built-in ones).
+
+    The toolkit's warnings of the rebuilt models are held back (they are about
+    the candidate, not the fit); numpy's still reach the caller.
+    """
+    effects = {e.spec(): e for e in candidate_effects(model, measurements.configurations,
+                                                      registry)}
+    variables = configuration_variables(model.robot, measurements.configurations)
+    basis = fitted_basis(model, measurements, fit.parameters)  # shared by every candidate
+    plots, failed = [], []
+    for c in diagnosis.candidates:
+        if len(plots) == top:
+            break
+        effect = effects.get(c.spec)
+        if effect is None:
+            continue
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", DoeCalibWarning)
+                plots.append(added_variable(model, measurements, fit.parameters, effect,
+                                            variables, basis))
+        except (DoeCalibError, ValueError, np.linalg.LinAlgError) as exc:
+            failed.append((c.spec, str(exc) or type(exc).__name__))
+    return AddedVariables(tuple(plots), tuple(failed))
 
 
 def _per_config(values, config, m) -> np.ndarray:

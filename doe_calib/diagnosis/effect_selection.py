@@ -16,6 +16,7 @@ from doe_calib.diagnosis.effect_tests import augmented
 from doe_calib.diagnosis.engine import diagnose
 from doe_calib.diagnosis.refine_result import RefineResult, RefineStep
 from doe_calib.estimation.identify import identify_quietly
+from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.model.effects import parse_effect
 
 __all__ = ["refine", "RefineResult", "RefineStep"]
@@ -29,7 +30,7 @@ def _size_words(sizes) -> str:
 
 def refine(model, measurements, validation=None, level: float = 0.01, max_steps: int = 5,
            min_gain: float = 0.02, folds: int = 5, grouping: str = "auto", progress=None,
-           fit=None, registry=None) -> RefineResult:
+           fit=None, registry=None, sigma_mm: float | None = None) -> RefineResult:
     """Grow ``model`` one effect at a time while an effect predicts materially better.
 
     Parameters
@@ -37,7 +38,9 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
     model : Model
         The starting model.
     measurements : Measurements
-        Readings to fit, test and cross-validate on.
+        Readings to fit, test and cross-validate on. Readings without σ are
+        given the σ̂ of the starting model's fit, as on the command line
+        (:func:`~doe_calib.estimation.sigma.resolve_sigma`).
     validation : Measurements, optional
         Held-out readings, only for reporting the validation RMS at each step
         (never used to choose).
@@ -59,11 +62,16 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         user effects: ``DEFAULT_REGISTRY.with_file(path)``). A candidate whose
         fitted values are physically implausible (its parameters' bounds and
         plausible ranges, :func:`~doe_calib.diagnosis.engine.diagnose`) is not added.
+    sigma_mm : float, optional
+        σ per coordinate, mm, for every reading (replacing the readings' own).
 
     Returns
     -------
     RefineResult
     """
+    settled = resolve_sigma(model, measurements, sigma_mm, fit=fit)
+    if settled.measurements is not measurements:  # σ settled here: fit at that σ
+        measurements, fit = settled.measurements, None
     fit = identify_quietly(model, measurements) if fit is None else fit
     steps, added, reason, effect = [], None, "starting model", None
     while True:

@@ -17,13 +17,12 @@ are ordered by ``log10 p`` (which does not underflow).
 """
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import stats
 
-from doe_calib.errors import ModelError
+from doe_calib.errors import DoeCalibError
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects import DEFAULT_REGISTRY, joint_index
 from doe_calib.model.marker_model import build_model
@@ -125,8 +124,34 @@ def _basis(jac: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     return u[:, s > tol * (s[0] if s.size else 1.0)]
 
 
-def test_candidates(model, measurements, params, effects=None,
-                    registry=None) -> list[CandidateTest]:
+@dataclass(frozen=True)
+class CandidateTests:
+    """The candidates' tests and the candidates whose test could not be computed.
+
+    Attributes
+    ----------
+    tests : tuple of CandidateTest
+        Strongest evidence (smallest p, as log10) first; p-values Bonferroni-adjusted
+        over every candidate tried, those in ``failed`` included.
+    failed : tuple of (str, str)
+        ``(spec, reason)`` of each candidate whose model or columns could not be built.
+    """
+
+    tests: tuple
+    failed: tuple = ()
+
+    def note(self) -> str:
+        """The failed candidates in words (empty when none failed)."""
+        if not self.failed:
+            return ""
+        n = len(self.failed)
+        return (f"{n} candidate{'s' if n > 1 else ''} could not be computed: "
+                + ", ".join(f"{s}: {why}" for s, why in self.failed)
+                + f" ({'they count' if n > 1 else 'it counts'} in the Bonferroni correction)")
+
+
+def candidate_tests(model, measurements, params, effects=None,
+                    registry=None) -> CandidateTests:
     """Score/F test of every candidate effect against the residual of ``params``.
 
     Parameters
@@ -143,18 +168,21 @@ def test_candidates(model, measurements, params, effects=None,
 
     Returns
     -------
-    list of CandidateTest, strongest evidence (smallest p, as log10) first.
+    CandidateTests
+        A candidate whose columns cannot be built is named in ``failed`` and
+        still counts in the Bonferroni correction (it was tried).
     """
     if effects is None:
         effects = candidate_effects(model, measurements.configurations, registry)
     r, q_basis = fitted_basis(model, measurements, params)
     rank_j = q_basis.shape[1]
     ss = float(r @ r)
-    raw = []
+    raw, failed = [], []
     for e in effects:
         try:
             z, zp = projected_columns(model, measurements, params, e, q_basis)
-        except (ModelError, ValueError):
+        except (DoeCalibError, ValueError, np.linalg.LinAlgError) as exc:
+            failed.append((e.spec(), str(exc) or type(exc).__name__))
             continue
         norm2 = float((z ** 2).sum())
         absorbed = 1.0 - float((zp ** 2).sum()) / norm2 if norm2 > 0 else 1.0
@@ -168,14 +196,19 @@ def test_candidates(model, measurements, params, effects=None,
             continue
         dss = float(((u[:, keep].T @ r) ** 2).sum())
         f = (dss / q) / max((ss - dss) / dof, 1e-300)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            log_p = float(stats.f.logsf(f, q, dof))
+        log_p = float(stats.f.logsf(f, q, dof))  # −inf (p = 0) past underflow, no warning
         raw.append((e, z.shape[1], q, f, log_p, dss / ss if ss > 0 else 0.0, absorbed, dof))
-    n = max(len(raw), 1)
+    n = max(len(raw) + len(failed), 1)
     out = [CandidateTest(e.name, e.spec(),
                          None if e.joint is None else joint_index(model.robot, e.joint) + 1,
                          npar, q, float(f), float(min(1.0, np.exp(log_p) * n)),
                          float(np.exp(log_p)), frac, absorbed, log_p / np.log(10), dof=dof)
            for e, npar, q, f, log_p, frac, absorbed, dof in raw]
-    return sorted(out, key=lambda c: (c.log10_p, -c.statistic))
+    return CandidateTests(tuple(sorted(out, key=lambda c: (c.log10_p, -c.statistic))),
+                          tuple(failed))
+
+
+def test_candidates(model, measurements, params, effects=None,
+                    registry=None) -> list[CandidateTest]:
+    """The tests of :func:`candidate_tests` (those computed), strongest evidence first."""
+    return list(candidate_tests(model, measurements, params, effects, registry).tests)

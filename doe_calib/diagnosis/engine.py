@@ -13,13 +13,14 @@ import numpy as np
 
 from doe_calib.diagnosis.candidate import candidate_records
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
-from doe_calib.diagnosis.effect_tests import augmented, test_candidates
+from doe_calib.diagnosis.effect_tests import augmented, candidate_tests
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.errors import DoeCalibError, ModelError
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.plausibility import beyond_plausible, out_of_bounds, value_words
+from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.model.effects import parse_effect
 
 #: A residual "follows" a variable when its adjusted R² reaches this.
@@ -178,14 +179,17 @@ def _verdict(model, test, adequate, cv, folds, tests, proposed, follow, flagged,
 
 def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
              grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
-             tolerance: float = 0.05, progress=None, registry=None) -> DiagnosisResult:
+             tolerance: float = 0.05, progress=None, registry=None,
+             sigma_mm: float | None = None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
 
     Parameters
     ----------
     model : Model
     measurements : Measurements
-        Readings with their σ (m).
+        Readings with their σ (m). Readings without σ are tested against the
+        σ̂ of the starting model's fit, as on the command line
+        (:func:`~doe_calib.estimation.sigma.resolve_sigma`).
     fit : IdentificationResult, optional
         The model's fit to these data; identified here when not given.
     level : float
@@ -209,11 +213,16 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         Its :meth:`~doe_calib.model.effects.registry.EffectRegistry.catalogue` is what
         is tested as missing (default the built-in catalogue; user effects:
         ``DEFAULT_REGISTRY.with_file(path)``).
+    sigma_mm : float, optional
+        σ per coordinate, mm, for every reading (replacing the readings' own).
 
     Returns
     -------
     DiagnosisResult
     """
+    settled = resolve_sigma(model, measurements, sigma_mm, fit=fit)
+    if settled.measurements is not measurements:  # σ settled here: fit at that σ
+        measurements, fit = settled.measurements, None
     if fit is None:
         fit = identify_quietly(model, measurements)
     params = fit.parameters
@@ -221,11 +230,12 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     rank = int(params.free.sum())
     rep = repeatability_sigma(measurements)
     sigma_mm = float(np.median(measurements.sigma) * 1e3)
-    test = adequacy(res, rank, sigma_mm, level, rep)
+    test = adequacy(res, rank, sigma_mm, level, rep, measurements.sigma_source)
     screen, screened = screening_set(measurements)
     split = make_folds(screen, folds, grouping)
     cv = cross_validated_rms(model, screen, params, split)
-    tests = test_candidates(model, screen, params, registry=registry)
+    tried = candidate_tests(model, screen, params, registry=registry)
+    tests = list(tried.tests)
     chosen = _groups_to_try(tests, level, cv_top)
     scored = {}
     for i, t in enumerate(chosen):
@@ -277,4 +287,4 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                            spec, int(res.weighted.size),
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
-                           notes=(screened,) if screened else ())
+                           notes=tuple(n for n in (screened, tried.note()) if n))

@@ -65,7 +65,8 @@ class Adequacy:
     sigma_mm : float
         The noise σ the test assumes, mm (given, or from repeated readings).
     sigma_source : str
-        ``"given"`` or ``"repeated readings"``.
+        ``"given"``, ``"per reading"``, ``"estimated"`` (the readings' σ) or
+        ``"repeated readings"``.
     adequate : bool
         ``p_value ≥ level``.
     level : float
@@ -125,14 +126,15 @@ def repeatability_sigma(measurements):
 
 
 def adequacy(res: Residuals, rank: int, sigma_mm: float, level: float = 0.01,
-             repeat_sigma_m=None) -> Adequacy:
+             repeat_sigma_m=None, sigma_source: str = "given") -> Adequacy:
     """χ² test of the weighted residuals with ``rank`` fitted parameters.
 
     When ``repeat_sigma_m`` (σ from repeated readings, m) is given, the
-    residuals are re-weighted with it instead of the a-priori σ.
+    residuals are re-weighted with it instead of the a-priori σ, whose
+    ``sigma_source`` (:data:`~doe_calib.io.measurements.SIGMA_SOURCES`) is said otherwise.
     """
     w = res.weighted
-    source = "given"
+    source = sigma_source
     if repeat_sigma_m is not None:
         w = res.error / repeat_sigma_m
         sigma_mm, source = repeat_sigma_m * 1e3, "repeated readings"

@@ -61,7 +61,8 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
     return IdentificationResult(
         model.robot, model.tool, model.spec, estimator, params, covariance, ratio,
         residual_statistics(model, measurements, params.values), convergence, n_obs,
-        sigma_mm, tuple(notes), estimated, "estimated" if estimated else "given",
+        sigma_mm, tuple(notes), estimated,
+        "estimated" if estimated else measurements.sigma_source,
         effect_files(model.effects))
 
 

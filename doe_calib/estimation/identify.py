@@ -9,21 +9,19 @@ from __future__ import annotations
 import warnings
 from dataclasses import replace
 
-from doe_calib.errors import PlausibilityWarning
+from doe_calib.errors import DoeCalibWarning, PlausibilityWarning
 from doe_calib.estimation import plausibility
-from doe_calib.estimation.point_estimator import identify_point
+from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
 from doe_calib.estimation.pose_estimator import identify_pose
+from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.estimation.two_step import identify_two_step
 from doe_calib.model.marker_model import for_workload
 
 ESTIMATORS = ("point", "two-step", "pose")
-#: Passes over every configuration a typical fit makes (start, Jacobians, trial
-#: steps, result): what :func:`~doe_calib.model.marker_model.for_workload` is told.
-_PASSES = 10
 
 
 def identify(model, measurements, params=None, estimator: str = "point", progress=None,
-             **options):
+             sigma_mm: float | None = None, **options):
     """Identify the model's parameters from marker readings.
 
     Parameters
@@ -42,6 +40,10 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
         for comparison (``normalisation`` option, m/rad).
     progress : callable(stage, note), optional
         Told of long steps (compiling the model, each iteration of ``point``).
+    sigma_mm : float, optional
+        σ per coordinate, mm, for every reading (it replaces the readings' own);
+        default: theirs, or, when they have none, σ̂ of this fit
+        (:func:`~doe_calib.estimation.sigma.resolve_sigma`).
 
     Returns
     -------
@@ -51,7 +53,8 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
         ``measurements.sigma_estimated``, σ is estimated from the residuals:
         ``sigma_mm`` is σ̂, the covariance is scaled to it, and the result says so.
     """
-    model = for_workload(model, _PASSES * len(measurements.configurations), progress)
+    measurements = resolve_sigma(model, measurements, sigma_mm, in_fit=True).measurements
+    model = for_workload(model, FIT_PASSES * len(measurements.configurations), progress)
     if estimator == "point":
         result = identify_point(model, measurements, params, progress=progress, **options)
     elif estimator == "two-step":
@@ -76,9 +79,11 @@ def with_plausibility(model, measurements, result):
 def identify_quietly(model, measurements, params=None, **options):
     """:func:`identify` for fits run many times (cross-validation, diagnosis, refinement).
 
-    Identifiability, conditioning and convergence trouble is not issued as
-    warnings: it stays, in words, in the result's ``warnings``.
+    Identifiability, conditioning, convergence and plausibility trouble is not
+    issued as warnings: it stays, in words, in the result's ``warnings``. Only the
+    toolkit's own warnings (:class:`~doe_calib.errors.DoeCalibWarning`) are
+    held back; numpy's, scipy's and CasADi's still reach the caller.
     """
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+        warnings.simplefilter("ignore", DoeCalibWarning)
         return identify(model, measurements, params, **options)

@@ -23,6 +23,10 @@ from doe_calib.estimation.weighted_residuals import reduce_jacobian, residual_no
 
 log = logging.getLogger(__name__)
 
+#: Passes over every configuration a typical fit makes (start, Jacobians, trial
+#: steps, result): what :func:`~doe_calib.model.marker_model.for_workload` is told.
+FIT_PASSES = 10
+
 
 def identify_point(model, measurements, params=None, max_iterations: int = 200,
                    register: bool = True, progress=None) -> IdentificationResult:

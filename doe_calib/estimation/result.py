@@ -11,12 +11,12 @@ from doe_calib.estimation.fit_statistics import FitStatistics, fit_statistics
 from doe_calib.estimation.parameter_estimate import ParameterEstimate, parameter_estimate
 from doe_calib.estimation.predict import Prediction, predict
 from doe_calib.io.json_file import read_json, write_json
+from doe_calib.io.measurements import SIGMA_SOURCES
 from doe_calib.model.parameters import ParameterSet
 from doe_calib.model.robot import Robot
 from doe_calib.model.tool import Tool
 
 FORMAT_VERSION = 1
-SIGMA_SOURCES = ("given", "per reading", "estimated")
 
 
 @dataclass(frozen=True, eq=False)

@@ -40,7 +40,14 @@ import numpy as np
 from doe_calib.errors import DataError
 from doe_calib.io.column_reader import Columns, read_columns
 from doe_calib.io.columns import PLAUSIBLE, Q_TOL, WRENCH, XYZ, approach_columns, joint_columns
-from doe_calib.io.measurements import Configurations, Measurements, approach_from_order
+from doe_calib.io.measurements import (
+    ESTIMATED,
+    GIVEN,
+    PER_READING,
+    Configurations,
+    Measurements,
+    approach_from_order,
+)
 from doe_calib.io.table import Table, read_table
 
 #: σ (mm) of the readings of a file without σ, until identification estimates it.
@@ -284,8 +291,15 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
     cfg = Configurations.from_arrays(cols.q, cols.wrench, cols.temperature[:, None],
                                      [k[0] for k in cols.keys], approach)
     meas = Measurements(cfg, cols.config, cols.marker, cols.xyz, cols.sigma, cols.line,
-                        table.path, tuple(dropped), tuple(notes), session, estimated)
+                        table.path, tuple(dropped), tuple(notes), session, estimated,
+                        reading_sigma_source("sigma" in table.columns, estimated))
     return _with_unit_check(meas, robot)
+
+
+def reading_sigma_source(has_column: bool, unknown: bool) -> str:
+    """The σ source of a file's readings: its ``sigma`` column, else the σ given, else none
+    (estimated; :mod:`doe_calib.estimation.sigma`)."""
+    return PER_READING if has_column else ESTIMATED if unknown else GIVEN
 
 
 def _with_unit_check(meas, robot) -> Measurements:

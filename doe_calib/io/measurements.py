@@ -14,6 +14,11 @@ import numpy as np
 #: with one approach direction per joint, is :func:`env_fields`.
 ENV_FIELDS = ("temperature",)
 
+#: Where the readings' σ comes from (the policy is :mod:`doe_calib.estimation.sigma`): an
+#: option or keyword, the file's ``sigma`` column, or the σ̂ of the starting model's fit.
+GIVEN, PER_READING, ESTIMATED = "given", "per reading", "estimated"
+SIGMA_SOURCES = (GIVEN, PER_READING, ESTIMATED)
+
 
 def env_fields(n_joints: int) -> tuple:
     """Names of the model's ``env`` input for an N-joint robot, in order.
@@ -174,9 +179,16 @@ class Measurements:
         The measurement session of each configuration (length M; empty: one
         session). Cross-validation holds out whole sessions when there are several.
     sigma_estimated : bool
-        True when no σ was given (no ``sigma`` column, no ``--sigma``): ``sigma``
-        then holds a provisional 1 mm and identification estimates σ from the
-        residuals (formats.md §3).
+        True while σ is still to be estimated: none was given (no ``sigma``
+        column, no ``--sigma``), ``sigma`` holds a provisional 1 mm, and
+        identification estimates σ from the residuals (formats.md §3);
+        :func:`~doe_calib.estimation.sigma.resolve_sigma` settles it. True
+        implies ``sigma_source`` ``"estimated"``.
+    sigma_source : str
+        Where ``sigma`` comes from (:data:`SIGMA_SOURCES`): ``"given"`` (an
+        option or keyword; the default for readings built in code),
+        ``"per reading"`` (the file's ``sigma`` column) or ``"estimated"``
+        (σ̂ of the starting model; still to come while ``sigma_estimated``).
     """
 
     configurations: Configurations
@@ -190,6 +202,14 @@ class Measurements:
     warnings: tuple = ()
     session: tuple = ()
     sigma_estimated: bool = False
+    sigma_source: str = GIVEN
+
+    def __post_init__(self):
+        if self.sigma_source not in SIGMA_SOURCES:
+            raise ValueError(f"sigma_source must be one of {', '.join(SIGMA_SOURCES)}, got "
+                             f"{self.sigma_source!r}")
+        if self.sigma_estimated and self.sigma_source != ESTIMATED:  # σ to be estimated
+            object.__setattr__(self, "sigma_source", ESTIMATED)
 
     def __len__(self) -> int:
         return self.config.shape[0]
@@ -208,7 +228,8 @@ class Measurements:
         return Measurements(self.configurations.subset(used), new_config, self.marker[rows],
                             self.xyz[rows], self.sigma[rows], self.line[rows], self.source,
                             session=tuple(self.sessions[used]),
-                            sigma_estimated=self.sigma_estimated)
+                            sigma_estimated=self.sigma_estimated,
+                            sigma_source=self.sigma_source)
 
     @property
     def sessions(self) -> np.ndarray:
@@ -242,4 +263,13 @@ def concatenate(parts) -> Measurements:
                         sum((p.dropped for p in parts), ()),
                         sum((p.warnings for p in parts), ()),
                         tuple(s for p in parts for s in p.sessions),
-                        any(p.sigma_estimated for p in parts))
+                        any(p.sigma_estimated for p in parts), joined_sigma_source(parts))
+
+
+def joined_sigma_source(parts) -> str:
+    """The σ source of readings joined from ``parts``: estimated if any part's is, one source
+    if all share it, else per reading (σ differs from reading to reading)."""
+    sources = {p.sigma_source for p in parts}
+    if ESTIMATED in sources:
+        return ESTIMATED
+    return sources.pop() if len(sources) == 1 else PER_READING

@@ -1,15 +1,10 @@
 """Diagnosis and refinement reports: the verdict in words, ranked effects, the error falling."""
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 
-from doe_calib.diagnosis.added_variable import added_variable
-from doe_calib.diagnosis.effect_tests import candidate_effects, fitted_basis
+from doe_calib.diagnosis.added_variable import strongest_added_variables
 from doe_calib.diagnosis.residuals import residuals
-from doe_calib.diagnosis.variables import configuration_variables
-from doe_calib.errors import DoeCalibError
 from doe_calib.report import figures
 from doe_calib.report.diagnosis_figures import (
     added_variable_panels,
@@ -47,29 +42,6 @@ def _candidates_table(diagnosis, top: int = 15):
     return table(["#", "effect", "in words", "F", "dof", "p", "p (Bonferroni)",
                   "explains (%)", "CV RMS before → after", "fitted size ± std",
                   "decision"], rows, 4)
-
-
-def _added_variables(diagnosis, model, measurements, fit, registry=None) -> list:
-    """Added-variable data of the strongest candidates (those ``registry`` can rebuild)."""
-    effects = {e.spec(): e for e in candidate_effects(model, measurements.configurations,
-                                                      registry)}
-    variables = configuration_variables(model.robot, measurements.configurations)
-    basis = fitted_basis(model, measurements, fit.parameters)  # shared by every candidate
-    out = []
-    for c in diagnosis.candidates:
-        if len(out) == ADDED_VARIABLE_PLOTS:
-            break
-        effect = effects.get(c.spec)
-        if effect is None:
-            continue
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                out.append(added_variable(model, measurements, fit.parameters, effect,
-                                          variables, basis))
-        except (DoeCalibError, ValueError, np.linalg.LinAlgError):
-            continue
-    return out
 
 
 def _by_direction(diagnosis, columns, top: int = 3):
@@ -115,7 +87,10 @@ def evidence_section(diagnosis, model, measurements, fit, dpi: int = 90, title: 
     """Which effect is missing: added-variable plots of the strongest candidates, their
     tests and the share of the residual each explains (``registry``: the effects the
     diagnosis tested, default the catalogue)."""
-    plots = _added_variables(diagnosis, model, measurements, fit, registry)
+    found = strongest_added_variables(diagnosis, model, measurements, fit, ADDED_VARIABLE_PLOTS,
+                                      registry)
+    plots = found.plots
+    failed = [paragraph(f"Not shown: {found.note()}.")] if found.failed else []
     shapes = [figure(_png(added_variable_panels(plots), dpi),
                      "added-variable plots of the strongest candidates",
                      "For each of the strongest candidates: the residual of each configuration "
@@ -124,7 +99,8 @@ def evidence_section(diagnosis, model, measurements, fit, dpi: int = 90, title: 
                      "(red), against the variable that part follows. A step (backlash), a sine "
                      "(cyclic error) or a slope (compliance) shows here; r is their "
                      "correlation.")] if plots else []
-    return section(f"{title}Which effect is missing", *shapes, _candidates_table(diagnosis),
+    return section(f"{title}Which effect is missing", *shapes, *failed,
+                   _candidates_table(diagnosis),
                    figure(_png(candidate_bars(diagnosis), dpi),
                           "share of the residual each candidate explains",
                           "Share of the remaining residual (after projecting out what the "

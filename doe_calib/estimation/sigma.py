@@ -1,0 +1,151 @@
+"""Where σ comes from: the one policy for the tracker's σ per coordinate.
+
+A reading's σ has one of three sources (:data:`SIGMA_SOURCES`):
+
+``"given"``
+    an option or keyword (``--sigma``, ``sigma_mm=``) for every reading
+    without a σ of its own;
+``"per reading"``
+    the measurement file's ``sigma`` column;
+``"estimated"``
+    neither: σ is the σ̂ of the starting model's fit to the readings.
+
+The readers mark readings without σ ``sigma_estimated`` (σ still to be
+estimated, a provisional 1 mm in the meantime). :func:`resolve_sigma` settles
+it: every task that needs a σ before it fits (diagnose, refine and the
+commands built on them) calls it first, so the Python API and the command
+line test a model against the same σ. ``identify`` settles it in its own fit:
+its σ̂ *is* the starting model's, and its covariance is scaled to it.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from doe_calib.errors import DataError, DoeCalibWarning, OptionError
+from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
+from doe_calib.io.measurements import ESTIMATED, GIVEN, PER_READING, SIGMA_SOURCES, Measurements
+from doe_calib.model.marker_model import for_workload
+
+__all__ = ["GIVEN", "PER_READING", "ESTIMATED", "SIGMA_SOURCES", "SettledSigma", "resolve_sigma",
+           "with_sigma"]
+
+
+@dataclass(frozen=True, eq=False)
+class SettledSigma:
+    """Readings whose σ is settled, and how.
+
+    Attributes
+    ----------
+    measurements : Measurements
+        The readings with their σ (m); ``sigma_estimated`` is False unless
+        ``in_fit`` left the estimate to the caller's fit.
+    source : str
+        One of :data:`SIGMA_SOURCES`.
+    sigma_mm : float
+        The median σ of the readings, mm (NaN while the caller's fit estimates it).
+    words : str
+        How σ was decided, for a message (``σ given: 0.02 mm``).
+    """
+
+    measurements: Measurements
+    source: str
+    sigma_mm: float
+    words: str
+
+
+def with_sigma(measurements, sigma_mm: float, source: str = GIVEN) -> Measurements:
+    """``measurements`` with every reading's σ set to ``sigma_mm`` (mm), from ``source``.
+
+    Raises
+    ------
+    OptionError
+        When ``sigma_mm`` is not a positive finite number.
+    """
+    if not (np.isfinite(sigma_mm) and sigma_mm > 0):
+        raise OptionError(f"σ must be a positive number of mm, got {sigma_mm!r}")
+    if source not in SIGMA_SOURCES:
+        raise OptionError(f"unknown σ source {source!r}; one of {', '.join(SIGMA_SOURCES)}")
+    return replace(measurements, sigma=np.full(len(measurements), sigma_mm / 1000.0),
+                   sigma_source=source, sigma_estimated=False)
+
+
+def resolve_sigma(model, measurements, sigma_mm: float | None = None, params=None, fit=None,
+                  in_fit: bool = False) -> SettledSigma:
+    """Settle the σ of ``measurements``: given, per reading, or estimated.
+
+    Parameters
+    ----------
+    model : Model
+        The starting model, whose fit estimates σ when none is known.
+    measurements : Measurements
+        Readings in SI, as read (``sigma_estimated`` when no σ came with them).
+    sigma_mm : float, optional
+        σ per coordinate, mm, for every reading (source ``"given"``); it
+        replaces whatever σ the readings carry.
+    params : ParameterSet, optional
+        Start values and free parameters of the starting fit (default nominal).
+    fit : IdentificationResult, optional
+        The starting model's fit to these readings, when at hand: its σ̂ is the
+        estimate (no second fit).
+    in_fit : bool
+        The caller's own fit estimates σ (``identify``): readings without σ
+        are returned as they are, still ``sigma_estimated``.
+
+    Returns
+    -------
+    SettledSigma
+
+    Raises
+    ------
+    DataError
+        When σ must be estimated and the readings cannot give it (no more
+        coordinates than free parameters).
+
+    Examples
+    --------
+    >>> from doe_calib import Robot, Tool, build_model, examples, simulate
+    >>> from doe_calib.model.simulate import random_configurations
+    >>> from doe_calib.io.measurements import Configurations
+    >>> model = build_model(Robot.from_urdf(examples.ROBOT_URDF),
+    ...                     Tool.from_yaml(examples.TOOL_YAML), "joint_offset")
+    >>> cfg = Configurations.from_arrays(random_configurations(model.robot, 20))
+    >>> meas = simulate(model, model.nominal().values, cfg, 2e-5)
+    >>> resolve_sigma(model, meas, sigma_mm=0.03).words
+    'σ given: 0.03 mm'
+    """
+    if sigma_mm is not None:
+        settled = with_sigma(measurements, sigma_mm)
+        return SettledSigma(settled, GIVEN, float(sigma_mm), f"σ given: {sigma_mm:.3g} mm")
+    median = float(np.median(measurements.sigma) * 1000.0) if len(measurements) else np.nan
+    if not measurements.sigma_estimated:
+        words = {GIVEN: f"σ given: {median:.3g} mm",
+                 PER_READING: f"σ per reading (the file's sigma column): median "
+                              f"{median:.3g} mm",
+                 ESTIMATED: f"σ estimated from the residuals of the starting model, "
+                            f"{median:.3g} mm"}
+        return SettledSigma(measurements, measurements.sigma_source, median,
+                            words[measurements.sigma_source])
+    if in_fit:
+        return SettledSigma(measurements, ESTIMATED, float("nan"),
+                            "σ not given: estimated from the residuals of this fit")
+    if fit is None or not fit.sigma_estimated:
+        fit = _starting_fit(model, measurements, params)
+    if not (fit.sigma_estimated and np.isfinite(fit.sigma_mm) and fit.sigma_mm > 0):
+        raise DataError(f"σ is not given and cannot be estimated: {3 * len(measurements)} "
+                        f"coordinates for {int(fit.parameters.free.sum())} free parameters; give "
+                        f"σ (a sigma column, --sigma or sigma_mm=)", measurements.source or None)
+    return SettledSigma(with_sigma(measurements, fit.sigma_mm, ESTIMATED), ESTIMATED,
+                        fit.sigma_mm, f"σ not given: estimated from the residuals of the "
+                                      f"starting model, {fit.sigma_mm:.3g} mm")
+
+
+def _starting_fit(model, measurements, params):
+    """The point estimator's fit of ``model`` (σ̂ from its residuals), the toolkit's warnings
+    kept in its words (as :func:`~doe_calib.estimation.identify.identify_quietly`)."""
+    model = for_workload(model, FIT_PASSES * len(measurements.configurations))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DoeCalibWarning)
+        return identify_point(model, measurements, params)
