@@ -92,11 +92,8 @@ class Criterion:
         """
         if isinstance(name, Criterion):
             return name
-        if name not in CRITERIA:
-            raise ValueError(f"unknown criterion {name!r}; choose one of {', '.join(CRITERIA)}")
+        check(name, task)
         if name == "task":
-            if task is None:
-                raise ValueError("the task criterion needs task poses")
             return TaskOptimal(np.asarray(task, float))
         return {"D": DOptimal, "A": AOptimal, "E": EOptimal}[name]()
 
@@ -357,6 +354,16 @@ class TaskOptimal(Criterion):
 def criterion(name="D", task: np.ndarray | None = None) -> Criterion:
     """The criterion object for a name of :data:`CRITERIA` (:meth:`Criterion.from_name`)."""
     return Criterion.from_name(name, task)
+
+
+def check(name, task) -> None:
+    """Raise ValueError for an unknown criterion name, or ``"task"`` when ``task`` is None."""
+    if isinstance(name, Criterion):
+        return
+    if name not in CRITERIA:
+        raise ValueError(f"unknown criterion {name!r}; choose one of {', '.join(CRITERIA)}")
+    if name == "task" and task is None:
+        raise ValueError("the task criterion needs task poses")
 
 
 def evaluate_criterion(name, m: np.ndarray, task: np.ndarray | None = None) -> float:

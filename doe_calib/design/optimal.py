@@ -11,7 +11,15 @@ import numpy as np
 from doe_calib.design.candidate_poses import feasible_candidates
 from doe_calib.design.clearances import collision_note, pose_clearances
 from doe_calib.design.constraints import DesignConstraints
-from doe_calib.design.criteria import CRITERIA, Criterion, DOptimal, TaskOptimal, log_det
+from doe_calib.design.criteria import (
+    AOptimal,
+    Criterion,
+    DOptimal,
+    EOptimal,
+    TaskOptimal,
+    check,
+    log_det,
+)
 from doe_calib.design.exchange import exact_design
 from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.pose_refinement import refine as refine_poses
@@ -91,9 +99,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     if isinstance(criterion, TaskOptimal):
         raise OptionError("ask for the task criterion by name, criterion=\"task\", with task= "
                           "poses: its matrix depends on the parameters designed for")
-    crit = None if criterion == "task" else Criterion.from_name(criterion)
-    if crit is None and task is None:
-        raise ValueError("the task criterion needs task poses")
+    check(criterion, task)
     if n_poses < 1:
         raise OptionError(f"{n_poses} poses (--poses): a design needs at least 1 pose")
     rng = np.random.default_rng() if rng is None else rng
@@ -107,7 +113,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         raise SolverError(f"only {len(cands.q)} feasible candidates for {n_poses} poses")
     params = design_parameters(model, params, cands.q, loads, rng=rng)
     t = None if task is None else task_matrix(model, params, task, task_point)
-    crit = TaskOptimal(t) if crit is None else crit
+    crit = Criterion.from_name(criterion, t)
     stage("information", f"{len(cands.q)} candidates")
     blocks = blocks_for(model, params, cands.q, loads, sigma)
     check_enough_poses(n_poses, blocks, model.tool.n_markers, len(loads), rng)
@@ -136,12 +142,12 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     value, bound = crit.value(m), relaxed.bound(n_poses)
     p = m.shape[0]
     efficiencies = {crit.name: crit.efficiency(value, bound, p)}
-    if crit.name != "D":
+    if not isinstance(crit, DOptimal):
         stage("bound", "D relaxation for the D-efficiency")
         efficiencies["D"] = DOptimal().efficiency(log_det(m), relax(blocks).bound(n_poses), p)
     stage("report")
-    criteria = {c: Criterion.from_name(c, t).value(m) for c in CRITERIA
-                if c != "task" or t is not None}
+    reported = [DOptimal(), AOptimal(), EOptimal()] + ([] if t is None else [TaskOptimal(t)])
+    criteria = {c.name: c.value(m) for c in reported}
     ratio = equivalence_ratio(blocks, m / n_poses, crit)
     target = crit.target(p)
     equivalence = {"criterion": crit.name, "statistic": crit.statistic, "target": target,
