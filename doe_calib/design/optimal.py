@@ -170,7 +170,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     scale = params.scales[params.free]
     std = np.sqrt(np.diag(np.linalg.inv(m))) * scale
     free = [par for par, f in zip(params.parameters, params.free) if f]
-    notes = [versus_random,
+    notes = [versus_random, f"{crit.name} criterion: {crit.words}",
              f"relaxation over {len(blocks)} candidates: equivalence ratio {relaxed.ratio:.4g} "
              f"after {relaxed.iterations} iterations; {p} parameters designed for, "
              f"{int((~params.free).sum())} fixed as not identifiable by any candidate"]

@@ -194,8 +194,10 @@ def design_fragment(design, dpi: int = 72) -> Html:
     head = paragraph(f"{len(design.poses())} poses ({len(design.configurations)} measurements) "
                      f"for {design.robot.name}, model {design.model}, {design.criterion} "
                      f"criterion, efficiency {design.efficiency:.3f}")
-    return Html("<div>" + "\n".join([head, efficiency_section(design),
-                                     std_section(design, dpi)]) + "</div>")
+    parts = [head, efficiency_section(design)]
+    if design.predicted_std:
+        parts.append(std_section(design, dpi))
+    return Html("<div>" + "\n".join(parts) + "</div>")
 
 
 def design_report(design, path, dpi: int = 90):
