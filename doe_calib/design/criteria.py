@@ -58,13 +58,14 @@ def log_det(m: np.ndarray) -> float:
     return float(value) if sign > 0 else -np.inf
 
 
-def _neg_trace(m: np.ndarray, c_root: np.ndarray | None) -> float:
-    """−tr(C M⁻¹) with C = RᵀR (R = ``c_root``, identity when None); −inf when singular."""
+def _neg_trace(m: np.ndarray, root: np.ndarray | None) -> float:
+    """−tr(R M⁻¹ Rᵀ) (R = ``root``; −tr M⁻¹ when None); −inf when M is singular."""
     try:
-        inv = np.linalg.inv(m)
+        if root is None:
+            return -float(np.trace(np.linalg.inv(m)))
+        return -float(np.trace(root @ np.linalg.solve(m, root.T)))
     except np.linalg.LinAlgError:
         return -np.inf
-    return -float(np.trace(inv) if c_root is None else np.trace(c_root @ inv @ c_root.T))
 
 
 @dataclass(frozen=True, eq=False)
