@@ -89,7 +89,7 @@ def test_relaxation_matches_cvxpy_and_certifies_its_bound(small, name):
         assert rel.value == pytest.approx(reference, rel=1e-4)
     rng = np.random.default_rng(0)
     for n in (6, 10):
-        best = exact_design(blocks, n, name, rel.weights, task)
+        best = exact_design(blocks, n, name, rel.weights, task).indices
         value = evaluate_criterion(name, information(blocks[best], np.ones(n)), task)
         randoms = [evaluate_criterion(name, information(
             blocks[rng.choice(len(blocks), n, replace=False)], np.ones(n)), task)

@@ -1,19 +1,26 @@
 """Experiment design: choose the measurement poses that make the parameters most precise.
 
-Per-candidate information blocks (:mod:`.problem`), criteria D, A, E and
-task (:mod:`.criteria`), the constraints on a pose (:mod:`.constraints`,
-read from a file by :mod:`.constraint_file`, evaluated by
+Per-candidate information blocks (:mod:`.problem`), the criterion objects
+D, A, E and task (:mod:`.criteria`: ``criterion("D")``), the constraints on
+a pose (:mod:`.constraints`, read from a file by :mod:`.constraint_file`, evaluated by
 :mod:`.feasibility` on candidates drawn by :mod:`.candidates`), the convex
 relaxation with its certified bound (:mod:`.relaxation`), the exact N-pose
 exchange (:mod:`.exchange`, :mod:`.updates`), the continuous IPOPT
-refinement (:mod:`.refine`, on the expressions of :mod:`.symbolic`), and the
+refinement (:mod:`.pose_refinement`, on the expressions of :mod:`.symbolic`)
+— three solvers that each return a :class:`.outcome.DesignOutcome` — and the
 pipeline (:mod:`.optimal`) behind ``doe-calib design`` with its result
-(:mod:`.result`).
+(:mod:`.result`, predicted std by name from :mod:`.predicted_std`).
 """
 from doe_calib.design.constraint_file import read_constraints
 from doe_calib.design.constraints import Box, Coverage, DesignConstraints, LineOfSight
 from doe_calib.design.criteria import (
            CRITERIA,
+           AOptimal,
+           Criterion,
+           DOptimal,
+           EOptimal,
+           TaskOptimal,
+           criterion,
            d_efficiency,
            efficiency,
            evaluate_criterion,
@@ -27,8 +34,10 @@ from doe_calib.design.problem import (
            load_configurations,
            task_matrix,
 )
+from doe_calib.design.outcome import DesignOutcome
+from doe_calib.design.predicted_std import PredictedStd, StdMapping
 from doe_calib.design.relaxation import (
-           Relaxation,
+           convex_relaxation,
            equivalence_ratio,
            information,
            relax,
@@ -37,7 +46,9 @@ from doe_calib.design.relaxation import (
 )
 
 __all__ = ["read_constraints", "Box", "Coverage", "DesignConstraints", "LineOfSight", "CRITERIA",
+           "AOptimal", "Criterion", "DOptimal", "EOptimal", "TaskOptimal", "criterion",
            "d_efficiency", "efficiency", "evaluate_criterion", "log_det", "exact_d_design",
            "exact_design", "LoadCase", "blocks_for", "design_parameters", "load_configurations",
-           "task_matrix", "Relaxation", "equivalence_ratio", "information", "relax", "relax_d",
+           "task_matrix", "DesignOutcome", "PredictedStd", "StdMapping", "convex_relaxation",
+           "equivalence_ratio", "information", "relax", "relax_d",
            "variances"]

@@ -123,6 +123,43 @@ class Comparison:
         """JSON text; also written to ``path`` when given."""
         return write_json(self.to_dict(), path)
 
+    @classmethod
+    def from_dict(cls, d: dict) -> "Comparison":
+        """Rebuild a comparison from :meth:`to_dict` (null std back to NaN); builds no model."""
+        def array(rows, width):
+            return np.array([[np.nan if v is None else float(v) for v in r] for r in rows],
+                            float).reshape(len(rows), width)
+
+        sources, params = d["sources"], d["parameters"]
+        task = d.get("task")
+        return cls(tuple(s["label"] for s in sources), tuple(s["kind"] for s in sources),
+                   tuple(s["model"] for s in sources), tuple(int(s["poses"]) for s in sources),
+                   tuple(int(s["observations"]) for s in sources),
+                   tuple(float(s["sigma_mm"]) for s in sources),
+                   tuple(p["name"] for p in params), tuple(p["unit"] for p in params),
+                   array([p["std"] for p in params], len(sources)),
+                   task_poses=tuple(task["poses"]) if task else (),
+                   task_point_mm=tuple(task["point_mm"]) if task else (0.0, 0.0, 0.0),
+                   task_std=(array(task["position_std_mm"], len(sources)) if task
+                             else np.zeros((0, 0))))
+
+    @classmethod
+    def from_json(cls, path) -> "Comparison":
+        """Read a comparison file written by :meth:`to_json`."""
+        return cls.from_dict(read_json(path, FORMAT, "doe_calib comparison file"))
+
+    def __repr__(self) -> str:
+        return (f"<Comparison: {', '.join(self.labels)}; {len(self.names)} parameters, "
+                f"{len(self.task_poses)} task poses>")
+
+    def __str__(self) -> str:
+        return self.summary()
+
+    def _repr_html_(self) -> str:
+        """The comparison report's content for a notebook: tables and bar charts."""
+        from doe_calib.report.compare import compare_fragment
+        return str(compare_fragment(self))
+
 
 def load_source(path, registry=None):
     """A design or identification-result JSON file, by its ``format`` key (``registry``:

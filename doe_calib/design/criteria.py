@@ -1,26 +1,50 @@
-"""Design criteria: pure functions of the information matrix M (larger is better).
+"""Design criteria: objects that know everything a solver needs about one function of M.
 
-All take the information matrix of the free parameters, already scaled by
-the parameters' typical sizes (``S M S`` with ``S = diag(scale)``) so that
-units do not decide the A and E criteria; D is scale-invariant anyway.
+A criterion is a pure function of the information matrix M of the free
+parameters, already scaled by their typical sizes (``S M S`` with
+``S = diag(scale)``) so that units do not decide the A and E criteria; D is
+scale-invariant anyway. Larger is better. :class:`DOptimal`,
+:class:`AOptimal`, :class:`EOptimal` and :class:`TaskOptimal` each carry
 
-Each criterion has a value (what the design reports: log det M, −tr M⁻¹,
-λ_min(M), −tr(T M⁻¹ Tᵀ)) and an information function Φ, concave and
-positively homogeneous of degree 1 ((det M)^(1/p), 1/tr M⁻¹, λ_min,
-1/tr(T M⁻¹ Tᵀ)), which makes efficiencies ratios and gives the
-equivalence theorem its general form: for candidates with information
-M_i, normalised weights w and M = Σ w_i M_i, every design ξ over the
-candidates has
+* ``value(M)``: what a design reports: log det M, −tr M⁻¹, λ_min(M),
+  −tr(T M⁻¹ Tᵀ);
+* ``cvxpy_value(M)``: the same as a concave cvxpy expression, for the
+  relaxation solved by an interior-point method;
+* ``sensitivity(M)`` and the bounds of the equivalence theorem below;
+* ``added_values(M, B)``: the criterion of M + B_jᵀB_j for many candidates
+  at once (rank-r updates), the exchange's inner step;
+* ``log_phi(M)``: log Φ as a CasADi expression, the IPOPT refinement's
+  objective;
+* its ``name`` and the words a report uses.
+
+The information function Φ is concave and positively homogeneous of degree 1
+((det M)^(1/p), 1/tr M⁻¹, λ_min, 1/tr(T M⁻¹ Tᵀ)), which makes efficiencies
+ratios and gives the equivalence theorem its general form: for candidates
+with information M_i, normalised weights w and M = Σ w_i M_i, every design ξ
+over the candidates has
 
     Φ(M(ξ)) ≤ c · max_i tr(H M_i) · Φ(M),
 
-with the sensitivity matrix H and factor c of :func:`sensitivity`
+with the sensitivity matrix H and factor c of ``sensitivity``
 (``Σ_i w_i tr(H M_i) = 1``; ψ_i = tr(H M_i) ≤ 1 for all i is the optimality
-condition: d_i = tr(M⁻¹M_i) ≤ p for D).
+condition: d_i = tr(M⁻¹M_i) ≤ p for D). The functions at the end
+(:func:`evaluate_criterion`, :func:`sensitivity`, :func:`efficiency` …) take
+a criterion name or object.
+
+Examples
+--------
+>>> m = np.diag([4.0, 1.0])
+>>> [round(criterion(c).value(m), 4) for c in ("D", "A", "E")]
+[1.3863, -1.25, 1.0]
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import ClassVar
+
+import casadi as ca
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 CRITERIA = ("D", "A", "E", "task")
 
@@ -34,62 +58,321 @@ def log_det(m: np.ndarray) -> float:
     return float(value) if sign > 0 else -np.inf
 
 
-def neg_trace_inverse(m: np.ndarray) -> float:
-    """A: −tr(M⁻¹), minus the sum of the (scaled) parameter variances."""
+def _neg_trace(m: np.ndarray, root: np.ndarray | None) -> float:
+    """−tr(R M⁻¹ Rᵀ) (R = ``root``; −tr M⁻¹ when None); −inf when M is singular."""
     try:
-        return -float(np.trace(np.linalg.inv(m)))
+        if root is None:
+            return -float(np.trace(np.linalg.inv(m)))
+        return -float(np.trace(root @ np.linalg.solve(m, root.T)))
     except np.linalg.LinAlgError:
         return -np.inf
 
 
-def min_eigenvalue(m: np.ndarray) -> float:
-    """E: the smallest eigenvalue of M (the worst-determined direction)."""
-    return float(np.linalg.eigvalsh(m)[0])
+@dataclass(frozen=True, eq=False)
+class Criterion:
+    """A design criterion: a function of the scaled information M, larger is better.
+
+    Subclasses set ``name``, ``words`` (what the criterion asks for, for
+    reports), ``statistic`` (the equivalence-theorem statistic) and
+    ``power`` (the exponent λ of the multiplicative relaxation step
+    ``w_i ← w_i ψ_i^λ``, the value known to increase the criterion
+    monotonically, Yu 2010). Build one with :func:`criterion`.
+    """
+
+    name: ClassVar[str]
+    words: ClassVar[str]
+    statistic: ClassVar[str]
+    power: ClassVar[float] = 0.5
+
+    @classmethod
+    def from_name(cls, name, task: np.ndarray | None = None) -> "Criterion":
+        """The criterion called ``name`` (one of :data:`CRITERIA`), or ``name`` if a Criterion.
+
+        ``task`` (rows, p) is the task matrix of :class:`TaskOptimal`.
+        Raises ValueError for an unknown name or the task criterion without task.
+        """
+        if isinstance(name, Criterion):
+            return name
+        check(name, task)
+        if name == "task":
+            return TaskOptimal(np.asarray(task, float))
+        return {"D": DOptimal, "A": AOptimal, "E": EOptimal}[name]()
+
+    def __str__(self) -> str:
+        return self.name
+
+    def value(self, m: np.ndarray) -> float:
+        """The criterion of M (−inf when M is singular)."""
+        raise NotImplementedError
+
+    def smooth_value(self, m: np.ndarray) -> float:
+        """The criterion, or for E its smooth surrogate; what line searches maximise."""
+        return self.value(m)
+
+    def log_information(self, m: np.ndarray) -> float:
+        """log Φ(M), numerically (for E of the surrogate): :meth:`log_phi` in numpy."""
+        return float(-np.log(-self.value(m)))
+
+    def target(self, p: int) -> float:
+        """The value of the equivalence statistic at the optimum (1; p for D)."""
+        return 1.0
+
+    def sensitivity(self, m: np.ndarray) -> tuple[np.ndarray, float]:
+        """Sensitivity matrix H (p, p) and bound factor c at M (module docstring)."""
+        raise NotImplementedError
+
+    def scale_value(self, value: float, n: float, p: int) -> float:
+        """The criterion of n·M from that of M (−tr/n for A and task)."""
+        return value / n
+
+    def bound_value(self, value: float, ratio: float, n: float, p: int) -> float:
+        """Upper bound on the criterion of any n-point design over the candidates.
+
+        ``value`` is the criterion of a normalised relaxation M(w) and ``ratio``
+        = c · max_i ψ_i ≥ 1 its equivalence-theorem ratio.
+        """
+        return self.scale_value(value, n, p) / ratio
+
+    def efficiency(self, value: float, reference: float, p: int) -> float:
+        """Φ(design) / Φ(reference) from criterion values: 1 as good as the reference."""
+        return float(reference / value)
+
+    def step(self, m: np.ndarray, m_j: np.ndarray, d_j: float) -> float:
+        """Best step α ∈ [0, 1/2] from M towards candidate information M_j (a line search)."""
+        res = minimize_scalar(lambda a: -self.smooth_value((1 - a) * m + a * m_j),
+                              bounds=(0.0, 0.5), method="bounded", options={"xatol": 1e-4})
+        return float(res.x)
+
+    def prune(self, psi: np.ndarray, gap: float, p: int) -> np.ndarray | None:
+        """Mask of candidates that may still carry weight (None: no rule, keep all)."""
+        return None
+
+    def added_values(self, m: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+        """Criterion of M + B_jᵀB_j for every block B_j (K, r, p), by rank-r updates; (K,).
+
+        Woodbury, with U = B M⁻¹ and S = I + U Bᵀ:
+        tr(C (M + BᵀB)⁻¹) = tr(C M⁻¹) − tr(S⁻¹ U C Uᵀ).
+        """
+        k, r, _ = blocks.shape
+        inv = np.linalg.inv(m)
+        u = blocks @ inv                                   # (K, r, p)
+        s = np.eye(r) + np.einsum("kri,ksi->krs", u, blocks)
+        root = self._root()
+        base = np.trace(inv) if root is None else np.trace(root @ inv @ root.T)
+        v = u if root is None else u @ root.T
+        vv = np.einsum("kri,ksi->krs", v, v)
+        return -(base - np.trace(np.linalg.solve(s, vv), axis1=1, axis2=2))
+
+    def _root(self) -> np.ndarray | None:
+        """R of the weight C = RᵀR of the trace criteria (None: identity)."""
+        return None
+
+    def cvxpy_value(self, m):
+        """The criterion of a cvxpy affine matrix expression M (p, p), concave."""
+        raise NotImplementedError
+
+    def reference(self, m: np.ndarray) -> float:
+        """A scale for :meth:`log_phi` at M (λ_min for E, whose powers need it; else 1)."""
+        return 1.0
+
+    def log_phi(self, m: ca.SX, reference: float = 1.0) -> ca.SX:
+        """log Φ(M) as a CasADi expression of the symmetric positive-definite M (p, p)."""
+        r_inv = ca.solve(ca.chol(m), ca.SX.eye(m.shape[0]))  # M⁻¹ = R⁻¹R⁻ᵀ, RᵀR = M
+        root = self._root()
+        return -ca.log(ca.sumsqr(r_inv if root is None else ca.DM(root) @ r_inv))
 
 
-def neg_task_variance(m: np.ndarray, task: np.ndarray) -> float:
+@dataclass(frozen=True, eq=False)
+class DOptimal(Criterion):
+    """D: log det M, the volume of the confidence ellipsoid (scale-invariant)."""
+
+    name: ClassVar[str] = "D"
+    words: ClassVar[str] = "the smallest confidence ellipsoid (log det M)"
+    statistic: ClassVar[str] = "max_i tr(M⁻¹ M_i)"
+    power: ClassVar[float] = 1.0
+
+    def value(self, m):
+        return log_det(m)
+
+    def log_information(self, m):
+        return self.value(m) / m.shape[0]
+
+    def target(self, p):
+        return float(p)
+
+    def sensitivity(self, m):
+        return np.linalg.inv(m) / m.shape[0], 1.0
+
+    def scale_value(self, value, n, p):
+        return value + p * np.log(n)
+
+    def bound_value(self, value, ratio, n, p):
+        return self.scale_value(value, n, p) + p * np.log(ratio)
+
+    def efficiency(self, value, reference, p):
+        return float(np.exp((value - reference) / p))
+
+    def step(self, m, m_j, d_j):
+        p = m.shape[0]
+        return (d_j - p) / (p * (d_j - 1.0))
+
+    def prune(self, psi, gap, p):
+        """Harman–Pronzato: a candidate with d_i below the threshold is in no D-optimal design."""
+        g = p * gap
+        return p * psi >= p * (1 + g / 2 - np.sqrt(g * (4 + g - 4 / p)) / 2)
+
+    def added_values(self, m, blocks):
+        """log det(M + BᵀB) = log det M + log det(I + B M⁻¹ Bᵀ)."""
+        k, r, p = blocks.shape
+        chol = np.linalg.cholesky(m)
+        x = np.linalg.solve(chol, blocks.reshape(-1, p).T).T.reshape(k, r, p)
+        g = np.einsum("kri,ksi->krs", x, x) + np.eye(r)
+        return np.linalg.slogdet(m)[1] + np.linalg.slogdet(g)[1]
+
+    def cvxpy_value(self, m):
+        import cvxpy as cp
+        return cp.log_det(m)
+
+    def log_phi(self, m, reference=1.0):
+        return 2.0 * ca.sum1(ca.log(ca.diag(ca.chol(m)))) / m.shape[0]
+
+
+@dataclass(frozen=True, eq=False)
+class AOptimal(Criterion):
+    """A: −tr M⁻¹, minus the sum of the (scaled) parameter variances."""
+
+    name: ClassVar[str] = "A"
+    words: ClassVar[str] = "the smallest sum of (scaled) parameter variances (−tr M⁻¹)"
+    statistic: ClassVar[str] = "max_i tr(M⁻² M_i) / tr(M⁻¹)"
+
+    def value(self, m):
+        return _neg_trace(m, None)
+
+    def sensitivity(self, m):
+        inv = np.linalg.inv(m)
+        return inv @ inv / np.trace(inv), 1.0
+
+    def cvxpy_value(self, m):
+        import cvxpy as cp
+        return -cp.tr_inv(m)
+
+
+@dataclass(frozen=True, eq=False)
+class EOptimal(Criterion):
+    """E: λ_min(M), the worst-determined direction; smooth surrogate (tr M^-k)^(-1/k)."""
+
+    name: ClassVar[str] = "E"
+    words: ClassVar[str] = "the best worst-determined direction (λ_min M)"
+    statistic: ClassVar[str] = "max_i tr(G M_i) / λ_min(M), G = M^-(k+1) / tr M^-(k+1)"
+    power: ClassVar[float] = 1.0 / (E_ORDER + 1)
+
+    def value(self, m):
+        return float(np.linalg.eigvalsh(m)[0])
+
+    def smooth_value(self, m):
+        """log (tr M^-k)^(-1/k), k = :data:`E_ORDER` (−inf unless M is positive definite)."""
+        ev = np.linalg.eigvalsh(m)
+        if ev[0] <= 0:
+            return -np.inf
+        return float(np.log(ev[0]) - np.log(np.sum((ev[0] / ev) ** E_ORDER)) / E_ORDER)
+
+    def log_information(self, m):
+        return self.smooth_value(m)
+
+    def sensitivity(self, m):
+        """H of the surrogate; c turns its bound into one on λ_min."""
+        ev, vec = np.linalg.eigh(m)
+        rel = (ev[0] / ev) ** (E_ORDER + 1)  # eigenvalue weights of M^-(k+1), scaled
+        h = (vec * rel) @ vec.T / np.sum(rel * ev)
+        return h, float(np.sum(rel * ev) / (ev[0] * rel.sum()))
+
+    def scale_value(self, value, n, p):
+        return value * n
+
+    def bound_value(self, value, ratio, n, p):
+        return self.scale_value(value, n, p) * ratio
+
+    def efficiency(self, value, reference, p):
+        return float(value / reference)
+
+    def added_values(self, m, blocks):
+        """λ_min of every sum (batched eigenvalues)."""
+        return np.linalg.eigvalsh(m + np.einsum("kri,krj->kij", blocks, blocks))[:, 0]
+
+    def cvxpy_value(self, m):
+        import cvxpy as cp
+        return cp.lambda_min(m)
+
+    def reference(self, m):
+        return float(np.linalg.eigvalsh(m)[0])
+
+    def log_phi(self, m, reference=1.0):
+        """−(1/k) log tr M^-k, computed on M / ``reference`` (about λ_min keeps powers near 1)."""
+        r_inv = ca.solve(ca.chol(m), ca.SX.eye(m.shape[0]))
+        x = reference * (r_inv @ r_inv.T)
+        for _ in range(int(np.log2(E_ORDER))):
+            x = x @ x
+        return np.log(reference) - ca.log(ca.trace(x)) / E_ORDER
+
+
+@dataclass(frozen=True, eq=False)
+class TaskOptimal(Criterion):
     """Task: −tr(T M⁻¹ Tᵀ), minus the predicted position variance at the task poses.
 
-    ``task`` (rows, F) stacks the Jacobians of the task points (TCP at task
-    poses under task loads) with respect to the scaled free parameters.
+    Attributes
+    ----------
+    task : ndarray, shape (rows, p)
+        The Jacobians of the task points (TCP at task poses under task loads)
+        with respect to the scaled free parameters, per unit σ (m).
     """
-    try:
-        return -float(np.trace(task @ np.linalg.solve(m, task.T)))
-    except np.linalg.LinAlgError:
-        return -np.inf
+
+    task: np.ndarray
+    name: ClassVar[str] = "task"
+    words: ClassVar[str] = "the smallest predicted position variance at the task poses"
+    statistic: ClassVar[str] = "max_i tr(M⁻¹TᵀTM⁻¹ M_i) / tr(T M⁻¹ Tᵀ)"
+
+    def __post_init__(self):
+        if np.ndim(self.task) != 2:
+            raise ValueError(f"the task matrix must be 2-D (rows, parameters), got shape "
+                             f"{np.shape(self.task)}")
+
+    def _root(self):
+        return self.task
+
+    def value(self, m):
+        return _neg_trace(m, self.task)
+
+    def sensitivity(self, m):
+        inv = np.linalg.inv(m)
+        c = self.task.T @ self.task
+        return inv @ c @ inv / np.trace(c @ inv), 1.0
+
+    def cvxpy_value(self, m):
+        import cvxpy as cp
+        return -cp.matrix_frac(self.task.T, m)
 
 
-def evaluate_criterion(name: str, m: np.ndarray, task: np.ndarray | None = None) -> float:
-    """The criterion ``name`` (one of :data:`CRITERIA`) of M."""
-    check(name, task)
-    if name == "D":
-        return log_det(m)
-    if name == "A":
-        return neg_trace_inverse(m)
-    if name == "E":
-        return min_eigenvalue(m)
-    return neg_task_variance(m, task)
+def criterion(name="D", task: np.ndarray | None = None) -> Criterion:
+    """The criterion object for a name of :data:`CRITERIA` (:meth:`Criterion.from_name`)."""
+    return Criterion.from_name(name, task)
 
 
-def smooth_value(name: str, m: np.ndarray, task: np.ndarray | None = None) -> float:
-    """The criterion, with λ_min replaced for E by its surrogate log (tr M^-k)^(-1/k)."""
-    if name != "E":
-        return evaluate_criterion(name, m, task)
-    ev = np.linalg.eigvalsh(m)
-    if ev[0] <= 0:
-        return -np.inf
-    return float(np.log(ev[0]) - np.log(np.sum((ev[0] / ev) ** E_ORDER)) / E_ORDER)
-
-
-def check(name: str, task) -> None:
-    """Raise ValueError for an unknown criterion or a task criterion without task."""
+def check(name, task) -> None:
+    """Raise ValueError for an unknown criterion name, or ``"task"`` when ``task`` is None."""
+    if isinstance(name, Criterion):
+        return
     if name not in CRITERIA:
         raise ValueError(f"unknown criterion {name!r}; choose one of {', '.join(CRITERIA)}")
     if name == "task" and task is None:
         raise ValueError("the task criterion needs task poses")
 
 
-def sensitivity(name: str, m: np.ndarray, task: np.ndarray | None = None):
+def evaluate_criterion(name, m: np.ndarray, task: np.ndarray | None = None) -> float:
+    """The criterion ``name`` (a name of :data:`CRITERIA` or a Criterion) of M."""
+    return Criterion.from_name(name, task).value(m)
+
+
+def sensitivity(name, m: np.ndarray, task: np.ndarray | None = None):
     """Sensitivity matrix H (p, p) and bound factor c of the criterion at M.
 
     ψ_i = tr(H M_i) is the directional derivative of Φ towards candidate i,
@@ -99,51 +382,20 @@ def sensitivity(name: str, m: np.ndarray, task: np.ndarray | None = None):
     surrogate (tr M^-k)^(-1/k), k = :data:`E_ORDER`, and c turns it into a
     bound on λ_min.
     """
-    check(name, task)
-    if name == "E":
-        ev, vec = np.linalg.eigh(m)
-        rel = (ev[0] / ev) ** (E_ORDER + 1)  # eigenvalue weights of M^-(k+1), scaled
-        h = (vec * rel) @ vec.T / np.sum(rel * ev)
-        return h, float(np.sum(rel * ev) / (ev[0] * rel.sum()))
-    inv = np.linalg.inv(m)
-    if name == "D":
-        return inv / m.shape[0], 1.0
-    c = np.eye(m.shape[0]) if name == "A" else task.T @ task
-    h = inv @ c @ inv
-    return h / np.trace(c @ inv), 1.0
+    return Criterion.from_name(name, task).sensitivity(m)
 
 
-def scale_value(name: str, value: float, n: float, p: int) -> float:
-    """The criterion of n·M from that of M: log det + p log n, −tr/n, λ·n, −var/n."""
-    return value + p * np.log(n) if name == "D" else (value * n if name == "E" else value / n)
-
-
-def bound_value(name: str, value: float, ratio: float, n: float, p: int) -> float:
-    """Upper bound on the criterion of any n-point design over the candidates.
-
-    ``value`` is the criterion of a normalised relaxation M(w) and ``ratio``
-    = c · max_i ψ_i ≥ 1 its equivalence-theorem ratio (:func:`sensitivity`).
-    """
-    if name == "D":
-        return scale_value(name, value, n, p) + p * np.log(ratio)
-    if name == "E":
-        return scale_value(name, value, n, p) * ratio
-    return scale_value(name, value, n, p) / ratio
-
-
-def efficiency(name: str, value: float, reference: float, p: int) -> float:
+def efficiency(name, value: float, reference: float, p: int) -> float:
     """Φ(design) / Φ(reference) from criterion values: 1 means as good as the reference.
 
     D: (det M / det M_ref)^(1/p); A and task: variance_ref / variance;
     E: λ / λ_ref.
     """
-    if name == "D":
-        return float(np.exp((value - reference) / p))
-    if name == "E":
-        return float(value / reference)
-    return float(reference / value)
+    if not isinstance(name, Criterion) and name == "task":  # needs no task matrix
+        name = TaskOptimal(np.zeros((0, p)))
+    return Criterion.from_name(name).efficiency(value, reference, p)
 
 
 def d_efficiency(m: np.ndarray, m_reference: np.ndarray) -> float:
     """(det M / det M_ref)^(1/p): 1 means as informative as the reference."""
-    return efficiency("D", log_det(m), log_det(m_reference), m.shape[0])
+    return DOptimal().efficiency(log_det(m), log_det(m_reference), m.shape[0])

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.design.criteria import evaluate_criterion, sensitivity
+from doe_calib.design.criteria import Criterion
+from doe_calib.design.outcome import DesignOutcome
 from doe_calib.design.relaxation import information, traces
 from doe_calib.design.updates import added_values, regularised
 from doe_calib.errors import SolverError
@@ -15,9 +16,9 @@ from doe_calib.errors import SolverError
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
 
 
-def _pool(blocks, weights, criterion, task, size, bins):
+def _pool(blocks, weights, crit, size, bins):
     """Candidates worth searching: the largest weights, then sensitivities, and each bin's best."""
-    h, _ = sensitivity(criterion, regularised(information(blocks, weights)), task)
+    h, _ = crit.sensitivity(regularised(information(blocks, weights)))
     order = np.lexsort((-traces(blocks, h), -weights))
     pool = order[:size]
     if bins is not None:
@@ -28,7 +29,7 @@ def _pool(blocks, weights, criterion, task, size, bins):
     return order, pool
 
 
-def _cover(blocks, chosen, pool, bins, min_bins, criterion, task):
+def _cover(blocks, chosen, pool, bins, min_bins, crit):
     """Swap poses into missing bins (best pair first) until ``min_bins`` bins are used."""
     chosen = list(chosen)
     while len(set(bins[chosen]) - {-1}) < min_bins:
@@ -43,7 +44,7 @@ def _cover(blocks, chosen, pool, bins, min_bins, criterion, task):
         best = (-np.inf, None, None)
         for s in slots:
             b = blocks[chosen[s]]
-            values = added_values(criterion, m - b.T @ b, blocks[new], task)
+            values = added_values(crit, m - b.T @ b, blocks[new])
             j = int(np.argmax(values))
             if values[j] > best[0]:
                 best = (values[j], s, int(new[j]))
@@ -59,63 +60,76 @@ def _allowed(bins, chosen, slot, candidates, min_bins):
     return after >= min_bins
 
 
-def exact_design(blocks: np.ndarray, n: int, criterion: str = "D",
+def exact_design(blocks: np.ndarray, n: int, criterion="D",
                  weights: np.ndarray | None = None, task: np.ndarray | None = None,
                  bins: np.ndarray | None = None, min_bins: int = 0, pool: int = 2000,
-                 max_sweeps: int = 50) -> np.ndarray:
-    """Indices of n distinct candidates with a (locally) maximal criterion of Σ B_iᵀB_i.
+                 max_sweeps: int = 50) -> DesignOutcome:
+    """n distinct candidates with a (locally) maximal criterion of Σ B_iᵀB_i.
 
     Parameters
     ----------
     blocks : ndarray, shape (K, r, p)
     n : int
         Number of poses.
-    criterion : {"D", "A", "E", "task"}
+    criterion : {"D", "A", "E", "task"} or Criterion
     weights : ndarray, shape (K,), optional
         Relaxation weights: the start is their n largest; the exchange
         searches the ``pool`` candidates with the largest weights and
         sensitivities.
     task : ndarray, shape (rows, p), optional
-        For the task criterion.
+        For the task criterion named by a string.
     bins : ndarray of int, shape (K,), optional
         Coverage bin of every candidate (−1: in none).
     min_bins : int
         Distinct bins the n poses must use.
 
+    Returns
+    -------
+    DesignOutcome
+        Stage ``exchange``: ``indices`` the n chosen candidates in pose
+        order, ``weights`` 1 on them, ``value`` the criterion of their Σ B_iᵀB_i.
+
     Examples
     --------
     >>> blocks = np.random.default_rng(1).normal(size=(50, 2, 3))
-    >>> len(set(exact_design(blocks, 4, "A").tolist()))
+    >>> len(set(exact_design(blocks, 4, "A").indices.tolist()))
     4
     """
+    crit = Criterion.from_name(criterion, task)
     k = blocks.shape[0]
     weights = np.full(k, 1.0 / k) if weights is None else weights
-    order, candidates = _pool(blocks, weights, criterion, task, min(pool, k), bins)
+    order, candidates = _pool(blocks, weights, crit, min(pool, k), bins)
     chosen = [int(c) for c in order[:n]]
     if bins is not None and min_bins > 0:
-        chosen = _cover(blocks, chosen, candidates, bins, min_bins, criterion, task)
+        chosen = _cover(blocks, chosen, candidates, bins, min_bins, crit)
     m = information(blocks[chosen], np.ones(n))
-    current = evaluate_criterion(criterion, m, task)
+    current = crit.value(m)
+    sweeps, status = 0, f"stopped at {max_sweeps} sweeps, still improving"
     for _ in range(max_sweeps):
-        improved = False
+        sweeps, improved = sweeps + 1, False
         for slot in range(n):
             i = chosen[slot]
             m_minus = m - blocks[i].T @ blocks[i]
-            values = added_values(criterion, m_minus, blocks[candidates], task)
+            values = added_values(crit, m_minus, blocks[candidates])
             values[np.isin(candidates, chosen) & (candidates != i)] = -np.inf  # distinct poses
             if bins is not None and min_bins > 0:
                 values[~_allowed(bins, chosen, slot, candidates, min_bins)] = -np.inf
             j = int(candidates[np.argmax(values)])
             m_new = m_minus + blocks[j].T @ blocks[j]
-            value = evaluate_criterion(criterion, m_new, task)
+            value = crit.value(m_new)
             if j != i and value > current + 1e-10 * max(1.0, abs(current)):
                 chosen[slot], m, current, improved = j, m_new, value, True
         if not improved:
+            status = "converged: no single exchange improves the criterion"
             break
-    return np.array(chosen)
+    indices = np.array(chosen)
+    selected = np.zeros(k)
+    selected[indices] = 1.0
+    return DesignOutcome("exchange", crit, selected, float(current), sweeps, status,
+                         blocks.shape[2], indices=indices)
 
 
 def exact_d_design(blocks: np.ndarray, n: int, weights: np.ndarray | None = None,
                    pool: int = 2000, max_sweeps: int = 50) -> np.ndarray:
-    """D-optimal :func:`exact_design` (kept for callers of the first design release)."""
-    return exact_design(blocks, n, "D", weights, pool=pool, max_sweeps=max_sweeps)
+    """Indices of the D-optimal :func:`exact_design` (kept for callers of the first release)."""
+    return exact_design(blocks, n, "D", weights, pool=pool, max_sweeps=max_sweeps).indices

@@ -11,7 +11,15 @@ import numpy as np
 from doe_calib.design.candidate_poses import feasible_candidates
 from doe_calib.design.clearances import collision_note, pose_clearances
 from doe_calib.design.constraints import DesignConstraints
-from doe_calib.design.criteria import CRITERIA, check, efficiency, evaluate_criterion, log_det
+from doe_calib.design.criteria import (
+    AOptimal,
+    Criterion,
+    DOptimal,
+    EOptimal,
+    TaskOptimal,
+    check,
+    log_det,
+)
 from doe_calib.design.exchange import exact_design
 from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.pose_refinement import refine as refine_poses
@@ -29,10 +37,6 @@ from doe_calib.errors import OptionError, SolverError
 log = logging.getLogger(__name__)
 
 _RANDOM_DESIGNS = 100
-_STATISTIC = {"D": "max_i tr(M⁻¹ M_i)", "A": "max_i tr(M⁻² M_i) / tr(M⁻¹)",
-              "E": "max_i tr(G M_i) / λ_min(M), G = M^-(k+1) / tr M^-(k+1)",
-              "task": "max_i tr(M⁻¹TᵀTM⁻¹ M_i) / tr(T M⁻¹ Tᵀ)"}
-
 
 class _Stages:
     """Reports each stage to ``progress(stage, note)`` and logs its duration."""
@@ -54,7 +58,7 @@ class _Stages:
 
 
 def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma: float = 2e-5,
-                   criterion: str = "D", task=None, task_point=(0.0, 0.0, 0.0),
+                   criterion="D", task=None, task_point=(0.0, 0.0, 0.0),
                    constraints: DesignConstraints | None = None, refine: bool = True,
                    params=None, rng=None, progress=None, collision=None) -> DesignResult:
     """Optimal N-pose design for ``model`` under constraints.
@@ -71,7 +75,10 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         Feasible candidate poses, drawn uniformly inside the joint bounds.
     sigma : float
         Tracker σ per coordinate, m.
-    criterion : {"D", "A", "E", "task"}
+    criterion : {"D", "A", "E", "task"} or Criterion
+        A name or a criterion object (:func:`.criteria.criterion`); the task
+        criterion is asked for by name with ``task``, since its matrix
+        depends on the parameters designed for.
     task : Configurations, optional
         Task poses and their loads (wrenches), for the task criterion.
     task_point : array_like, shape (3,)
@@ -89,6 +96,9 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         that lose it step back, and each pose's clearance is reported
         (:func:`doe_calib.collision.build_collision_model`; None: no check).
     """
+    if isinstance(criterion, TaskOptimal):
+        raise OptionError("ask for the task criterion by name, criterion=\"task\", with task= "
+                          "poses: its matrix depends on the parameters designed for")
     check(criterion, task)
     if n_poses < 1:
         raise OptionError(f"{n_poses} poses (--poses): a design needs at least 1 pose")
@@ -103,40 +113,44 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         raise SolverError(f"only {len(cands.q)} feasible candidates for {n_poses} poses")
     params = design_parameters(model, params, cands.q, loads, rng=rng)
     t = None if task is None else task_matrix(model, params, task, task_point)
+    crit = Criterion.from_name(criterion, t)
     stage("information", f"{len(cands.q)} candidates")
     blocks = blocks_for(model, params, cands.q, loads, sigma)
     check_enough_poses(n_poses, blocks, model.tool.n_markers, len(loads), rng)
-    stage("relaxation", f"{criterion} criterion over {len(blocks)} candidates")
-    relaxed = relax(blocks, criterion, t, progress=stage.iterations("relaxation"))
+    stage("relaxation", f"{crit.name} criterion over {len(blocks)} candidates")
+    relaxed = relax(blocks, crit, progress=stage.iterations("relaxation"))
+    stages = {"relaxation": relaxed.to_dict()}
     stage("exchange", f"{n_poses} poses")
     cov = constraints.coverage
-    chosen = exact_design(blocks, n_poses, criterion, relaxed.weights, t,
+    exchanged = exact_design(blocks, n_poses, crit, relaxed.weights, None,
                           None if cov is None else cov.bins(cands.q),
                           0 if cov is None else cov.min_bins)
-    q, refinement = cands.q[chosen], None
+    stages["exchange"] = exchanged.to_dict()
+    q, refinement = cands.q[exchanged.indices], None
     if refine:
         stage("refinement", f"IPOPT on {q.size} joint angles")
-        refinement = refine_poses(model, params, loads, sigma, q, feasibility, criterion, t,
+        refinement = refine_poses(model, params, loads, sigma, q, feasibility, crit,
                                   collision=collision)
-        q = refinement.q
+        q, stages["refinement"] = refinement.q, refinement.to_dict()
         if refinement.accepted:
             stage("bound", "relaxation with the refined poses as candidates")
             blocks = np.concatenate([blocks, blocks_for(model, params, q, loads, sigma)])
-            relaxed = relax(blocks, criterion, t, start=np.r_[relaxed.weights, np.zeros(n_poses)],
+            relaxed = relax(blocks, crit, start=np.r_[relaxed.weights, np.zeros(n_poses)],
                             progress=stage.iterations("bound"))
     design = blocks_for(model, params, q, loads, sigma)
     m = information(design, np.ones(n_poses))
-    value, bound = evaluate_criterion(criterion, m, t), relaxed.bound(n_poses)
+    value, bound = crit.value(m), relaxed.bound(n_poses)
     p = m.shape[0]
-    efficiencies = {criterion: efficiency(criterion, value, bound, p)}
-    if criterion != "D":
+    efficiencies = {crit.name: crit.efficiency(value, bound, p)}
+    if not isinstance(crit, DOptimal):
         stage("bound", "D relaxation for the D-efficiency")
-        efficiencies["D"] = efficiency("D", log_det(m), relax(blocks).bound(n_poses), p)
+        efficiencies["D"] = DOptimal().efficiency(log_det(m), relax(blocks).bound(n_poses), p)
     stage("report")
-    criteria = {c: evaluate_criterion(c, m, t) for c in CRITERIA if c != "task" or t is not None}
-    ratio = equivalence_ratio(blocks, m / n_poses, criterion, t)
-    target = p if criterion == "D" else 1.0
-    equivalence = {"criterion": criterion, "statistic": _STATISTIC[criterion], "target": target,
+    reported = [DOptimal(), AOptimal(), EOptimal()] + ([] if t is None else [TaskOptimal(t)])
+    criteria = {c.name: c.value(m) for c in reported}
+    ratio = equivalence_ratio(blocks, m / n_poses, crit)
+    target = crit.target(p)
+    equivalence = {"criterion": crit.name, "statistic": crit.statistic, "target": target,
                    "relaxation": target * relaxed.ratio, "design": target * ratio,
                    "design_efficiency_at_least": 1.0 / ratio}
     randoms = [log_det(information(blocks[rng.choice(len(cands.q), n_poses, replace=False)],
@@ -156,7 +170,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     scale = params.scales[params.free]
     std = np.sqrt(np.diag(np.linalg.inv(m))) * scale
     free = [par for par, f in zip(params.parameters, params.free) if f]
-    notes = [versus_random,
+    notes = [versus_random, f"{crit.name} criterion: {crit.words}",
              f"relaxation over {len(blocks)} candidates: equivalence ratio {relaxed.ratio:.4g} "
              f"after {relaxed.iterations} iterations; {p} parameters designed for, "
              f"{int((~params.free).sum())} fixed as not identifiable by any candidate"]
@@ -178,12 +192,12 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         used_constraints["collision"] = collision.summary()
         notes.append(collision_note(collision, cands.removed, cands.drawn, clearances))
     cfg = load_configurations(model, params.values, q, loads)
-    return DesignResult(model.robot, model.tool, model.spec, cfg, criterion, value, bound,
-                        efficiencies[criterion],
+    return DesignResult(model.robot, model.tool, model.spec, cfg, crit.name, value, bound,
+                        efficiencies[crit.name],
                         {par.name: (float(s * par.display_factor), par.display_unit)
                          for par, s in zip(free, std)}, used_constraints, tuple(notes),
                         efficiencies, criteria, equivalence, cands.to_dict(),
                         {} if refinement is None else refinement.to_dict(), coverage,
                         {"designs": _RANDOM_DESIGNS, "singular_fraction": singular,
                          "equivalent_poses": None if equivalent is None else float(equivalent)},
-                        sigma_mm=1000.0 * sigma, clearances=clearances)
+                        sigma_mm=1000.0 * sigma, clearances=clearances, stages=stages)

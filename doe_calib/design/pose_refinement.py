@@ -14,53 +14,19 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from doe_calib.collision import too_close
-from doe_calib.design.criteria import evaluate_criterion
+from doe_calib.design.criteria import Criterion
+from doe_calib.design.outcome import DesignOutcome
 from doe_calib.design.symbolic import log_criterion, pose_information
 
 log = logging.getLogger(__name__)
 
 _MARGIN = 1e-7  # rows g ≥ this in IPOPT, so its tolerance never leaves g < 0
 _STEPS_BACK = (0.5, 0.25, 0.125, 0.0625)  # fractions of the move kept when a pose fails
-
-
-@dataclass(frozen=True, eq=False)
-class Refinement:
-    """Outcome of the refinement.
-
-    Attributes
-    ----------
-    q : ndarray, shape (N, n_joints)
-        Poses kept (the refined ones if accepted, else the start), rad/m.
-    start_value, value : float
-        Criterion of the start and of the kept poses.
-    accepted : bool
-    status : str
-        IPOPT's return status, or why the result was not kept.
-    iterations : int
-    seconds : float
-    stepped_back : int
-        Refined poses that failed the re-check and were moved back toward their start.
-    """
-
-    q: np.ndarray
-    start_value: float
-    value: float
-    accepted: bool
-    status: str
-    iterations: int
-    seconds: float
-    stepped_back: int = 0
-
-    def to_dict(self) -> dict:
-        return {"accepted": self.accepted, "status": self.status, "iterations": self.iterations,
-                "seconds": self.seconds, "start_value": self.start_value, "value": self.value,
-                "stepped_back": self.stepped_back}
 
 
 def _admissible(feasibility, collision, q: np.ndarray) -> np.ndarray:
@@ -102,8 +68,8 @@ def _bounds(q0, constraints, robot):
 
 
 def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
-           criterion: str = "D", task: np.ndarray | None = None,
-           max_iterations: int = 300, collision=None) -> Refinement:
+           criterion="D", task: np.ndarray | None = None,
+           max_iterations: int = 300, collision=None) -> DesignOutcome:
     """Optimise the poses q0 (N, n_joints) jointly with IPOPT (L-BFGS Hessian).
 
     Parameters
@@ -117,20 +83,27 @@ def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
     q0 : ndarray, shape (N, n_joints)
         Start poses (the exact design), rad/m; they satisfy every constraint.
     feasibility : Feasibility
-    criterion : {"D", "A", "E", "task"}
+    criterion : {"D", "A", "E", "task"} or Criterion
     task : ndarray, optional
-        Task Jacobians (scaled), for the task criterion.
+        Task Jacobians (scaled), for the task criterion named by a string.
     collision : CollisionModel, optional
         Refined poses closer than its clearances step back (:func:`step_back`).
+
+    Returns
+    -------
+    DesignOutcome
+        Stage ``refinement``: ``q`` the poses kept (the refined ones if
+        ``accepted``, else q0), ``value`` and ``start_value`` their criterion,
+        ``status`` IPOPT's return status or why the result was not kept.
     """
+    crit = Criterion.from_name(criterion, task)
     t0 = time.perf_counter()
     n, dof = q0.shape
     info = pose_information(model, params, loads, sigma)
     m0 = np.array(info.map(n)(q0.T)).reshape(-1, n, info.size1_out(0)).sum(axis=1)
-    start_value = evaluate_criterion(criterion, m0, task)
+    start_value = crit.value(m0)
     p = m0.shape[0]
-    lam0 = float(np.linalg.eigvalsh(m0)[0]) if criterion == "E" else 1.0
-    objective = log_criterion(criterion, p, task, lam0)
+    objective = log_criterion(crit, p, reference=crit.reference(m0))
     q = ca.MX.sym("q", dof, n)
     m = info.map(n)(q) @ ca.repmat(ca.DM.eye(p), n, 1)
     g = ca.vertcat(*[feasibility.expressions(q[:, i], q0[i]) for i in range(n)])
@@ -150,12 +123,13 @@ def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
                    f"({'constraints or clearance' if collision is not None else 'constraints'}) "
                    f"stepped back toward the start")
     m1 = np.array(info.map(n)(q1.T)).reshape(-1, n, p).sum(axis=1)
-    value = evaluate_criterion(criterion, m1, task)
+    value = crit.value(m1)
     accepted = bool(value > start_value)
     if not accepted:
         status += "; not kept: the criterion did not improve"
     log.info("refinement: %s after %d iterations, %.6g → %.6g", status, iterations, start_value,
              value)
-    return Refinement(q1 if accepted else q0, float(start_value),
-                      float(value if accepted else start_value), accepted, status, iterations,
-                      time.perf_counter() - t0, stepped)
+    return DesignOutcome("refinement", crit, np.ones(n), float(value if accepted else start_value),
+                         iterations, status, p, q=q1 if accepted else q0,
+                         start_value=float(start_value), accepted=accepted,
+                         seconds=time.perf_counter() - t0, stepped_back=stepped)

@@ -17,60 +17,12 @@ for every exact N-pose design drawn from the candidates.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
-from scipy.optimize import minimize_scalar
 
-from doe_calib.design.criteria import (
-    E_ORDER,
-    bound_value,
-    check,
-    evaluate_criterion,
-    sensitivity,
-    smooth_value,
-)
+from doe_calib.design.criteria import Criterion
+from doe_calib.design.outcome import DesignOutcome
 
-#: Exponent λ of the multiplicative step w_i ← w_i ψ_i^λ: the values known to increase
-#: the criterion monotonically (Yu 2010: 1/(1 − q) for Φ_q, q = 0 for D, −1 for A and
-#: task, −k for the E surrogate).
-_POWER = {"D": 1.0, "A": 0.5, "task": 0.5, "E": 1.0 / (E_ORDER + 1)}
 _CHUNK = 4096  # candidates per step when sweeping all of them (bounds memory)
-
-
-@dataclass(frozen=True, eq=False)
-class Relaxation:
-    """Optimal candidate weights and the bound they certify.
-
-    Attributes
-    ----------
-    criterion : str
-    weights : ndarray, shape (K,)
-        Sum to 1.
-    value : float
-        Criterion of the normalised information M(w) (log det M(w) for D).
-    ratio : float
-        c · max_i ψ_i ≥ 1 over every candidate: no design beats Φ(M(w)) by more.
-    iterations : int
-    p : int
-        Number of parameters.
-    """
-
-    criterion: str
-    weights: np.ndarray
-    value: float
-    ratio: float
-    iterations: int
-    p: int
-
-    @property
-    def gap(self) -> float:
-        """p (ratio − 1): for D the duality gap max_i d_i − p."""
-        return self.p * (self.ratio - 1.0)
-
-    def bound(self, n: int) -> float:
-        """Upper bound on the criterion of any exact n-candidate design."""
-        return bound_value(self.criterion, self.value, self.ratio, n, self.p)
 
 
 def variances(blocks: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -88,14 +40,14 @@ def traces(blocks: np.ndarray, h: np.ndarray) -> np.ndarray:
     return out
 
 
-def equivalence_ratio(blocks: np.ndarray, m: np.ndarray, criterion: str = "D",
+def equivalence_ratio(blocks: np.ndarray, m: np.ndarray, criterion="D",
                       task: np.ndarray | None = None) -> float:
     """c · max_i ψ_i over every candidate at the normalised information M (≥ 1 at the optimum).
 
     No design over the candidates has an information function Φ above
     ratio · Φ(M) (:func:`.criteria.sensitivity`); for D, ratio = max_i d_i / p.
     """
-    h, c = sensitivity(criterion, m, task)
+    h, c = Criterion.from_name(criterion, task).sensitivity(m)
     return float(c * traces(blocks, h).max())
 
 
@@ -106,22 +58,7 @@ def information(blocks: np.ndarray, weights: np.ndarray) -> np.ndarray:
     return root.T @ root
 
 
-def _removal_threshold(gap: float, p: int) -> float:
-    """Harman–Pronzato: a candidate with d_i below this is in no D-optimal design."""
-    return p * (1 + gap / 2 - np.sqrt(gap * (4 + gap - 4 / p)) / 2)
-
-
-def _step(criterion, task, m, m_j, d_j):
-    """Best step α towards candidate j: closed form for D, a line search otherwise."""
-    if criterion == "D":
-        p = m.shape[0]
-        return (d_j - p) / (p * (d_j - 1.0))
-    res = minimize_scalar(lambda a: -smooth_value(criterion, (1 - a) * m + a * m_j, task),
-                          bounds=(0.0, 0.5), method="bounded", options={"xatol": 1e-4})
-    return float(res.x)
-
-
-def _solve_working_set(mi, w, criterion, task, tol, max_iterations, progress, done):
+def _solve_working_set(mi, w, crit, tol, max_iterations, progress, done):
     """Multiplicative iterations on one candidate set (``mi``: (S, p²) information).
 
     Returns (indices kept, their weights, iterations used).
@@ -130,31 +67,30 @@ def _solve_working_set(mi, w, criterion, task, tol, max_iterations, progress, do
     active = np.arange(len(mi))
     it = 0
     for it in range(1, max_iterations + 1):
-        h, _ = sensitivity(criterion, (w @ mi).reshape(p, p), task)
+        h, _ = crit.sensitivity((w @ mi).reshape(p, p))
         psi = mi @ h.ravel()
         gap = float(psi.max() - 1.0)
         if progress is not None and (done + it) % 50 == 0:
             progress(done + it, gap)
         if gap < tol:
             break
-        if criterion == "D":
-            keep = p * psi >= _removal_threshold(p * gap, p)
-            if not keep.all():
-                active, mi, w, psi = active[keep], mi[keep], w[keep], psi[keep]
-                w = w / w.sum()
-        w = w * psi ** _POWER[criterion]
+        keep = crit.prune(psi, gap, p)
+        if keep is not None and not keep.all():
+            active, mi, w, psi = active[keep], mi[keep], w[keep], psi[keep]
+            w = w / w.sum()
+        w = w * psi ** crit.power
         w /= w.sum()
         j = int(np.argmax(psi))  # vertex-direction step toward the most informative candidate
-        alpha = _step(criterion, task, (w @ mi).reshape(p, p), mi[j].reshape(p, p), p * psi[j])
+        alpha = crit.step((w @ mi).reshape(p, p), mi[j].reshape(p, p), p * psi[j])
         if 0 < alpha < 1:
             w *= 1 - alpha
             w[j] += alpha
     return active, w, it
 
 
-def relax(blocks: np.ndarray, criterion: str = "D", task: np.ndarray | None = None,
+def relax(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
           tol: float = 2e-3, max_iterations: int = 20000, working_set: int = 1500,
-          start: np.ndarray | None = None, progress=None) -> Relaxation:
+          start: np.ndarray | None = None, progress=None) -> DesignOutcome:
     """Optimal approximate design over candidates for any criterion of :mod:`.criteria`.
 
     The ``working_set`` candidates with the largest sensitivity under the
@@ -167,9 +103,9 @@ def relax(blocks: np.ndarray, criterion: str = "D", task: np.ndarray | None = No
     ----------
     blocks : ndarray, shape (K, r, p)
         Per-candidate (scaled, σ-weighted) observation blocks.
-    criterion : {"D", "A", "E", "task"}
+    criterion : {"D", "A", "E", "task"} or Criterion
     task : ndarray, shape (rows, p), optional
-        Task Jacobians (scaled), for the task criterion.
+        Task Jacobians (scaled), for the task criterion named by a string.
     tol : float
         Stop when max_i ψ_i − 1 is below ``tol`` (for D: max_i d_i − p < tol·p).
     working_set : int
@@ -179,6 +115,12 @@ def relax(blocks: np.ndarray, criterion: str = "D", task: np.ndarray | None = No
         candidates); default uniform.
     progress : callable(iteration, gap), optional
 
+    Returns
+    -------
+    DesignOutcome
+        Stage ``relaxation``: the weights (sum 1), the criterion of M(w) and
+        the equivalence ratio over every candidate (:meth:`DesignOutcome.bound`).
+
     Examples
     --------
     >>> rng = np.random.default_rng(0)
@@ -186,10 +128,10 @@ def relax(blocks: np.ndarray, criterion: str = "D", task: np.ndarray | None = No
     >>> bool(rel.ratio >= 1.0 and abs(rel.weights.sum() - 1) < 1e-12)
     True
     """
-    check(criterion, task)
+    crit = Criterion.from_name(criterion, task)
     k, _, p = blocks.shape
     w_all = np.full(k, 1.0 / k) if start is None else np.asarray(start, float) / np.sum(start)
-    h, c = sensitivity(criterion, information(blocks, w_all), task)
+    h, c = crit.sensitivity(information(blocks, w_all))
     psi_all = traces(blocks, h)
     support = np.flatnonzero(w_all > 0) if start is not None else np.array([], int)
     work = np.union1d(support, np.argsort(-psi_all)[:working_set])
@@ -199,12 +141,12 @@ def relax(blocks: np.ndarray, criterion: str = "D", task: np.ndarray | None = No
     iterations = 0
     while True:
         mi = np.einsum("kri,krj->kij", blocks[work], blocks[work]).reshape(len(work), -1)
-        kept, w, used = _solve_working_set(mi, w, criterion, task, tol,
+        kept, w, used = _solve_working_set(mi, w, crit, tol,
                                            max_iterations - iterations, progress, iterations)
         iterations += used
         work = work[kept]
         m = information(blocks[work], w)
-        h, c = sensitivity(criterion, m, task)
+        h, c = crit.sensitivity(m)
         psi_all = traces(blocks, h)
         violators = np.setdiff1d(np.flatnonzero(psi_all > 1 + tol), work)
         if violators.size == 0 or iterations >= max_iterations:
@@ -214,12 +156,57 @@ def relax(blocks: np.ndarray, criterion: str = "D", task: np.ndarray | None = No
         w = np.concatenate([w * 0.9, np.full(add.size, 0.1 / add.size)])
     weights = np.zeros(k)
     weights[work] = w
-    return Relaxation(criterion, weights, evaluate_criterion(criterion, m, task),
-                      max(float(c * psi_all.max()), 1.0), iterations, p)
+    ratio = max(float(c * psi_all.max()), 1.0)
+    status = ("converged" if iterations < max_iterations else
+              f"stopped at the iteration limit {max_iterations}, equivalence ratio {ratio:.4g}")
+    return DesignOutcome("relaxation", crit, weights, crit.value(m), iterations, status, p,
+                         ratio=ratio)
 
 
 def relax_d(blocks: np.ndarray, tol: float = 2e-3, max_iterations: int = 20000,
-            working_set: int = 1500, progress=None) -> Relaxation:
+            working_set: int = 1500, progress=None) -> DesignOutcome:
     """D-optimal approximate design over candidates (:func:`relax` with ``criterion="D"``)."""
     return relax(blocks, "D", tol=tol, max_iterations=max_iterations, working_set=working_set,
                  progress=progress)
+
+
+def convex_relaxation(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
+                      solver: str = "CLARABEL") -> DesignOutcome:
+    """The relaxation solved by cvxpy (interior point) on the criterion's cvxpy expression.
+
+    A second, independent solver of :func:`relax`'s problem, for a few
+    hundred candidates (it forms every M_i): maximise the criterion of
+    Σ w_i B_iᵀB_i over w ≥ 0, Σ w = 1. The ratio is the same equivalence
+    check over every candidate, so :meth:`DesignOutcome.bound` is certified too.
+
+    Parameters
+    ----------
+    blocks : ndarray, shape (K, r, p)
+    criterion : {"D", "A", "E", "task"} or Criterion
+    task : ndarray, shape (rows, p), optional
+    solver : str
+        A cvxpy conic solver.
+
+    Examples
+    --------
+    >>> blocks = np.random.default_rng(0).normal(size=(30, 2, 3))
+    >>> a, b = convex_relaxation(blocks), relax(blocks, tol=1e-6)
+    >>> bool(abs(a.value - b.value) < 1e-4)
+    True
+    """
+    import cvxpy as cp
+
+    crit = Criterion.from_name(criterion, task)
+    k, _, p = blocks.shape
+    w = cp.Variable(k, nonneg=True)
+    mi = np.einsum("kri,krj->kij", blocks, blocks).reshape(k, p * p)
+    m = cp.reshape(mi.T @ w, (p, p), order="C")
+    problem = cp.Problem(cp.Maximize(crit.cvxpy_value((m + m.T) / 2)), [cp.sum(w) == 1])
+    problem.solve(solver=solver)
+    weights = np.clip(w.value, 0.0, None)
+    weights /= weights.sum()
+    m_w = information(blocks, weights)
+    h, c = crit.sensitivity(m_w)
+    return DesignOutcome("relaxation", crit, weights, crit.value(m_w),
+                         int(problem.solver_stats.num_iters or 0), str(problem.status), p,
+                         ratio=max(float(c * traces(blocks, h).max()), 1.0))

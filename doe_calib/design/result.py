@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from doe_calib.design.predicted_std import PredictedStd, StdMapping, predicted_std
 from doe_calib.errors import DataError
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import Configurations
@@ -69,6 +70,16 @@ class DesignResult:
         Per pose, in measuring order: its clearance (mm) and the pair with
         least distance to spare (:mod:`doe_calib.collision`); empty when not
         checked.
+    stages : dict
+        Each solver's outcome (:meth:`.outcome.DesignOutcome.to_dict`) by stage:
+        ``relaxation``, ``exchange`` and, when run, ``refinement`` (empty in
+        design files written before it was stored).
+
+    Examples
+    --------
+    >>> d = DesignResult.from_json("design.json")  # doctest: +SKIP
+    >>> d.std["k_a3"], d["k_a3"].display_unit  # doctest: +SKIP
+    (2.1e-07, 'µrad/(N·m)')
     """
 
     robot: Robot
@@ -91,6 +102,28 @@ class DesignResult:
     versus_random: dict = field(default_factory=dict)
     sigma_mm: float | None = None
     clearances: tuple = ()
+    stages: dict = field(default_factory=dict)
+
+    @property
+    def std(self) -> StdMapping:
+        """Parameter name → predicted std in SI units; ``.display()`` in display units."""
+        return StdMapping(predicted_std(n, s, u) for n, (s, u) in self.predicted_std.items())
+
+    def __getitem__(self, name: str) -> PredictedStd:
+        """The predicted std of parameter ``name``: SI and display value, both units."""
+        return self.std.record(name)
+
+    def __repr__(self) -> str:
+        return (f"<DesignResult: {len(self.poses())} poses, {self.criterion} criterion, "
+                f"efficiency {self.efficiency:.3f}>")
+
+    def __str__(self) -> str:
+        return self.summary()
+
+    def _repr_html_(self) -> str:
+        """The design report's content for a notebook: summary, std table and bars."""
+        from doe_calib.report.design import design_fragment
+        return str(design_fragment(self))
 
     def poses(self) -> list[dict]:
         """One entry per pose: id, q in deg (mm for prismatic joints), its wrenches, approach
@@ -166,6 +199,7 @@ class DesignResult:
                 "equivalence": self.equivalence, "candidates": self.candidates,
                 "refinement": self.refinement, "coverage": self.coverage,
                 "versus_random": self.versus_random, "sigma_mm": self.sigma_mm,
+                "stages": self.stages,
                 "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
 
     def to_json(self, path=None) -> str:
@@ -190,7 +224,8 @@ class DesignResult:
                                             "versus_random")),
                    sigma_mm=None if d.get("sigma_mm") is None else float(d["sigma_mm"]),
                    clearances=tuple((float(p["clearance_mm"]), p["clearance_pair"])
-                                    for p in d["poses"] if "clearance_mm" in p))
+                                    for p in d["poses"] if "clearance_mm" in p),
+                   stages=d.get("stages", {}))
 
     @classmethod
     def from_json(cls, path) -> "DesignResult":

@@ -16,7 +16,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from doe_calib.design.criteria import E_ORDER, check
+from doe_calib.design.criteria import Criterion
 from doe_calib.io.measurements import env_fields
 from doe_calib.model.loads import GRAVITY
 from doe_calib.model.marker_model import build_model
@@ -70,28 +70,24 @@ def pose_information(model, params, loads, sigma: float) -> ca.Function:
     return ca.Function("pose_information", [q], [bt.T @ bt], ["q"], ["M"])
 
 
-def log_criterion(name: str, p: int, task: np.ndarray | None = None,
+def log_criterion(criterion, p: int, task: np.ndarray | None = None,
                   reference: float = 1.0) -> ca.Function:
-    """``log_criterion(M) -> log Φ(M)`` for the information function Φ of :mod:`.criteria`.
+    """``log_criterion(M) -> log Φ(M)`` for the information function Φ of the criterion.
 
-    log det M / p (D), −log tr M⁻¹ (A), −log tr(T M⁻¹ Tᵀ) (task) and, for
-    E, the smooth −(1/k) log tr M^-k, k = :data:`.criteria.E_ORDER`, computed
-    on M / ``reference`` (pass about λ_min so the powers stay near 1).
+    The criterion's :meth:`.criteria.Criterion.log_phi` frozen into a
+    Function of a (p, p) SX symbol: log det M / p (D), −log tr M⁻¹ (A),
+    −log tr(T M⁻¹ Tᵀ) (task) and, for E, the smooth −(1/k) log tr M^-k on
+    M / ``reference`` (pass about λ_min so the powers stay near 1).
+
+    Parameters
+    ----------
+    criterion : {"D", "A", "E", "task"} or Criterion
+    p : int
+        Size of M.
+    task : ndarray, shape (rows, p), optional
+        For the task criterion named by a string.
+    reference : float
     """
-    check(name, task)
+    crit = Criterion.from_name(criterion, task)
     m = ca.SX.sym("M", p, p)
-    r = ca.chol(m)  # RᵀR = M
-    if name == "D":
-        out = 2.0 * ca.sum1(ca.log(ca.diag(r))) / p
-    else:
-        r_inv = ca.solve(r, ca.SX.eye(p))  # M⁻¹ = R⁻¹R⁻ᵀ
-        if name == "A":
-            out = -ca.log(ca.sumsqr(r_inv))
-        elif name == "task":
-            out = -ca.log(ca.sumsqr(ca.DM(task) @ r_inv))
-        else:
-            x = reference * (r_inv @ r_inv.T)
-            for _ in range(int(np.log2(E_ORDER))):
-                x = x @ x
-            out = np.log(reference) - ca.log(ca.trace(x)) / E_ORDER
-    return ca.Function("log_criterion", [m], [out], ["M"], ["log_phi"])
+    return ca.Function("log_criterion", [m], [crit.log_phi(m, reference)], ["M"], ["log_phi"])

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.report.figures import new_figure, to_png
-from doe_calib.report.html import figure, paragraph, section, table, write_report
+from doe_calib.report.html import Html, figure, paragraph, section, table, write_report
 
 
 def grouped_bars(categories, values, labels, ylabel: str, title: str = "", log: bool = False):
@@ -95,6 +95,11 @@ def compare_sections(comparison, dpi: int = 90) -> list:
                    "Position std of the task point at each task configuration, one bar per "
                    "source.")))
     return out
+
+
+def compare_fragment(comparison, dpi: int = 72) -> Html:
+    """The comparison report's sections without page chrome, for a notebook."""
+    return Html("<div>" + "\n".join(compare_sections(comparison, dpi)) + "</div>")
 
 
 def compare_report(comparison, path, dpi: int = 90):

@@ -7,7 +7,15 @@ from doe_calib.model.evaluation import evaluate, marker_positions
 from doe_calib.model.marker_model import build_model
 from doe_calib.report import figures
 from doe_calib.report.figures import to_png as png
-from doe_calib.report.html import figure, paragraph, preformatted, section, table, write_report
+from doe_calib.report.html import (
+    Html,
+    figure,
+    paragraph,
+    preformatted,
+    section,
+    table,
+    write_report,
+)
 
 
 def _text(value) -> str:
@@ -142,6 +150,13 @@ def design_sections(design, dpi: int = 90) -> list:
     if design.coverage:
         met.append(table(["coverage", "value"], flatten(design.coverage)))
     sections.append(section("Constraints met", *met))
+    sections += [efficiency_section(design), std_section(design, dpi)]
+    sections.append(section("Notes", *([paragraph(n) for n in design.notes] or ["None."])))
+    return sections
+
+
+def efficiency_section(design):
+    """The section with the criterion, its certified bound, the efficiencies and the checks."""
     eff = [["criterion", design.criterion], ["value", design.value],
            ["certified bound", design.bound], ["efficiency", design.efficiency]]
     eff += [[f"efficiency ({c})", v] for c, v in design.efficiencies.items()]
@@ -153,19 +168,36 @@ def design_sections(design, dpi: int = 90) -> list:
                                                   flatten(design.equivalence))]
     if design.refinement:
         blocks.append(table(["refinement", "value"], flatten(design.refinement)))
-    sections.append(section("Efficiency against the bound", *blocks))
+    return section("Efficiency against the bound", *blocks)
+
+
+def std_section(design, dpi: int = 90):
+    """The section with the predicted std of every parameter: a table and log-scale bars."""
     names = list(design.predicted_std)
     std = [float(design.predicted_std[n][0]) for n in names]
     std_units = [design.predicted_std[n][1] for n in names]
-    sections.append(section(
+    return section(
         "Predicted standard deviations",
         table(["parameter", "predicted std", "unit"],
               [[n, s, u] for n, s, u in zip(names, std, std_units)], 4),
         figure(png(figures.std_bars(names, std, std_units), dpi),
                "predicted standard deviation of each parameter, log scale",
-               "Predicted std of each designed-for parameter (display units, log scale).")))
-    sections.append(section("Notes", *([paragraph(n) for n in design.notes] or ["None."])))
-    return sections
+               "Predicted std of each designed-for parameter (display units, log scale)."))
+
+
+def design_fragment(design, dpi: int = 72) -> Html:
+    """The design report's content without page chrome, for a notebook.
+
+    The one-line description, the efficiency section and the predicted std
+    (table and bars): nothing that needs the model (no 3-D views).
+    """
+    head = paragraph(f"{len(design.poses())} poses ({len(design.configurations)} measurements) "
+                     f"for {design.robot.name}, model {design.model}, {design.criterion} "
+                     f"criterion, efficiency {design.efficiency:.3f}")
+    parts = [head, efficiency_section(design)]
+    if design.predicted_std:
+        parts.append(std_section(design, dpi))
+    return Html("<div>" + "\n".join(parts) + "</div>")
 
 
 def design_report(design, path, dpi: int = 90):
