@@ -63,6 +63,8 @@ _PUBLIC = {
     "read_constraints": "doe_calib.design.constraint_file",
     "optimal_design": "doe_calib.design.optimal",
     "DesignResult": "doe_calib.design.result",
+    "Criterion": "doe_calib.design.criteria",
+    "criterion": "doe_calib.design.criteria",
     "compare": "doe_calib.design.comparison",
     "Comparison": "doe_calib.design.comparison",
     # diagnosis

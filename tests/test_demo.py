@@ -2,6 +2,10 @@
 refine → report, checked against the truth it simulated."""
 import json
 
+import casadi
+import pytest
+
+import doe_calib
 from doe_calib import build_model
 from doe_calib.design.result import DesignResult
 from doe_calib.diagnosis import validation_rms
@@ -10,9 +14,16 @@ from doe_calib.examples.demo import HIDDEN, SIGMA_MM, run_demo
 from doe_calib.io.csv_files import read_measurements
 
 
-def test_demo_finds_the_hidden_effect_and_reaches_the_noise(tmp_path):
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory):
+    """The demo run once into a folder: (folder, key figures, what it said)."""
+    folder = tmp_path_factory.mktemp("demo")
     said = []
-    out = run_demo(tmp_path, candidates=1500, say=said.append)
+    return folder, run_demo(folder, candidates=1500, say=said.append), said
+
+
+def test_demo_finds_the_hidden_effect_and_reaches_the_noise(demo):
+    tmp_path, out, said = demo
     design = DesignResult.from_json(tmp_path / "design.json")
     truth_file = json.loads((tmp_path / "truth.json").read_text())
     assert len(design.poses()) == 15 and 0.9 < out["d_efficiency"] <= 1.0
@@ -50,3 +61,50 @@ def test_demo_finds_the_hidden_effect_and_reaches_the_noise(tmp_path):
     assert "clearance" in html
     compensated = (tmp_path / "compensated.csv").read_text()
     assert "true" in compensated and (tmp_path / "compensated.src").exists()
+
+
+def test_the_demo_files_answer_questions_from_python(demo, monkeypatch):
+    """What a researcher does in a notebook with the demo's files: load them (no model is
+    built), ask a parameter, print the fit report, display result, design and diagnosis."""
+    folder = demo[0]
+    made = []
+    real = casadi.Function
+
+    class Counting(real):
+        def __init__(self, *args, **kwargs):
+            made.append(args[:1])
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(casadi, "Function", Counting)
+    result = doe_calib.load(folder / "result.json")
+    design = doe_calib.load(folder / "design.json")
+    diagnosis = doe_calib.load(folder / "diagnosis.json")
+    refined = doe_calib.load(folder / "refine.json")
+    assert made == []  # reading any file we write builds no model
+    monkeypatch.undo()
+
+    k = result["k_a3"]
+    assert k.free and k.display_unit == "µrad/(N·m)" and k.std > 0
+    assert k.std_a_posteriori == pytest.approx(k.std * result.sigma_ratio)
+    assert k.value == result.parameters.values[result.parameters.names.index("k_a3")]
+    assert len(k.correlations) == 3 and all(abs(r) <= 1 for _, r in k.correlations)
+    fixed = next(n for n, f in zip(result.parameters.names, result.parameters.free) if not f)
+    assert result[fixed].fixed_reason and not result[fixed].free
+    report = str(result)
+    for heading in ("[[Fit statistics]]", "[[Variables]]", "[[Correlations]]", "[[Notes]]"):
+        assert heading in report
+    assert "k_a3" in report and "%)" in report and "µrad/(N·m)" in report
+    assert report.count("not separable") == 1  # one note, not a wall
+    stats = result.fit_statistics
+    assert stats.observations == result.n_observations and stats.dof > 0
+    assert "\n" not in repr(result) and len(repr(result)) < 200
+
+    assert design.std["k_a3"] > 0 and design["k_a3"].display_unit == "µrad/(N·m)"
+    best = diagnosis.candidates[0]
+    assert best.spec == "compliance_by_angle(j2,bins=3)" and best.p_value < 0.01
+    assert best.sizes and all(s.unit == "µrad/(N·m)" for s in best.sizes)
+    assert best.cv_gain > 0.02 and best.proposed
+    assert refined.steps[-1].added == "compliance_by_angle(j2,bins=3)"
+    for shown in (result, design, diagnosis, refined):
+        html = shown._repr_html_()
+        assert "<table" in html and "data:image/png;base64," in html, type(shown)

@@ -158,6 +158,10 @@ class IdentificationResult:
         """Fit statistics, variables, correlations above ``min_correl``, residuals, notes."""
         return fit_report(self, min_correl)
 
+    def __str__(self) -> str:
+        """``print(result)``: the fit report."""
+        return self.fit_report()
+
     def __repr__(self) -> str:
         return (f"<IdentificationResult {self.model or '(base + markers)'}, {self.estimator} "
                 f"estimator, {self.n_observations // 3} readings, RMS "

@@ -14,3 +14,5 @@ THREE_DOF_TOOL_YAML = str(_DATA / "three_dof_tool.yaml")
 #: The KR 270 example cell: floor, pedestal keep-out, tracker line of sight, load torques,
 #: A2 coverage (the constraints ``doe-calib demo`` designs under).
 CELL_YAML = str(_DATA / "kr270_cell.yaml")
+#: A user effect file (``progressive_stiffness``: a joint stiffening with its torque).
+EFFECT_FILE = str(_DATA / "example_effect.py")

@@ -65,20 +65,19 @@ def _comparison(d, path):
 def _refine(d, path):
     """A refine history; its ``fit`` is the identification result written beside it
     (``X.json`` for ``X_refine.json``, as ``doe-calib refine`` names them), else None."""
-    from doe_calib.diagnosis.effect_selection import RefineResult, RefineStep
-    from doe_calib.diagnosis.result import DiagnosisResult
+    from dataclasses import replace
 
-    fit = None
+    from doe_calib.diagnosis.refine_result import RefineResult
+
+    history = RefineResult.from_dict(d)
     path = Path(path)
     beside = path.with_name(path.name.removesuffix("_refine.json") + ".json")
     if path.name.endswith("_refine.json") and beside.exists():
         doc = read_json(beside, what="identification result")
         if doc.get("format") == "doe_calib.identification" and \
                 doc.get("model") == d.get("final_model"):
-            fit = _identification(doc, beside)
-    steps = tuple(RefineStep(**{**s, "fitted": tuple(s.get("fitted", ()))}) for s in d["steps"])
-    return RefineResult(steps, fit, DiagnosisResult.from_dict(d["diagnosis"]),
-                        float(d["noise_floor_mm"]), d["stopped"], tuple(d.get("notes", ())))
+            history = replace(history, fit=_identification(doc, beside))
+    return history
 
 
 #: ``format`` key → reader(dict, path).

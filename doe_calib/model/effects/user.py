@@ -90,12 +90,13 @@ from types import MappingProxyType
 import casadi as ca
 import numpy as np
 
+from doe_calib.examples import EFFECT_FILE
 from doe_calib.errors import DataError, DoeCalibError, ModelError
 from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
 from doe_calib.model.parameters import DISPLAY_UNITS, Parameter
 
 #: The shipped example effect file.
-EXAMPLE_FILE = str(Path(__file__).resolve().parents[2] / "examples" / "example_effect.py")
+EXAMPLE_FILE = EFFECT_FILE
 
 #: Function name → its arguments, in the order they are passed.
 FUNCTIONS = {"joint_correction": ("q", "env", "p", "joint"),
