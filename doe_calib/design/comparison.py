@@ -14,7 +14,8 @@ import numpy as np
 
 from doe_calib.design.result import DesignResult
 from doe_calib.errors import DataError, OptionError
-from doe_calib.estimation.covariance import point_covariance, predict_covariance
+from doe_calib.estimation.covariance import (point_covariance, predict_covariance,
+                                            std_from_covariance)
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.model.marker_model import build_model
@@ -233,7 +234,7 @@ def compare(sources, labels=None, sigma: float | None = None, task=None,
         model, params, cov, s = _covariance(source, sigma, registry)
         sigmas.append(1000.0 * s)
         free = [p for p, f in zip(params.parameters, params.free) if f]
-        d = np.sqrt(np.clip(np.diag(cov), 0, None))
+        d = std_from_covariance(cov)
         stds.append({p.name: v * p.display_factor for p, v in zip(free, d)})
         for p in params.parameters:
             names.setdefault(p.name, None)

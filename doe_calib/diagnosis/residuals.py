@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from doe_calib.model.evaluation import marker_positions
+from doe_calib.estimation.weighted_residuals import marker_residuals
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,8 +44,7 @@ class Residuals:
 
 def residuals(model, measurements, values) -> Residuals:
     """Residuals of ``measurements`` under ``model`` at parameter ``values`` (SI)."""
-    x = marker_positions(model, values, measurements.configurations)
-    e = measurements.xyz - x[measurements.config, measurements.marker]
+    e = marker_residuals(model, measurements, values)
     pose = tuple(measurements.configurations.pose[c] for c in measurements.config)
     return Residuals(e, e / measurements.sigma[:, None], measurements.config, pose)
 

@@ -7,14 +7,12 @@ import numpy as np
 
 from doe_calib.estimation.covariance import covariance_from_r_factor
 from doe_calib.estimation.result import IdentificationResult
-from doe_calib.estimation.weighted_residuals import reduce_jacobian
-from doe_calib.model.evaluation import marker_positions
+from doe_calib.estimation.weighted_residuals import marker_residuals, reduce_jacobian
 
 
 def residual_statistics(model, measurements, values) -> dict:
     """Residual RMS (per coordinate) and max 3-D error, overall, per marker and per pose, mm."""
-    x = marker_positions(model, values, measurements.configurations)
-    e = (measurements.xyz - x[measurements.config, measurements.marker]) * 1000.0
+    e = marker_residuals(model, measurements, values) * 1000.0
     sq, d = np.sum(e ** 2, axis=1), np.linalg.norm(e, axis=1)
 
     def stats(groups, names):

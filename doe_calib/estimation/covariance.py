@@ -10,6 +10,19 @@ import numpy as np
 from doe_calib.model.evaluation import evaluate, observation_matrix
 
 
+def std_from_covariance(covariance) -> np.ndarray:
+    """Standard deviations √diag(Σ) of a covariance matrix (round-off negatives read as 0)."""
+    return np.sqrt(np.clip(np.diag(covariance), 0, None))
+
+
+def parameter_std(covariance, free) -> np.ndarray:
+    """Std of every parameter, shape (P,): √diag of the free parameters' covariance (F, F)
+    where ``free`` (P bools) is set, 0 for the fixed ones. Units those of the covariance."""
+    out = np.zeros(len(free))
+    out[np.asarray(free, bool)] = std_from_covariance(covariance)
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class CovariancePrediction:
     """Predicted parameter covariance for a set of configurations.
@@ -30,9 +43,7 @@ class CovariancePrediction:
 
     def std(self) -> np.ndarray:
         """Standard deviation of every parameter (SI), 0 for fixed ones."""
-        out = np.zeros(len(self.parameters))
-        out[self.parameters.free] = np.sqrt(np.clip(np.diag(self.covariance), 0, None))
-        return out
+        return parameter_std(self.covariance, self.parameters.free)
 
     def summary(self) -> str:
         lines = [f"{'parameter':<22}{'predicted std':>16}  unit"]

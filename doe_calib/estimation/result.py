@@ -10,6 +10,7 @@ from doe_calib.estimation.fit_report import fit_report
 from doe_calib.estimation.fit_statistics import FitStatistics, fit_statistics
 from doe_calib.estimation.parameter_estimate import ParameterEstimate, parameter_estimate
 from doe_calib.estimation.predict import Prediction, predict
+from doe_calib.estimation.covariance import parameter_std, std_from_covariance
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import SIGMA_SOURCES
 from doe_calib.model.parameters import ParameterSet
@@ -113,9 +114,8 @@ class IdentificationResult:
         a_posteriori : bool
             Scaled by σ̂/σ (keyword only).
         """
-        out = np.zeros(len(self.parameters))
-        s = np.sqrt(np.clip(np.diag(self.covariance), 0, None))
-        out[self.parameters.free] = s * (self.sigma_ratio if a_posteriori else 1.0)
+        out = parameter_std(self.covariance, self.parameters.free) * (
+            self.sigma_ratio if a_posteriori else 1.0)
         if name is None:
             return out
         return float(out[self.parameters.position(name)])
@@ -126,7 +126,7 @@ class IdentificationResult:
 
     def correlation(self) -> np.ndarray:
         """Correlation matrix of the free parameters, shape (F, F)."""
-        s = np.sqrt(np.diag(self.covariance))
+        s = std_from_covariance(self.covariance)
         s[s == 0] = 1.0
         return self.covariance / np.outer(s, s)
 

@@ -19,6 +19,13 @@ from doe_calib.model.evaluation import marker_positions, observation_matrix
 BLOCK_CONFIGURATIONS = 2048
 
 
+def marker_residuals(model, measurements, values) -> np.ndarray:
+    """Reading minus model of every reading, shape (K, 3), m (the one place it is computed
+    from marker positions; the weighted residual below divides it by σ)."""
+    x = marker_positions(model, values, measurements.configurations)
+    return measurements.xyz - x[measurements.config, measurements.marker]
+
+
 def weighted_residual(model, measurements, values, jacobian: bool = True):
     """Weighted residuals r (3K,) and, if asked, ∂r/∂p (3K, P) for all P parameters."""
     cfg = measurements.configurations
