@@ -18,6 +18,7 @@ from doe_calib.cli.common import (
 )
 from doe_calib.cli.options import count, positive
 from doe_calib.design import CRITERIA, LoadCase, read_constraints
+from doe_calib.design.effect_detection import with_detectability
 from doe_calib.design.optimal import optimal_design
 from doe_calib.errors import DoeCalibError, OptionError
 from doe_calib.io.csv_files import read_design, write_design
@@ -56,6 +57,14 @@ def add_arguments(c):
     c.add_argument("--sigma", type=positive("--sigma", "mm"), default=0.02,
                    help="tracker σ per coordinate, mm")
     c.add_argument("--seed", type=count("--seed", 0), help="random seed")
+    c.add_argument("--detect", metavar="EFFECTS",
+                   help="also say what these poses can reveal: the smallest detectable size of "
+                        "each effect ('+'-joined effect strings, or 'catalogue' for every "
+                        "catalogue effect on every joint it can sit on)")
+    c.add_argument("--alpha", type=positive("--alpha", "(a probability)"), default=0.05,
+                   help="level of the detection test (--detect), default 0.05")
+    c.add_argument("--power", type=positive("--power", "(a probability)"), default=0.8,
+                   help="power asked of the detection test (--detect), default 0.8")
     c.add_argument("--out", required=True, metavar="DESIGN.json",
                    help="design JSON to write (the design CSV is written beside it: same name, "
                         ".csv)")
@@ -98,6 +107,12 @@ def run(args):
                             collision=collision)
     if progress:
         print(file=sys.stderr)
+    if args.detect:
+        if not (0 < args.alpha < 1 and args.alpha < args.power < 1):
+            raise OptionError(f"--alpha {args.alpha:g} and --power {args.power:g}: give "
+                              f"0 < alpha < power < 1")
+        result = with_detectability(result, model, args.detect, args.alpha, args.power,
+                                    effect_registry(args))
     result.to_json(args.out)
     write_design(csv_path, result.configurations, robot)
     print(strict_json(result.to_dict()) if args.json else result.summary())

@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from doe_calib.design.detectability import Detectability
 from doe_calib.design.predicted_std import PredictedStd, StdMapping, predicted_std
 from doe_calib.errors import DataError
 from doe_calib.io.json_file import read_json, write_json
@@ -103,6 +104,7 @@ class DesignResult:
     sigma_mm: float | None = None
     clearances: tuple = ()
     stages: dict = field(default_factory=dict)
+    detectability: tuple = ()
 
     @property
     def std(self) -> StdMapping:
@@ -184,6 +186,11 @@ class DesignResult:
         if self.clearances:
             mm, pair = min(self.clearances)
             lines.append(f"clearance: every pose keeps ≥ {mm:.1f} mm ({pair} the closest)")
+        if self.detectability:
+            d0 = self.detectability[0]
+            lines += ["", f"What these poses can reveal (χ² score test at α = {d0.alpha:g}, "
+                          f"power {d0.power:.0%}, the model's own parameters estimated too):"]
+            lines += [f"  {d}" for d in self.detectability]
         lines += [*self.notes, "", f"{'parameter':<22}{'predicted std':>14}  unit"]
         lines += [f"{n:<22}{s:14.4g}  {u}" for n, (s, u) in self.predicted_std.items()]
         return "\n".join(lines)
@@ -200,6 +207,7 @@ class DesignResult:
                 "refinement": self.refinement, "coverage": self.coverage,
                 "versus_random": self.versus_random, "sigma_mm": self.sigma_mm,
                 "stages": self.stages,
+                "detectability": [d.to_dict() for d in self.detectability],
                 "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
 
     def to_json(self, path=None) -> str:
@@ -225,7 +233,9 @@ class DesignResult:
                    sigma_mm=None if d.get("sigma_mm") is None else float(d["sigma_mm"]),
                    clearances=tuple((float(p["clearance_mm"]), p["clearance_pair"])
                                     for p in d["poses"] if "clearance_mm" in p),
-                   stages=d.get("stages", {}))
+                   stages=d.get("stages", {}),
+                   detectability=tuple(Detectability.from_dict(r)
+                                       for r in d.get("detectability", ())))
 
     @classmethod
     def from_json(cls, path) -> "DesignResult":

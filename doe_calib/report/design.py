@@ -151,6 +151,8 @@ def design_sections(design, dpi: int = 90) -> list:
         met.append(table(["coverage", "value"], flatten(design.coverage)))
     sections.append(section("Constraints met", *met))
     sections += [efficiency_section(design), std_section(design, dpi)]
+    if design.detectability:
+        sections.append(detectability_section(design))
     sections.append(section("Notes", *([paragraph(n) for n in design.notes] or ["None."])))
     return sections
 
@@ -185,6 +187,20 @@ def std_section(design, dpi: int = 90):
                "Predicted std of each designed-for parameter (display units, log scale)."))
 
 
+def detectability_section(design):
+    """What the poses can reveal: each effect's smallest detectable size, or why none."""
+    d0 = design.detectability[0]
+    rows = [[d.effect, d.min_detectable if d.detectable else "not detectable", d.unit,
+             f"{d.absorbed:.0%}", d.why or "–"] for d in design.detectability]
+    return section(
+        "What these poses can reveal",
+        paragraph(f"The smallest size of each effect that the χ² score test at level "
+                  f"{d0.alpha:g} detects with power {d0.power:.0%} in the least favourable "
+                  f"direction, the model's own parameters estimated too (σ of the design)."),
+        table(["effect", "smallest detectable", "unit", "absorbed by the model", "why not"],
+              rows, 3))
+
+
 def design_fragment(design, dpi: int = 72) -> Html:
     """The design report's content without page chrome, for a notebook.
 
@@ -197,6 +213,8 @@ def design_fragment(design, dpi: int = 72) -> Html:
     parts = [head, efficiency_section(design)]
     if design.predicted_std:
         parts.append(std_section(design, dpi))
+    if design.detectability:
+        parts.append(detectability_section(design))
     return Html("<div>" + "\n".join(parts) + "</div>")
 
 

@@ -70,6 +70,15 @@ SIGN = ("positive: a band's width; negative usually means the approach direction
 
 #: What decides the side of the band; the first is the default.
 MODES = ("both", "torque", "approach", "gravity")
+#: Why the band may show in no reading, by mode (``{joint}``: the joint's name).
+INERT = {"torque": "no load in these configurations puts a torque on joint {joint}, so its "
+                   "band is never crossed",
+         "approach": "no approach direction is planned or read for joint {joint} (a design's "
+                     "are 0 unless the program alternates them)",
+         "both": "no load in these configurations puts a torque on joint {joint} and no "
+                 "approach direction is planned or read for it",
+         "gravity": "the robot's own weight puts no torque on joint {joint} in these "
+                    "configurations"}
 
 
 class Backlash(Effect):
@@ -113,7 +122,7 @@ class Backlash(Effect):
         return [Parameter(f"backlash_{j.name}", self.name, unit, 0.0, 1e-4,
                           f"backlash (dead-band width) of joint {j.name}",
                           bounds=(0.0, np.inf), plausible=(-LIMIT[unit], LIMIT[unit]),
-                          sign=SIGN)]
+                          sign=SIGN, inert_when=INERT[self._mode].format(joint=j.name))]
 
     def _half_width(self, s: ChainSymbols, k: int):
         return 0.5 * s.p[f"backlash_{s.robot.joints[k].name}"]

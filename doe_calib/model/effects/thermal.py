@@ -56,7 +56,9 @@ class Thermal(Effect):
     def parameters(self, robot) -> list:
         return [Parameter("alpha_thermal", self.name, "1/K", 0.0, 1e-5,
                           f"thermal expansion of the links (relative length change per K "
-                          f"from {self._t_ref:g} °C)")]
+                          f"from {self._t_ref:g} °C)",
+                          inert_when="the temperature does not differ from the reference in "
+                                     "these configurations (no temperature column)")]
 
     def placement(self, s: ChainSymbols, k: int):
         robot = s.robot
