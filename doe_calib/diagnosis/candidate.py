@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from doe_calib.design.detectability import SEPARATE, Detectability
 from doe_calib.errors import DoeCalibError
 from doe_calib.model.effects import parse_effect
 
@@ -126,6 +127,22 @@ class Candidate:
     proposed: bool
     why_not: str
     implausible: str = ""
+    detectability: object = None
+    absorbed_by: tuple = ()
+
+    @property
+    def confounded(self) -> bool:
+        """Significant, and its signature mostly what the model's own parameters already make
+        (``absorbed_by`` names them)."""
+        return bool(self.absorbed_by)
+
+    def confounding_words(self) -> str:
+        """"cannot be told apart from …" with what would separate it ("" when not confounded)."""
+        if not self.absorbed_by:
+            return ""
+        return (f"{100 * self.absorbed_fraction:.0f} % of its signature is absorbed by the "
+                f"model's own parameters: in these poses it cannot be told apart from "
+                f"{', '.join(self.absorbed_by)} ({SEPARATE})")
 
     @property
     def cv_gain_mm(self) -> float | None:
@@ -189,6 +206,12 @@ class Candidate:
                  f"  parameters: {', '.join(self.parameters) or '–'}"]
         if self.sizes:
             lines.append(f"  fitted: {self.size_words(len(self.sizes))}")
+        if self.detectability is not None:
+            d = self.detectability
+            lines.append(f"  detectable here from {d.min_detectable:.3g} {d.unit}"
+                         if d.detectable else f"  not detectable here: {d.why}")
+        if self.absorbed_by:
+            lines.append(f"  {self.confounding_words()}")
         lines.append("  proposed" if self.proposed else f"  not proposed: {self.why_not}")
         return "\n".join(lines)
 
@@ -211,7 +234,10 @@ class Candidate:
                 "implausible": self.implausible, "dof": self.dof, "words": self.words,
                 "parameters": list(self.parameters), "units": list(self.units),
                 "cv_rms_before_mm": self.cv_rms_before_mm, "cv_gain_mm": self.cv_gain_mm,
-                "proposed": self.proposed, "why_not": self.why_not}
+                "proposed": self.proposed, "why_not": self.why_not,
+                "detectability": (None if self.detectability is None
+                                  else self.detectability.to_dict()),
+                "absorbed_by": list(self.absorbed_by)}
 
     @classmethod
     def from_dict(cls, d: dict, cv_rms_before_mm: float = float("nan"), level: float = 0.01,
@@ -233,7 +259,9 @@ class Candidate:
                    float(d["p_value_raw"]), float(d["log10_p"]),
                    float(d["explained_fraction"]), float(d["absorbed_fraction"]),
                    float(before), d.get("cv_rms_mm"), sizes, bool(is_proposed), why,
-                   d.get("implausible", ""))
+                   d.get("implausible", ""),
+                   Detectability.from_dict(d["detectability"]) if d.get("detectability")
+                   else None, tuple(d.get("absorbed_by", ())))
 
 
 _DECISIONS = (("not significant", "not significant"), ("not cross-validated", "not tried"),
@@ -306,5 +334,5 @@ def candidate_records(tests, robot, words, cv_rms_before_mm: float, level: float
             t.statistic, t.p_value, t.p_value_raw, t.log10_p, t.explained_fraction,
             t.absorbed_fraction, cv_rms_before_mm, t.cv_rms_mm, sizes, chosen,
             why_not(t.p_value, t.cv_rms_mm, t.implausible, cv_rms_before_mm, level, min_gain,
-                    chosen, proposed), t.implausible))
+                    chosen, proposed), t.implausible, t.detection, t.absorbed_by))
     return tuple(out)

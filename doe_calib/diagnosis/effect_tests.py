@@ -22,6 +22,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy import stats
 
+from doe_calib.design.detectability import (MOSTLY_ABSORBED, Detectability, absorbing_parameters,
+                                            assess)
 from doe_calib.errors import DoeCalibError
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects import DEFAULT_REGISTRY, joint_index
@@ -47,6 +49,8 @@ class CandidateTest:
     fitted: tuple = ()
     implausible: str = ""
     dof: int | None = None
+    detection: object = None
+    absorbed_by: tuple = ()
 
     def with_cv(self, cv_rms_mm: float, fitted: tuple = (),
                 implausible: str = "") -> "CandidateTest":
@@ -62,12 +66,17 @@ class CandidateTest:
                 "p_value_raw": self.p_value_raw, "explained_fraction": self.explained_fraction,
                 "absorbed_fraction": self.absorbed_fraction, "log10_p": self.log10_p,
                 "cv_rms_mm": self.cv_rms_mm, "fitted": list(self.fitted),
-                "implausible": self.implausible, "dof": self.dof}
+                "implausible": self.implausible, "dof": self.dof,
+                "detectability": None if self.detection is None else self.detection.to_dict(),
+                "absorbed_by": list(self.absorbed_by)}
 
     @classmethod
     def from_dict(cls, d: dict) -> "CandidateTest":
         fields = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
         fields["fitted"] = tuple(fields.get("fitted", ()))
+        fields["absorbed_by"] = tuple(fields.get("absorbed_by", ()))
+        if d.get("detectability"):
+            fields["detection"] = Detectability.from_dict(d["detectability"])
         return cls(**fields)
 
 
@@ -124,6 +133,11 @@ def _basis(jac: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     return u[:, s > tol * (s[0] if s.size else 1.0)]
 
 
+#: A candidate this significant before the Bonferroni correction, and mostly absorbed by
+#: the model's own parameters, is named with the parameters that absorb it.
+SIGNIFICANT_RAW = 1e-3
+
+
 @dataclass(frozen=True)
 class CandidateTests:
     """The candidates' tests and the candidates whose test could not be computed.
@@ -178,32 +192,48 @@ def candidate_tests(model, measurements, params, effects=None,
     rank_j = q_basis.shape[1]
     ss = float(r @ r)
     raw, failed = [], []
+    jac = []  # the free weighted Jacobian, made once and only when words need it
+
+    def jacobian():
+        if not jac:
+            jac.append(weighted_residual(model, measurements, params.values)[1][:, params.free])
+        return jac[0]
+
     for e in effects:
         try:
             z, zp = projected_columns(model, measurements, params, e, q_basis)
+            new = e.parameters(model.robot)
         except (DoeCalibError, ValueError, np.linalg.LinAlgError) as exc:
             failed.append((e.spec(), str(exc) or type(exc).__name__))
             continue
         norm2 = float((z ** 2).sum())
         absorbed = 1.0 - float((zp ** 2).sum()) / norm2 if norm2 > 0 else 1.0
+        detection = assess(e.spec(), new, params, z, zp, jacobian)
         scale = np.sqrt(max(norm2, 1e-300) / max(z.shape[1], 1))
         u, s, _ = np.linalg.svd(zp, full_matrices=False)
         keep = s > 1e-6 * scale
         q = int(keep.sum())
         dof = len(r) - rank_j - q
         if q == 0 or dof <= 0:
-            raw.append((e, z.shape[1], 0, 0.0, 0.0, 0.0, absorbed, None))
+            raw.append((e, z.shape[1], 0, 0.0, 0.0, 0.0, absorbed, None, detection, ()))
             continue
         dss = float(((u[:, keep].T @ r) ** 2).sum())
         f = (dss / q) / max((ss - dss) / dof, 1e-300)
         log_p = float(stats.f.logsf(f, q, dof))  # −inf (p = 0) past underflow, no warning
-        raw.append((e, z.shape[1], q, f, log_p, dss / ss if ss > 0 else 0.0, absorbed, dof))
+        by = ()
+        if absorbed > MOSTLY_ABSORBED and log_p < np.log(SIGNIFICANT_RAW):
+            # what the model's own parameters made of the signature the residual asks for
+            theta = np.linalg.lstsq(z, r, rcond=None)[0]
+            by = tuple(absorbing_parameters(params, jacobian(), z @ theta))
+        raw.append((e, z.shape[1], q, f, log_p, dss / ss if ss > 0 else 0.0, absorbed, dof,
+                    detection, by))
     n = max(len(raw) + len(failed), 1)
     out = [CandidateTest(e.name, e.spec(),
                          None if e.joint is None else joint_index(model.robot, e.joint) + 1,
                          npar, q, float(f), float(min(1.0, np.exp(log_p) * n)),
-                         float(np.exp(log_p)), frac, absorbed, log_p / np.log(10), dof=dof)
-           for e, npar, q, f, log_p, frac, absorbed, dof in raw]
+                         float(np.exp(log_p)), frac, absorbed, log_p / np.log(10), dof=dof,
+                         detection=detection, absorbed_by=by)
+           for e, npar, q, f, log_p, frac, absorbed, dof, detection, by in raw]
     return CandidateTests(tuple(sorted(out, key=lambda c: (c.log10_p, -c.statistic))),
                           tuple(failed))
 

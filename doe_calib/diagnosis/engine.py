@@ -17,6 +17,7 @@ from doe_calib.diagnosis.effect_tests import augmented, candidate_tests
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.variables import configuration_variables, follows
+from doe_calib.design.detectability import SEPARATE
 from doe_calib.errors import DoeCalibError, ModelError
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.plausibility import beyond_plausible, out_of_bounds, value_words
@@ -123,8 +124,47 @@ def _adequacy_words(test):
             f"{test.p_value:.2g}, σ {test.sigma_source} {test.sigma_mm:.3g} mm)")
 
 
+def _confounded_words(tests, proposed, level) -> str:
+    """A sentence naming the significant candidates that the model's own parameters absorb
+    (not said silently as "too small a gain")."""
+    if proposed is not None:  # what the proposal explains is said with it
+        return _rivals_words(tests, proposed, level)
+    hidden = [t for t in tests if t.p_value < level and t.absorbed_by][:2]
+    return "".join(
+        f" {t.spec} is significant (p = {t.p_value:.2g}) but {100 * t.absorbed_fraction:.0f} % "
+        f"of its signature is absorbed by the model: in these poses it cannot be told apart "
+        f"from {', '.join(t.absorbed_by)} ({SEPARATE})." for t in hidden)
+
+
+#: Candidates of other effects whose cross-validated RMS is within this fraction of the
+#: proposed one's explain the data as well: these poses cannot tell them apart.
+RIVAL_MARGIN = 0.005
+
+
+def _rivals_words(tests, proposed, level) -> str:
+    """A sentence naming other effects that predict as well as the proposed one."""
+    best = proposed.cv_rms_mm
+    rivals = [t for t in tests if t.p_value < level and t.cv_rms_mm is not None
+              and np.isfinite(t.cv_rms_mm) and (t.effect, t.joint) != (proposed.effect,
+                                                                       proposed.joint)
+              and t.cv_rms_mm <= best * (1 + RIVAL_MARGIN)]
+    if not rivals:
+        return ""
+    names = ", ".join(f"{t.spec} ({t.cv_rms_mm:.4g} mm)" for t in rivals[:3])
+    return (f" These poses cannot tell {proposed.spec} ({best:.4g} mm) apart from {names}: "
+            f"they predict equally well here; {SEPARATE.replace('them', 'the effects')}, "
+            f"before either is trusted away from these poses.")
+
+
 def _verdict(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross, level,
              min_gain, tolerance, registry=None):
+    return _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, flagged,
+                          gross, level, min_gain, tolerance, registry) \
+        + _confounded_words(tests, proposed, level)
+
+
+def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross,
+                   level, min_gain, tolerance, registry=None):
     ratio = _adequacy_words(test)
     cv_words = f"cross-validated RMS {cv:.3g} mm ({folds.description})"
     if proposed is not None:
