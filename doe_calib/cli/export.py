@@ -100,9 +100,8 @@ def _constraints(args, design):
     return read_constraints(path, design.robot, design.tool)
 
 
-def _models(args, design):
+def _models(args, design, constraints):
     """The collision model of each load case (:func:`program_models`); None with --no-collision."""
-    constraints = _constraints(args, design)
     build = collision_builder(args, design.robot, design.tool, constraints,
                               design.constraints.get("collision"))
     if build is None:
@@ -123,8 +122,10 @@ def run(args):
     try:
         design = DesignResult.from_json(args.design)
         axis_map = None if args.axis_map is None else AxisMap.parse(args.axis_map, design.robot)
-        models = _models(args, design)
-        where, home = stations(args, design, _is_free(models))
+        constraints = _constraints(args, design)
+        models = _models(args, design, constraints)
+        limits = None if constraints is None else (constraints.lower, constraints.upper)
+        where, home = stations(args, design, _is_free(models), limits)
         if home is not None:
             print(home, file=sys.stderr)
         plan = Plan(args.group_by, args.order, args.approach_step, args.alternate != "none",

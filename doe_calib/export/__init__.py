@@ -8,9 +8,9 @@ changed at a load-change pose when the plan names one (:mod:`.stations`) —,
 reaches each pose from the side the design or the backlash model asks for
 through a pre-pose (:mod:`.approach`), stops for the operator where the load
 changes, declares the payload (:mod:`.payload`) and waits for the
-measurement at each pose (:class:`.program.Settings`). Joint limits are checked again before anything
-is written. :func:`.safety.check_program` checks every move for collisions
-and routes a colliding one round through intermediate positions;
+measurement at each pose (:class:`.program.Settings`). Joint limits are
+checked again before anything is written. :func:`.safety.check_program`
+checks every move for collisions and routes a colliding one round through intermediate positions;
 :func:`.cycle.cycle_time` estimates how long the program runs.
 """
 from __future__ import annotations

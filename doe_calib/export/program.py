@@ -228,8 +228,9 @@ def _load_specs(design) -> list:
     """The load of each configuration as ``KG@X,Y,Z`` (mm), "" unloaded, None unknown.
 
     ``constraints["row_loads"]`` when given (one per row: a compensated
-    program's); else from the design's load cases (``constraints["loads"]``)
-    when the pose has one unloaded visit followed by one per load case.
+    program's, ``KG@`` for a mass whose centre of mass is not known); else
+    from the design's load cases (``constraints["loads"]``) when the pose
+    has one unloaded visit followed by one per load case.
     """
     cfg = design.configurations
     if "row_loads" in design.constraints:
@@ -251,14 +252,23 @@ def _loads(design) -> tuple:
     """
     words, payloads = [], []
     for spec, w in zip(_load_specs(design), design.configurations.wrench):
+        if spec and spec.endswith("@"):  # a mass whose centre of mass is not known
+            words.append(f"{spec[:-1]} kg hung on the flange (centre of mass not known)")
+            payloads.append(None)
+            continue
         words.append(_wrench_words(w) if not spec else load_words(spec))
         payloads.append(None if spec is None else Payload() if not spec
                         else Payload.from_spec(spec))
     return words, payloads
 
 
-def _turned(design, q, plan: Plan, home) -> np.ndarray:
-    """``q`` (visits in order, rad/m) with multi-turn joints at their shortest equivalents."""
+def _turned(design, q, loads, plan: Plan, home, load_pose) -> np.ndarray:
+    """``q`` (visits in order, rad/m) with multi-turn joints at their shortest equivalents.
+
+    ``loads``: each visit's load in words; with a home pose the program
+    passes the load-change pose ``load_pose`` before each change of load
+    (:func:`_with_stations`), a fixed point of the path.
+    """
     robot = design.robot
     joints = turn_joints(robot) if plan.turns else ()
     if not joints:
@@ -267,8 +277,19 @@ def _turned(design, q, plan: Plan, home) -> np.ndarray:
         joints = periodic_joints(build_model(robot, design.tool, design.model), joints)
     except DoeCalibError:  # a model that cannot be built here (an unregistered effect)
         return q
+    path, fixed, previous = [], [], NO_LOAD
+    for v, load in zip(q, loads):
+        if home is not None and load != previous:
+            path.append(load_pose)
+            fixed.append(True)
+        path.append(v)
+        fixed.append(False)
+        previous = load
     margin = plan.approach_step / robot.display_factors
-    return shortest_turns(q, joints, robot.lower, robot.upper, margin, start=home, end=home)
+    lower, upper = (robot.lower, robot.upper) if plan.limits is None else plan.limits
+    out = shortest_turns(np.array(path), joints, np.asarray(lower, float),
+                         np.asarray(upper, float), margin, start=home, end=home, fixed=fixed)
+    return out[~np.array(fixed)]
 
 
 def moves(design, plan: Plan | None = None) -> list[Move]:
@@ -296,7 +317,9 @@ def moves(design, plan: Plan | None = None) -> list[Move]:
     axis_map = plan.axis_map
     if axis_map is None:
         axis_map = AxisMap.identity(robot.n_joints)
-    home = None if plan.home is None else np.array(check_station(robot, plan.home, "--home"))
+    limits = plan.limits
+    home = None if plan.home is None else np.array(check_station(robot, plan.home, "--home",
+                                                                 limits))
     joints = backlash_joints(design.model, robot) if plan.alternate else ()
     loads, payloads = _loads(design)
     index = {p: i for i, p in enumerate(dict.fromkeys(cfg.pose), start=1)}
@@ -304,7 +327,9 @@ def moves(design, plan: Plan | None = None) -> list[Move]:
     for group in visit_order(design, loads, plan):
         rows += group
         all_sides += list(default_sides(cfg.approach[group], joints))
-    turned = _turned(design, cfg.q[rows], plan, home)
+    load_pose = home if plan.load_pose is None else np.array(
+        check_station(robot, plan.load_pose, "--load-change-pose", limits))
+    turned = _turned(design, cfg.q[rows], [loads[r] for r in rows], plan, home, load_pose)
     out = []
     for r, sides, q in zip(rows, all_sides, turned):
         pose, want = cfg.pose[r], cfg.approach[r]
@@ -320,8 +345,6 @@ def moves(design, plan: Plan | None = None) -> list[Move]:
                         q, pre if has_pre else None, payload=payloads[r]))
     if home is None:
         return out
-    load_pose = home if plan.load_pose is None else np.array(
-        check_station(robot, plan.load_pose, "--load-change-pose"))
     return _with_stations(out, home, load_pose, axis_map, factors)
 
 

@@ -55,6 +55,11 @@ class Plan:
     load_pose : tuple of float or None
         URDF joint values, rad (m), of the pose where the operator changes the
         load; None: the home pose. Only with ``home``.
+    limits : tuple of two tuples, or None
+        ``(lower, upper)`` joint limits, rad (m), that the home and
+        load-change poses and the equivalent angles stay inside: a cell
+        file's (:class:`~doe_calib.design.DesignConstraints`); None: the
+        URDF's.
     turns : bool
         Whether joints with more than one turn of range take, at each visit,
         the equivalent angle (q ± 2π) that keeps the moves short
@@ -69,6 +74,7 @@ class Plan:
     axis_map: AxisMap | None = None
     home: tuple | None = None
     load_pose: tuple | None = None
+    limits: tuple | None = None
     turns: bool = False
 
     def __post_init__(self):

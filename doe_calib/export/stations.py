@@ -17,8 +17,8 @@ from doe_calib.export.ordering import axis_speeds, move_times
 _LIMIT_TOL = 1e-12  # rad or m
 
 
-def zero_home(robot) -> tuple:
-    """The URDF zero clipped inside the joint limits, rad (m).
+def zero_home(robot, limits=None) -> tuple:
+    """The URDF zero clipped inside the joint limits (``limits``: (lower, upper)), rad (m).
 
     Examples
     --------
@@ -27,11 +27,14 @@ def zero_home(robot) -> tuple:
     >>> len(zero_home(Robot.from_urdf(examples.ROBOT_URDF)))
     6
     """
-    return tuple(float(v) for v in np.clip(np.zeros(robot.n_joints), robot.lower, robot.upper))
+    lower, upper = (robot.lower, robot.upper) if limits is None else limits
+    return tuple(float(v) for v in np.clip(np.zeros(robot.n_joints), lower, upper))
 
 
-def check_station(robot, q, option: str) -> tuple:
+def check_station(robot, q, option: str, limits=None) -> tuple:
     """``q`` (URDF values, rad/m) if it has one value per joint inside the limits.
+
+    ``limits``: (lower, upper), rad (m), e.g. a cell file's; None: the URDF's.
 
     Raises
     ------
@@ -42,11 +45,12 @@ def check_station(robot, q, option: str) -> tuple:
     if q.shape != (robot.n_joints,) or not np.all(np.isfinite(q)):
         raise OptionError(f"{option}: give {robot.n_joints} finite joint values "
                           f"({', '.join(robot.joint_names)}), deg (mm for prismatic joints)")
-    for joint, v in zip(robot.joints, q):
-        if not joint.lower - _LIMIT_TOL <= v <= joint.upper + _LIMIT_TOL:
+    lower, upper = (robot.lower, robot.upper) if limits is None else limits
+    for joint, v, lo, hi in zip(robot.joints, q, lower, upper):
+        if not lo - _LIMIT_TOL <= v <= hi + _LIMIT_TOL:
             k, unit = joint.display_factor, joint.display_unit
             raise OptionError(f"{option}: joint {joint.name} = {v * k:.6g} {unit} is outside its "
-                              f"limits [{joint.lower * k:g}, {joint.upper * k:g}] {unit}")
+                              f"limits [{lo * k:g}, {hi * k:g}] {unit}")
     return tuple(float(v) for v in q)
 
 
@@ -57,7 +61,7 @@ def nearest_pose(design, q) -> tuple:
     return tuple(float(v) for v in cfg.q[int(np.argmin(times))])
 
 
-def default_home(design, is_free=None) -> tuple:
+def default_home(design, is_free=None, limits=None) -> tuple:
     """The home pose a program uses when none is given, and why, in words.
 
     The URDF zero inside the limits (:func:`zero_home`) when ``is_free``
@@ -72,6 +76,9 @@ def default_home(design, is_free=None) -> tuple:
     is_free : callable, optional
         ``is_free(q)`` → whether the pose q (rad/m) keeps its clearances under
         every load the program hangs.
+    limits : (lower, upper), optional
+        Joint limits, rad (m), the zero is clipped inside (a cell file's);
+        None: the URDF's.
 
     Returns
     -------
@@ -79,7 +86,7 @@ def default_home(design, is_free=None) -> tuple:
         rad (m).
     why : str
     """
-    zero = zero_home(design.robot)
+    zero = zero_home(design.robot, limits)
     if is_free is None or is_free(np.array(zero)):
         return zero, "home: the URDF zero inside the joint limits"
     q = nearest_pose(design, zero)

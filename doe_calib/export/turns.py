@@ -3,16 +3,21 @@
 A revolute joint whose limits span more than one turn (a UR arm's ±360°)
 stands in the same place at q and at q ± 2π. Once the visiting order is
 fixed, each such joint's angle at each visit is chosen among its
-equivalents inside the limits so that the joint's **total travel** over the
-program,
+equivalents inside the limits, for each joint separately and exactly, by
+dynamic programming over the visits (a shortest path through the layers of
+equivalents), for a lexicographic cost:
 
-    Σ_i |q_j(i+1) − q_j(i)|        (from the start position to the end one),
+1. least total **excess** Σ_i (|Δq_i| − d_i), with d_i the shortest move of
+   the joint that any equivalent of visit i allows from where the joint
+   is: every move is as short as its equivalents allow, unless the limits
+   force a longer one (a joint turning one way runs into its limit), and
+   then the fewest radians of detour over the program;
+2. then least total **travel** Σ_i |Δq_i|, from the start position to the
+   end one (the home pose, when the program has one).
 
-is least — for each joint separately, exactly, by dynamic programming over
-the visits (a shortest path through the layers of equivalents). Total travel
-per joint, not the time of the slowest axis, is the cost: it separates over
-the joints, so the optimum is exact; shorter travel of every joint also
-shortens every synchronous move it is part of.
+The cost is the joint's own, not the time of the slowest axis: it separates
+over the joints, so the optimum is exact, and a move whose every joint is as
+short as it can be is as short in time as it can be.
 
 An equivalent other than the design's own angle must stay ``margin`` inside
 the limits (the pre-pose step), and is used only on joints on which the
@@ -86,8 +91,9 @@ def _equivalents(value: float, lower: float, upper: float, margin: float) -> np.
     return shifted[keep]
 
 
-def shortest_turns(q, joints, lower, upper, margin, start=None, end=None) -> np.ndarray:
-    """``q`` with each joint of ``joints`` turned by whole turns for least total travel.
+def shortest_turns(q, joints, lower, upper, margin, start=None, end=None,
+                   fixed=None) -> np.ndarray:
+    """``q`` with each joint of ``joints`` turned by whole turns for short moves (module notes).
 
     Parameters
     ----------
@@ -102,6 +108,8 @@ def shortest_turns(q, joints, lower, upper, margin, start=None, end=None) -> np.
     start, end : array_like, shape (N,), optional
         Fixed positions before the first and after the last visit (the home
         pose); None: the path starts (ends) at its first (last) visit.
+    fixed : array_like of bool, shape (V,), optional
+        Rows of ``q`` passed through as they are (a load-change pose).
 
     Returns
     -------
@@ -115,21 +123,43 @@ def shortest_turns(q, joints, lower, upper, margin, start=None, end=None) -> np.
     0.2832
     """
     q = np.array(q, dtype=float)
+    fixed = np.zeros(len(q), dtype=bool) if fixed is None else np.asarray(fixed, bool)
     for j in joints:
-        layers = [_equivalents(v, lower[j], upper[j], margin[j]) for v in q[:, j]]
+        layers = [np.array([v]) if keep else _equivalents(v, lower[j], upper[j], margin[j])
+                  for v, keep in zip(q[:, j], fixed)]
         if not layers:
             continue
-        cost = np.zeros(len(layers[0])) if start is None else np.abs(layers[0] - start[j])
-        back = []
-        for prev, layer in zip(layers[:-1], layers[1:]):
-            total = cost[None, :] + np.abs(layer[:, None] - prev[None, :])
-            back.append(np.argmin(total, axis=1))
-            cost = total[np.arange(len(layer)), back[-1]]
-        if end is not None:
-            cost = cost + np.abs(layers[-1] - end[j])
-        pick = int(np.argmin(cost))
-        for i in range(len(layers) - 1, -1, -1):
-            q[i, j] = layers[i][pick]
-            if i > 0:
-                pick = int(back[i - 1][pick])
+        path = _best_path(layers, None if start is None else start[j],
+                          None if end is None else end[j])
+        q[:, j] = [layer[k] for layer, k in zip(layers, path)]
     return q
+
+
+def _step(prev, layer):
+    """Travel and excess of each move prev[p] → layer[c], shape (C, P)."""
+    travel = np.abs(layer[:, None] - prev[None, :])
+    return travel, np.round(travel - travel.min(axis=0, keepdims=True), 9)
+
+
+def _best_path(layers, start, end) -> list:
+    """Index into each layer of the path of least (excess, travel), lexicographically."""
+    excess = np.zeros(len(layers[0]))
+    travel = np.zeros(len(layers[0]))
+    if start is not None:
+        travel, excess = _step(np.array([start]), layers[0])
+        travel, excess = travel[:, 0], excess[:, 0]
+    back = []
+    for prev, layer in zip(layers[:-1], layers[1:]):
+        t, e = _step(prev, layer)
+        t, e = t + travel[None, :], e + excess[None, :]
+        best = np.array([np.lexsort((t[c], e[c]))[0] for c in range(len(layer))])
+        back.append(best)
+        rows = np.arange(len(layer))
+        travel, excess = t[rows, best], e[rows, best]
+    if end is not None:
+        t = np.abs(end - layers[-1])  # the last move, home: its excess over the nearest
+        travel, excess = travel + t, excess + np.round(t - t.min(), 9)
+    pick = [int(np.lexsort((travel, np.round(excess, 9)))[0])]
+    for best in reversed(back):
+        pick.append(int(best[pick[-1]]))
+    return pick[::-1]
