@@ -172,3 +172,24 @@ def test_four_joint_chain_position_reached_orientation_named(model_odd):
     assert np.all(out.predicted_std > 0)
     with pytest.raises(ModelError, match="position only"):
         build_problem(model_odd)
+
+
+def test_cli_program_changes_the_load_once(campaign, tmp_path):
+    """Every row carries the same 250 kg: one prompt, one set_payload of 250 kg at 200 mm."""
+    model, _, result, targets = campaign
+    result.to_json(tmp_path / "r.json")
+    write_design(tmp_path / "t.csv", targets.configurations, model.robot)
+    home = "0,-90,90,0,45,0"
+    assert main(["compensate", "--result", str(tmp_path / "r.json"), "--targets",
+                 str(tmp_path / "t.csv"), "--tcp", "A", "--out", str(tmp_path / "c.csv"),
+                 "--format", "urscript", "--program-out", str(tmp_path / "prog"),
+                 f"--home={home}", "--trigger", "set_digital_out(2, True)"]) == 0
+    script = (tmp_path / "prog" / "compensated.script").read_text()
+    assert script.count("popup(") == 1 and script.count("set_digital_out(2, True)") == 10
+    payloads = re.findall(r"set_payload\(([^,]+), \[([^\]]*)\]\)", script)
+    assert [float(m) for m, _ in payloads] == [0.0, pytest.approx(LOAD[0], rel=1e-5)]
+    assert np.allclose([float(v) for v in payloads[1][1].split(",")], LOAD[1], atol=2e-4)
+    moves = re.findall(r"movej\(\[([^\]]*)\]", script)
+    first, last = (np.degrees([float(v) for v in moves[k].split(",")]) for k in (0, -1))
+    assert np.allclose(first, [0, -90, 90, 0, 45, 0]) and np.allclose(last, first)
+    assert script.rstrip().endswith("\ncompensated()")

@@ -32,14 +32,17 @@ def _visits(lines, move):
     """(comment match, move match, is pre-pose) for each move line.
 
     The comment is the last load-case comment before the move; a move right
-    after a ``pre-pose of pose`` comment line goes to a pre-pose.
+    after a ``pre-pose of pose`` comment line goes to a pre-pose. Moves to the
+    home and load-change poses (after a ``home pose (`` or ``load change pose
+    (`` comment) measure nothing and are left out.
     """
-    out, comment, pre = [], None, False
+    out, comment, pre, station = [], None, False, False
     for line in lines:
         c = re.search(r"pose (\S+), load case (\d+) of (\d+): (.*)$", line)
         comment = c or comment
+        station = bool(re.search(r"(home|load change) pose \(", line)) or (station and not c)
         m = re.match(move, line.strip())
-        if m:
+        if m and not station:
             out.append((comment, m, pre))
         pre = "pre-pose of pose" in line
     return out
@@ -74,9 +77,39 @@ def parse_rapid(mod):
     return [(c, targets[m.group(1)], pre) for c, m, pre in visits]
 
 
+def urscript_structure(script):
+    """(function name, top-level calls) of a URScript file, its blocks checked balanced.
+
+    ``def``, ``while``, ``if`` and ``thread`` open a block, ``end`` closes one;
+    at top level only blank lines, comments, ``def`` and calls may stand.
+    """
+    depth, name, calls = 0, None, []
+    for line in script.splitlines():
+        text = line.strip()
+        if not text or text.startswith("#"):
+            continue
+        if re.match(r"(def|while|if|thread)\b.*:$", text):
+            if depth == 0:
+                m = re.match(r"def (\w+)\(\):$", text)
+                assert m and name is None, f"top level: {text!r}"
+                name = m.group(1)
+            depth += 1
+        elif re.match(r"(elif\b.*|else):$", text):
+            assert depth > 0
+        elif text == "end":
+            depth -= 1
+            assert depth >= 0, "an end without its block"
+        elif depth == 0:
+            assert re.fullmatch(r"\w+\(\)", text), f"top-level code: {text!r}"
+            calls.append(text[:-2])
+    assert depth == 0, "a block without its end"
+    return name, calls
+
+
 def parse_urscript(script):
     """[(comment, joints in deg, is pre-pose)] of every movej of a URScript program."""
-    assert re.match(r"def \w+\(\):\n", script) and script.rstrip().endswith("end")
+    name, calls = urscript_structure(script)
+    assert re.match(rf"def {name}\(\):\n", script) and calls == [name]
     move = r"movej\(\[([^\]]*)\], a=[\d.]+, v=[\d.]+\)$"
     return [(c, list(np.degrees(_numbers(m.group(1)))), pre)
             for c, m, pre in _visits(script.splitlines(), move)]

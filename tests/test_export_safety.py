@@ -166,7 +166,7 @@ def _constructed(tmp_path, poses_deg, name):
 def test_move_through_the_floor_is_refused_naming_the_pair(tmp_path, capsys):
     design, path = _constructed(tmp_path, [FLOOR_A, FLOOR_B], "floor")
     status = main(["export", str(path), "--format", "krl", "--out", str(tmp_path / "p"),
-                   "--order", "design"])
+                   "--order", "design", "--home", "none"])
     err = capsys.readouterr().err
     assert status == 2 and re.search(r"error: .*move 2, from pose 1 to pose 2, no load: "
                                      r"marker . vs floor at \d+% of the move \(a1 ", err), err
@@ -180,7 +180,7 @@ def test_move_through_the_floor_is_refused_naming_the_pair(tmp_path, capsys):
 def test_move_through_the_floor_is_routed_through_a_free_pose(tmp_path, capsys):
     design, path = _constructed(tmp_path, [FLOOR_A, FLOOR_B, HOME], "routed")
     assert main(["export", str(path), "--format", "krl", "--out", str(tmp_path / "p"),
-                 "--order", "design"]) == 0
+                 "--order", "design", "--home", "none"]) == 0
     err = capsys.readouterr().err
     assert "1 routed, 0 colliding" in err and "(straight: marker" in err
     paths = sorted((tmp_path / "p").iterdir())
@@ -200,7 +200,7 @@ def test_move_through_the_floor_is_routed_through_a_free_pose(tmp_path, capsys):
 def test_allow_collisions_writes_the_program_with_a_warning(tmp_path, capsys):
     _, path = _constructed(tmp_path, [FLOOR_A, FLOOR_B], "allowed")
     assert main(["export", str(path), "--format", "urscript", "--out", str(tmp_path / "p"),
-                 "--order", "design", "--allow-collisions"]) == 0
+                 "--order", "design", "--allow-collisions", "--home", "none"]) == 0
     err = capsys.readouterr().err
     assert re.search(r"warning: written with a colliding move .*marker . vs floor", err)
     assert len(_urscript(sorted((tmp_path / "p").iterdir()))) == 2

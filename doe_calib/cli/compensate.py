@@ -12,7 +12,8 @@ from doe_calib.cli.common import (
     report_warnings,
 )
 from doe_calib.compensation import build_problem, compensate, read_targets
-from doe_calib.compensation.program import export_compensated
+from doe_calib.cli.program_options import program_arguments, stations, tool_payload
+from doe_calib.compensation.program import compensated_design, export_compensated
 from doe_calib.errors import ConvergenceWarning, DataError, OptionError
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.export import FORMATS
@@ -41,6 +42,7 @@ def add_arguments(c):
     c.add_argument("--program-out", help="directory (or file) for --format (default: the "
                                          "folder of --out)")
     c.add_argument("--name", default="compensated", help="program name (default compensated)")
+    program_arguments(c, home="none")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
     effect_file_argument(c)
 
@@ -78,7 +80,12 @@ def run(args):
     if args.format:
         where = args.program_out if args.program_out is not None else Path(args.out).parent
         try:
-            paths = export_compensated(out, result.tool, args.format, where, name=args.name)
+            design = compensated_design(out, result.tool, model)
+            fields, _ = stations(args, design)
+            paths = export_compensated(out, result.tool, args.format, where, name=args.name,
+                                       model=model, home=fields["home"],
+                                       load_pose=fields["load_pose"], trigger=args.trigger,
+                                       tool_payload=tool_payload(args))
         except DataError as exc:
             raise DataError(f"compensated program: {exc}") from exc
         kept = [p for p, ok in zip(out.pose, out.converged) if not ok]

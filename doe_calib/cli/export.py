@@ -11,6 +11,8 @@ from pathlib import Path
 
 from doe_calib.cli.common import collision_arguments, collision_builder, parse_load
 from doe_calib.cli.options import at_least, count, positive
+from doe_calib.cli.program_options import program_arguments, stations, tool_payload
+from doe_calib.collision import check_segment
 from doe_calib.design import LoadCase, read_constraints
 from doe_calib.design.result import DesignResult
 from doe_calib.errors import DataError, OptionError
@@ -62,6 +64,11 @@ def add_arguments(c):
     c.add_argument("--axis-map", metavar="J:SIGN:OFFSET,...",
                    help="controller value = SIGN * URDF value + OFFSET (deg, mm) per joint, for a "
                         "URDF that does not count joints as the controller, e.g. a1:-1:0,a3:1:-90")
+    c.add_argument("--turns", choices=("shortest", "design"), default="shortest",
+                   help="joints with more than one turn of range (a UR's +-360 deg): shortest "
+                        "(default) takes at each pose the equivalent angle (q +- 360 deg) that "
+                        "keeps the moves short; design: the design's angles")
+    program_arguments(c)
     c.add_argument("--load-change-time", type=at_least("--load-change-time", 0.0, "s"),
                    default=300.0, metavar="S",
                    help="seconds to change the load, for the cycle-time estimate (default 300)")
@@ -93,33 +100,41 @@ def _constraints(args, design):
     return read_constraints(path, design.robot, design.tool)
 
 
-def _checked(args, design, visits, axis_map):
-    """The program's moves checked for collisions and routed.
-
-    None with ``--no-collision`` and for the design CSV, which lists the
-    measurements in the program's order but moves nothing.
-    """
-    if args.format == "csv":
-        return None
-    constraints = _constraints(args, design)
+def _models(args, design, constraints):
+    """The collision model of each load case (:func:`program_models`); None with --no-collision."""
     build = collision_builder(args, design.robot, design.tool, constraints,
                               design.constraints.get("collision"))
     if build is None:
         return None
     loads = [LoadCase(kg, com, r) for kg, com, r in
              (parse_load(spec) for spec in design.constraints.get("loads", []))]
-    return check_program(visits, program_models(loads, build), design.robot, axis_map)
+    return program_models(loads, build)
+
+
+def _is_free(models):
+    """``is_free(q)``: whether pose q keeps its clearances under every load; None: no check."""
+    if models is None:
+        return None
+    return lambda q: all(check_segment(cm, q, q).free for cm in models.values())
 
 
 def run(args):
     try:
         design = DesignResult.from_json(args.design)
         axis_map = None if args.axis_map is None else AxisMap.parse(args.axis_map, design.robot)
+        constraints = _constraints(args, design)
+        models = _models(args, design, constraints)
+        limits = None if constraints is None else (constraints.lower, constraints.upper)
+        where, home = stations(args, design, _is_free(models), limits)
+        if home is not None:
+            print(home, file=sys.stderr)
         plan = Plan(args.group_by, args.order, args.approach_step, args.alternate != "none",
-                    axis_map)
+                    axis_map, turns=args.turns == "shortest", **where)
         out = args.out if args.out is not None else Path(args.design).parent
         visits = moves(design, plan)
-        checked = _checked(args, design, visits, axis_map)
+        # the design CSV lists the measurements in the program's order but moves nothing
+        checked = None if models is None or args.format == "csv" else check_program(
+            visits, models, design.robot, axis_map)
         if checked is not None:
             print(checked.summary(), file=sys.stderr)
             if not args.allow_collisions:
@@ -129,7 +144,8 @@ def run(args):
                 print(f"warning: written with a colliding move (--allow-collisions): {c}",
                       file=sys.stderr)
         paths = export_design(design, args.format, out, name=args.name, dwell=args.dwell,
-                              handshake=args.handshake, plan=plan, visits=visits)
+                              handshake=args.handshake, plan=plan, visits=visits,
+                              trigger=args.trigger, tool=tool_payload(args))
         cycle = cycle_time(visits, design.robot, args.dwell, args.load_change_time)
     except DataError as exc:
         if exc.path is not None:

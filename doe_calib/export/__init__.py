@@ -1,13 +1,16 @@
 """Robot programs that visit a design's poses: KUKA KRL, ABB RAPID, URScript, and the design CSV.
 
 Every format visits each pose once per load case — by default grouped by
-load case and ordered for short joint travel (:class:`.sequence.Plan`) —,
+load case and ordered for short joint travel (:class:`.sequence.Plan`), a
+joint with more than one turn of range at the equivalent angle that keeps the
+moves short (:mod:`.turns`), from and back to a home pose with the load
+changed at a load-change pose when the plan names one (:mod:`.stations`) —,
 reaches each pose from the side the design or the backlash model asks for
 through a pre-pose (:mod:`.approach`), stops for the operator where the load
-changes and waits for the measurement at each pose
-(:class:`.program.Settings`). Joint limits are checked again before anything
-is written. :func:`.safety.check_program` checks every move for collisions
-and routes a colliding one round through intermediate positions;
+changes, declares the payload (:mod:`.payload`) and waits for the
+measurement at each pose (:class:`.program.Settings`). Joint limits are
+checked again before anything is written. :func:`.safety.check_program`
+checks every move for collisions and routes a colliding one round through intermediate positions;
 :func:`.cycle.cycle_time` estimates how long the program runs.
 """
 from __future__ import annotations
@@ -16,13 +19,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
+
 from doe_calib.errors import DataError, OptionError
 from doe_calib.export import krl, rapid, urscript
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.cycle import CycleTime, cycle_time
+from doe_calib.export.payload import Payload
 from doe_calib.export.program import Move, Settings, Waypoint, moves, realised_approach
 from doe_calib.export.safety import Collision, ProgramCheck, check_program, program_models
 from doe_calib.export.sequence import Plan
+from doe_calib.export.stations import zero_home
 from doe_calib.io.csv_files import write_design
 from doe_calib.io.measurements import Configurations
 
@@ -59,21 +66,28 @@ def _stem(out, name: str) -> tuple[Path, str]:
 
 
 def program_configurations(design, visits) -> Configurations:
-    """The configurations in the program's order, with the approach directions it realises.
+    """The measured configurations in the program's order, with the approach directions it realises.
+
+    Their joint values are the program's: a joint with more than one turn of
+    range at the equivalent angle the program chose (:mod:`.turns`).
 
     Read back as a design or measurement file, their order and ``approach``
     columns give the ``backlash`` effect exactly what the program does.
     """
     cfg = design.configurations
-    rows = [m.row for m in visits]
-    return Configurations.from_arrays(cfg.q[rows], cfg.wrench[rows], cfg.temperature[rows],
-                                      [m.pose for m in visits],
+    visits = list(visits)
+    measured = [m for m in visits if m.measures]
+    rows = [m.row for m in measured]
+    q = np.array([m.urdf_q for m in measured]).reshape(len(rows), design.robot.n_joints)
+    return Configurations.from_arrays(q, cfg.wrench[rows], cfg.temperature[rows],
+                                      [m.pose for m in measured],
                                       realised_approach(visits, design.robot))
 
 
 def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float = 3.0,
                   handshake: int | None = None, plan: Plan | None = None,
-                  visits=None) -> list[Path]:
+                  visits=None, trigger: str | None = None,
+                  tool: Payload | None = None) -> list[Path]:
     """Write ``design`` as a robot program (or design CSV); return the files written.
 
     Parameters
@@ -100,6 +114,12 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
         The program's visits made with ``plan`` (:func:`moves`), e.g. checked
         for collisions and routed by :func:`.safety.check_program`; default
         ``moves(design, plan)``.
+    trigger : str, optional
+        One line of the program's language written at every measurement pose
+        after the dwell (:class:`.program.Settings`).
+    tool : Payload, optional
+        The tool's own mass and centre of mass, declared at the start and
+        added to every load; default none (mass 0).
 
     Raises
     ------
@@ -110,8 +130,9 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
     ModelError
         A robot the format cannot drive (KRL, RAPID, URScript: 6 axes).
     OptionError
-        A negative dwell, a handshake that is not an I/O number ≥ 1, or an
-        axis map with the design CSV.
+        A negative dwell, a handshake that is not an I/O number ≥ 1, a
+        trigger that is not one line of ASCII, or an axis map with the
+        design CSV.
 
     Examples
     --------
@@ -136,14 +157,15 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
         write_design(stem.with_suffix(".csv"), program_configurations(design, visits),
                      design.robot)
         return [stem.with_suffix(".csv")]
-    texts = form.render(design, visits, Settings(name, dwell, handshake))
+    texts = form.render(design, visits, Settings(name, dwell, handshake, trigger,
+                                                 Payload() if tool is None else tool))
     stem.parent.mkdir(parents=True, exist_ok=True)
     paths = [stem.with_suffix(s) for s in form.suffixes]
     for path in paths:
         path.write_text(texts[path.suffix], encoding="ascii")
     return paths
 
-__all__ = ["FORMATS", "AxisMap", "Collision", "CycleTime", "Format", "Move", "Plan",
+__all__ = ["FORMATS", "AxisMap", "Collision", "CycleTime", "Format", "Move", "Payload", "Plan",
            "ProgramCheck", "Settings", "Waypoint", "check_program", "cycle_time",
            "export_design", "moves", "program_configurations", "program_models",
-           "realised_approach"]
+           "realised_approach", "zero_home"]

@@ -7,9 +7,9 @@ Model: every PTP move (pre-poses and intermediate positions included) takes
 with v_j each joint's maximum speed (:func:`.ordering.axis_speeds`), f the
 programmed share of it (:data:`SPEED_FRACTION`, KRL's ``BAS(#VEL_PTP, 10)``)
 and t_ramp a fixed allowance for accelerating and braking (:data:`RAMP`);
-every visit adds the dwell, every load change the time to change the load.
-The move to the first pose (from wherever the robot stands) and the
-handshake's waiting for the tracker are not counted.
+every measuring visit adds the dwell, every load change the time to change
+the load. Without a home pose the move to the first pose (from wherever the
+robot stands) is not counted; the handshake's waiting for the tracker never is.
 """
 from __future__ import annotations
 
@@ -98,5 +98,5 @@ def cycle_time(visits, robot, dwell: float, load_change: float) -> CycleTime:
     moving = [t for t in steps if t > 0]
     changes = int(np.sum(load_changes(visits)))
     return CycleTime(travel=sum(moving) + RAMP * len(moving), moves=len(moving),
-                     dwell=dwell * len(visits), load_changes=changes,
+                     dwell=dwell * sum(m.measures for m in visits), load_changes=changes,
                      load_change=load_change * changes)

@@ -5,12 +5,17 @@ A1..A6 in deg (mm for a linear axis), declared in the ``.dat``; E1..E6 are 0.
 A visit whose joints must arrive from a given side is preceded by
 ``PTP XA<n>``, its pre-pose (n: the visit's number in the program). A move
 routed round a collision (:mod:`.safety`) first visits ``XV<n>_<k>``.
-Before a visit whose load differs from the previous one the program HALTs
-with a comment telling the operator which load to hang (restart with Start).
-At each pose it waits ``dwell`` s (``WAIT SEC``, which also stops the
-advance run so the robot is really there) and, with a handshake n, sets
-``$OUT[n]``, waits for ``$IN[n]``, resets ``$OUT[n]`` and waits for
-``$IN[n]`` to drop. Exactly 6 axes are supported.
+The home and load-change poses (:mod:`.stations`) are ``XCHOME`` and
+``XCLOAD``. The program first declares the tool's load data (``$LOAD.M``
+in kg, ``$LOAD.CM`` in mm, ``$LOAD.J`` 0: KSS's ``LOAD`` structure of the
+flange's payload). Before a visit whose load differs from the previous one
+the program HALTs with a comment telling the operator which load to hang
+(restart with Start), then declares the tool plus the new load in
+``$LOAD``. At each measurement pose it waits ``dwell`` s (``WAIT SEC``,
+which also stops the advance run so the robot is really there), writes the
+trigger line if one is given, and, with a handshake n, sets ``$OUT[n]``,
+waits for ``$IN[n]``, resets ``$OUT[n]`` and waits for ``$IN[n]`` to drop.
+Exactly 6 axes are supported.
 """
 from __future__ import annotations
 
@@ -37,6 +42,8 @@ def _axis(q) -> str:
 
 def _wait(settings) -> list[str]:
     lines = [f"  WAIT SEC {settings.dwell:g} ; stand still (stops the advance run)"]
+    if settings.trigger is not None:
+        lines.append(f"  {settings.trigger}")
     n = settings.handshake
     if n is not None:
         lines += [f"  $OUT[{n}]=TRUE ; in position: tracker may measure",
@@ -46,36 +53,58 @@ def _wait(settings) -> list[str]:
     return lines
 
 
+#: KRL variable of each station's pose (:mod:`.stations`).
+STATIONS = {"home": "XCHOME", "load change": "XCLOAD"}
+
+
+def _load(payload) -> list[str]:
+    if payload is None:
+        return ["  ; payload not known (a wrench without its mass): set $LOAD on the pendant"]
+    x, y, z = payload.com_mm()
+    return [f"  $LOAD.M={payload.mass:.6g}",
+            f"  $LOAD.CM={{X {x:.6g},Y {y:.6g},Z {z:.6g},A 0.0,B 0.0,C 0.0}}",
+            "  $LOAD.J={X 0.0,Y 0.0,Z 0.0}"]
+
+
+def _target(m) -> str:
+    return f"XP{m.index}" if m.measures else STATIONS[m.kind]
+
+
 def render(design, visits, settings) -> dict:
     """Text of the ``.src`` and ``.dat`` files, keyed by suffix."""
     check_robot(design.robot)
     name = check_name(settings.name, MAX_NAME)
-    n_poses = len({m.index for m in visits})
+    n_poses = len({m.index for m in visits if m.measures})
+    n_measured = sum(m.measures for m in visits)
     header = ["&ACCESS RVP", "&REL 1"]
     src = [*header, f"DEF {name}( )",
-           f"  ; doe_calib measurement program: {n_poses} poses, {len(visits)} measurements",
+           f"  ; doe_calib measurement program: {n_poses} poses, {n_measured} measurements",
            "  ; " + ascii_text(f"model {design.model}, criterion {design.criterion}; axes in "
                               f"deg (mm for linear axes)"),
            "  BAS(#INITMOV, 0)",
            f"  BAS(#VEL_PTP, {VEL_PTP})",
-           f"  BAS(#ACC_PTP, {ACC_PTP})"]
+           f"  BAS(#ACC_PTP, {ACC_PTP})",
+           "  ; load data of the tool alone (kg, mm)", *_load(settings.tool)]
     for m, change in zip(visits, load_changes(visits)):
         src += ["", f"  ; {m.comment()}"]
         if change:
-            src += [f"  ; OPERATOR: {m.instruction()}, then press Start", "  HALT"]
+            src += [f"  ; OPERATOR: {m.instruction()}, then press Start", "  HALT",
+                    *_load(settings.payload(m.payload))]
         for k, w in enumerate(m.via, start=1):
             src += [f"  ; {w.why}", f"  PTP XV{m.number}_{k}"]
         if m.pre is not None:
             src += [f"  ; {m.approach_words(design.robot.joint_names)}", f"  PTP XA{m.number}"]
-        src += [f"  PTP XP{m.index}", *_wait(settings)]
+        src.append(f"  PTP {_target(m)}")
+        if m.measures:
+            src += _wait(settings)
     src += ["END", ""]
     dat = [*header, f"DEFDAT {name}"]
     seen = set()
     for m in visits:
-        if m.index not in seen:
-            seen.add(m.index)
-            dat += ["  ; " + ascii_text(f"pose {m.pose}"),
-                    f"  DECL E6AXIS XP{m.index}={_axis(m.q)}"]
+        if _target(m) not in seen:
+            seen.add(_target(m))
+            dat += ["  ; " + ascii_text(f"pose {m.pose}" if m.measures else f"{m.kind} pose"),
+                    f"  DECL E6AXIS {_target(m)}={_axis(m.q)}"]
     for m in visits:
         if m.pre is not None:
             dat += ["  ; " + ascii_text(f"pre-pose of pose {m.pose}, visit {m.number}"),

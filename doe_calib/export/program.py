@@ -4,21 +4,28 @@ A design is turned into an ordered list of :class:`Move` — one per
 (pose, load case), in the order of :func:`.sequence.visit_order` — with joint
 values in controller units (deg; mm for prismatic joints) re-checked against
 the robot's joint limits, and a pre-pose where a joint must reach the pose
-from a given side (:mod:`.approach`). The format modules only render these
-moves.
+from a given side (:mod:`.approach`). Joints with more than one turn of range
+take the equivalent angles that keep the moves short (:mod:`.turns`). With a
+home pose (:attr:`.sequence.Plan.home`) the list starts and ends with a move
+to it and has a move to the load-change pose before each load change
+(:mod:`.stations`). The format modules only render these moves.
 """
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.errors import DataError
+from doe_calib.errors import DataError, DoeCalibError, OptionError
 from doe_calib.export.approach import backlash_joints, default_sides, pre_pose
 from doe_calib.export.axis_map import AxisMap
+from doe_calib.export.payload import Payload
 from doe_calib.export.sequence import NO_LOAD, Plan, visit_order
+from doe_calib.export.stations import check_station
+from doe_calib.export.turns import periodic_joints, shortest_turns, turn_joints
 from doe_calib.io.measurements import approach_from_order
+from doe_calib.model.marker_model import build_model
 
 _LIMIT_TOL = 1e-12  # rad or m, as when a design CSV is read
 _MOVED = 1e-9  # deg or mm: a smaller change is no motion
@@ -42,11 +49,31 @@ class Settings:
         ("measured") to go high, resets the output and waits for the input to
         drop again. RAPID uses the named signals ``doCalibReady`` and
         ``diCalibDone`` instead of the number.
+    trigger : str or None
+        One line of the program's language written at every measurement
+        pose after the dwell (before the handshake), e.g. URScript
+        ``set_digital_out(2, True)``: what makes the tracker measure. None:
+        nothing.
+    tool : Payload
+        The tool's own mass and centre of mass, declared at the start and
+        added to each load (:mod:`.payload`); default none.
     """
 
     name: str = "doe_calib"
     dwell: float = 3.0
     handshake: int | None = None
+    trigger: str | None = None
+    tool: Payload = Payload()
+
+    def __post_init__(self):
+        if self.trigger is not None and (not self.trigger.strip() or self.trigger != ascii_text(
+                self.trigger)):
+            raise OptionError(f"--trigger {self.trigger!r}: give one line of printable ASCII "
+                              f"(a statement of the program's language)")
+
+    def payload(self, load: Payload | None) -> Payload | None:
+        """What the controller is told with ``load`` hung: the tool plus the load."""
+        return None if load is None else self.tool.plus(load)
 
 
 @dataclass(frozen=True)
@@ -105,6 +132,13 @@ class Move:
         Intermediate positions visited first, on the way from the previous
         position (:mod:`.safety`: a move that would collide, routed); empty
         when the move goes straight.
+    kind : {"visit", "home", "load change"}
+        A measurement at a design pose, or a move to the home or the
+        load-change pose (:mod:`.stations`; ``row`` −1, ``index``, ``case``
+        and ``n_cases`` 0, ``load`` the load hung during the move).
+    payload : Payload or None
+        The load hung during the move (no load: mass 0); None when only its
+        wrench is known.
     """
 
     pose: str
@@ -122,9 +156,18 @@ class Move:
     urdf_q: np.ndarray
     urdf_pre: np.ndarray | None
     via: tuple = ()
+    kind: str = "visit"
+    payload: Payload | None = None
+
+    @property
+    def measures(self) -> bool:
+        """Whether the tracker measures at this move's end (a visit of a design pose)."""
+        return self.kind == "visit"
 
     def comment(self) -> str:
-        """``pose 3, load case 2 of 2: 250 kg at 0,0,200 mm (flange frame)``."""
+        """``pose 3, load case 2 of 2: 250 kg at 0,0,200 mm (flange frame)``; ``home pose``."""
+        if not self.measures:
+            return ascii_text(f"{self.kind} pose ({self.load} on)")
         return ascii_text(f"pose {self.pose}, load case {self.case} of {self.n_cases}: "
                           f"{self.load}")
 
@@ -181,21 +224,72 @@ def _wrench_words(wrench) -> str:
     return f"wrench at the flange F = ({f}) N, M = ({m}) N.m (base frame)"
 
 
-def _loads(design) -> list:
-    """The load of each configuration in words (:func:`load_words`).
+def _load_specs(design) -> list:
+    """The load of each configuration as ``KG@X,Y,Z`` (mm), "" unloaded, None unknown.
 
-    Named from the design's load cases (``constraints["loads"]``) when the
-    pose has one unloaded visit followed by one per load case; otherwise from
-    its wrench.
+    ``constraints["row_loads"]`` when given (one per row: a compensated
+    program's, ``KG@`` for a mass whose centre of mass is not known); else
+    from the design's load cases (``constraints["loads"]``) when the pose
+    has one unloaded visit followed by one per load case.
     """
-    cfg, specs = design.configurations, list(design.constraints.get("loads", []))
+    cfg = design.configurations
+    if "row_loads" in design.constraints:
+        return list(design.constraints["row_loads"])
+    specs = list(design.constraints.get("loads", []))
     out = []
     for r, w in enumerate(cfg.wrench):
         rows = [i for i, p in enumerate(cfg.pose) if p == cfg.pose[r]]
         case = rows.index(r)
         named = len(rows) == len(specs) + 1 and not np.any(cfg.wrench[rows[0]])
-        out.append(load_words(specs[case - 1]) if named and case > 0 else _wrench_words(w))
+        out.append(specs[case - 1] if named and case > 0 else "" if not np.any(w) else None)
     return out
+
+
+def _loads(design) -> tuple:
+    """The load of each configuration in words (:func:`load_words`) and as a Payload (or None).
+
+    Named from the load specs (:func:`_load_specs`); otherwise from its wrench.
+    """
+    words, payloads = [], []
+    for spec, w in zip(_load_specs(design), design.configurations.wrench):
+        if spec and spec.endswith("@"):  # a mass whose centre of mass is not known
+            words.append(f"{spec[:-1]} kg hung on the flange (centre of mass not known)")
+            payloads.append(None)
+            continue
+        words.append(_wrench_words(w) if not spec else load_words(spec))
+        payloads.append(None if spec is None else Payload() if not spec
+                        else Payload.from_spec(spec))
+    return words, payloads
+
+
+def _turned(design, q, loads, plan: Plan, home, load_pose) -> np.ndarray:
+    """``q`` (visits in order, rad/m) with multi-turn joints at their shortest equivalents.
+
+    ``loads``: each visit's load in words; with a home pose the program
+    passes the load-change pose ``load_pose`` before each change of load
+    (:func:`_with_stations`), a fixed point of the path.
+    """
+    robot = design.robot
+    joints = turn_joints(robot) if plan.turns else ()
+    if not joints:
+        return q
+    try:
+        joints = periodic_joints(build_model(robot, design.tool, design.model), joints)
+    except DoeCalibError:  # a model that cannot be built here (an unregistered effect)
+        return q
+    path, fixed, previous = [], [], NO_LOAD
+    for v, load in zip(q, loads):
+        if home is not None and load != previous:
+            path.append(load_pose)
+            fixed.append(True)
+        path.append(v)
+        fixed.append(False)
+        previous = load
+    margin = plan.approach_step / robot.display_factors
+    lower, upper = (robot.lower, robot.upper) if plan.limits is None else plan.limits
+    out = shortest_turns(np.array(path), joints, np.asarray(lower, float),
+                         np.asarray(upper, float), margin, start=home, end=home, fixed=fixed)
+    return out[~np.array(fixed)]
 
 
 def moves(design, plan: Plan | None = None) -> list[Move]:
@@ -223,25 +317,58 @@ def moves(design, plan: Plan | None = None) -> list[Move]:
     axis_map = plan.axis_map
     if axis_map is None:
         axis_map = AxisMap.identity(robot.n_joints)
+    limits = plan.limits
+    home = None if plan.home is None else np.array(check_station(robot, plan.home, "--home",
+                                                                 limits))
     joints = backlash_joints(design.model, robot) if plan.alternate else ()
-    loads = _loads(design)
+    loads, payloads = _loads(design)
     index = {p: i for i, p in enumerate(dict.fromkeys(cfg.pose), start=1)}
+    rows, all_sides = [], []
+    for group in visit_order(design, loads, plan):
+        rows += group
+        all_sides += list(default_sides(cfg.approach[group], joints))
+    load_pose = home if plan.load_pose is None else np.array(
+        check_station(robot, plan.load_pose, "--load-change-pose", limits))
+    turned = _turned(design, cfg.q[rows], [loads[r] for r in rows], plan, home, load_pose)
     out = []
-    for rows in visit_order(design, loads, plan):
-        demanded = cfg.approach[rows]
-        for r, sides, want in zip(rows, default_sides(demanded, joints), demanded):
-            pose, q = cfg.pose[r], cfg.q[r]
-            pre, sides = pre_pose(q, sides, want != 0, plan.approach_step, robot, pose)
-            has_pre = bool(np.any(sides))
-            mine = [i for i, p in enumerate(cfg.pose) if p == pose]
-            ctrl = axis_map.to_controller(q * factors)
-            ctrl_pre = axis_map.to_controller(pre * factors) if has_pre else None
-            out.append(Move(pose, index[pose], len(out) + 1, r, ctrl, ctrl / factors,
-                            mine.index(r) + 1, len(mine), loads[r],
-                            tuple(int(a) for a in sides), ctrl_pre,
-                            None if ctrl_pre is None else ctrl_pre / factors,
-                            q, pre if has_pre else None))
-    return out
+    for r, sides, q in zip(rows, all_sides, turned):
+        pose, want = cfg.pose[r], cfg.approach[r]
+        pre, sides = pre_pose(q, sides, want != 0, plan.approach_step, robot, pose)
+        has_pre = bool(np.any(sides))
+        mine = [i for i, p in enumerate(cfg.pose) if p == pose]
+        ctrl = axis_map.to_controller(q * factors)
+        ctrl_pre = axis_map.to_controller(pre * factors) if has_pre else None
+        out.append(Move(pose, index[pose], len(out) + 1, r, ctrl, ctrl / factors,
+                        mine.index(r) + 1, len(mine), loads[r],
+                        tuple(int(a) for a in sides), ctrl_pre,
+                        None if ctrl_pre is None else ctrl_pre / factors,
+                        q, pre if has_pre else None, payload=payloads[r]))
+    if home is None:
+        return out
+    return _with_stations(out, home, load_pose, axis_map, factors)
+
+
+def _station(kind: str, q, last: Move | None, axis_map, factors) -> Move:
+    """A move to the home or load-change pose with the load of ``last`` (None: unloaded) on."""
+    ctrl = axis_map.to_controller(q * factors)
+    load = NO_LOAD if last is None else last.load
+    payload = Payload() if last is None else last.payload
+    return Move(kind, 0, 0, -1, ctrl, ctrl / factors, 0, 0, load,
+                (0,) * len(q), None, None, np.array(q, float), None, kind=kind, payload=payload)
+
+
+def _with_stations(visits: list, home, load_pose, axis_map, factors) -> list:
+    """``visits`` from and back to ``home``, through ``load_pose`` before each load change.
+
+    Moves are renumbered in program order (their ``number``).
+    """
+    out = [_station("home", home, None, axis_map, factors)]
+    for m in visits:
+        if m.load != out[-1].load and not np.allclose(out[-1].urdf_q, load_pose):
+            out.append(_station("load change", load_pose, out[-1], axis_map, factors))
+        out.append(m)
+    out.append(_station("home", home, out[-1], axis_map, factors))
+    return [replace(m, number=k) for k, m in enumerate(out, start=1)]
 
 
 def realised_approach(visits: list[Move], robot) -> np.ndarray:
@@ -257,16 +384,18 @@ def realised_approach(visits: list[Move], robot) -> np.ndarray:
     Returns
     -------
     ndarray, shape (V, N)
-        +1, −1 or 0 per visit and joint.
+        +1, −1 or 0 per measuring visit (home and load-change moves are passed
+        through, not listed) and joint.
     """
     path, target = [], []
     for m in visits:
         path += [w.urdf for w in m.via]
         if m.urdf_pre is not None:
             path.append(m.urdf_pre)
-        target.append(len(path))
+        if m.measures:
+            target.append(len(path))
         path.append(m.urdf_q)
-    if not path:
+    if not target:
         return np.zeros((0, robot.n_joints))
     return approach_from_order(np.array(path) * robot.display_factors, _MOVED)[target]
 

@@ -7,10 +7,15 @@ pre-pose (n: the visit's number in the program), also ``fine``; a move
 routed round a collision (:mod:`.safety`) first by ``MoveAbsJ jv<n>_<k>``
 to its intermediate positions. Before a visit whose
 load differs from the previous one: ``TPWrite`` the load to hang, then
-``Stop;`` (restart with Start). At each pose ``WaitTime dwell;`` and, with a
-handshake, ``SetDO doCalibReady, 1; WaitDI diCalibDone, 1; SetDO doCalibReady,
-0; WaitDI diCalibDone, 0;`` (two signals to declare in the I/O configuration).
-Exactly 6 axes are supported.
+``Stop;`` (restart with Start), then ``GripLoad`` of the load's ``loaddata``
+(``ldCase<k>``: mass kg, centre of mass mm in the tool frame, no inertia;
+``load0`` when the load is removed). The tool's own mass, when given, is in
+the ``tooldata`` ``tCalib`` (at the flange) the moves use instead of
+``tool0``. The home and load-change poses (:mod:`.stations`) are ``jhome``
+and ``jload``. At each measurement pose ``WaitTime dwell;``, the trigger line
+if one is given, and, with a handshake, ``SetDO doCalibReady, 1; WaitDI
+diCalibDone, 1; SetDO doCalibReady, 0; WaitDI diCalibDone, 0;`` (two signals
+to declare in the I/O configuration). Exactly 6 axes are supported.
 """
 from __future__ import annotations
 
@@ -30,51 +35,85 @@ def check_robot(robot) -> None:
                          f"{robot.n_joints} joints")
 
 
-def _target(q) -> str:
+def _target_text(q) -> str:
     return "[[" + ",".join(f"{v:.6f}" for v in q) + "],[" + ",".join(["9E9"] * 6) + "]]"
 
 
 def _wait(settings) -> list[str]:
     lines = [f"    WaitTime {settings.dwell:g};"]
+    if settings.trigger is not None:
+        lines.append(f"    {settings.trigger}")
     if settings.handshake is not None:
         lines += ["    SetDO doCalibReady, 1;", "    WaitDI diCalibDone, 1;",
                   "    SetDO doCalibReady, 0;", "    WaitDI diCalibDone, 0;"]
     return lines
 
 
+#: RAPID variable of each station's pose (:mod:`.stations`).
+STATIONS = {"home": "jhome", "load change": "jload"}
+
+
+def _loaddata(payload) -> str:
+    """``[mass, [cx, cy, cz], [1, 0, 0, 0], 0, 0, 0]``: kg, mm, no inertia."""
+    com = ",".join(f"{c:.6g}" for c in payload.com_mm())
+    return f"[{payload.mass:.6g},[{com}],[1,0,0,0],0,0,0]"
+
+
+def _target(m) -> str:
+    return f"jp{m.index}" if m.measures else STATIONS[m.kind]
+
+
 def render(design, visits, settings) -> dict:
     """Text of the ``.mod`` file, keyed by suffix."""
     check_robot(design.robot)
     name = check_name(settings.name, MAX_NAME)
-    n_poses = len({m.index for m in visits})
+    n_poses = len({m.index for m in visits if m.measures})
+    n_measured = sum(m.measures for m in visits)
+    tool = "tool0" if settings.tool.mass == 0 else "tCalib"
     out = [f"MODULE {name}",
-           f"  ! doe_calib measurement program: {n_poses} poses, {len(visits)} measurements",
+           f"  ! doe_calib measurement program: {n_poses} poses, {n_measured} measurements",
            "  ! " + ascii_text(f"model {design.model}, criterion {design.criterion}; robax in "
-                              f"deg (mm for linear axes)")]
+                              f"deg (mm for linear axes); loads kg, mm")]
+    if tool != "tool0":
+        out.append(f"  PERS tooldata tCalib:=[TRUE,[[0,0,0],[1,0,0,0]],"
+                   f"{_loaddata(settings.tool)}]; ! the tool at the flange, its mass")
+    cases = {}
+    for m in visits:
+        if m.payload is not None and m.payload.mass > 0 and m.load not in cases:
+            cases[m.load] = f"ldCase{len(cases) + 1}"
+            out.append(f"  PERS loaddata {cases[m.load]}:={_loaddata(m.payload)}; ! "
+                       + ascii_text(m.load))
     seen = set()
     for m in visits:
-        if m.index not in seen:
-            seen.add(m.index)
-            out.append(f"  CONST jointtarget jp{m.index}:={_target(m.q)}; ! "
-                       + ascii_text(f"pose {m.pose}"))
+        if _target(m) not in seen:
+            seen.add(_target(m))
+            words = f"pose {m.pose}" if m.measures else f"{m.kind} pose"
+            out.append(f"  CONST jointtarget {_target(m)}:={_target_text(m.q)}; ! "
+                       + ascii_text(words))
     for m in visits:
         if m.pre is not None:
-            out.append(f"  CONST jointtarget ja{m.number}:={_target(m.pre)}; ! "
+            out.append(f"  CONST jointtarget ja{m.number}:={_target_text(m.pre)}; ! "
                        + ascii_text(f"pre-pose of pose {m.pose}, visit {m.number}"))
     for m in visits:
         for k, w in enumerate(m.via, start=1):
-            out.append(f"  CONST jointtarget jv{m.number}_{k}:={_target(w.q)}; ! {w.why}")
-    out += ["", "  PROC main()"]
+            out.append(f"  CONST jointtarget jv{m.number}_{k}:={_target_text(w.q)}; ! {w.why}")
+    out += ["", "  PROC main()", "    GripLoad load0; ! no load on the tool"]
     for m, change in zip(visits, load_changes(visits)):
         out.append(f"    ! {m.comment()}")
         if change:
             out += [f'    TPWrite "{m.instruction()[:TPWRITE_MAX]}";', "    Stop;"]
+            if m.payload is None:
+                out.append("    ! payload not known (a wrench without its mass): set the load")
+            else:
+                out.append(f"    GripLoad {cases.get(m.load, 'load0')};")
         for k, w in enumerate(m.via, start=1):
             out += [f"    ! {w.why}",
-                    f"    MoveAbsJ jv{m.number}_{k}\\NoEOffs, {SPEED}, fine, tool0;"]
+                    f"    MoveAbsJ jv{m.number}_{k}\\NoEOffs, {SPEED}, fine, {tool};"]
         if m.pre is not None:
             out += [f"    ! {m.approach_words(design.robot.joint_names)}",
-                    f"    MoveAbsJ ja{m.number}\\NoEOffs, {SPEED}, fine, tool0;"]
-        out += [f"    MoveAbsJ jp{m.index}\\NoEOffs, {SPEED}, fine, tool0;", *_wait(settings)]
+                    f"    MoveAbsJ ja{m.number}\\NoEOffs, {SPEED}, fine, {tool};"]
+        out.append(f"    MoveAbsJ {_target(m)}\\NoEOffs, {SPEED}, fine, {tool};")
+        if m.measures:
+            out += _wait(settings)
     out += ["  ENDPROC", "ENDMODULE", ""]
     return {".mod": "\n".join(out)}

@@ -47,6 +47,24 @@ class Plan:
         from alternate sides where the design plans no direction.
     axis_map : AxisMap or None
         Controller values from the URDF's (None: the same).
+    home : tuple of float or None
+        URDF joint values, rad (m), of the home pose the program starts from
+        and ends at (:func:`.stations.zero_home`: the URDF zero inside the
+        limits; ``doe-calib export`` uses it by default); None: the program
+        starts at its first visit and ends at its last.
+    load_pose : tuple of float or None
+        URDF joint values, rad (m), of the pose where the operator changes the
+        load; None: the home pose. Only with ``home``.
+    limits : tuple of two tuples, or None
+        ``(lower, upper)`` joint limits, rad (m), that the home and
+        load-change poses and the equivalent angles stay inside: a cell
+        file's (:class:`~doe_calib.design.DesignConstraints`); None: the
+        URDF's.
+    turns : bool
+        Whether joints with more than one turn of range take, at each visit,
+        the equivalent angle (q ± 2π) that keeps the moves short
+        (:mod:`.turns`; ``doe-calib export`` does by default); False: the
+        design's angles.
     """
 
     group_by: str = GROUPINGS[0]
@@ -54,6 +72,10 @@ class Plan:
     approach_step: float = 2.0
     alternate: bool = True
     axis_map: AxisMap | None = None
+    home: tuple | None = None
+    load_pose: tuple | None = None
+    limits: tuple | None = None
+    turns: bool = False
 
     def __post_init__(self):
         if self.group_by not in GROUPINGS:
@@ -63,6 +85,8 @@ class Plan:
         if not (np.isfinite(self.approach_step) and self.approach_step > 0):
             raise OptionError(f"--approach-step {self.approach_step}: must be positive "
                               f"(deg, mm for a prismatic joint)")
+        if self.load_pose is not None and self.home is None:
+            raise OptionError("--load-change-pose needs a home pose (--home)")
 
 
 def _ordered(q, speed, rows: list, after, by_travel: bool) -> list:

@@ -1,13 +1,19 @@
-"""Universal Robots URScript: ``def <name>():`` with one ``movej`` per visit.
+"""Universal Robots URScript: ``def <name>():`` with one ``movej`` per move, then ``<name>()``.
 
-Joint positions are in rad (URScript's unit), written to 1e-10 rad. Before a
-visit whose load differs from the previous one a blocking ``popup`` tells the
-operator which load to hang. A visit whose joints must arrive from a given
-side is preceded by a ``movej`` to its pre-pose, a move routed round a
-collision (:mod:`.safety`) by ``movej`` to its intermediate positions. At
-each pose ``sleep(dwell)`` and, with a handshake n, standard digital output
-n is set, the program waits for standard digital input n, resets the output
-and waits for the input to drop.
+The file defines the program function and calls it on its last line, so
+pasted into a Script node (or sent to the controller as a script file) it
+runs; there is no other top-level code. Joint positions are in rad
+(URScript's unit), written to 1e-10 rad. The function first declares the
+tool's payload (``set_payload(mass, [cx, cy, cz])``, kg and m in the flange
+frame). Before a visit whose load differs from the previous one a blocking
+``popup`` tells the operator which load to hang (at the load-change pose
+when the program has one, :mod:`.stations`) and ``set_payload`` declares the
+tool plus the new load. A visit whose joints must arrive from a given side is
+preceded by a ``movej`` to its pre-pose, a move routed round a collision
+(:mod:`.safety`) by ``movej`` to its intermediate positions. At each
+measurement pose ``sleep(dwell)``, the trigger line if one is given, and,
+with a handshake n, standard digital output n is set, the program waits for
+standard digital input n, resets the output and waits for the input to drop.
 Only 6 revolute joints are supported.
 """
 from __future__ import annotations
@@ -31,6 +37,8 @@ def check_robot(robot) -> None:
 
 def _wait(settings) -> list[str]:
     lines = [f"  sleep({settings.dwell:g})"]
+    if settings.trigger is not None:
+        lines.append(f"  {settings.trigger}")
     n = settings.handshake
     if n is not None:
         lines += [f"  set_standard_digital_out({n}, True)",
@@ -45,23 +53,35 @@ def _movej(q) -> str:
     return f"  movej([{values}], a={ACCELERATION:g}, v={VELOCITY:g})"
 
 
+def _set_payload(payload) -> str:
+    if payload is None:
+        return "  # payload not known (a wrench without its mass): set it on the teach pendant"
+    com = ", ".join(f"{c:.6g}" for c in payload.com)
+    return f"  set_payload({payload.mass:.6g}, [{com}])"
+
+
 def render(design, visits, settings) -> dict:
     """Text of the ``.script`` file, keyed by suffix."""
     check_robot(design.robot)
     name = check_name(settings.name, MAX_NAME)
-    n_poses = len({m.index for m in visits})
+    n_poses = len({m.index for m in visits if m.measures})
+    n_measured = sum(m.measures for m in visits)
     out = [f"def {name}():",
-           f"  # doe_calib measurement program: {n_poses} poses, {len(visits)} measurements",
+           f"  # doe_calib measurement program: {n_poses} poses, {n_measured} measurements",
            "  # " + ascii_text(f"model {design.model}, criterion {design.criterion}; "
-                              f"joints in rad")]
+                              f"joints in rad; payload kg, m (flange frame)"),
+           "  # the tool alone", _set_payload(settings.tool)]
     for m, change in zip(visits, load_changes(visits)):
         out += ["", f"  # {m.comment()}"]
         if change:
-            out.append(f'  popup("{m.instruction()}", title="doe_calib", blocking=True)')
+            out += [f'  popup("{m.instruction()}", title="doe_calib", blocking=True)',
+                    _set_payload(settings.payload(m.payload))]
         for w in m.via:
             out += [f"  # {w.why}", _movej(w.q_si)]
         if m.pre is not None:
             out += [f"  # {m.approach_words(design.robot.joint_names)}", _movej(m.pre_si)]
-        out += [_movej(m.q_si), *_wait(settings)]
-    out += ["end", ""]
+        out.append(_movej(m.q_si))
+        if m.measures:
+            out += _wait(settings)
+    out += ["end", "", f"{name}()", ""]
     return {".script": "\n".join(out)}

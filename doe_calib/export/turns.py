@@ -1,0 +1,165 @@
+"""Equivalent angles of joints with more than one turn: q + 2πk chosen for short moves.
+
+A revolute joint whose limits span more than one turn (a UR arm's ±360°)
+stands in the same place at q and at q ± 2π. Once the visiting order is
+fixed, each such joint's angle at each visit is chosen among its
+equivalents inside the limits, for each joint separately and exactly, by
+dynamic programming over the visits (a shortest path through the layers of
+equivalents), for a lexicographic cost:
+
+1. least total **excess** Σ_i (|Δq_i| − d_i), with d_i the shortest move of
+   the joint that any equivalent of visit i allows from where the joint
+   is: every move is as short as its equivalents allow, unless the limits
+   force a longer one (a joint turning one way runs into its limit), and
+   then the fewest radians of detour over the program;
+2. then least total **travel** Σ_i |Δq_i|, from the start position to the
+   end one (the home pose, when the program has one).
+
+The cost is the joint's own, not the time of the slowest axis: it separates
+over the joints, so the optimum is exact, and a move whose every joint is as
+short as it can be is as short in time as it can be.
+
+An equivalent other than the design's own angle must stay ``margin`` inside
+the limits (the pre-pose step), and is used only on joints on which the
+model's marker positions are the same a full turn away
+(:func:`periodic_joints`): geometry, compliances, cyclic errors with whole
+harmonics are; a gear-ratio error or a compliance by angle in bins is not,
+and those joints keep the design's angles.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from doe_calib.io.measurements import Configurations
+from doe_calib.model.evaluation import evaluate
+
+TURN = 2.0 * np.pi
+#: Largest difference of a marker's position a full turn away that counts as the same, m.
+SAME_POSITION = 1e-9
+
+
+def turn_joints(robot) -> tuple:
+    """Revolute joints (0-based) whose limits span more than one turn."""
+    return tuple(k for k, j in enumerate(robot.joints)
+                 if j.kind == "revolute" and j.upper - j.lower > TURN + 1e-9)
+
+
+def periodic_joints(model, joints, rng=None) -> tuple:
+    """Those of ``joints`` on which ``model``'s marker positions have period 2π.
+
+    Checked numerically: marker positions at 8 random configurations (inside
+    the limits, with a random wrench) and random parameter values (nominal ±
+    3 scales) compared with the same one turn up and one turn down.
+
+    Parameters
+    ----------
+    model : Model
+    joints : sequence of int
+    rng : numpy.random.Generator, optional
+
+    Returns
+    -------
+    tuple of int
+    """
+    rng = np.random.default_rng(0) if rng is None else rng
+    robot = model.robot
+    lower, upper = np.clip(robot.lower, -np.pi, None), np.clip(robot.upper, None, np.pi)
+    q = rng.uniform(lower, upper, size=(8, robot.n_joints))
+    wrench = rng.normal(0.0, 50.0, size=(8, 6))
+    nominal = model.nominal()
+    values = nominal.values + 3.0 * rng.standard_normal(len(nominal.values)) * np.array(
+        [p.scale for p in nominal.parameters])
+    here = evaluate(model.markers, Configurations.from_arrays(q, wrench), values)[0]
+    out = []
+    for k in joints:
+        same = True
+        for turn in (TURN, -TURN):
+            moved = q.copy()
+            moved[:, k] += turn
+            there = evaluate(model.markers, Configurations.from_arrays(moved, wrench), values)[0]
+            same = same and bool(np.max(np.abs(there - here)) <= SAME_POSITION)
+        if same:
+            out.append(k)
+    return tuple(out)
+
+
+def _equivalents(value: float, lower: float, upper: float, margin: float) -> np.ndarray:
+    """``value`` and each ``value + 2πk`` at least ``margin`` inside [lower, upper]."""
+    k = np.arange(-3, 4)
+    shifted = value + TURN * k
+    keep = (k == 0) | ((shifted >= lower + margin) & (shifted <= upper - margin))
+    return shifted[keep]
+
+
+def shortest_turns(q, joints, lower, upper, margin, start=None, end=None,
+                   fixed=None) -> np.ndarray:
+    """``q`` with each joint of ``joints`` turned by whole turns for short moves (module notes).
+
+    Parameters
+    ----------
+    q : array_like, shape (V, N)
+        Joint values of the visits in program order, rad (m).
+    joints : sequence of int
+        Joints whose angles may be turned by 2πk.
+    lower, upper : array_like, shape (N,)
+        Joint limits, rad.
+    margin : array_like, shape (N,)
+        Distance a turned angle keeps from the limits, rad.
+    start, end : array_like, shape (N,), optional
+        Fixed positions before the first and after the last visit (the home
+        pose); None: the path starts (ends) at its first (last) visit.
+    fixed : array_like of bool, shape (V,), optional
+        Rows of ``q`` passed through as they are (a load-change pose).
+
+    Returns
+    -------
+    ndarray, shape (V, N)
+        The chosen angles; joints not in ``joints`` unchanged.
+
+    Examples
+    --------
+    >>> out = shortest_turns([[3.0], [-3.0]], [0], [-7.0], [7.0], [0.0])
+    >>> round(float(out[1, 0] - out[0, 0]), 4)  # −3 rad is 3.2832 rad, 0.2832 rad away
+    0.2832
+    """
+    q = np.array(q, dtype=float)
+    fixed = np.zeros(len(q), dtype=bool) if fixed is None else np.asarray(fixed, bool)
+    for j in joints:
+        layers = [np.array([v]) if keep else _equivalents(v, lower[j], upper[j], margin[j])
+                  for v, keep in zip(q[:, j], fixed)]
+        if not layers:
+            continue
+        path = _best_path(layers, None if start is None else start[j],
+                          None if end is None else end[j])
+        q[:, j] = [layer[k] for layer, k in zip(layers, path)]
+    return q
+
+
+def _step(prev, layer):
+    """Travel and excess of each move prev[p] → layer[c], shape (C, P)."""
+    travel = np.abs(layer[:, None] - prev[None, :])
+    return travel, np.round(travel - travel.min(axis=0, keepdims=True), 9)
+
+
+def _best_path(layers, start, end) -> list:
+    """Index into each layer of the path of least (excess, travel), lexicographically."""
+    excess = np.zeros(len(layers[0]))
+    travel = np.zeros(len(layers[0]))
+    if start is not None:
+        travel, excess = _step(np.array([start]), layers[0])
+        travel, excess = travel[:, 0], excess[:, 0]
+    back = []
+    for prev, layer in zip(layers[:-1], layers[1:]):
+        t, e = _step(prev, layer)
+        t, e = t + travel[None, :], e + excess[None, :]
+        best = np.array([np.lexsort((t[c], e[c]))[0] for c in range(len(layer))])
+        back.append(best)
+        rows = np.arange(len(layer))
+        travel, excess = t[rows, best], e[rows, best]
+    if end is not None:
+        t = np.abs(end - layers[-1])  # the last move, home: its excess over the nearest
+        travel, excess = travel + t, excess + np.round(t - t.min(), 9)
+    pick = [int(np.lexsort((travel, np.round(excess, 9)))[0])]
+    for best in reversed(back):
+        pick.append(int(best[pick[-1]]))
+    return pick[::-1]
