@@ -126,3 +126,32 @@ def test_probe_identification_recovers_the_truth_with_the_predicted_spread(tmp_p
     # the predicted std against the Monte-Carlo spread: RMS z over 6 × 7 estimates
     assert 0.65 < np.sqrt(np.mean(z ** 2)) < 1.45, z
     assert 0.6 < res.sigma_ratio < 1.4  # χ² counts 6 observations per pose
+
+
+def test_identify_reads_a_probe_file_through_the_cli(tmp_path, capsys):
+    from doe_calib.cli import main
+
+    chain = sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0")
+    rng = np.random.default_rng(3)
+    truth = sim.Truth.random(chain, np.zeros((1, 3)), rng)
+    q = sim.random_configurations(chain, 20, rng, margin=0.15)
+    path = tmp_path / "probe.csv"
+    sim.write_probe_campaign(path, chain, truth, q, np.zeros((len(q), 6)), MOUNT_R, MOUNT_T,
+                             "ZYX", SIGMA_MM, ANGLE_DEG, rng)
+    out = tmp_path / "r.json"
+    base = ["identify", "--robot", examples.ROBOT_URDF, "--data", str(path), "--model",
+            "joint_offset+geometry", "--out", str(out), "--angles", "zyx-euler"]
+    assert main(base) == 2
+    assert "needs --sigma MM (position σ) and --angle-sigma-deg DEG" in capsys.readouterr().err
+    assert not out.exists()
+    assert main(base + ["--sigma", str(SIGMA_MM), "--angle-sigma-deg", str(ANGLE_DEG),
+                        "--probe-points-mm", "100"]) == 2
+    assert "need at least 280.7 mm" in capsys.readouterr().err  # √1.5·0.02 mm/0.005°
+    assert main(base + ["--sigma", str(SIGMA_MM), "--angle-sigma-deg", str(ANGLE_DEG)]) == 0
+    err = capsys.readouterr().err
+    assert "20 poses (zyx-euler, deg) as 7 virtual points each" in err
+    from doe_calib import load
+
+    res = load(out)
+    assert res["base_x"].value == pytest.approx(truth.base_position[0], abs=4 * res["base_x"].std)
+    assert 0.6 < res.sigma_ratio < 1.5
