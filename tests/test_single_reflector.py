@@ -125,3 +125,44 @@ def test_two_markers_through_the_cli_design_simulate_identify_predict(tmp_path, 
     assert scores["readings"] == 20
     # new poses, the true robot: the error of both markers is the tracker noise, √3·σ in 3-D
     assert scores["error"]["rms_3d_mm"] < 1.3 * np.sqrt(3) * 0.02, scores
+
+
+def test_what_one_reflector_and_two_markers_cannot_see_is_counted_from_their_layout():
+    from doe_calib.estimation.identifiability import blind_flange_motions, blind_motion_words
+
+    assert blind_flange_motions([[0.1, 0.02, 0.3]]) == 3  # any rotation about the point
+    assert blind_flange_motions([[0.1, 0.0, 0.1], [-0.1, 0.0, 0.1]]) == 1  # about their line
+    assert blind_flange_motions([[0.1, 0, 0], [0, 0.1, 0], [0, 0, 0.1]]) == 0
+    two = Tool.from_markers({"A": [100, 0, 100], "B": [-100, 0, 100]})
+    assert "lie on one line and cannot see the rotation of the flange about that line" in \
+        blind_motion_words(two)
+    assert blind_motion_words(Tool.from_yaml(examples.TOOL_YAML)) is None
+
+
+def test_pose_estimator_refuses_one_reflector_and_compensation_warns_about_orientation(
+        tmp_path, capsys):
+    tool = tmp_path / "smr.yaml"
+    tool.write_text("flange: tool0\nmarkers:\n  A: [120, 50, 100]\n")
+    common = ["--robot", examples.ROBOT_URDF, "--tool", str(tool)]
+    assert main(["simulate", *common, "--poses", "30", "--load", "250@0,0,200", "--sigma",
+                 "0.02", "--seed", "6", "--out", str(tmp_path / "m.csv")]) == 0
+    out = tmp_path / "pose.json"
+    assert main(["identify", *common, "--data", str(tmp_path / "m.csv"), "--estimator", "pose",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "the pose estimator reconstructs each flange pose from at least 3 markers" in err
+    assert "this tool has 1 marker: use the point estimator" in err and not out.exists()
+    assert main(["identify", *common, "--data", str(tmp_path / "m.csv"), "--out",
+                 str(tmp_path / "r.json")]) == 0
+    targets = tmp_path / "t.csv"
+    targets.write_text("pose,q1,q2,q3,q4,q5,q6\n1,10,-80,80,20,40,30\n2,-20,-70,100,-30,50,0\n")
+    base = ["compensate", "--result", str(tmp_path / "r.json"), "--targets", str(targets)]
+    capsys.readouterr()
+    assert main([*base, "--tcp", "A", "--out", str(tmp_path / "c1.csv")]) == 0
+    assert "compensating the orientation from a calibration in which one reflector (A) " \
+           "cannot see" in capsys.readouterr().err
+    assert main([*base, "--tcp", "A", "--position-only", "--out", str(tmp_path / "c2.csv")]) == 0
+    assert "cannot see" not in capsys.readouterr().err
+    assert main([*base, "--tcp", "0,0,300", "--position-only",
+                 "--out", str(tmp_path / "c3.csv")]) == 0
+    assert "compensating a point that is not a marker" in capsys.readouterr().err
