@@ -320,3 +320,52 @@ def ur10_urdf():
         return None
     found = [f for f in files if str(f).endswith("robots/ur_description/urdf/ur10_robot.urdf")]
     return found[0].locate() if found else None
+
+
+def probe_poses(chain, truth, q_si, wrench, mount_rotation, mount_position):
+    """True pose of a 6-DoF probe on the flange, tracker frame: R (M, 3, 3), t (M, 3) m.
+
+    The probe frame sits at ``mount_position`` (m) turned by ``mount_rotation`` (3, 3) in
+    the flange frame; the rest as :func:`marker_positions` (offsets, twists, effects, base).
+    """
+    q = np.atleast_2d(np.asarray(q_si, float))
+    tau, g = joint_torques(chain, q, wrench), gravity_torques(chain, q)
+    x = q + truth.offsets
+    for e in truth.effects:
+        x[:, e.joint] += e.delta(q, tau, g)
+    model = truth.robot_model(chain)
+    data = model.createData()
+    base = pin.SE3(pin.exp3(np.asarray(truth.base_rotvec, float)), truth.base_position)
+    mount = pin.SE3(np.asarray(mount_rotation, float), np.asarray(mount_position, float))
+    rot, trans = [], []
+    for xi in x:
+        pin.framesForwardKinematics(model, data, chain.full(xi))
+        pose = base * data.oMf[chain.flange] * mount
+        rot.append(pose.rotation.copy())
+        trans.append(pose.translation.copy())
+    return np.array(rot), np.array(trans)
+
+
+def write_probe_campaign(path, chain, truth, q_si, wrench, mount_rotation, mount_position,
+                         sequence: str, sigma_mm: float, angle_sigma_deg: float, rng) -> None:
+    """Write a 6-DoF probe file (formats.md §3b): one row per configuration, x, y, z (mm)
+    with Gaussian noise σ, angles a, b, c (deg) of scipy's Euler ``sequence`` ("xyz": fixed
+    axes = rpy; "XYZ"/"ZYX": intrinsic; "rotvec") of the pose turned by a Gaussian rotation
+    vector of σ ``angle_sigma_deg`` per axis (probe frame)."""
+    from scipy.spatial.transform import Rotation
+
+    q = np.atleast_2d(np.asarray(q_si, float))
+    rot, trans = probe_poses(chain, truth, q, wrench, mount_rotation, mount_position)
+    turn = np.radians(angle_sigma_deg) * rng.normal(size=(len(q), 3))
+    noisy = Rotation.from_matrix(rot) * Rotation.from_rotvec(turn)
+    angles = np.degrees(noisy.as_rotvec() if sequence == "rotvec" else noisy.as_euler(sequence))
+    xyz = trans * 1000.0 + sigma_mm * rng.normal(size=trans.shape)
+    qf = q * chain.file_units()
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        out = csv.writer(fh)
+        out.writerow(["pose", *(f"q{k + 1}" for k in range(q.shape[1])), *WRENCH,
+                      "x", "y", "z", "a", "b", "c"])
+        for i in range(len(q)):
+            out.writerow([str(i + 1), *map(repr, qf[i].tolist()),
+                          *map(repr, np.atleast_2d(wrench)[i].tolist()),
+                          *map(repr, xyz[i].tolist()), *map(repr, angles[i].tolist())])

@@ -138,8 +138,10 @@ def test_tool_file_errors(tmp_path):
     bad = _write(tmp_path, "markers:", "  A: [1, 2, x]", name="t2.yaml")
     with pytest.raises(DataError, match=r"t2.yaml, line 2, column 13"):
         Tool.from_yaml(bad)
-    bad = _write(tmp_path, "markers:", "  A: [1, 2, 3]", "  B: [1, 2, 4]", name="t3.yaml")
-    with pytest.raises(DataError, match="at least 3 markers"):
+    two = _write(tmp_path, "markers:", "  A: [1, 2, 3]", "  B: [1, 2, 4]", name="t3.yaml")
+    assert Tool.from_yaml(two).names == ("A", "B")  # one or two reflectors are a tool
+    bad = _write(tmp_path, "markers: {}", name="t4.yaml")
+    with pytest.raises(DataError, match="at least one marker"):
         Tool.from_yaml(bad)
 
 

@@ -22,12 +22,19 @@ def effect_file_argument(c):
                         "repeat for several")
 
 
-def robot_arguments(c, model: bool = True):
-    """Add ``--robot``, ``--flange``, ``--tool`` (and ``--model``, ``--effect-file``)."""
+def robot_arguments(c, model: bool = True, tool_required: bool = True):
+    """Add ``--robot``, ``--flange``, ``--tool`` (and ``--model``, ``--effect-file``).
+
+    ``tool_required`` False: the command can also read 6-DoF probe files
+    (``--angles``), whose tool comes from the data; :func:`load_robot_tool`
+    then asks for ``--tool`` when it is needed.
+    """
     c.add_argument("--robot", required=True, help="URDF file of the nominal robot")
     c.add_argument("--flange", help="flange link (default: the tool file's, else the "
                                     "chain's last link)")
-    c.add_argument("--tool", required=True, help="tool YAML with marker positions (mm)")
+    c.add_argument("--tool", required=tool_required,
+                   help="tool YAML with marker positions (mm): 1 reflector, 2 or more markers"
+                        + ("" if tool_required else "; not with --angles (6-DoF probe files)"))
     if model:
         c.add_argument("--model", default=DEFAULT_MODEL, type=model_option,
                        help=f"effects joined by '+' (default {DEFAULT_MODEL}); 'none' for "
@@ -53,6 +60,9 @@ def effect_registry(args):
 
 def load_robot_tool(args):
     """The Robot and Tool named by ``--robot``, ``--tool`` and ``--flange``."""
+    if args.tool is None:
+        raise OptionError("--tool is needed: the tool YAML with the marker positions (mm); "
+                          "for 6-DoF probe files give --angles instead")
     tool = Tool.from_yaml(args.tool)
     robot = Robot.from_urdf(args.robot, flange=args.flange or tool.flange)
     return robot, tool

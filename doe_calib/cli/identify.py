@@ -13,6 +13,7 @@ from doe_calib.cli.common import (
     stage_progress,
 )
 from doe_calib.cli.options import positive
+from doe_calib.cli.probe import probe_arguments, probe_model_and_measurements
 from doe_calib.estimation.identify import ESTIMATORS, identify
 from doe_calib.io.json_file import strict_json
 
@@ -22,8 +23,9 @@ EXAMPLE = ("doe-calib identify --robot kr270.urdf --tool tool.yaml --data meas.c
 
 
 def add_arguments(c):
-    robot_arguments(c)
+    robot_arguments(c, tool_required=False)
     data_argument(c)
+    probe_arguments(c)
     c.add_argument("--estimator", choices=ESTIMATORS, default="point")
     c.add_argument("--sigma", type=positive("--sigma", "mm"),
                    help="tracker σ per coordinate, mm, for rows without a sigma column "
@@ -44,8 +46,12 @@ OUTPUTS = {"out": "file", "report": "file"}
 
 
 def run(args):
-    model, meas = model_and_measurements(args, estimate_sigma=False)  # identify says σ̂ itself
-    params = fix_and_free(model.nominal(), args.fix, args.free)
+    if args.angles:
+        model, meas, params = probe_model_and_measurements(args)
+    else:
+        model, meas = model_and_measurements(args, estimate_sigma=False)  # σ̂ said by identify
+        params = model.nominal()
+    params = fix_and_free(params, args.fix, args.free)
     options = {"normalisation": args.normalisation} if args.estimator == "pose" else {}
     progress = stage_progress()
     with warnings.catch_warnings(record=True) as caught:

@@ -11,7 +11,8 @@ import numpy as np
 
 from doe_calib.compensation.problem import CompensationProblem, build_problem
 from doe_calib.compensation.result import CompensationResult
-from doe_calib.errors import ConvergenceWarning, OptionError
+from doe_calib.errors import ConvergenceWarning, IdentifiabilityWarning, OptionError
+from doe_calib.estimation.identifiability import blind_motion_words
 from doe_calib.model.evaluation import evaluate
 
 log = logging.getLogger(__name__)
@@ -90,6 +91,17 @@ def _reason(status: str, pos: float, rot: float, at_limit: list, condition: floa
     return "; ".join(words)
 
 
+def _warn_unseen_orientation(tool, tcp_marker, position_only: bool) -> None:
+    """Warn when the compensation relies on a flange orientation the markers did not see."""
+    blind = blind_motion_words(tool)
+    if blind and (tcp_marker is None or not position_only):
+        what = "the orientation" if tcp_marker is not None else "a point that is not a marker"
+        warnings.warn(f"compensating {what} from a calibration in which {blind.split(':')[0]}: "
+                      f"that part follows the nominal flange rotation (use --position-only "
+                      f"and --tcp MARKER for what was measured)", IdentifiabilityWarning,
+                      stacklevel=3)
+
+
 def compensate(model, result, targets, tcp, problem: CompensationProblem | None = None,
                position_only: bool = False) -> CompensationResult:
     """Joint values that make the identified model reach each target.
@@ -122,6 +134,7 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
     problem = build_problem(model, position_only) if problem is None else problem
     cfg = targets.configurations
     point, name = tcp_point(result.parameters, tcp)
+    _warn_unseen_orientation(model.tool, name, problem.position_only)
     x_nom, r_nom = nominal_targets(model, result.parameters, cfg, point)
     x_t = x_nom if targets.positions is None else np.asarray(targets.positions, float)
     values = result.parameters.values

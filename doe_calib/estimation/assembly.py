@@ -48,7 +48,7 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
         red = reduce_jacobian(model, measurements, params.values, params.free)
         covariance = covariance_from_r_factor(red.r_factor) if covariance is None else covariance
         norm2 = red.norm2 if norm2 is None else norm2
-    n_obs = 3 * len(measurements)
+    n_obs = measurements.n_coordinates
     dof = n_obs - n_free
     ratio = float(np.sqrt(norm2 / dof)) if dof > 0 else float("nan")
     sigma_mm = float(np.median(measurements.sigma) * 1000.0)

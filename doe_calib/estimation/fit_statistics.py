@@ -116,7 +116,8 @@ def ratio_interval(chi2: float, dof: int, level: float = RATIO_LEVEL) -> tuple:
 def fit_statistics(result) -> FitStatistics:
     """The :class:`FitStatistics` of an identification result.
 
-    χ² is ``(σ̂/σ)²·dof`` with dof = 3K − free, as ``σ̂/σ`` was computed from
+    χ² is ``(σ̂/σ)²·dof`` with dof = observations − free (3K, or 6 per pose of a
+    6-DoF probe), as ``σ̂/σ`` was computed from
     ‖r_w‖² (:func:`~doe_calib.estimation.assembly.finish`).
     """
     from scipy.stats import chi2 as chi2_dist

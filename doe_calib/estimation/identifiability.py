@@ -124,3 +124,46 @@ def _conditioning(b, kept, norms, params):
     _, s, vt = np.linalg.svd(cols, full_matrices=False)
     weak = np.argsort(-np.abs(vt[-1]))[:3]
     return float(s[0] / s[-1]), tuple(params[kept[k]].name for k in weak)
+
+
+def blind_flange_motions(marker_positions) -> int:
+    """How many independent small flange motions move none of the markers.
+
+    A flange twist ``(v, ω)`` moves marker ``u_j`` by ``v + ω × u_j``; the
+    count is 6 minus the rank of the stacked ``[I, −[u_j]×]``: 3 for one
+    marker (rotations about any axis through it), 1 for markers on one line
+    (rotation about that line), 0 for 3 or more not on one line.
+
+    Parameters
+    ----------
+    marker_positions : array_like, shape (n, 3)
+        Marker positions in the flange frame, m.
+
+    Examples
+    --------
+    >>> blind_flange_motions([[0.1, 0.0, 0.2]]), blind_flange_motions([[0, 0, 0], [0.1, 0, 0]])
+    (3, 1)
+    """
+    u = np.asarray(marker_positions, float).reshape(-1, 3)
+    size = max(float(np.abs(u).max(initial=0.0)), 1e-3)
+    rows = [np.hstack([np.eye(3), -np.array([[0, -p[2], p[1]], [p[2], 0, -p[0]],
+                                            [-p[1], p[0], 0]]) / size]) for p in u]
+    return 6 - int(np.linalg.matrix_rank(np.vstack(rows), tol=1e-9))
+
+
+def blind_motion_words(tool) -> str | None:
+    """What the tool's markers cannot see, in words; None when they fix the flange pose."""
+    blind = blind_flange_motions(tool.position_array)
+    if blind == 0:
+        return None
+    names = ", ".join(tool.names)
+    if blind == 3:
+        what = (f"one reflector ({names}) cannot see the rotation of the flange about any axis "
+                f"through the reflector")
+    else:
+        what = (f"the markers {names} lie on one line and cannot see the rotation of the "
+                f"flange about that line")
+    return (f"{what}: the flange orientation is not measured, so the offset of the last joint "
+            f"and the flange's rotation about it are fixed with the marker position; the result "
+            f"predicts the measured marker point(s), not another point of the tool (a tool "
+            f"centre point elsewhere needs 3 markers not on one line or a 6-DoF probe)")

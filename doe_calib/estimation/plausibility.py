@@ -207,7 +207,13 @@ def marker_condition(positions) -> float:
 
 
 def marker_layout_finding(tool) -> str | None:
-    """A finding when the markers are nearly collinear (orientation about their line is weak)."""
+    """A finding when 3 or more markers are nearly collinear (orientation about their line is weak).
+
+    One or two markers are no finding here: the rank analysis says what they
+    cannot see (:func:`~doe_calib.estimation.identifiability.blind_motion_words`).
+    """
+    if tool.n_markers < 3:
+        return None
     cond = marker_condition(tool.position_array)
     if cond > MARKER_CONDITION_WARN:
         return (f"the markers of {tool.source or 'the tool'} are nearly collinear (condition "

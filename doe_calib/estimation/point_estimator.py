@@ -48,7 +48,7 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
     params, notes = prepare(model, measurements, params, register)
     free = params.free
     scale = params.scales[free]
-    n_obs = 3 * len(measurements)
+    n_obs = measurements.n_coordinates
 
     def values(x):
         return params.with_free_values(x).values

@@ -35,11 +35,29 @@ def _pose_error(model):
     return build_pose_error(model)
 
 
+def check_tool_fixes_the_pose(markers, source: str = "") -> None:
+    """Raise a DataError unless the markers (n, 3), m, can fix a flange pose.
+
+    The pose estimator reconstructs each configuration's full flange pose,
+    which takes at least 3 markers not on one line.
+    """
+    from doe_calib.estimation.plausibility import marker_condition
+
+    markers = np.asarray(markers, float).reshape(-1, 3)
+    if len(markers) < 3 or not np.isfinite(marker_condition(markers)):
+        raise DataError(f"the pose estimator reconstructs each flange pose from at least 3 "
+                        f"markers not on one line; this tool has {len(markers)} "
+                        f"{'marker' if len(markers) == 1 else 'markers on one line'}: use the "
+                        f"point estimator (the default, --estimator point), which fits the "
+                        f"readings themselves", source or None)
+
+
 def reconstruct_poses(measurements, markers):
     """Flange pose (R (M,3,3), t (M,3)) of every configuration from its readings.
 
     ``markers`` (n, 3) are the marker positions in the flange frame, m.
     """
+    check_tool_fixes_the_pose(markers, measurements.source)
     m = len(measurements.configurations)
     rot, trans = np.zeros((m, 3, 3)), np.zeros((m, 3))
     for c in range(m):
@@ -63,6 +81,7 @@ def identify_pose(model, measurements, params=None, normalisation: float | None 
         λ in m/rad weighting orientation residuals against position ones;
         default :func:`default_normalisation` of the tool.
     """
+    check_tool_fixes_the_pose(model.tool.position_array, model.tool.source)
     params = model.nominal() if params is None else params
     params = params.fixed(["markers"], "the pose estimator takes the marker positions as known")
     params, notes = prepare(model, measurements, params, register)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import warnings
 
 from doe_calib.errors import ConditioningWarning, DataError, IdentifiabilityWarning
-from doe_calib.estimation.identifiability import analyse
+from doe_calib.estimation.identifiability import analyse, blind_motion_words
 from doe_calib.estimation.registration import register
 from doe_calib.estimation.weighted_residuals import reduce_jacobian
 from doe_calib.model.evaluation import marker_positions
@@ -54,12 +54,19 @@ def fix_unidentifiable(model, measurements, params, tol: float = 1e-7):
     red = reduce_jacobian(model, measurements, params.values)
     ident = analyse(red.r_factor, params, tol=tol)  # RᵀR = JᵀJ: same columns' geometry
     notes = []
+    blind, unseen = blind_motion_words(model.tool), False
     if ident.dependent:
         names = [n for n, _ in ident.dependent]
+        marker_names = [params.names[i] for i in params.index("markers")]
         for name, why in ident.dependent:
+            if blind and any(f"({m})" in why for m in marker_names):
+                why += f" ({blind.split(':')[0]})"
+                unseen = True
             params = params.fixed([name], why + "; fixed at its current value")
         warnings.warn(_fixed_sentence(params, names), IdentifiabilityWarning, stacklevel=3)
         notes.append(f"{len(names)} parameters fixed as not identifiable (see the fixed list)")
+    if unseen:
+        notes.append(blind)
     if ident.condition_number > COND_WARN:
         msg = (f"the observation matrix is poorly conditioned (condition number "
                f"{ident.condition_number:.2g}); the weakest combination involves "

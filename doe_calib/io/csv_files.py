@@ -459,3 +459,25 @@ def write_design(path, configurations, robot) -> None:
                     + (_approach_fields(cfg, c) if with_approach else []))
     _write(path, "doe_calib design: q in deg (mm for prismatic joints), forces in N, moments "
                  "in N·m", header, rows)
+
+
+def row_number(table, line, fields, name, default=None) -> float:
+    """The number in column ``name`` of one row (file units), or ``default`` when absent.
+
+    For other readers of our CSV files (formats.md): a bad value raises a
+    :class:`~doe_calib.errors.DataError` naming file, line and column.
+    """
+    return _number(table, line, fields, name, default)
+
+
+def row_joints(table, line, fields, robot, notes: list) -> np.ndarray:
+    """q of one row in SI, checked against the limits as a measurement file's are.
+
+    A value a hair past a limit (:data:`LIMIT_TOLERANCE`) is kept and described in ``notes``.
+    """
+    return _joints(table, line, fields, robot, LIMIT_TOLERANCE, notes)
+
+
+def parse_rows(table, robot, row_parser) -> list:
+    """``[(line, row_parser(line, fields)), …]`` for every row; a row of the wrong width raises."""
+    return _parse_rows(table, robot, row_parser, False)[0]

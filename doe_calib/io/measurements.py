@@ -189,6 +189,11 @@ class Measurements:
         option or keyword; the default for readings built in code),
         ``"per reading"`` (the file's ``sigma`` column) or ``"estimated"``
         (σ̂ of the starting model; still to come while ``sigma_estimated``).
+    observed_per_configuration : int
+        Independent scalar observations behind each configuration's readings
+        when they are derived from fewer numbers than 3 per reading (6 for the
+        virtual points of a 6-DoF probe pose); 0: 3 per reading. Sets the
+        degrees of freedom of σ̂ and χ².
     """
 
     configurations: Configurations
@@ -203,6 +208,7 @@ class Measurements:
     session: tuple = ()
     sigma_estimated: bool = False
     sigma_source: str = GIVEN
+    observed_per_configuration: int = 0
 
     def __post_init__(self):
         if self.sigma_source not in SIGMA_SOURCES:
@@ -216,7 +222,9 @@ class Measurements:
 
     @property
     def n_coordinates(self) -> int:
-        """Number of scalar observations, 3K."""
+        """Number of independent scalar observations: 3K, or 6 per pose of a 6-DoF probe."""
+        if self.observed_per_configuration:
+            return self.observed_per_configuration * len(np.unique(self.config))
         return 3 * len(self)
 
     def subset(self, rows) -> "Measurements":
@@ -229,7 +237,8 @@ class Measurements:
                             self.xyz[rows], self.sigma[rows], self.line[rows], self.source,
                             session=tuple(self.sessions[used]),
                             sigma_estimated=self.sigma_estimated,
-                            sigma_source=self.sigma_source)
+                            sigma_source=self.sigma_source,
+                            observed_per_configuration=self.observed_per_configuration)
 
     @property
     def sessions(self) -> np.ndarray:
@@ -263,7 +272,17 @@ def concatenate(parts) -> Measurements:
                         sum((p.dropped for p in parts), ()),
                         sum((p.warnings for p in parts), ()),
                         tuple(s for p in parts for s in p.sessions),
-                        any(p.sigma_estimated for p in parts), joined_sigma_source(parts))
+                        any(p.sigma_estimated for p in parts), joined_sigma_source(parts),
+                        _joined_observed(parts))
+
+
+def _joined_observed(parts) -> int:
+    """``observed_per_configuration`` of joined parts; they must agree."""
+    counts = {p.observed_per_configuration for p in parts}
+    if len(counts) > 1:
+        raise ValueError("cannot join marker readings with the virtual points of a 6-DoF "
+                         "probe: their observation counts differ")
+    return counts.pop()
 
 
 def joined_sigma_source(parts) -> str:

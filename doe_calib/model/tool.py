@@ -126,9 +126,9 @@ class Tool:
                 xyz.append(v / 1000.0)
             names.append(key.value)
             positions.append(tuple(xyz))
-        if len(names) < 3:
-            raise DataError(f"a tool needs at least 3 markers to fix the flange orientation; "
-                            f"found {len(names)}", path, top["markers"].start_mark.line + 1, 1)
+        if not names:
+            raise DataError("a tool needs at least one marker; found none", path,
+                            top["markers"].start_mark.line + 1, 1)
         _check_layout(positions, path)
         flange = top["flange"].value if "flange" in top else None
         sizes = _collision_sizes(top.get("collision"), path)
@@ -163,11 +163,23 @@ def _collision_sizes(node, path) -> tuple[float, float]:
 
 
 def _check_layout(positions, path) -> None:
-    """Refuse markers that cannot fix the flange orientation: all on one line or one point."""
+    """Refuse marker layouts that are surely a mistake.
+
+    One marker (a single reflector) or two are accepted: the rank analysis
+    then says what they cannot see. Two markers at one point, or a plate of
+    three or more all on one line, are refused.
+    """
     from doe_calib.estimation.plausibility import marker_condition
 
-    if not np.isfinite(marker_condition(positions)):
+    p = np.asarray(positions, float)
+    for i in range(len(p)):
+        for j in range(i):
+            if np.linalg.norm(p[i] - p[j]) < 1e-6:
+                raise ModelError(f"{path}: markers {j + 1} and {i + 1} are collinear or "
+                                 f"coincident (at the same position): give each marker its "
+                                 f"own place on the tool")
+    if len(p) >= 3 and not np.isfinite(marker_condition(p)):
         raise ModelError(f"{path}: the markers are collinear or coincident (condition number "
                          f"of their centred positions is infinite), so the rotation about "
-                         f"their line is not fixed: the tool needs at least 3 markers not on "
-                         f"one line")
+                         f"their line is not fixed: a plate of 3 or more markers needs them "
+                         f"not on one line (one or two markers are accepted as such)")

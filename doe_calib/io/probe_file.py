@@ -1,0 +1,174 @@
+"""A 6-DoF probe file: the probe's position and three angles per pose (formats.md §3b).
+
+A 6-DoF probe (a tracker's T-Mac or 6-DoF SMR, a mocap rigid body) reads
+the full pose of a frame on the flange: ``x, y, z`` (mm) and three angles
+``a, b, c`` (deg) in the device frame. The angle convention is stated by
+the caller (:data:`ANGLE_CONVENTIONS`), the rotation ``R`` maps probe-frame
+vectors into the device frame:
+
+* ``rpy``: roll a about x, pitch b about y, yaw c about z, fixed axes:
+  ``R = Rz(c)·Ry(b)·Rx(a)`` (URDF, ROS);
+* ``xyz-euler``: intrinsic x, y′, z″: ``R = Rx(a)·Ry(b)·Rz(c)``;
+* ``zyx-euler``: intrinsic z, y′, x″: ``R = Rz(a)·Ry(b)·Rx(c)`` (KUKA A, B, C);
+* ``rotvec``: ``(a, b, c)`` is the rotation vector, deg.
+
+The configuration columns are those of a measurement file (pose, q1..qN,
+optional wrench, temperature, session), one row per pose and load.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from doe_calib.errors import DataError
+from doe_calib.io.columns import Q_TOL, WRENCH, XYZ, joint_columns
+from doe_calib.io.csv_files import parse_rows, row_joints, row_number
+from doe_calib.io.measurements import Configurations, approach_from_order
+from doe_calib.io.table import read_table
+
+#: Angle convention → scipy's sequence (lower case: fixed axes; upper case: intrinsic).
+ANGLE_CONVENTIONS = {"rpy": "xyz", "xyz-euler": "XYZ", "zyx-euler": "ZYX", "rotvec": None}
+ANGLES = ("a", "b", "c")
+
+
+def angles_to_matrix(angles_deg, convention: str) -> np.ndarray:
+    """Rotation matrices from three angles per row in ``convention``.
+
+    Parameters
+    ----------
+    angles_deg : array_like, shape (M, 3)
+        Angles in degrees (a rotation vector in degrees for ``rotvec``).
+    convention : str
+        One of :data:`ANGLE_CONVENTIONS`.
+
+    Returns
+    -------
+    ndarray, shape (M, 3, 3)
+
+    Examples
+    --------
+    >>> r = angles_to_matrix([[0, 0, 90]], "rpy")[0]
+    >>> np.round(r @ [1, 0, 0], 12).tolist()
+    [0.0, 1.0, 0.0]
+    """
+    if convention not in ANGLE_CONVENTIONS:
+        raise ValueError(f"unknown angle convention {convention!r}; choose one of "
+                         f"{', '.join(ANGLE_CONVENTIONS)}")
+    a = np.radians(np.atleast_2d(np.asarray(angles_deg, float)))
+    seq = ANGLE_CONVENTIONS[convention]
+    rot = Rotation.from_rotvec(a) if seq is None else Rotation.from_euler(seq, a)
+    return rot.as_matrix().reshape(-1, 3, 3)
+
+
+@dataclass(frozen=True, eq=False)
+class ProbeReadings:
+    """Probe poses, one per configuration, in SI.
+
+    Attributes
+    ----------
+    configurations : Configurations
+        The M configurations, in file order.
+    position : ndarray, shape (M, 3)
+        Probe origin in the device frame, m.
+    rotation : ndarray, shape (M, 3, 3)
+        Probe orientation in the device frame (probe → device).
+    line : ndarray of int, shape (M,)
+        Source line of each row.
+    source : str
+        The file, for messages.
+    session : tuple of str
+        Session of each configuration.
+    convention : str
+        The angle convention the file was read with.
+    warnings : tuple of str
+        Rows accepted with a doubt (a joint a hair past its limit).
+    """
+
+    configurations: Configurations
+    position: np.ndarray
+    rotation: np.ndarray
+    line: np.ndarray
+    source: str = ""
+    session: tuple = ()
+    convention: str = "rpy"
+    warnings: tuple = ()
+
+    def __len__(self) -> int:
+        return len(self.configurations)
+
+
+def read_probe(path, robot, convention: str) -> ProbeReadings:
+    """Read a 6-DoF probe file (formats.md §3b).
+
+    Parameters
+    ----------
+    path : path-like
+    robot : Robot
+        Gives N (columns q1..qN, deg or mm) and the joint limits.
+    convention : str
+        Angle convention of ``a, b, c`` (:data:`ANGLE_CONVENTIONS`), deg.
+
+    Returns
+    -------
+    ProbeReadings
+
+    Examples
+    --------
+    >>> probe = read_probe("probe.csv", robot, "rpy")   # doctest: +SKIP
+    >>> probe.rotation.shape                            # doctest: +SKIP
+    (40, 3, 3)
+    """
+    if convention not in ANGLE_CONVENTIONS:
+        raise DataError(f"unknown angle convention {convention!r}; choose one of "
+                        f"{', '.join(ANGLE_CONVENTIONS)}", path)
+    table = read_table(path)
+    header = table.rows[0][0] - 1
+    required = ["pose", *joint_columns(robot), *XYZ, *ANGLES]
+    missing = [c for c in required if c not in table.columns]
+    if missing:
+        hint = " (a probe file has one row per pose: x, y, z in mm and angles a, b, c in deg)"
+        raise DataError(f"missing column(s) {', '.join(missing)}{hint}", table.path, header, 1)
+    known = set(required) | {*WRENCH, "temperature", "session"}
+    for c in table.columns:
+        if c not in known:
+            raise DataError(f"unknown column {c!r}; accepted columns: {', '.join(required)}, "
+                            f"{', '.join(WRENCH)}, temperature, session", table.path, header,
+                            table.col(c))
+    notes, seen = [], {}
+    default_session = Path(str(path)).stem
+
+    def row(line, fields):
+        pose = fields[table.columns.index("pose")]
+        if not pose:
+            raise DataError("empty pose id", table.path, line, table.col("pose"))
+        session = fields[table.columns.index("session")] if "session" in table.columns \
+            else default_session
+        wrench = tuple(row_number(table, line, fields, c, 0.0) for c in WRENCH)
+        key = (session, pose, wrench)
+        if key in seen:
+            raise DataError(f"pose {pose!r} is read twice under the same load (first on line "
+                            f"{seen[key]}): a probe file has one row per pose and load",
+                            table.path, line, table.col("pose"))
+        seen[key] = line
+        return (pose, row_joints(table, line, fields, robot, notes), wrench,
+                row_number(table, line, fields, "temperature", np.nan), session,
+                [row_number(table, line, fields, c) / 1000.0 for c in XYZ],
+                [row_number(table, line, fields, c) for c in ANGLES])
+
+    parsed = parse_rows(table, robot, row)
+    rows = [p for _, p in parsed]
+    q = np.array([r[1] for r in rows])
+    session = tuple(r[4] for r in rows)
+    approach = np.zeros_like(q)
+    for name in dict.fromkeys(session):
+        mine = np.array([s == name for s in session])
+        approach[mine] = approach_from_order(q[mine] * robot.display_factors, Q_TOL)
+    cfg = Configurations.from_arrays(q, [r[2] for r in rows], [[r[3]] for r in rows],
+                                     [r[0] for r in rows], approach)
+    return ProbeReadings(cfg, np.array([r[5] for r in rows]),
+                         angles_to_matrix([r[6] for r in rows], convention),
+                         np.array([line for line, _ in parsed]), table.path, session,
+                         convention, tuple(notes))
