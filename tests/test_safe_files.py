@@ -46,7 +46,8 @@ def test_predict_does_not_replace_its_data(files, capsys):
 def test_identify_does_not_replace_its_csv_by_a_relative_path(files, capsys, monkeypatch):
     monkeypatch.chdir(files)
     _untouched(capsys, ["identify", "--robot", "robot.urdf", "--tool", examples.TOOL_YAML,
-                        "--model", "joint_offset", "--data", "m.csv", "--out", f"../{files.name}/m.csv"],
+                        "--model", "joint_offset", "--data", "m.csv",
+                        "--out", f"../{files.name}/m.csv"],
                files / "m.csv", "is the input --data m.csv")
 
 
