@@ -202,6 +202,28 @@ def parse_load(text: str):
     return kg, com, radius
 
 
+def check_payloads(robot, loads) -> None:
+    """Refuse a ``--load`` far beyond the URDF's effort limits, with the numbers.
+
+    Parameters
+    ----------
+    robot : Robot
+    loads : sequence of (kg, com (3,) m, radius) as :func:`parse_load` returns them
+
+    Raises
+    ------
+    OptionError
+        :func:`~doe_calib.model.loads.payload_beyond_effort` found a joint
+        that cannot hold the payload in most poses.
+    """
+    from doe_calib.model.loads import payload_beyond_effort
+
+    for kg, com, _ in loads:
+        why = payload_beyond_effort(robot, kg, com)
+        if why:
+            raise OptionError(f"--load {kg:g}@{','.join(f'{1000 * c:g}' for c in com)}: {why}")
+
+
 def fix_and_free(params, fix: str | None, free: str | None):
     """``params`` with the ``--fix`` names fixed, then the ``--free`` names freed.
 

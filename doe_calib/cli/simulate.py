@@ -6,6 +6,7 @@ import sys
 import numpy as np
 
 from doe_calib.cli.common import (
+    check_payloads,
     collision_arguments,
     collision_builder,
     effect_registry,
@@ -60,6 +61,7 @@ OUTPUTS = {"out": "file", "truth_out": "file"}
 
 def run(args):
     robot, tool = load_robot_tool(args)
+    check_payloads(robot, [args.load] if args.load else [])
     model = build_model(robot, tool, args.model, registry=effect_registry(args))
     rng = np.random.default_rng(args.seed)
     if args.truth:
