@@ -81,7 +81,7 @@ def test_design_round_trip(rt, tmp_path):
 
 @pytest.mark.parametrize("lines, where, words", [
     (["pose,q1,q2,q3,q4,q5,q6,marker,x,y", GOOD[:-5]], "line 1", "missing column(s) z"),
-    ([HEADER + ",colour", GOOD + ",red"], "column 'colour' (12)", "unknown column"),
+    ([HEADER + ",sigam", GOOD + ",0.02"], "column 'sigam' (12)", "unknown column"),
     ([HEADER + ",x", GOOD + ",1"], "column 12", "appears twice"),
     ([HEADER, GOOD + ",7"], "line 2", "12 fields where the header has 11"),
     ([HEADER, GOOD.replace("1000.5", "1,000.5")], "line 2", "fields where the header"),

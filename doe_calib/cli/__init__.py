@@ -25,7 +25,7 @@ from doe_calib.cli import (
     simulate,
     study,
 )
-from doe_calib.cli.options import check_outputs
+from doe_calib.cli.options import check_outputs, join_negative_values
 from doe_calib.errors import DoeCalibError
 from doe_calib.runtime.threads import single_threaded_blas
 
@@ -69,10 +69,12 @@ def main(argv=None) -> int:
     """Run the command line; returns the exit status (2 on a user error, printed in one line).
 
     Option values are checked while parsing, and every output path before the
-    command starts working (:mod:`.options`).
+    command starts working (:mod:`.options`). A value that starts with '-'
+    (``--tracker -300,200,0,0,0,0``) is the option's value, not an option.
     """
     try:
-        args = build_parser().parse_args(argv)
+        argv = sys.argv[1:] if argv is None else argv
+        args = build_parser().parse_args(join_negative_values(argv))
         check_outputs(args, args.outputs)
         single_threaded_blas()
         args.func(args)

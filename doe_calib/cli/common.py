@@ -212,6 +212,28 @@ def parse_load(text: str):
     return kg, com, radius
 
 
+def check_payloads(robot, loads) -> None:
+    """Refuse a ``--load`` far beyond the URDF's effort limits, with the numbers.
+
+    Parameters
+    ----------
+    robot : Robot
+    loads : sequence of (kg, com (3,) m, radius) as :func:`parse_load` returns them
+
+    Raises
+    ------
+    OptionError
+        :func:`~doe_calib.model.loads.payload_beyond_effort` found a joint
+        that cannot hold the payload in most poses.
+    """
+    from doe_calib.model.loads import payload_beyond_effort
+
+    for kg, com, _ in loads:
+        why = payload_beyond_effort(robot, kg, com)
+        if why:
+            raise OptionError(f"--load {kg:g}@{','.join(f'{1000 * c:g}' for c in com)}: {why}")
+
+
 def fix_and_free(params, fix: str | None, free: str | None):
     """``params`` with the ``--fix`` names fixed, then the ``--free`` names freed.
 
@@ -239,7 +261,7 @@ def report_warnings(caught):
 
 
 def collision_arguments(c, defaults_from: str | None = None):
-    """Add ``--clearance``, ``--self-clearance``, ``--srdf``, ``--no-collision``.
+    """Add ``--clearance``, ``--self-clearance``, ``--srdf``, ``--package-dir``, ``--no-collision``.
 
     ``defaults_from``: what the clearances default to when not given (e.g.
     ``"the design's"``); None: the collision model's defaults.
@@ -258,6 +280,10 @@ def collision_arguments(c, defaults_from: str | None = None):
                         f"(default {said}{self_clear:g})")
     c.add_argument("--srdf", help="SRDF whose <disable_collisions> pairs are not checked "
                                   "(default: adjacent links and pairs always in contact)")
+    c.add_argument("--package-dir", action="append", metavar="DIR",
+                   help="folder holding the packages of the URDF's package:// meshes (repeat "
+                        "for several; ROS_PACKAGE_PATH and the URDF's own folders are searched "
+                        "too)")
     c.add_argument("--no-collision", action="store_true",
                    help="skip the collision check (not recommended)")
 
@@ -283,5 +309,6 @@ def collision_builder(args, robot, tool, constraints, recorded: dict | None = No
 
     def build(loads):
         return build_collision_model(robot, tool, loads, constraints, clearance=clear / 1000.0,
-                                     self_clearance=self_clear / 1000.0, srdf=args.srdf)
+                                     self_clearance=self_clear / 1000.0, srdf=args.srdf,
+                                     package_dirs=args.package_dir or ())
     return build

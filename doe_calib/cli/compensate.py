@@ -30,7 +30,12 @@ def add_arguments(c):
     c.add_argument("--result", required=True, help="identification result JSON")
     c.add_argument("--targets", required=True,
                    help="design CSV of the program (pose, q1..qN in deg/mm, optional wrench "
-                        "fx..mz) with optional x,y,z target positions (mm, tracker frame)")
+                        "fx..mz) with optional x,y,z target positions (mm, tracker frame "
+                        "unless --targets-frame)")
+    c.add_argument("--targets-frame", default="tracker", metavar="FRAME",
+                   help="frame of the targets' x,y,z: tracker (default), base_link (the URDF "
+                        "root), base (the UR controller's: base_link turned 180° about z), or "
+                        "any URDF frame fixed to the base")
     c.add_argument("--tcp", required=True, metavar="MARKER|X,Y,Z",
                    help="a marker of the result, or a point in the flange frame (mm)")
     c.add_argument("--out", required=True, help="compensated CSV to write")
@@ -65,7 +70,7 @@ def run(args):
     registry = effect_registry(args)
     result = IdentificationResult.from_json(args.result)
     tcp = _tcp(args.tcp, result)
-    targets = read_targets(args.targets, result.robot)
+    targets = read_targets(args.targets, result.robot, args.targets_frame, result)
     model = build_model(result.robot, result.tool, result.model, registry=registry)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

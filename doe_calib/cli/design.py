@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from doe_calib.cli.common import (
+    check_payloads,
     collision_arguments,
     collision_builder,
     effect_registry,
@@ -90,6 +91,7 @@ def run(args):
         raise OptionError(f"--report {args.report}: the design CSV is written there; give the "
                           f"report its own name")
     robot, tool = load_robot_tool(args)
+    check_payloads(robot, args.load or [])
     model = build_model(robot, tool, args.model, registry=effect_registry(args))
     loads = [LoadCase(kg, com, r) for kg, com, r in args.load or [] if kg > 0]
     if args.criterion == "task" and not args.task:

@@ -1,10 +1,13 @@
 """``doe-calib export-urdf``: the identified geometry folded into a URDF, the rest in a YAML."""
 from __future__ import annotations
 
+import os
 import sys
 import warnings
+from pathlib import Path
 
 from doe_calib.cli.common import effect_file_argument, effect_registry, report_warnings
+from doe_calib.cli.options import refuse_input
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.export.calibrated_urdf import export_urdf
 from doe_calib.io.json_file import strict_json
@@ -29,6 +32,12 @@ OUTPUTS = {"out": "file"}
 def run(args):
     registry = effect_registry(args)
     result = IdentificationResult.from_json(args.result)
+    inputs = {os.path.realpath(args.result): f"--result {args.result}"}
+    if result.robot.source and Path(result.robot.source).is_file():
+        inputs[os.path.realpath(result.robot.source)] = \
+            f"URDF {result.robot.source} (the result's robot)"
+    refuse_input("--out", args.out, inputs)
+    refuse_input("--out", Path(args.out).with_suffix(".yaml"), inputs)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         urdf, extra = export_urdf(result, args.out, build_model(

@@ -7,12 +7,16 @@ the command before any work with one line (``error: --sigma -1: ...``).
 Each command module may declare ``OUTPUTS``: option destination → ``"file"``
 (written as given: its folder must exist) or ``"folder"`` (created if needed:
 its nearest existing ancestor must be a writable folder). :func:`check_outputs`
-checks them all before the command runs.
+checks them all before the command runs, and refuses an output file that is
+one of the command's input files (any option naming an existing file: data,
+URDF, tool, design, result …), compared as resolved paths (symlinks,
+relative paths and hard links).
 """
 from __future__ import annotations
 
 import math
 import os
+import re
 from pathlib import Path
 
 from doe_calib.errors import OptionError
@@ -89,6 +93,33 @@ def _check_folder(option: str, path: Path) -> None:
         raise OptionError(f"{option} {path}: cannot write in {existing} (permission denied)")
 
 
+def input_files(args, outputs: dict) -> dict:
+    """Every existing file an option names, other than the outputs: resolved path → option."""
+    found = {}
+    for dest, value in vars(args).items():
+        if dest in outputs:
+            continue
+        for v in value if isinstance(value, (list, tuple)) else [value]:
+            if isinstance(v, (str, os.PathLike)) and str(v) and Path(v).is_file():
+                found.setdefault(os.path.realpath(v), f"{_option_name(dest)} {v}")
+    return found
+
+
+def refuse_input(option: str, path, inputs: dict) -> None:
+    """Raise when the output ``path`` is one of ``inputs`` (resolved path → what it is).
+
+    Raises
+    ------
+    OptionError
+        Writing ``path`` would replace an input file.
+    """
+    key = os.path.realpath(path)
+    for other, what in inputs.items():
+        if key == other or (Path(path).is_file() and os.path.samefile(path, other)):
+            raise OptionError(f"{option} {path}: is the input {what}; writing it would replace "
+                              "that file: give the output another name")
+
+
 def check_outputs(args, outputs: dict) -> None:
     """Check, before any work, that every output option given can be written.
 
@@ -102,17 +133,36 @@ def check_outputs(args, outputs: dict) -> None:
     ------
     OptionError
         A file in a missing folder or under a file, a folder given for a file,
-        a place without write permission, or two options naming one file.
+        a place without write permission, two options naming one file, or an
+        output file that is an input file.
     """
-    seen = {}
+    seen, inputs = {}, input_files(args, outputs)
     for dest, kind in outputs.items():
         value = getattr(args, dest, None)
         if value is None:
             continue
         option, path = _option_name(dest), Path(value)
         (_check_file if kind == "file" else _check_folder)(option, path)
+        if kind == "file":
+            refuse_input(option, path, inputs)
         key = os.path.abspath(path)
         if key in seen:
             raise OptionError(f"{option} {value}: the same file as {seen[key]}; "
                               f"give each output its own name")
         seen[key] = option
+
+
+_NEGATIVE = re.compile(r"^-\.?\d")
+
+
+def join_negative_values(argv) -> list:
+    """``--tracker -300,200,0`` as ``--tracker=-300,200,0``: argparse reads a value that
+    starts with '-' (other than a plain number) as an option; a long option without ``=``
+    followed by a word that starts like a negative number takes it as its value."""
+    out = []
+    for word in map(str, argv):
+        if out and _NEGATIVE.match(word) and out[-1].startswith("--") and "=" not in out[-1]:
+            out[-1] = f"{out[-1]}={word}"
+        else:
+            out.append(word)
+    return out

@@ -26,6 +26,11 @@ def add_arguments(c):
                                                 "their predicted std_x,std_y,std_z (mm)")
     c.add_argument("--json", action="store_true", help="print the error figures as JSON "
                                                        "(null when the data have no x,y,z)")
+    c.add_argument("--register", choices=("frame", "frame+tool"), default=None,
+                   help="a new session: re-fit the tracker frame (frame: the 6 base "
+                        "parameters) or also the tool mounting (frame+tool: the marker "
+                        "positions) on these readings before scoring, every robot parameter "
+                        "held; needs x,y,z in the data")
     effect_file_argument(c)   # a result whose model names a user effect needs its file
 
 
@@ -47,16 +52,22 @@ def run(args):
     result = IdentificationResult.from_json(args.result)
     model = build_model(result.robot, result.tool, result.model, registry=registry)
     meas = read_data(args.data, result.robot, result.tool, sigma_mm=1.0, require_xyz=False)
-    pred = predict(result, meas, model, a_posteriori=False)
+    pred = predict(result, meas, model, a_posteriori=False, register=args.register)
     sigma = np.full(len(meas), result.sigma_mm / 1000.0)
     write_measurements(args.out, replace(meas, xyz=pred.xyz, sigma=sigma), result.robot,
                        result.tool, std=pred.std)
     error = pred.error(meas) if np.all(np.isfinite(meas.xyz)) else None
     if args.json:
         print(strict_json({"result": args.result, "model": result.model, "data": args.data,
-                          "readings": len(meas), "predicted": args.out, "error": error}))
+                          "readings": len(meas), "predicted": args.out, "error": error,
+                          "registration": None if pred.registration is None
+                          else pred.registration.to_dict(), "notes": list(pred.notes)}))
     elif error is not None:
+        if pred.registration is not None:
+            print(pred.registration.summary())
         print(f"{len(meas)} readings: RMS {error['rms_mm']:.4f} mm per coordinate, "
               f"3-D RMS {error['rms_3d_mm']:.4f} mm, mean 3-D {error['mean_3d_mm']:.4f} mm, "
               f"max 3-D {error['max_3d_mm']:.4f} mm (model {result.model})")
+        for note in pred.notes:
+            print(f"note: {note}")
     print(f"written: {args.out}", file=sys.stderr)

@@ -6,6 +6,9 @@ import sys
 import numpy as np
 
 from doe_calib.cli.common import (
+    check_payloads,
+    collision_arguments,
+    collision_builder,
     effect_registry,
     load_robot_tool,
     parse_floats,
@@ -33,6 +36,10 @@ def add_arguments(c):
                                     "writes, or its CSV (else random poses)")
     c.add_argument("--poses", type=count("--poses", 1, "pose"), default=30,
                    help="random poses when no design")
+    c.add_argument("--constraints", metavar="CELL.yaml",
+                   help="design constraints YAML (the cell: floor, boxes, joint limits, line "
+                        "of sight): the random poses satisfy it and keep clear of collisions, "
+                        "as design's candidates do")
     c.add_argument("--load", type=parse_load,
                    help="MASS_KG@X,Y,Z: measure each pose unloaded and with this mass (kg; "
                         "centre of mass in mm, flange frame); 0 kg measures unloaded only")
@@ -46,6 +53,7 @@ def add_arguments(c):
     c.add_argument("--truth-out", help="JSON to write the true parameters to")
     c.add_argument("--json", action="store_true", help="print what was written as JSON "
                                                        "(messages go to stderr)")
+    collision_arguments(c)   # used with --constraints
 
 
 OUTPUTS = {"out": "file", "truth_out": "file"}
@@ -53,6 +61,7 @@ OUTPUTS = {"out": "file", "truth_out": "file"}
 
 def run(args):
     robot, tool = load_robot_tool(args)
+    check_payloads(robot, [args.load] if args.load else [])
     model = build_model(robot, tool, args.model, registry=effect_registry(args))
     rng = np.random.default_rng(args.seed)
     if args.truth:
@@ -66,9 +75,13 @@ def run(args):
     if args.design:
         if args.load:
             raise OptionError("--load is for random poses: a --design carries its own loads")
+        if args.constraints:
+            raise OptionError("--constraints is for random poses: a --design's poses were "
+                              "chosen inside its own")
         cfg = read_design(args.design, robot)
     else:
-        q = random_configurations(robot, args.poses, rng)
+        q = random_configurations(robot, args.poses, rng) if not args.constraints else \
+            _poses_in_cell(args, model, truth, robot, tool, rng)
         if args.load:
             kg, com, _ = args.load
             cfg = unloaded_and_loaded(model, truth.values, q, kg, com)
@@ -87,3 +100,18 @@ def run(args):
                           "configurations": len(cfg), "poses": len(set(cfg.pose)),
                           "sigma_mm": args.sigma, "model": model.spec, "seed": args.seed,
                           "truth": args.truth_out}))
+
+
+def _poses_in_cell(args, model, truth, robot, tool, rng):
+    """``--poses`` random poses (m, N), rad/m, that satisfy the ``--constraints`` cell and keep
+    clear of collisions (unless ``--no-collision``), drawn as design draws its candidates."""
+    from doe_calib.design import LoadCase, read_constraints
+    from doe_calib.design.candidate_poses import feasible_candidates
+    from doe_calib.design.feasibility import build_feasibility
+
+    constraints = read_constraints(args.constraints, robot, tool)
+    loads = [LoadCase(kg, com, r) for kg, com, r in [args.load] if kg > 0] if args.load else []
+    build = collision_builder(args, robot, tool, constraints)
+    feasibility = build_feasibility(model, truth.values, constraints, loads)
+    return feasible_candidates(feasibility, robot, args.poses, rng,
+                               None if build is None else build(loads)).q

@@ -8,6 +8,7 @@ chain, coal geometry, the active pairs named in words) and how closely
 from __future__ import annotations
 
 import logging
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -116,14 +117,16 @@ def _robot_geometry(robot, package_dirs):
     if not path.is_file():
         raise ModelError(f"collision check: the robot's URDF {path} is not found; give the URDF "
                          f"the design is for")
-    dirs = [str(p) for p in (*package_dirs, *path.resolve().parents)]
+    ros = [d for d in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if d]
+    dirs = [str(p) for p in (*package_dirs, *ros, *path.resolve().parents)]
     model = pin.buildModelFromUrdf(str(path))
     try:
         geometry = pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.COLLISION,
                                          package_dirs=dirs)
     except (RuntimeError, ValueError) as exc:
         raise ModelError(f"{path}: cannot load the collision geometry ({exc}); name the "
-                         f"folders holding its meshes' packages") from exc
+                         f"folder holding its meshes' packages (--package-dir DIR, "
+                         f"package_dirs=[DIR], or ROS_PACKAGE_PATH)") from exc
     chain = set(robot.joint_names)
     lock = [j for j in range(1, model.njoints) if model.names[j] not in chain]
     if lock:
@@ -158,8 +161,8 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
         of ``samples`` random configurations are not (pairs with a tool,
         payload or cell shape are always judged so).
     package_dirs : sequence of path-like
-        Folders holding the packages of ``package://`` meshes (the URDF's own
-        folders are searched too).
+        Folders holding the packages of ``package://`` meshes (those of
+        ``ROS_PACKAGE_PATH`` and the URDF's own folders are searched too).
 
     Examples
     --------

@@ -2,7 +2,9 @@
 
 A targets CSV is a design CSV (docs/formats.md §4: ``pose``, ``q1``…``qN`` in
 deg/mm, optional wrench, temperature and approach columns) that may carry
-``x``, ``y``, ``z`` (mm, tracker frame): where the TCP must go for that row.
+``x``, ``y``, ``z`` (mm, tracker frame unless a ``frame`` is given: the robot's
+``base_link``, the UR controller's ``base``, or any URDF frame fixed to the base,
+:mod:`doe_calib.model.frames`): where the TCP must go for that row.
 The design columns are read by :func:`doe_calib.io.csv_files.read_design`; this module
 only reads the three extra columns (and hands ``read_design`` the file
 without them, line numbers kept).
@@ -18,11 +20,16 @@ from pathlib import Path
 
 import numpy as np
 
-from doe_calib.errors import DataError
+from doe_calib.errors import DataError, OptionError
 from doe_calib.io.columns import XYZ
 from doe_calib.io.csv_files import read_design
 from doe_calib.io.measurements import Configurations
 from doe_calib.io.table import delimiter, read_table
+from doe_calib.model.frames import frame_placement, transform_points
+from doe_calib.model.rotations import rotation_vector_to_matrix
+
+#: The frame target positions are in when none is named (as they always were).
+TRACKER = "tracker"
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,13 +72,20 @@ def _renumber(message_column, columns, kept):
     return message_column
 
 
-def read_targets(path, robot) -> Targets:
+def read_targets(path, robot, frame: str = TRACKER, result=None) -> Targets:
     """Read a targets CSV (design columns, optional ``x,y,z`` in mm).
 
     Parameters
     ----------
     path : path-like
     robot : Robot
+    frame : str
+        The frame of ``x,y,z``: ``tracker`` (default), or a robot frame
+        (``base_link``, ``base``, a fixed URDF frame:
+        :func:`~doe_calib.model.frames.frame_placement`), turned into the
+        tracker frame with ``result``'s identified base pose.
+    result : IdentificationResult, optional
+        Needed when ``frame`` is not ``tracker``.
 
     Returns
     -------
@@ -83,6 +97,10 @@ def read_targets(path, robot) -> Targets:
         Anything :func:`~doe_calib.io.csv_files.read_design` refuses (with the file's
         own line and column), only some of ``x,y,z``, or a value there that
         is not a finite number.
+    OptionError
+        A robot ``frame`` without ``result``.
+    ModelError
+        A ``frame`` the URDF does not have (or one moving with a joint).
 
     Examples
     --------
@@ -125,7 +143,21 @@ def read_targets(path, robot) -> Targets:
         except DataError as exc:
             raise DataError(_message(exc), path, exc.line,
                             _renumber(exc.column, table.columns, kept)) from None
-    return Targets(cfg, xyz)
+    return Targets(cfg, xyz if frame == TRACKER else in_tracker(xyz, robot, frame, result))
+
+
+def in_tracker(points, robot, frame: str, result) -> np.ndarray:
+    """Points (K, 3) given in the robot frame ``frame``, in the tracker frame, m.
+
+    ``p_tracker = R_b (T_frame p) + t_b`` with ``(R_b, t_b)`` the base pose
+    ``result`` identified (parameters ``base_x`` … ``base_rz``).
+    """
+    if result is None:
+        raise OptionError(f"targets in frame {frame!r} need the identification result (its base "
+                          f"pose places the robot in the tracker frame)")
+    base = result.parameters.values[result.parameters.index("base")]
+    in_base = transform_points(frame_placement(robot, frame), points)
+    return in_base @ rotation_vector_to_matrix(base[3:]).T + base[:3]
 
 
 def _message(exc: DataError) -> str:

@@ -17,6 +17,14 @@
       normals: {A: [0, 0, 1]}    # flange frame, per marker (default: the flange z axis)
     load_torque: {a2: 9000}      # |τ| under each load, N·m (N for prismatic joints)
     coverage: {joint: a2, bins: 5, min_bins: 5}   # or edges: [deg, ...]
+    frame: base_link             # the frame of every position above (default base_link)
+
+``frame`` names the frame the Cartesian entries and the tracker position are
+written in (:mod:`doe_calib.model.frames`): ``base_link`` (the URDF root, the
+default), ``base`` (the UR controller's frame, base_link turned 180° about z),
+or any URDF frame fixed to the base. They are turned into the robot base frame
+on reading; boxes and the floor need a frame whose axes are the base's, up to
+signs and order (z kept up for the floor).
 """
 from __future__ import annotations
 
@@ -32,9 +40,11 @@ from doe_calib.design.constraints import (
     DesignConstraints,
     LineOfSight,
 )
-from doe_calib.errors import DataError
+from doe_calib.errors import DataError, ModelError
+from doe_calib.model.frames import DEFAULT_FRAME, frame_placement, transform_points
 
-SECTIONS = ("joint_limits", "margin", "cartesian", "line_of_sight", "load_torque", "coverage")
+SECTIONS = ("joint_limits", "margin", "cartesian", "line_of_sight", "load_torque", "coverage",
+            "frame")
 
 
 class _Reader:
@@ -188,6 +198,47 @@ def _coverage(r, node, robot, lower, upper, margin) -> Coverage:
     return Coverage(k, tuple(map(float, edges)), int(need))
 
 
+def _frame(r, node, robot) -> np.ndarray:
+    """The placement (4×4) of the file's ``frame:`` in the robot base frame."""
+    if not isinstance(node, yaml.ScalarNode) or not str(node.value).strip():
+        r.fail(node, f"frame: expected a frame name ({DEFAULT_FRAME}, base, or a URDF frame)")
+    try:
+        return frame_placement(robot, str(node.value).strip())
+    except ModelError as exc:
+        r.fail(node, f"frame: {exc}")
+
+
+def _box_in_base(r, node, box, placement) -> Box:
+    """``box`` (given in the frame at ``placement``) as an axis-aligned box of the base frame."""
+    rot = placement[:3, :3]
+    if not np.allclose(np.abs(rot), np.round(np.abs(rot)), atol=1e-9):
+        r.fail(node, f"box {box.name!r}: its frame is turned by other than right angles from "
+                     f"the base, so the box is not axis-aligned there; give it in {DEFAULT_FRAME}")
+    lo, hi = np.asarray(box.lower), np.asarray(box.upper)
+    corners = transform_points(placement, [np.where(np.array(bits) > 0, hi, lo)
+                                           for bits in np.ndindex(2, 2, 2)])
+    return Box(box.name, tuple(corners.min(axis=0)), tuple(corners.max(axis=0)))
+
+
+def _in_base(r, top, cart, los, placement):
+    """The Cartesian entries and the line of sight turned from the file's frame to the base."""
+    where = top["frame"]
+    if cart:
+        cart = dict(cart)
+        cart["keep_out"] = tuple(_box_in_base(r, where, b, placement) for b in cart["keep_out"])
+        if cart["keep_in"] is not None:
+            cart["keep_in"] = _box_in_base(r, where, cart["keep_in"], placement)
+        if cart["floor"] is not None:
+            if not np.allclose(placement[2, :3], [0.0, 0.0, 1.0], atol=1e-9):
+                r.fail(where, "floor: the frame's z axis is not the base's (up), so a floor "
+                              f"height means nothing there; give it in {DEFAULT_FRAME}")
+            cart["floor"] = cart["floor"] + float(placement[2, 3])
+    if los is not None:
+        tracker = transform_points(placement, los.tracker)[0]
+        los = LineOfSight(tuple(map(float, tracker)), los.max_incidence, los.normals)
+    return cart, los
+
+
 def read_constraints(path, robot, tool) -> DesignConstraints:
     """Read a constraints file (see the module docstring); units deg, mm, N·m.
 
@@ -223,10 +274,12 @@ def read_constraints(path, robot, tool) -> DesignConstraints:
         r.fail(top.get("margin", node), f"margin {margin:g} leaves no range for joint "
                                         f"{robot.joints[k].name}")
     cart = _cartesian(r, top["cartesian"]) if "cartesian" in top else {}
+    los = _line_of_sight(r, top["line_of_sight"], tool) if "line_of_sight" in top else None
+    if "frame" in top:
+        cart, los = _in_base(r, top, cart, los, _frame(r, top["frame"], robot))
     return DesignConstraints(
         lower, upper, margin, **cart,
-        line_of_sight=_line_of_sight(r, top["line_of_sight"], tool)
-        if "line_of_sight" in top else None,
+        line_of_sight=los,
         torque_limits=_load_torque(r, top["load_torque"], robot) if "load_torque" in top
         else None,
         coverage=_coverage(r, top["coverage"], robot, lower, upper, margin)

@@ -27,6 +27,9 @@ BAD_SIGMA_HAT_MM = 1.0
 MARKER_CONDITION_WARN = 20.0
 #: A fitted value beyond its parameter's bounds by more than this many std is reported.
 BOUND_STDS = 2.0
+#: The other likely cause of a value beyond its bounds, after the parameter's own ``sign``.
+INADEQUATE = ("otherwise an inadequate model: the fit makes this parameter stand in for an "
+              "effect the model lacks (run doe-calib diagnose)")
 
 
 def robot_reach(robot) -> float:
@@ -172,6 +175,10 @@ def _range_words(p, field: str) -> str:
 def parameter_findings(params, std) -> list[str]:
     """Findings for fitted values beyond their parameters' bounds or plausible ranges.
 
+    A value beyond its bounds (a negative compliance or backlash width) is
+    named with its likely causes: what its sign means (a flipped load sign,
+    :attr:`Parameter.sign`) and else an inadequate model (:data:`INADEQUATE`).
+
     Parameters
     ----------
     params : ParameterSet
@@ -184,7 +191,7 @@ def parameter_findings(params, std) -> list[str]:
         whose = f" (with {p.adds_to})" if p.adds_to in params.names else ""
         sign = f"; {p.sign}" if p.sign else ""
         out.append(f"the fitted {p.description}{whose} is {value_words(p, value, s)}, not "
-                   f"{_range_words(p, 'bounds')}: physically implausible{sign}")
+                   f"{_range_words(p, 'bounds')}: physically implausible{sign}; {INADEQUATE}")
     for p, value in beyond_plausible(params):
         out.append(f"the fitted {p.description} is {value_words(p, value)}: implausible for it "
                    f"(expected {_range_words(p, 'plausible')})")

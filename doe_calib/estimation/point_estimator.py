@@ -11,15 +11,13 @@ from __future__ import annotations
 import logging
 import warnings
 
-import numpy as np
 
-from doe_calib.errors import ConvergenceWarning, SolverError
+from doe_calib.errors import ConvergenceWarning
 from doe_calib.estimation.assembly import finish
 from doe_calib.estimation.covariance import covariance_from_r_factor
-from doe_calib.estimation.least_squares import levenberg_marquardt
+from doe_calib.estimation.point_fit import point_fit
 from doe_calib.estimation.preparation import prepare
 from doe_calib.estimation.result import IdentificationResult
-from doe_calib.estimation.weighted_residuals import reduce_jacobian, residual_norm2
 
 log = logging.getLogger(__name__)
 
@@ -46,22 +44,8 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
         Told of each iteration (weighted RMS of the residuals).
     """
     params, notes = prepare(model, measurements, params, register)
-    free = params.free
-    scale = params.scales[free]
-    n_obs = measurements.n_coordinates
-
-    def values(x):
-        return params.with_free_values(x).values
-
-    sol = levenberg_marquardt(
-        lambda x: residual_norm2(model, measurements, values(x)),
-        lambda x: reduce_jacobian(model, measurements, values(x), free, scale),
-        params.free_values(), scale, max_iterations=max_iterations,
-        progress=None if progress is None else lambda k, f: progress(
-            "Levenberg–Marquardt", f"iteration {k}, weighted RMS {np.sqrt(f / n_obs):.4g}"))
-    if not np.all(np.isfinite(sol.x)):
-        raise SolverError("the identification diverged (non-finite parameters); check the "
-                          "tool file and the units of the measurement file")
+    sol = point_fit(model, measurements, params, max_iterations, progress)
+    scale = params.scales[params.free]
     if not sol.converged:
         msg = f"Levenberg–Marquardt stopped before converging: {sol.message}"
         warnings.warn(msg, ConvergenceWarning, stacklevel=2)

@@ -1,12 +1,13 @@
 """Marker positions an identification result predicts, with their std (validation, CLI)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from doe_calib.errors import DataError, ModelError
 from doe_calib.io.measurements import Configurations, Measurements
+from doe_calib.estimation.session import reregister, session_notes
 from doe_calib.model.evaluation import observation_matrix
 
 
@@ -23,6 +24,12 @@ class Prediction:
     config, marker : ndarray of int, shape (K,)
         Configuration and marker index of each reading.
     marker_names : tuple of str
+    registration : Reregistration or None
+        What was re-fitted on the readings before predicting
+        (``register="frame"`` or ``"frame+tool"``), with the error before and after.
+    notes : tuple of str
+        Numerical findings in words, e.g. an error far beyond the predicted
+        std that a re-registration would remove (naming ``--register``).
     """
 
     xyz: np.ndarray
@@ -30,6 +37,8 @@ class Prediction:
     config: np.ndarray
     marker: np.ndarray
     marker_names: tuple
+    registration: object = None
+    notes: tuple = field(default=())
 
     @property
     def xyz_mm(self) -> np.ndarray:
@@ -128,8 +137,8 @@ def aligned_parameters(model, result):
                          f"({exc.args[0]}); was its effect file changed?") from None
 
 
-def predict(result, data, model=None, *, registry=None,
-            a_posteriori: bool = True) -> Prediction:
+def predict(result, data, model=None, *, registry=None, a_posteriori: bool = True,
+            register: str | None = None) -> Prediction:
     """Marker positions ``result`` predicts for readings or configurations.
 
     Parameters
@@ -146,13 +155,26 @@ def predict(result, data, model=None, *, registry=None,
     a_posteriori : bool
         Scale the covariance by (σ̂/σ)² (default); False: for the a-priori σ
         (what ``doe-calib predict`` writes, as it always has).
+    register : {None, "frame", "frame+tool"}
+        Re-fit the tracker frame (the 6 base parameters), or also the tool
+        mounting (the marker positions), on the readings before predicting,
+        every robot parameter held at the result's value
+        (:func:`~doe_calib.estimation.session.reregister`): a new session
+        whose tracker moved or whose probe was remounted. Needs readings with
+        x, y, z.
 
     Returns
     -------
     Prediction
         Positions (m) and their std ``√diag(B Σ Bᵀ)`` with ``B`` the
         observation matrix of each reading and Σ the covariance of the free
-        parameters.
+        parameters. When the readings have x, y, z and the error is far beyond
+        that std, ``notes`` says whether a re-registration removes it.
+
+    Raises
+    ------
+    DataError
+        ``register`` without readings (or without x, y, z).
     """
     if isinstance(data, Measurements):
         cfg, config, marker = data.configurations, data.config, data.marker
@@ -167,9 +189,23 @@ def predict(result, data, model=None, *, registry=None,
         model, params = result_model(result, registry)
     else:
         params = aligned_parameters(model, result)
+    measured = isinstance(data, Measurements) and bool(np.all(np.isfinite(data.xyz)))
+    done = None
+    if register is not None:
+        if not measured:
+            raise DataError(f"register={register!r} re-fits the tracker frame on measured "
+                            "readings: give readings with x, y, z")
+        done = reregister(model, params, data, register)
+        params = params.with_values(done.parameters.values)
     x, b = observation_matrix(model, params.values, cfg)
     bf = b[config, marker][..., params.free]
     cov = result.cov_params(a_posteriori=a_posteriori)
     var = np.einsum("kif,fg,kig->ki", bf, cov, bf)
-    return Prediction(x[config, marker], np.sqrt(np.clip(var, 0.0, None)),
-                      np.asarray(config), np.asarray(marker), tuple(result.tool.names))
+    std = np.sqrt(np.clip(var, 0.0, None))
+    notes = ()
+    if measured:
+        sigma = result.sigma_mm * result.sigma_ratio / 1000.0
+        expected = float(np.sqrt(sigma ** 2 + np.mean(std ** 2)))
+        notes = session_notes(model, params, data, expected, done)
+    return Prediction(x[config, marker], std, np.asarray(config), np.asarray(marker),
+                      tuple(result.tool.names), done, notes)

@@ -146,13 +146,16 @@ class IdentificationResult:
         """χ², dof, p-value, σ̂/σ with its interval, evaluations (:class:`FitStatistics`)."""
         return fit_statistics(self)
 
-    def predict(self, data, model=None, registry=None) -> Prediction:
+    def predict(self, data, model=None, registry=None, *,
+                register: str | None = None) -> Prediction:
         """Marker positions this result predicts (:func:`doe_calib.estimation.predict.predict`).
 
         Builds the model (CasADi) from the robot, tool and model string unless
         ``model`` is given; a user effect needs a ``registry`` holding its file.
+        ``register="frame"`` or ``"frame+tool"`` re-fits the tracker frame (and
+        the tool mounting) on the readings first: a new session.
         """
-        return predict(self, data, model, registry=registry)
+        return predict(self, data, model, registry=registry, register=register)
 
     def fit_report(self, min_correl: float = 0.3) -> str:
         """Fit statistics, variables, correlations above ``min_correl``, residuals, notes."""

@@ -24,13 +24,18 @@ import numpy as np
 import yaml
 
 from doe_calib.errors import DataWarning, ModelError
+from doe_calib.io.measurements import Configurations
 from doe_calib.model.effects.base import ChainSymbols, Effect
+from doe_calib.model.evaluation import evaluate, marker_positions
 from doe_calib.model.kinematics import joint_placement
 from doe_calib.model.rotations import rotation_vector_to_matrix
+from doe_calib.model.simulate import random_configurations
 
 #: Effects folded into the URDF (their values at zero load are rigid placements and offsets).
 FOLDED = ("joint_offset", "geometry")
 TRACKER_LINK = "tracker"
+#: Poses inside the limits (seed 0) over which the own-weight deflection is sized.
+OWN_WEIGHT_POSES = 64
 
 
 def corrections(model) -> ca.Function:
@@ -202,6 +207,56 @@ def leftovers(model, parameters, std=None) -> list[dict]:
     return rows
 
 
+def own_weight_deflection(model, params, q):
+    """How far the robot's own weight moves the markers and the flange, unloaded.
+
+    The effects that use the gravity torque (``gravity_compliance``) deflect
+    the arm under its own weight even with no payload; the URDF cannot hold
+    that. This is the model's unloaded shape minus the same with those
+    effects' parameters at zero.
+
+    Parameters
+    ----------
+    model : Model
+    params : ParameterSet
+        Identified values (SI).
+    q : array_like, shape (M, N)
+        Joint positions, rad/m.
+
+    Returns
+    -------
+    markers : ndarray, shape (M, n)
+        Displacement of each marker, m.
+    flange : ndarray, shape (M,)
+        Displacement of the flange origin, m.
+    effects : list of str
+        The effects responsible (empty: none in the model, both arrays zero).
+    """
+    own = [e for e in model.effects if e.uses_gravity]
+    blocks = {e.name for e in own}
+    values = np.asarray(params.values, float)
+    rigid = values.copy()
+    rigid[[i for i, p in enumerate(params.parameters) if p.block in blocks]] = 0.0
+    cfg = Configurations.from_arrays(np.atleast_2d(q))
+    markers = np.linalg.norm(marker_positions(model, values, cfg)
+                             - marker_positions(model, rigid, cfg), axis=2)
+    origin = [np.asarray(evaluate(model.point, cfg, v, np.zeros(3))[0])[:, :, 0]
+              for v in (values, rigid)]
+    return markers, np.linalg.norm(origin[0] - origin[1], axis=1), [e.spec() for e in own]
+
+
+def _own_weight(model, params) -> dict | None:
+    """The YAML's ``own_weight`` entry: largest displacements over sampled poses, mm."""
+    q = random_configurations(model.robot, OWN_WEIGHT_POSES, np.random.default_rng(0),
+                              margin=0.0)
+    markers, flange, effects = own_weight_deflection(model, params, q)
+    if not effects:
+        return None
+    return {"effects": effects, "poses": OWN_WEIGHT_POSES,
+            "max_marker_displacement_mm": float(markers.max() * 1000.0),
+            "max_flange_displacement_mm": float(flange.max() * 1000.0)}
+
+
 def export_urdf(result, out, model=None) -> tuple[Path, Path]:
     """Write the calibrated URDF and, beside it, the YAML of what it cannot hold.
 
@@ -237,6 +292,15 @@ def export_urdf(result, out, model=None) -> tuple[Path, Path]:
              f"values are the controller's, as in the original URDF",
              "compliance and every effect listed here act on top of the URDF: the URDF alone "
              "is the robot unloaded"]
+    own_weight = _own_weight(model, result.parameters)
+    if own_weight:
+        notes[1] = ("compliance and every effect listed here act on top of the URDF: the URDF "
+                    "alone is the robot unloaded and without its own weight's deflection")
+        notes.append(f"the unloaded shape includes the deflection under the robot's own weight "
+                     f"({', '.join(own_weight['effects'])}), which the URDF leaves out: up to "
+                     f"{own_weight['max_marker_displacement_mm']:.3g} mm at the markers and "
+                     f"{own_weight['max_flange_displacement_mm']:.3g} mm at the flange over "
+                     f"{own_weight['poses']} poses inside the limits")
     if rigid_at_rest:
         notes.append(f"not in the URDF, and changing the unloaded geometry too: "
                      f"{', '.join(rigid_at_rest)}")
@@ -250,6 +314,7 @@ def export_urdf(result, out, model=None) -> tuple[Path, Path]:
            "markers_mm": {m: [float(params[f"marker_{m}_{a}"] * 1000) for a in "xyz"]
                           for m in result.tool.names},
            "not_in_urdf": leftovers(model, params, result.std()),
+           "own_weight": own_weight,
            "notes": notes}
     yaml_path = out.with_suffix(".yaml")
     yaml_path.write_text(yaml.safe_dump(doc, sort_keys=False, allow_unicode=True),

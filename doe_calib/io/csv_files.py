@@ -33,11 +33,14 @@ from __future__ import annotations
 
 import csv
 import io as _io
+import re
+import warnings
+from difflib import get_close_matches
 from pathlib import Path
 
 import numpy as np
 
-from doe_calib.errors import DataError
+from doe_calib.errors import DataError, DataWarning
 from doe_calib.io.column_reader import Columns, read_columns
 from doe_calib.io.columns import PLAUSIBLE, Q_TOL, WRENCH, XYZ, approach_columns, joint_columns
 from doe_calib.io.measurements import (
@@ -56,17 +59,42 @@ PROVISIONAL_SIGMA_MM = 1.0
 PREDICTED_STD = ("std_x", "std_y", "std_z")
 
 
-def _check_columns(table: Table, required, optional, line):
+#: Columns that look like doe_calib's own (a joint or approach column of another robot).
+_OWN_PATTERN = re.compile(r"^(q|approach)\d+$")
+#: difflib similarity above which an unknown column is taken for a typo of a known one.
+TYPO_CUTOFF = 0.75
+
+
+def _check_columns(table: Table, required, optional, line) -> tuple:
+    """Refuse missing columns and typos of known ones; return the other extra columns.
+
+    An unknown column is an error when it looks like a known one (a close
+    match, e.g. ``sigam`` for ``sigma``, or a joint column the robot does not
+    have); any other (``timestamp``) is ignored and returned for a note.
+    """
     missing = [c for c in required if c not in table.columns]
     if missing:
         raise DataError(f"missing column(s) {', '.join(missing)}; the header must hold "
                         f"{', '.join(required)}", table.path, line, 1)
-    known = set(required) | set(optional)
+    accepted = list(required) + list(optional)
+    known = {c.lower(): c for c in accepted}
+    extra = []
     for i, c in enumerate(table.columns):
-        if c not in known:
-            raise DataError(f"unknown column {c!r}; accepted columns: "
-                            f"{', '.join(list(required) + list(optional))}", table.path, line,
-                            f"'{c}' ({i + 1})")
+        if c in accepted:
+            continue
+        close = get_close_matches(c.lower(), list(known), n=1, cutoff=TYPO_CUTOFF)
+        if close or _OWN_PATTERN.match(c.lower()):
+            hint = (f"did you mean {known[close[0]]!r}?" if close else
+                    "the robot has no such joint")
+            raise DataError(f"unknown column {c!r} ({hint}); accepted columns: "
+                            f"{', '.join(accepted)}", table.path, line, f"'{c}' ({i + 1})")
+        extra.append(c)
+    return tuple(extra)
+
+
+def _ignored_note(table, extra) -> str:
+    return (f"{table.path}: column(s) {', '.join(repr(c) for c in extra)} ignored (not "
+            "doe_calib columns; docs/formats.md §3 lists them)")
 
 
 def _number(table, line, fields, name, default=None) -> float:
@@ -151,11 +179,40 @@ def _joints(table, line, fields, robot, tolerance: float = 0.0, notes=None) -> n
         span = joint.upper - joint.lower
         if not np.isfinite(span) or past > tolerance * span:
             hint = f" (more than {tolerance:.0%} of the range past it)" if tolerance else ""
+            if joint.kind == "revolute" and joint.lower <= shown <= joint.upper:
+                hint += (f"; read as radians ({np.degrees(shown):.4g} deg) it is inside: the "
+                         f"file is likely in radians, and q must be in degrees")
             raise DataError(where + hint, table.path, line, table.col(name))
         notes.append(str(DataError(f"{where} by {past * joint.display_factor:.3g} "
                                    f"{joint.display_unit}: accepted as measured",
                                    table.path, line, table.col(name))))
     return q
+
+
+#: Configurations a file needs before all-small angles are taken for radians.
+RADIANS_MIN_CONFIGURATIONS = 3
+
+
+def check_not_radians(q, robot, path) -> None:
+    """Refuse joint values (SI, read from degrees) that are all within ±π·1.05 *degrees*
+    while the revolute limits span far more: the file was written in radians.
+
+    Raises
+    ------
+    DataError
+        Naming radians as the likely cause, with the largest value and the span.
+    """
+    q = np.atleast_2d(np.asarray(q, float))
+    revolute = [k for k, j in enumerate(robot.joints) if j.kind == "revolute"]
+    if not revolute or len(q) < RADIANS_MIN_CONFIGURATIONS:
+        return
+    shown = np.degrees(np.abs(q[:, revolute]))
+    span = np.degrees([robot.joints[k].upper - robot.joints[k].lower for k in revolute])
+    largest = float(shown.max())
+    if 0.0 < largest <= np.pi * 1.05 and np.max(np.minimum(span, 1e6)) > 20 * np.pi:
+        raise DataError(f"every revolute joint value is within ±{largest:.3g} deg while the "
+                        f"limits span up to {np.max(np.minimum(span, 1e6)):.0f} deg: the file "
+                        f"is likely in radians; q must be in degrees (multiply by 180/π)", path)
 
 
 def _parse_rows(table, robot, row_parser, skip_bad):
@@ -218,7 +275,7 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
     required = ["pose", *qcols, "marker", *(XYZ if require_xyz else ())]
     optional = [*WRENCH, "temperature", "sigma", "session", *approach_columns(robot),
                 *(() if require_xyz else XYZ), *PREDICTED_STD]
-    _check_columns(table, required, optional, header_line)
+    extra = _check_columns(table, required, optional, header_line)
     explicit = _checkapproach_columns(table, robot, header_line)
     estimated = "sigma" not in table.columns and sigma_mm is None
     sigma_mm = PROVISIONAL_SIGMA_MM if estimated else sigma_mm
@@ -280,6 +337,7 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
                        np.array([p[4] for _, p in parsed]), np.array([p[5] for _, p in parsed]),
                        np.array([p[6] for _, p in parsed]),
                        np.array([line for line, _ in parsed]))
+    check_not_radians(cols.q, robot, table.path)
     session = tuple(k[4] for k in cols.keys)
     if explicit:
         approach = np.array([k[3] for k in cols.keys])
@@ -291,7 +349,9 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
     cfg = Configurations.from_arrays(cols.q, cols.wrench, cols.temperature[:, None],
                                      [k[0] for k in cols.keys], approach)
     meas = Measurements(cfg, cols.config, cols.marker, cols.xyz, cols.sigma, cols.line,
-                        table.path, tuple(dropped), tuple(notes), session, estimated,
+                        table.path, tuple(dropped),
+                        ((_ignored_note(table, extra),) if extra else ()) + tuple(notes),
+                        session, estimated,
                         reading_sigma_source("sigma" in table.columns, estimated))
     return _with_unit_check(meas, robot)
 
@@ -327,8 +387,10 @@ def read_design(path, robot) -> Configurations:
         return _read_design_json(path, robot)
     table = read_table(path)
     header_line = table.rows[0][0] - 1
-    _check_columns(table, ["pose", *joint_columns(robot)],
-                   [*WRENCH, "temperature", *approach_columns(robot)], header_line)
+    extra = _check_columns(table, ["pose", *joint_columns(robot)],
+                           [*WRENCH, "temperature", *approach_columns(robot)], header_line)
+    if extra:  # the design's configurations have no place for notes
+        warnings.warn(_ignored_note(table, extra), DataWarning, stacklevel=2)
     explicit = _checkapproach_columns(table, robot, header_line)
 
     def row(line, fields):
@@ -343,6 +405,7 @@ def read_design(path, robot) -> Configurations:
     parsed, _ = _parse_rows(table, robot, row, False)
     rows = [p for _, p in parsed]
     q = np.array([r[1] for r in rows])
+    check_not_radians(q, robot, table.path)
     approach = np.array([r[4] for r in rows]) if explicit else _derived_approach(q, robot)
     return Configurations.from_arrays(q, [r[2] for r in rows], [[r[3]] for r in rows],
                                       [r[0] for r in rows], approach)

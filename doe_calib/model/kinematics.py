@@ -146,3 +146,16 @@ def nominal_torque_function(robot) -> ca.Function:
     flange = _constant(np.array(robot.flange_placement, float).reshape(4, 4))
     joints, (_, p_f) = _forward(robot, placements, flange, q)
     return ca.Function("tau", [q, w], [joint_torques(robot, joints, p_f, w)], ["q", "w"], ["tau"])
+
+
+def payload_torque_function(robot) -> ca.Function:
+    """``tau(q, m, c)``: joint torques (N·m or N) of a mass ``m`` (kg) hung at ``c`` (flange
+    frame, m), nominal chain, gravity :data:`GRAVITY`: τ = J_θᵀ F of its wrench at the flange."""
+    q, m, c = ca.SX.sym("q", robot.n_joints), ca.SX.sym("m"), ca.SX.sym("c", 3)
+    placements = [_constant(j.placement_matrix) for j in robot.joints]
+    flange = _constant(np.array(robot.flange_placement, float).reshape(4, 4))
+    joints, (rot, p_f) = _forward(robot, placements, flange, q)
+    f = m * ca.DM(GRAVITY)
+    wrench = ca.vertcat(f, ca.cross(rot @ c, f))
+    return ca.Function("tau_payload", [q, m, c], [joint_torques(robot, joints, p_f, wrench)],
+                       ["q", "m", "c"], ["tau"])

@@ -48,6 +48,9 @@ class Joint:
     velocity : float
         Maximum speed from the URDF's ``<limit velocity>``, rad/s (m/s for a
         prismatic joint); 0 when the URDF gives none.
+    effort : float
+        Maximum torque (N·m) or force (N) from the URDF's ``<limit effort>``;
+        0 when the URDF gives none.
     """
 
     name: str
@@ -59,6 +62,7 @@ class Joint:
     mass: float = 0.0
     com: tuple = (0.0, 0.0, 0.0)
     velocity: float = 0.0
+    effort: float = 0.0
 
     @property
     def placement_matrix(self) -> np.ndarray:
@@ -140,7 +144,8 @@ class Robot:
                 "joints": [{"name": j.name, "kind": j.kind, "axis": list(j.axis),
                             "placement": list(j.placement),
                             "lower": _finite_or_none(j.lower), "upper": _finite_or_none(j.upper),
-                            "mass": j.mass, "com": list(j.com), "velocity": j.velocity}
+                            "mass": j.mass, "com": list(j.com), "velocity": j.velocity,
+                            "effort": j.effort}
                            for j in self.joints]}
 
     @classmethod
@@ -150,7 +155,7 @@ class Robot:
                              -np.inf if j["lower"] is None else j["lower"],
                              np.inf if j["upper"] is None else j["upper"],
                              j.get("mass", 0.0), tuple(j.get("com", (0.0, 0.0, 0.0))),
-                             j.get("velocity", 0.0))
+                             j.get("velocity", 0.0), j.get("effort", 0.0))
                        for j in d["joints"])
         return cls(d["name"], joints, d["flange"], tuple(d["flange_placement"]),
                    d.get("source", ""))
@@ -273,7 +278,7 @@ def _joint_from_model(model, jid: int, path, body) -> Joint:
     else:
         raise ModelError(f"{path}: joint {name!r} is of type {short}; only revolute and prismatic "
                          f"joints are supported")
-    lo, hi, speed = -np.inf, np.inf, 0.0
+    lo, hi, speed, effort = -np.inf, np.inf, 0.0, 0.0
     if jm.nq == 1:
         lo = float(model.lowerPositionLimit[jm.idx_q])
         hi = float(model.upperPositionLimit[jm.idx_q])
@@ -281,6 +286,8 @@ def _joint_from_model(model, jid: int, path, body) -> Joint:
         hi = np.inf if abs(hi) > _UNBOUNDED else hi
         speed = float(model.velocityLimit[jm.idx_v])
         speed = speed if 0 < speed < _UNBOUNDED else 0.0
+        effort = float(model.effortLimit[jm.idx_v])
+        effort = effort if 0 < effort < _UNBOUNDED else 0.0
     placement = tuple(model.jointPlacements[jid].homogeneous.ravel())
     return Joint(name, kind, tuple(float(a) for a in axis), placement, lo, hi,
-                 float(body.mass), tuple(float(c) for c in body.lever), speed)
+                 float(body.mass), tuple(float(c) for c in body.lever), speed, effort)

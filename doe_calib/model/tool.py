@@ -129,6 +129,7 @@ class Tool:
         if not names:
             raise DataError("a tool needs at least one marker; found none", path,
                             top["markers"].start_mark.line + 1, 1)
+        _check_not_metres(positions, path, top["markers"].start_mark.line + 1)
         _check_layout(positions, path)
         flange = top["flange"].value if "flange" in top else None
         sizes = _collision_sizes(top.get("collision"), path)
@@ -160,6 +161,19 @@ def _collision_sizes(node, path) -> tuple[float, float]:
     if out["marker_radius"] <= 0:
         raise DataError("collision marker_radius: a marker needs a positive size (mm)", path)
     return out["marker_radius"], out["rod_radius"]
+
+
+#: Marker coordinates all below this (mm) were written in metres.
+METRES_BELOW_MM = 1.0
+
+
+def _check_not_metres(positions, path, line) -> None:
+    """Refuse a tool whose marker coordinates are all below 1 mm: written in metres."""
+    largest = float(np.abs(np.asarray(positions, float)).max(initial=0.0)) * 1000.0
+    if 0.0 < largest < METRES_BELOW_MM:
+        raise DataError(f"every marker coordinate is below {METRES_BELOW_MM:g} mm (largest "
+                        f"{largest:g}): the file looks like metres; marker positions must be in "
+                        f"mm (write {largest:g} as {largest * 1000:g})", path, line, 1)
 
 
 def _check_layout(positions, path) -> None:
