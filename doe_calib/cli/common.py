@@ -255,11 +255,11 @@ def collision_arguments(c, defaults_from: str | None = None):
                    metavar="MM",
                    help=f"distance the robot's links keep from one another along the moves, mm "
                         f"(default {said}half the self-clearance)")
-    c.add_argument("--planner-time", type=positive("--planner-time", "s"), default=2.0,
+    c.add_argument("--planner-time", type=positive("--planner-time", "s"), default=1.0,
                    metavar="S",
                    help="longest search of the motion planner (OMPL RRT-Connect) for one move "
-                        "that no straight line or simple route clears, s (default 2; two "
-                        "searches)")
+                        "that no straight line or simple route clears, s (default 1; a search "
+                        "near the move, then one over the whole joint range)")
     c.add_argument("--planner-seed", type=count("--planner-seed", 0), default=0, metavar="N",
                    help="seed of the motion planner's sampling (default 0: the same path on "
                         "every run)")

@@ -26,7 +26,7 @@ DEFAULT_CLEARANCE = 0.02
 DEFAULT_SELF_CLEARANCE = 0.005
 #: Random configurations sampled to find the pairs always in contact.
 SAMPLES = 400
-#: How moves are planned by default: RRT-Connect, 2 s per search, seed 0, two searches.
+#: How moves are planned by default: RRT-Connect, 1 s per search, seed 0.
 DEFAULT_PLANNER = PlannerSettings()
 #: Share of a pose's clearance a move keeps by default (10 mm of the 20 mm default).
 MOVE_SHARE = 0.5

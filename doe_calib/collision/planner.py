@@ -1,13 +1,15 @@
 """A joint-space motion planner for moves the straight line cannot clear: OMPL's RRT-Connect.
 
-The state space is the chain's joint box (the URDF limits; ±2π for a
-continuous joint); a state is valid when every checked pair keeps its move
-clearance (:attr:`CollisionModel.move_margins`, :func:`.clearance.too_close`);
-OMPL checks its motions at ≤ 1° (Euclidean, hence on every joint). The path
-found is shortened and smoothed (``PathSimplifier``: vertices removed,
-shortcuts), and then every segment is checked again with
+The state space is a joint box: first the box spanned by start and goal
+widened by :data:`WIDEN` on each side, then, if no path is found there, the
+whole joint range (the limits; ±2π for a continuous joint). A state is valid
+when every checked pair keeps its move clearance
+(:attr:`CollisionModel.move_margins`, :func:`.clearance.too_close`); OMPL
+checks its motions at :data:`SEARCH_STEP` (Euclidean, hence on every joint).
+The path found is shortened and smoothed (``PathSimplifier``: vertices
+removed, shortcuts, until no change: ``simplifyMax``), and then every segment is checked again with
 :func:`.clearance.check_segment` at ≤ 1° steps — a path that fails that check
-is not returned.
+is not returned (the next search is made at 1°).
 
 Planning is seeded (OMPL's global seed, set before each plan) and bounded in
 time (:attr:`PlannerSettings.time`): the same seed gives the same path as
@@ -16,11 +18,17 @@ measurement program do (a few hundred states, well under a second).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from doe_calib.collision.clearance import SEGMENT_STEP, Workspace, check_segment, too_close
+
+#: Joint step at which the search checks its motions, rad (the final check is at 1°).
+SEARCH_STEP = np.radians(3.0)
+#: Margin around the start–goal box searched first, rad (m).
+WIDEN = np.pi / 2
 
 
 @dataclass(frozen=True)
@@ -31,18 +39,16 @@ class PlannerSettings:
     ----------
     time : float
         Longest search for one move, s.
-    simplify_time : float
-        Longest shortening and smoothing of a path found, s.
     seed : int
         Seed of OMPL's random sampling.
     attempts : int
-        Searches (seeds ``seed``, ``seed + 1``, …) before a move is given up.
+        Searches (seeds ``seed``, ``seed + 1``, …) in each of the two boxes
+        (near start and goal, the whole joint range) before a move is given up.
     """
 
-    time: float = 2.0
-    simplify_time: float = 0.5
+    time: float = 1.0
     seed: int = 0
-    attempts: int = 2
+    attempts: int = 1
 
 
 @dataclass(frozen=True)
@@ -67,8 +73,18 @@ def _bounds(lower, upper):
     return lo, hi
 
 
-def _search(cm, qa, qb, lo, hi, margins, settings, seed, ws):
+def _slots(cm) -> list:
+    """(index in the Pinocchio configuration, whether stored as cos, sin) of each chain joint."""
+    out = []
+    for name in cm.joint_names:
+        jm = cm.model.joints[cm.model.getJointId(name)]
+        out.append((jm.idx_q, jm.nq == 2))
+    return out
+
+
+def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, ws):
     """One seeded RRT-Connect search, simplified; the path's positions (K, N) or None."""
+    import pinocchio as pin
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou
@@ -86,13 +102,22 @@ def _search(cm, qa, qb, lo, hi, margins, settings, seed, ws):
         space.setBounds(bounds)
         setup = og.SimpleSetup(space)
 
+        ws.set_margins(np.broadcast_to(np.asarray(margins, float), len(cm.margins)))
+        x = cm.configurations(qa)[:, 0]
+        slots = _slots(cm)
+
         def valid(state) -> bool:
-            q = np.array([state[k] for k in range(n)])
-            return bool(too_close(cm, q[None], margins, ws)[0] < 0)
+            for k, (i, turns) in enumerate(slots):
+                v = state[k]
+                if turns:
+                    x[i], x[i + 1] = math.cos(v), math.sin(v)
+                else:
+                    x[i] = v
+            return not pin.computeCollisions(cm.model, ws.data, cm.geometry, ws.geometry, x, True)
 
         setup.setStateValidityChecker(valid)
         info = setup.getSpaceInformation()
-        info.setStateValidityCheckingResolution(SEGMENT_STEP / space.getMaximumExtent())
+        info.setStateValidityCheckingResolution(step / space.getMaximumExtent())
         start, goal = space.allocState(), space.allocState()
         for k in range(n):
             start[k], goal[k] = float(qa[k]), float(qb[k])
@@ -101,8 +126,8 @@ def _search(cm, qa, qb, lo, hi, margins, settings, seed, ws):
         solved = setup.solve(settings.time)
         if not solved or not setup.haveExactSolutionPath():
             return None
-        setup.simplifySolution(settings.simplify_time)
         path = setup.getSolutionPath()
+        og.PathSimplifier(info).simplifyMax(path)
         out = np.array([[path.getState(i)[k] for k in range(n)]
                         for i in range(path.getStateCount())])
         setup.clear()
@@ -144,8 +169,11 @@ def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | No
                      np.asarray(cm.upper if upper is None else upper, float))
     if (too_close(cm, np.array([qa, qb]), margins, ws) >= 0).any():
         return None
-    for attempt in range(settings.attempts):
-        path = _search(cm, qa, qb, lo, hi, margins, settings, settings.seed + attempt, ws)
+    near = (np.maximum(lo, np.minimum(qa, qb) - WIDEN), np.minimum(hi, np.maximum(qa, qb) + WIDEN))
+    searches = [(near, SEARCH_STEP, settings.seed + a) for a in range(settings.attempts)]
+    searches += [((lo, hi), SEGMENT_STEP, settings.seed + a) for a in range(settings.attempts)]
+    for (low, high), step, seed in searches:
+        path = _search(cm, qa, qb, low, high, margins, settings, seed, step, ws)
         if path is None:
             continue
         path[0], path[-1] = qa, qb
