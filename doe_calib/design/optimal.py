@@ -24,7 +24,7 @@ from doe_calib.design.exchange import exact_design
 from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.pose_refinement import refine as refine_poses
 from doe_calib.design.reachability import (
-    check_home,
+    free_home,
     home_pose,
     reachability_note,
     unreachable,
@@ -111,7 +111,10 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         goes back to its candidate.
     home : array_like, shape (N,), optional
         The pose programs start from, rad (m); default the URDF zero clipped
-        inside the joint bounds (:func:`.reachability.home_pose`).
+        inside the joint bounds (:func:`.reachability.home_pose`), or the
+        free candidate nearest it when it is not free
+        (:func:`.reachability.free_home`); recorded in the result's
+        ``constraints["reachability"]["home"]`` (deg, mm).
     """
     if isinstance(criterion, TaskOptimal):
         raise OptionError("ask for the task criterion by name, criterion=\"task\", with task= "
@@ -139,9 +142,10 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     stages = {"relaxation": relaxed.to_dict()}
     stage("exchange", f"{n_poses} poses")
     cov = constraints.coverage
+    given, moved = home is not None, ""
     home = None if collision is None else home_pose(model.robot, constraints, home)
     if home is not None:
-        check_home(collision, home, model.robot)
+        home, moved = free_home(collision, home, model.robot, given, cands.q)
     keep, replaced, verdict = np.ones(len(cands.q), bool), {}, {}
     pool_q, bounds = cands.q.copy(), constraints.bounds(model.robot)
     for _ in range(_REACH_ROUNDS):
@@ -240,7 +244,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         clearances = pose_clearances(collision, q)
         used_constraints["collision"] = collision.summary()
         notes.append(collision_note(collision, cands.removed, cands.drawn, clearances))
-        notes.append(reachability_note(home, model.robot, replaced, reverted))
+        notes.append(reachability_note(home, model.robot, replaced, reverted, moved))
         used_constraints["reachability"] = {
             "home": [float(v) for v in home * model.robot.display_factors],
             "replaced": dict(replaced), "refined_reverted": reverted}

@@ -56,13 +56,28 @@ def home_pose(robot, constraints, home=None) -> np.ndarray:
     return home
 
 
-def check_home(collision, home, robot) -> None:
-    """Raise :class:`OptionError` when the home pose itself is closer than the move clearance."""
+def free_home(collision, home, robot, given: bool, candidates) -> tuple:
+    """The home pose checked free at the move clearance, and a note when it was replaced.
+
+    A given home (``--home``) that is not free is an error; the default one
+    (the URDF zero, e.g. a UR's wrist hanging below the base plane) is then
+    replaced by the free candidate pose nearest to it.
+
+    Returns
+    -------
+    (ndarray, str)
+        The home pose, rad (m), and "" or a sentence saying why it moved.
+    """
     hit = too_close(collision, np.atleast_2d(home), collision.move_margins or None)[0]
-    if hit >= 0:
-        deg = ", ".join(f"{v:.6g}" for v in np.asarray(home) * robot.display_factors)
+    if hit < 0:
+        return np.asarray(home, float), ""
+    deg = ", ".join(f"{v:.6g}" for v in np.asarray(home) * robot.display_factors)
+    if given or not len(candidates):
         raise OptionError(f"the home pose ({deg}) is itself too close: "
                           f"{collision.pair_name(int(hit))}; give a free one with --home")
+    near = candidates[int(np.argmin(np.linalg.norm(candidates - home, axis=1)))]
+    return near, (f"the URDF zero ({deg}) is too close ({collision.pair_name(int(hit))}): "
+                  f"the home pose is the free candidate nearest it")
 
 
 def nearest_equivalent(q, home, robot, lower, upper) -> np.ndarray:
@@ -115,10 +130,12 @@ def unreachable(collision, q, home, robot, lower, upper,
     return out
 
 
-def reachability_note(home, robot, replaced: dict, reverted: int) -> str:
+def reachability_note(home, robot, replaced: dict, reverted: int, moved: str = "") -> str:
     """One sentence: the home pose and how many chosen poses were replaced, and why."""
     deg = ", ".join(f"{v:.4g}" for v in np.asarray(home) * robot.display_factors)
     text = f"reachability: every pose joined to the home pose ({deg}) by a free path"
+    if moved:
+        text += f" ({moved})"
     if replaced:
         text += "; chosen poses replaced from the candidates: " + ", ".join(
             f"{n} ({why})" for why, n in sorted(replaced.items(), key=lambda x: -x[1]))
