@@ -5,7 +5,10 @@ position (the constraints' ``line_of_sight.tracker``, kept in
 :attr:`CollisionModel.tracker`) to the marker, stopped short of the marker's
 own sphere; it is blocked when it touches any geometry of the collision
 model — robot links, the other markers and rods, payloads, floor and
-keep-out boxes — except the marker it reaches and the rod holding it. The
+keep-out boxes — except the marker it reaches, the rod holding it and the
+bodies the marker always touches (fixed to the flange and overlapping it,
+as a marker inside the sphere a heavy payload is drawn as, or never
+checked as always in contact). The
 incidence angle at the marker is a separate, smooth design constraint
 (:mod:`doe_calib.design.feasibility`).
 """
@@ -44,11 +47,25 @@ class BlockedBeam:
 
 def _markers(cm) -> list:
     """(marker name, its object index, the objects its beam is checked against)."""
+    import coal
+
     out = []
+    touching = {pair for pair, _ in cm.disabled}
+    objects = cm.geometry.geometryObjects
+
+    def overlaps(i, k):  # two objects on the same joint that touch
+        a, b = objects[i], objects[k]
+        return a.parentJoint == b.parentJoint and coal.collide(
+            a.geometry, coal.Transform3s(a.placement.rotation, a.placement.translation),
+            b.geometry, coal.Transform3s(b.placement.rotation, b.placement.translation),
+            coal.CollisionRequest(), coal.CollisionResult()) > 0
+
     for i, name in enumerate(cm.names):
         if name.startswith("marker "):
             marker = name[len("marker "):]
-            own = {i} | {k for k, n in enumerate(cm.names) if n == f"rod to marker {marker}"}
+            own = {i} | {k for k, n in enumerate(cm.names) if n == f"rod to marker {marker}"
+                         or f"{n} vs {name}" in touching or f"{name} vs {n}" in touching
+                         or (k != i and overlaps(i, k))}
             out.append((marker, i, [k for k in range(len(cm.names)) if k not in own]))
     return out
 
