@@ -109,7 +109,9 @@ def test_ur10_free_pose_agrees_with_independent_distance(ur10):
     q = np.array([0.0, -1.2, 1.0, -1.4, -1.57, 0.0])
     assert not contacts(cm, q)
     c = clearance(cm, q)
-    assert c.free and c.distance >= 0.02
+    # pairs whose distance never changes (wrist_2_link vs a rod turning about wrist 3, always
+    # 20.6 mm apart) are no longer the one reported (issue 20): the closest that can change is
+    assert c.free and c.distance >= c.required + 0.01 and c.pair == "forearm_link vs wrist_2_link"
     model, geom = _independent(robot.source)
     data, gdata = model.createData(), geom.createData()
     pin.computeDistances(model, data, geom, gdata, q)

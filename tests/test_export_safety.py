@@ -165,14 +165,16 @@ def _constructed(tmp_path, poses_deg, name):
 
 def test_move_through_the_floor_is_refused_naming_the_pair(tmp_path, capsys):
     design, path = _constructed(tmp_path, [FLOOR_A, FLOOR_B], "floor")
+    # without the motion planner, which finds a way (tests/test_motion_planner.py)
     status = main(["export", str(path), "--format", "krl", "--out", str(tmp_path / "p"),
-                   "--order", "design", "--home", "none"])
+                   "--order", "design", "--home", "none", "--no-planner"])
     err = capsys.readouterr().err
     assert status == 2 and re.search(r"error: .*move 2, from pose 1 to pose 2, no load: "
                                      r"marker . vs floor at \d+% of the move \(a1 ", err), err
     assert not (tmp_path / "p").exists()
     cm = build_collision_model(design.robot, design.tool)
-    checked = check_program(moves(design), program_models([], lambda loads: cm), design.robot)
+    checked = check_program(moves(design), program_models([], lambda loads: cm), design.robot,
+                            planner=False)
     with pytest.raises(CollisionError, match="vs floor"):
         checked.raise_if_colliding()
 
@@ -200,7 +202,7 @@ def test_move_through_the_floor_is_routed_through_a_free_pose(tmp_path, capsys):
 def test_allow_collisions_writes_the_program_with_a_warning(tmp_path, capsys):
     _, path = _constructed(tmp_path, [FLOOR_A, FLOOR_B], "allowed")
     assert main(["export", str(path), "--format", "urscript", "--out", str(tmp_path / "p"),
-                 "--order", "design", "--allow-collisions", "--home", "none"]) == 0
+                 "--order", "design", "--allow-collisions", "--home", "none", "--no-planner"]) == 0
     err = capsys.readouterr().err
     assert re.search(r"warning: written with a colliding move .*marker . vs floor", err)
     assert len(_urscript(sorted((tmp_path / "p").iterdir()))) == 2

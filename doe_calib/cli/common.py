@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from doe_calib.cli.options import at_least
+from doe_calib.cli.options import at_least, count, positive
 from doe_calib.errors import OptionError
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.model.effects import DEFAULT_MODEL, registry_with_files
@@ -278,6 +278,25 @@ def collision_arguments(c, defaults_from: str | None = None):
                    default=None if defaults_from else self_clear, metavar="MM",
                    help=f"distance the robot's links keep from one another, mm "
                         f"(default {said}{self_clear:g})")
+    c.add_argument("--move-clearance", type=at_least("--move-clearance", 0.0, "mm"),
+                   metavar="MM",
+                   help=f"distance kept from tool, payloads and cell along the moves between "
+                        f"poses, at most --clearance, mm (default {said}half the clearance: a "
+                        f"pose on the boundary of its clearance can always be left)")
+    c.add_argument("--move-self-clearance", type=at_least("--move-self-clearance", 0.0, "mm"),
+                   metavar="MM",
+                   help=f"distance the robot's links keep from one another along the moves, mm "
+                        f"(default {said}half the self-clearance)")
+    c.add_argument("--planner-time", type=positive("--planner-time", "s"), default=1.0,
+                   metavar="S",
+                   help="longest search of the motion planner (OMPL RRT-Connect) for one move "
+                        "that no straight line or simple route clears, s (default 1; a search "
+                        "near the move, then one over the whole joint range)")
+    c.add_argument("--planner-seed", type=count("--planner-seed", 0), default=0, metavar="N",
+                   help="seed of the motion planner's sampling (default 0: the same path on "
+                        "every run)")
+    c.add_argument("--no-planner", action="store_true",
+                   help="do not plan moves: a move no simple route clears collides")
     c.add_argument("--srdf", help="SRDF whose <disable_collisions> pairs are not checked "
                                   "(default: adjacent links and pairs always in contact)")
     c.add_argument("--package-dir", action="append", metavar="DIR",
@@ -297,7 +316,12 @@ def collision_builder(args, robot, tool, constraints, recorded: dict | None = No
         A design's ``constraints["collision"]`` (``clearance_mm``,
         ``self_clearance_mm``): the clearances when the options give none.
     """
-    from doe_calib.collision import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE, build_collision_model
+    from doe_calib.collision import (
+        DEFAULT_CLEARANCE,
+        DEFAULT_SELF_CLEARANCE,
+        PlannerSettings,
+        build_collision_model,
+    )
 
     if args.no_collision:
         return None
@@ -306,9 +330,19 @@ def collision_builder(args, robot, tool, constraints, recorded: dict | None = No
         "clearance_mm", 1000.0 * DEFAULT_CLEARANCE)
     self_clear = args.self_clearance if args.self_clearance is not None else recorded.get(
         "self_clearance_mm", 1000.0 * DEFAULT_SELF_CLEARANCE)
+    # a move clearance not given follows a pose clearance given, else the design's, else half
+    move = args.move_clearance if args.move_clearance is not None else None if \
+        args.clearance is not None else recorded.get("move_clearance_mm")
+    move_self = args.move_self_clearance if args.move_self_clearance is not None else None if \
+        args.self_clearance is not None else recorded.get("move_self_clearance_mm")
+    planner = None if args.no_planner else PlannerSettings(time=args.planner_time,
+                                                            seed=args.planner_seed)
 
     def build(loads):
-        return build_collision_model(robot, tool, loads, constraints, clearance=clear / 1000.0,
-                                     self_clearance=self_clear / 1000.0, srdf=args.srdf,
-                                     package_dirs=args.package_dir or ())
+        return build_collision_model(
+            robot, tool, loads, constraints, clearance=clear / 1000.0,
+            self_clearance=self_clear / 1000.0, srdf=args.srdf,
+            move_clearance=None if move is None else move / 1000.0,
+            move_self_clearance=None if move_self is None else move_self / 1000.0,
+            planner=planner, package_dirs=args.package_dir or ())
     return build

@@ -53,6 +53,10 @@ def add_arguments(c):
     c.add_argument("--constraints", help="constraints YAML: joint limits, margin, Cartesian boxes "
                                          "and floor, line of sight, load torques, coverage")
     collision_arguments(c)
+    c.add_argument("--home", metavar="Q1,Q2,...",
+                   help="the pose the robot program starts from, deg (mm for prismatic joints); "
+                        "only poses a free path joins to it are designed (default: the URDF "
+                        "zero, clipped inside the joint limits)")
     c.add_argument("--no-refine", action="store_true",
                    help="skip the continuous IPOPT refinement of the exact design")
     c.add_argument("--sigma", type=positive("--sigma", "mm"), default=0.02,
@@ -100,13 +104,15 @@ def run(args):
     constraints = read_constraints(args.constraints, robot, tool) if args.constraints else None
     build = collision_builder(args, robot, tool, constraints)
     collision = None if build is None else build(loads)
+    home = None if args.home is None else \
+        parse_floats(args.home, robot.n_joints, "--home") / robot.display_factors
     progress = stage_progress()
     result = optimal_design(model, args.poses, loads, candidates=args.candidates,
                             sigma=args.sigma / 1000.0, criterion=args.criterion, task=task,
                             task_point=parse_floats(args.task_point, 3, "--task-point") / 1000.0,
                             constraints=constraints, refine=not args.no_refine,
                             rng=np.random.default_rng(args.seed), progress=progress,
-                            collision=collision)
+                            collision=collision, home=home)
     if progress:
         print(file=sys.stderr)
     if args.detect:

@@ -4,8 +4,11 @@
 Pinocchio and coal, :mod:`.shapes` for tool, payloads, keep-out boxes and
 floor); :mod:`.pairs` decides which pairs are never checked (SRDF, adjacent
 links, always in contact); :mod:`.clearance` gives the clearance at a pose,
-screens many poses and checks a joint-space move at ≤ 1° steps.
+screens many poses and checks a joint-space move at ≤ 1° steps;
+:mod:`.planner` finds a free path (OMPL RRT-Connect) where the straight move
+collides; :mod:`.beams` checks the tracker's beams to the markers.
 """
+from doe_calib.collision.beams import BEAM_RADIUS, BlockedBeam, blocked_beams, screen_beams
 from doe_calib.collision.clearance import (
                         SEGMENT_STEP,
                         Clearance,
@@ -18,12 +21,19 @@ from doe_calib.collision.clearance import (
 )
 from doe_calib.collision.model import (
                         DEFAULT_CLEARANCE,
+                        DEFAULT_PLANNER,
+                        MOVE_SHARE,
                         DEFAULT_SELF_CLEARANCE,
                         CollisionModel,
                         build_collision_model,
 )
 
-__all__ = ["SEGMENT_STEP", "Clearance", "SegmentCheck", "Workspace", "check_segment",
+from doe_calib.collision.planner import PlannedMove, PlannerSettings, plan_move
+
+__all__ = ["BEAM_RADIUS", "BlockedBeam", "blocked_beams", "screen_beams", "MOVE_SHARE",
+           "DEFAULT_PLANNER",
+           "PlannedMove", "PlannerSettings", "plan_move", "SEGMENT_STEP", "Clearance",
+           "SegmentCheck", "Workspace", "check_segment",
            "clearance", "contacts", "too_close", "DEFAULT_CLEARANCE", "DEFAULT_SELF_CLEARANCE",
            "CollisionModel",
            "build_collision_model"]

@@ -92,6 +92,8 @@ def clearance(cm, q, workspace: Workspace | None = None) -> Clearance:
     """The pair with the least distance to spare at pose q (N,), rad/m: its distance and name.
 
     Every checked pair keeps its required distance when the returned one does.
+    Pairs whose distance never changes (:attr:`CollisionModel.fixed`) are not
+    reported unless they are the only ones or closer than required.
 
     Examples
     --------
@@ -110,7 +112,11 @@ def clearance(cm, q, workspace: Workspace | None = None) -> Clearance:
     pin.computeDistances(cm.model, ws.data, cm.geometry, ws.geometry,
                          cm.configurations(q)[:, 0])
     d = np.array([r.min_distance for r in ws.geometry.distanceResults])
-    k = int(np.argmin(d - np.asarray(cm.margins)))
+    spare = d - np.asarray(cm.margins)
+    fixed = np.zeros(len(d), bool) if len(cm.fixed) != len(d) else np.array(cm.fixed)
+    if (~fixed).any() and not (spare[fixed] < 0).any():
+        spare = np.where(fixed, np.inf, spare)
+    k = int(np.argmin(spare))
     return Clearance(float(d[k]), cm.pair_name(k), float(cm.margins[k]))
 
 
@@ -119,9 +125,10 @@ def too_close(cm, q, margin: float | None = None, workspace: Workspace | None = 
 
     Parameters
     ----------
-    margin : float, optional
-        Distance every pair must keep, m; default each pair's
-        (:attr:`CollisionModel.margins`).
+    margin : float or sequence of float, optional
+        Distance every pair (or each pair) must keep, m; default each pair's
+        (:attr:`CollisionModel.margins`); a move's are
+        :attr:`CollisionModel.move_margins`.
 
     Returns
     -------
@@ -131,7 +138,8 @@ def too_close(cm, q, margin: float | None = None, workspace: Workspace | None = 
     import pinocchio as pin
 
     ws = Workspace(cm) if workspace is None else workspace
-    ws.set_margins(cm.margins if margin is None else [margin] * len(cm.margins))
+    ws.set_margins(cm.margins if margin is None
+                   else np.broadcast_to(np.asarray(margin, float), len(cm.margins)))
     configurations = cm.configurations(q)
     out = np.full(configurations.shape[1], -1)
     results = ws.geometry.collisionResults
@@ -160,8 +168,9 @@ def check_segment(cm, qa, qb, margin: float | None = None, step: float = SEGMENT
 
     Parameters
     ----------
-    margin : float, optional
-        Distance every pair keeps along the move, m; default each pair's.
+    margin : float or sequence of float, optional
+        Distance every pair (or each pair) keeps along the move, m; default
+        each pair's pose clearance (:attr:`CollisionModel.margins`).
     step : float
         Largest change of any joint between checked poses, rad (m).
     """

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from doe_calib.collision import pairs as pair_rules
+from doe_calib.collision.planner import PlannerSettings
 from doe_calib.collision.shapes import cell_shapes, load_shapes, tool_shapes
 from doe_calib.errors import ModelError
 
@@ -26,6 +27,10 @@ DEFAULT_CLEARANCE = 0.02
 DEFAULT_SELF_CLEARANCE = 0.005
 #: Random configurations sampled to find the pairs always in contact.
 SAMPLES = 400
+#: How moves are planned by default: RRT-Connect, 1 s per search, seed 0.
+DEFAULT_PLANNER = PlannerSettings()
+#: Share of a pose's clearance a move keeps by default (10 mm of the 20 mm default).
+MOVE_SHARE = 0.5
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,11 +56,32 @@ class CollisionModel:
         links built to pass each other may do so with gaps of millimetres —
         the UR10's forearm and wrist 2 sit 19–21 mm apart in most poses).
     margins : tuple of float
-        Distance each checked pair must keep, m.
+        Distance each checked pair must keep at a pose, m.
     disabled : tuple of (str, str)
         Pairs never checked, in words, and why.
     source : str
         URDF file.
+    move_clearance, move_self_clearance : float
+        The distances kept along a move, m: smaller than the pose's (default
+        half, :data:`MOVE_SHARE`), so that a pose designed on its clearance's
+        boundary can always be left.
+    move_margins : tuple of float
+        Distance each checked pair must keep along a move, m.
+    fixed : tuple of bool
+        Per checked pair, whether its distance never changes (the same over
+        every random configuration sampled: e.g. a base link turning about
+        the vertical axis above the floor); a pose's reported clearance
+        ignores these pairs.
+    tracker : tuple of 3 float or None
+        Laser tracker position in the robot base frame, m (the constraints'
+        line of sight); the beams from it to the markers are checked
+        (:mod:`.beams`). None: no beam is checked.
+    lower, upper : tuple of float
+        Joint limits a planned move stays inside (the constraints', else the
+        URDF's), rad (m); ±inf for a continuous joint.
+    planner : PlannerSettings or None
+        How a move that no straight line or simple route clears is planned
+        in this cell (:func:`.planner.plan_move`); None: it is not.
     """
 
     model: object
@@ -67,6 +93,14 @@ class CollisionModel:
     margins: tuple
     disabled: tuple
     source: str
+    move_clearance: float = 0.0
+    move_self_clearance: float = 0.0
+    move_margins: tuple = ()
+    fixed: tuple = ()
+    tracker: tuple | None = None
+    lower: tuple = ()
+    upper: tuple = ()
+    planner: PlannerSettings | None = None
 
     @property
     def pairs(self) -> tuple:
@@ -85,8 +119,13 @@ class CollisionModel:
         """JSON-able description: clearances (mm), pairs checked and those never checked."""
         return {"clearance_mm": 1000.0 * self.clearance,
                 "self_clearance_mm": 1000.0 * self.self_clearance,
+                "move_clearance_mm": 1000.0 * self.move_clearance,
+                "move_self_clearance_mm": 1000.0 * self.move_self_clearance,
                 "pairs_checked": len(self.pairs),
-                "pairs_not_checked": [f"{p} ({why})" for p, why in self.disabled]}
+                "pairs_not_checked": [f"{p} ({why})" for p, why in self.disabled],
+                "pairs_never_moving": [p for p, f in zip(self.pairs, self.fixed) if f],
+                "tracker_mm": None if self.tracker is None
+                else [1000.0 * v for v in self.tracker]}
 
 
 def _words(names, pair) -> str:
@@ -138,7 +177,10 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
                           clearance: float = DEFAULT_CLEARANCE,
                           self_clearance: float = DEFAULT_SELF_CLEARANCE,
                           srdf=None, package_dirs=(),
-                          samples: int = SAMPLES, rng=None) -> CollisionModel:
+                          samples: int = SAMPLES, rng=None,
+                          move_clearance: float | None = None,
+                          move_self_clearance: float | None = None,
+                          planner: PlannerSettings | None = DEFAULT_PLANNER) -> CollisionModel:
     """The collision model of a robot with its tool, payloads and cell.
 
     Parameters
@@ -163,6 +205,12 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
     package_dirs : sequence of path-like
         Folders holding the packages of ``package://`` meshes (those of
         ``ROS_PACKAGE_PATH`` and the URDF's own folders are searched too).
+    move_clearance, move_self_clearance : float, optional
+        Distances kept along moves, m, at most the pose's; default
+        :data:`MOVE_SHARE` of ``clearance`` and ``self_clearance``.
+    planner : PlannerSettings or None
+        How moves no simple route clears are planned (default
+        :data:`DEFAULT_PLANNER`); None: they are not.
 
     Examples
     --------
@@ -174,9 +222,18 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
     """
     import pinocchio as pin
 
-    if clearance < 0 or self_clearance < 0:
-        raise ModelError(f"a clearance must not be negative, got "
-                         f"{1000 * min(clearance, self_clearance):g} mm")
+    move_clearance = MOVE_SHARE * clearance if move_clearance is None else move_clearance
+    move_self_clearance = MOVE_SHARE * self_clearance if move_self_clearance is None \
+        else move_self_clearance
+    least = min(clearance, self_clearance, move_clearance, move_self_clearance)
+    if least < 0:
+        raise ModelError(f"a clearance must not be negative, got {1000 * least:g} mm")
+    for move, pose, what in ((move_clearance, clearance, "clearance"),
+                             (move_self_clearance, self_clearance, "self-clearance")):
+        if move > pose:
+            raise ModelError(f"the move {what} {1000 * move:g} mm is above the pose {what} "
+                             f"{1000 * pose:g} mm: a pose on its boundary could not be left; "
+                             f"give a move {what} below it")
     model, geometry = _robot_geometry(robot, package_dirs)
     links = [model.frames[g.parentFrame].name for g in geometry.geometryObjects]
     robot_objects = set(range(len(links)))
@@ -195,8 +252,9 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
     links += [None] * len(shapes)
     geometry.addAllCollisionPairs()
     pairs = [pin.CollisionPair(p.first, p.second) for p in geometry.collisionPairs]
-    margins = np.array([self_clearance if p.first in robot_objects and p.second in robot_objects
-                        else clearance for p in pairs])
+    own = np.array([p.first in robot_objects and p.second in robot_objects for p in pairs])
+    margins = np.where(own, self_clearance, clearance)
+    move_margins = np.where(own, move_self_clearance, move_clearance)
     reasons = {}
     if srdf is not None:
         reasons.update({k: f"disabled in {Path(srdf).name}" for k in
@@ -223,5 +281,15 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
     geometry.removeAllCollisionPairs()
     for k in keep:
         geometry.addCollisionPair(pairs[k])
+    fixed = pair_rules.never_moving(model, geometry, sample)
+    los = None if constraints is None else constraints.line_of_sight
     return CollisionModel(model, geometry, names, tuple(robot.joint_names), float(clearance),
-                          float(self_clearance), tuple(margins[keep]), disabled, str(robot.source))
+                          float(self_clearance), tuple(margins[keep]), disabled, str(robot.source),
+                          float(move_clearance), float(move_self_clearance),
+                          tuple(float(m) for m in move_margins[keep]),
+                          tuple(bool(f) for f in fixed),
+                          None if los is None else tuple(float(v) for v in los.tracker),
+                          tuple(map(float, robot.lower if constraints is None
+                                    else constraints.lower)),
+                          tuple(map(float, robot.upper if constraints is None
+                                    else constraints.upper)), planner)

@@ -20,6 +20,11 @@ log = logging.getLogger(__name__)
 
 #: A pair closer than the clearance in at least this share of random samples is never checked.
 ALWAYS = 0.95
+#: Spread (max − min) of a pair's distance over the samples below which it never changes, m.
+CONSTANT = 1e-6
+#: Samples on which every pair's distance is first computed; only the pairs constant on these
+#: are followed over all samples.
+_FIRST = 20
 
 
 def _nearest_with_geometry(model, joint: int, has_geometry: set) -> int:
@@ -107,3 +112,36 @@ def contact_rates(model, geometry, configurations: np.ndarray, margins) -> np.nd
         pin.computeCollisions(model, data, geometry, gdata, q, False)
         counts += [r.isCollision() for r in gdata.collisionResults]
     return counts / configurations.shape[1]
+
+
+def never_moving(model, geometry, configurations: np.ndarray) -> np.ndarray:
+    """Per checked pair, whether its distance is the same in every configuration (nq, S).
+
+    Such a pair never moves relative to itself in a way that matters — a base
+    link turning about the vertical axis above the floor, a link and a box it
+    is bolted to — so a pose's clearance says nothing by naming it. The
+    distance is computed on the first 20 samples for every pair and on all
+    for those constant there; constant means a spread below :data:`CONSTANT`.
+
+    Returns
+    -------
+    ndarray of bool, shape (n_pairs,)
+    """
+    import pinocchio as pin
+
+    data, gdata = model.createData(), geometry.createData()
+    n = len(geometry.collisionPairs)
+    low, high = np.full(n, np.inf), np.full(n, -np.inf)
+    candidates = np.arange(n)
+    for s, q in enumerate(configurations.T):
+        if s == _FIRST:
+            candidates = np.flatnonzero(high - low < CONSTANT)
+        if not len(candidates):
+            break
+        pin.updateGeometryPlacements(model, data, geometry, gdata, q)
+        for k in candidates:
+            d = pin.computeDistance(geometry, gdata, int(k)).min_distance
+            low[k], high[k] = min(low[k], d), max(high[k], d)
+    out = np.zeros(n, bool)
+    out[candidates] = high[candidates] - low[candidates] < CONSTANT
+    return out

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from doe_calib.collision import Workspace, too_close
+from doe_calib.collision import Workspace, screen_beams, too_close
 from doe_calib.errors import SolverError
 
 _MAX_DRAWS = 50  # draw at most this many poses per candidate wanted
@@ -42,7 +42,10 @@ def feasible_candidates(feasibility, robot, n: int, rng, collision=None) -> Cand
     ``50 n`` poses in all. With a :class:`~doe_calib.collision.CollisionModel`,
     the poses meeting every other constraint are also screened for pairs
     closer than their clearance; each rejected pose is counted under the
-    first such pair (``"collision: upper_arm_link vs floor"``).
+    first such pair (``"collision: upper_arm_link vs floor"``). When the
+    collision model has a tracker, the poses left whose beam to a marker is
+    blocked are counted under the body blocking it
+    (``"line of sight: blocked by forearm_link"``).
 
     Raises
     ------
@@ -87,4 +90,12 @@ def _screen(collision, q, ok, workspace) -> tuple[np.ndarray, dict]:
     hit = np.full(len(q), -1)
     hit[ok] = too_close(collision, q[ok], workspace=workspace)
     masks = {f"collision: {collision.pair_name(k)}": hit == k for k in np.unique(hit[hit >= 0])}
-    return ok & (hit < 0), masks
+    ok = ok & (hit < 0)
+    if collision.tracker is not None:
+        bodies = np.full(len(q), None, dtype=object)
+        bodies[ok] = [None if b is None else b.body
+                      for b in screen_beams(collision, q[ok], workspace)]
+        for body in sorted({b for b in bodies if b is not None}):
+            masks[f"line of sight: blocked by {body}"] = bodies == body
+        ok = ok & np.array([b is None for b in bodies])
+    return ok, masks

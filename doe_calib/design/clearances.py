@@ -30,6 +30,12 @@ def collision_note(collision, removed: dict, drawn: int, clearances) -> str:
                  f"{worst} ({rejected[worst]})")
     else:
         text += f"none of {drawn} drawn poses rejected"
+    blocked = {k[len("line of sight: blocked by "):]: v for k, v in removed.items()
+               if k.startswith("line of sight: blocked by ")}
+    if blocked:
+        worst = max(blocked, key=blocked.get)
+        text += (f"; {sum(blocked.values())} with a tracker beam blocked, most by {worst} "
+                 f"({blocked[worst]})")
     if clearances:
         mm, pair = min(clearances)
         text += f"; least clearance of the design {mm:.1f} mm ({pair})"

@@ -23,6 +23,12 @@ from doe_calib.design.criteria import (
 from doe_calib.design.exchange import exact_design
 from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.pose_refinement import refine as refine_poses
+from doe_calib.design.reachability import (
+    free_home,
+    home_pose,
+    reachability_note,
+    unreachable,
+)
 from doe_calib.design.problem import (
     blocks_for,
     check_enough_poses,
@@ -37,6 +43,8 @@ from doe_calib.errors import OptionError, SolverError
 log = logging.getLogger(__name__)
 
 _RANDOM_DESIGNS = 100
+#: Rounds of exchange with unreachable chosen poses removed from the candidates.
+_REACH_ROUNDS = 8
 
 class _Stages:
     """Reports each stage to ``progress(stage, note)`` and logs its duration."""
@@ -60,7 +68,8 @@ class _Stages:
 def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma: float = 2e-5,
                    criterion="D", task=None, task_point=(0.0, 0.0, 0.0),
                    constraints: DesignConstraints | None = None, refine: bool = True,
-                   params=None, rng=None, progress=None, collision=None) -> DesignResult:
+                   params=None, rng=None, progress=None, collision=None,
+                   home=None) -> DesignResult:
     """Optimal N-pose design for ``model`` under constraints.
 
     Parameters
@@ -95,6 +104,17 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         Candidates closer than its clearances are rejected, refined poses
         that lose it step back, and each pose's clearance is reported
         (:func:`doe_calib.collision.build_collision_model`; None: no check).
+        Then, too, only poses joined to ``home`` by a free path at its move
+        clearance and whose tracker beams are free are kept
+        (:mod:`.reachability`): an unreachable chosen pose is removed from the
+        candidates and the exchange run again, an unreachable refined pose
+        goes back to its candidate.
+    home : array_like, shape (N,), optional
+        The pose programs start from, rad (m); default the URDF zero clipped
+        inside the joint bounds (:func:`.reachability.home_pose`), or the
+        free candidate nearest it when it is not free
+        (:func:`.reachability.free_home`); recorded in the result's
+        ``constraints["reachability"]["home"]`` (deg, mm).
     """
     if isinstance(criterion, TaskOptimal):
         raise OptionError("ask for the task criterion by name, criterion=\"task\", with task= "
@@ -122,16 +142,49 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     stages = {"relaxation": relaxed.to_dict()}
     stage("exchange", f"{n_poses} poses")
     cov = constraints.coverage
-    exchanged = exact_design(blocks, n_poses, crit, relaxed.weights, None,
-                          None if cov is None else cov.bins(cands.q),
-                          0 if cov is None else cov.min_bins)
+    given, moved = home is not None, ""
+    home = None if collision is None else home_pose(model.robot, constraints, home)
+    if home is not None:
+        home, moved = free_home(collision, home, model.robot, given, cands.q)
+    keep, replaced, verdict = np.ones(len(cands.q), bool), {}, {}
+    pool_q, bounds = cands.q.copy(), constraints.bounds(model.robot)
+    for _ in range(_REACH_ROUNDS):
+        pool = np.flatnonzero(keep)
+        if len(pool) < n_poses:
+            raise SolverError(f"only {len(pool)} candidates a program can reach for {n_poses} "
+                              f"poses: " + ", ".join(f"{n} {why}" for why, n in replaced.items()))
+        exchanged = exact_design(blocks[pool], n_poses, crit, relaxed.weights[pool], None,
+                                 None if cov is None else cov.bins(cands.q)[pool],
+                                 0 if cov is None else cov.min_bins)
+        chosen = pool[exchanged.indices]
+        if home is None:
+            break
+        todo = [k for k in chosen if k not in verdict]
+        for k, (why, used) in zip(todo, unreachable(collision, pool_q[todo], home, model.robot,
+                                                     *bounds)):
+            verdict[k], pool_q[k] = why, used
+        bad = [k for k in chosen if verdict[k] is not None]
+        if not bad:
+            break
+        for k in bad:
+            keep[k] = False
+            replaced[verdict[k]] = replaced.get(verdict[k], 0) + 1
+    else:
+        raise SolverError(f"after {_REACH_ROUNDS} exchanges some chosen poses are still "
+                          f"unreachable: " + ", ".join(f"{n} {why}" for why, n in replaced.items())
+                          + "; give more candidates, another --home or fewer constraints")
     stages["exchange"] = exchanged.to_dict()
-    q, refinement = cands.q[exchanged.indices], None
+    q, refinement, reverted = pool_q[chosen], None, 0
     if refine:
         stage("refinement", f"IPOPT on {q.size} joint angles")
         refinement = refine_poses(model, params, loads, sigma, q, feasibility, crit,
                                   collision=collision)
         q, stages["refinement"] = refinement.q, refinement.to_dict()
+        if home is not None and refinement.accepted:
+            checked = unreachable(collision, q, home, model.robot, *bounds)
+            back = np.array([why is not None for why, _ in checked])
+            q = np.where(back[:, None], pool_q[chosen], [used for _, used in checked])
+            reverted = int(back.sum())
         if refinement.accepted:
             stage("bound", "relaxation with the refined poses as candidates")
             blocks = np.concatenate([blocks, blocks_for(model, params, q, loads, sigma)])
@@ -191,6 +244,10 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         clearances = pose_clearances(collision, q)
         used_constraints["collision"] = collision.summary()
         notes.append(collision_note(collision, cands.removed, cands.drawn, clearances))
+        notes.append(reachability_note(home, model.robot, replaced, reverted, moved))
+        used_constraints["reachability"] = {
+            "home": [float(v) for v in home * model.robot.display_factors],
+            "replaced": dict(replaced), "refined_reverted": reverted}
     cfg = load_configurations(model, params.values, q, loads)
     return DesignResult(model.robot, model.tool, model.spec, cfg, crit.name, value, bound,
                         efficiencies[crit.name],

@@ -18,8 +18,19 @@ design's clearance); a retract–swing–extend, the previous position and the
 next with the arm joints (2 and 3) of such a pose; or the wrist turned as at
 such a pose for the move.
 The candidates are tried in order of their joint travel, at most
-:data:`MAX_ROUTES`. A move from a pre-pose into its pose is never routed (the
-side it arrives from is its purpose).
+:data:`MAX_ROUTES`; when none passes, the joint-space planner
+(:func:`doe_calib.collision.plan_move`: OMPL RRT-Connect, shortened, every
+segment re-checked at ≤ 1°) looks for a path, written as its intermediate
+positions like a route. A move from a pre-pose into its pose is never routed
+(the side it arrives from is its purpose).
+
+Moves keep the collision model's *move* clearance
+(:attr:`~doe_calib.collision.CollisionModel.move_margins`, by default half
+the pose clearance the design kept), so that a pose designed on the boundary
+of its clearance can always be left. With a tracker in the collision model
+(the constraints' line of sight), the beam to every marker is checked at
+every pose (:func:`doe_calib.collision.blocked_beams`); a blocked beam is
+reported with the pose, marker and body, and refused as a collision is.
 """
 from __future__ import annotations
 
@@ -27,7 +38,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.collision import Workspace, check_segment
+from doe_calib.collision import PlannerSettings, Workspace, blocked_beams, check_segment, plan_move
 from doe_calib.errors import CollisionError
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.program import Waypoint, ascii_text, load_words
@@ -37,6 +48,7 @@ from doe_calib.export.sequence import NO_LOAD
 MAX_ROUTES = 40
 #: Joints (0-based) a retract sets from a free pose: the arm's second and third.
 ARM = (1, 2)
+
 
 
 @dataclass(frozen=True)
@@ -90,6 +102,11 @@ class ProgramCheck:
         Each routed move in words.
     collisions : tuple of Collision
         Moves that still collide.
+    blocked : tuple of str
+        Each pose whose tracker beam to a marker is blocked, in words
+        (``"pose 3, no load: beam to marker A blocked by upper_arm_link"``).
+    clearance : str
+        The clearances the moves kept, in words.
     """
 
     visits: tuple
@@ -97,28 +114,39 @@ class ProgramCheck:
     samples: int
     routed: tuple
     collisions: tuple
+    blocked: tuple = ()
+    clearance: str = ""
 
     @property
     def free(self) -> bool:
-        return not self.collisions
+        """No move collides and no beam is blocked."""
+        return not self.collisions and not self.blocked
 
     def summary(self) -> str:
         """One line per finding: how much was checked, each routed move, each collision."""
+        kept = f" ({self.clearance})" if self.clearance else ""
         lines = [f"collision check of the program: {self.moves} moves, {self.samples} poses "
-                 f"checked at ≤ 1° steps; {len(self.routed)} routed, "
-                 f"{len(self.collisions)} colliding"]
+                 f"checked at ≤ 1° steps{kept}; {len(self.routed)} routed, "
+                 f"{len(self.collisions)} colliding, {len(self.blocked)} beams blocked"]
         lines += [f"routed: {r}" for r in self.routed]
         lines += [f"collides: {c}" for c in self.collisions]
+        lines += [f"blocked: {b}" for b in self.blocked]
         return "\n".join(lines)
 
     def raise_if_colliding(self) -> None:
-        """Raise :class:`CollisionError` naming every move that collides and its pair."""
+        """Raise :class:`CollisionError` naming every colliding move and every blocked beam."""
+        said = []
         if self.collisions:
+            said.append(f"the program would collide in {len(self.collisions)} move(s): "
+                        + "; ".join(str(c) for c in self.collisions))
+        if self.blocked:
+            said.append(f"the tracker's beam is blocked at {len(self.blocked)} pose(s): "
+                        + "; ".join(self.blocked))
+        if said:
             raise CollisionError(
-                f"the program would collide in {len(self.collisions)} move(s): "
-                + "; ".join(str(c) for c in self.collisions)
-                + " — change the design (more clearance, a constraints file) or write it anyway "
-                  "with --allow-collisions")
+                "; ".join(said)
+                + " — change the design (more clearance, a constraints file, another tracker "
+                  "position) or write it anyway with --allow-collisions")
 
 
 def program_models(loads, build) -> dict:
@@ -176,23 +204,41 @@ def _routes(a, b, safe) -> list:
     return sorted(out, key=lambda r: _travel([a, *r[1], b]))[:MAX_ROUTES]
 
 
-def _route(cm, a, b, safe, ws):
-    """The first candidate route whose every move passes, and the poses checked; None when none."""
+def _margins(cm):
+    return cm.move_margins or cm.margins
+
+
+def _route(cm, a, b, safe, ws, planner):
+    """The first candidate route whose every move passes, else a planned path; the poses checked.
+
+    ``(words, intermediate positions, samples)``; words and positions None when none passes.
+    """
     samples = 0
     for words, via in _routes(a, b, safe):
         path = [a, *via, b]
         for qa, qb in zip(path[:-1], path[1:]):
-            check = check_segment(cm, qa, qb, workspace=ws)
+            check = check_segment(cm, qa, qb, _margins(cm), workspace=ws)
             samples += check.samples
             if not check.free:
                 break
         else:
             return words, via, samples
+    if planner is not None:
+        planned = plan_move(cm, a, b, settings=planner, workspace=ws)
+        if planned is not None:
+            return (f"planned (RRT-Connect, {len(planned.via)} intermediate positions)",
+                    list(planned.via), samples + planned.samples)
     return None, None, samples
 
 
+def _clearance_words(cm) -> str:
+    return (f"moves keep {1000 * cm.move_clearance:g} mm, {1000 * cm.move_self_clearance:g} mm "
+            f"between links; poses {1000 * cm.clearance:g} mm")
+
+
 def check_program(visits, models, robot, axis_map: AxisMap | None = None,
-                  route: bool = True) -> ProgramCheck:
+                  route: bool = True,
+                  planner: PlannerSettings | bool = True) -> ProgramCheck:
     """Check every move of a program for collisions; route the colliding ones when possible.
 
     Parameters
@@ -209,6 +255,11 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
         Controller values of the intermediate positions from the URDF's.
     route : bool
         Look for intermediate positions round a colliding move.
+    planner : PlannerSettings or bool
+        How the motion planner searches for a move no simple route clears:
+        True (default) as each collision model says
+        (:attr:`~doe_calib.collision.CollisionModel.planner`), False: simple
+        routes only, or these settings.
 
     Returns
     -------
@@ -225,14 +276,14 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
     names = tuple(robot.joint_names)
     workspaces = {id(cm): Workspace(cm) for cm in models.values()}
     safe = list({m.pose: m.urdf_q for m in visits}.items())
-    out, routed, collisions = [], [], []
+    out, routed, collisions, blocked = [], [], [], []
     n_moves = n_samples = 0
     previous, where = None, None
 
     def checked(cm, qa, qb):
         nonlocal n_moves, n_samples
         n_moves += 1
-        result = check_segment(cm, qa, qb, workspace=workspaces[id(cm)])
+        result = check_segment(cm, qa, qb, _margins(cm), workspace=workspaces[id(cm)])
         n_samples += result.samples
         return result
 
@@ -250,7 +301,8 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
             + f", {m.load}"
         result = checked(cm, start, first)
         if not result.free and route and previous is not None:
-            how, via, samples = _route(cm, start, first, safe, workspaces[id(cm)])
+            settings = cm.planner if planner is True else (planner or None)
+            how, via, samples = _route(cm, start, first, safe, workspaces[id(cm)], settings)
             n_samples += samples
             if via is not None:
                 why = ascii_text(f"on the way from {where} to {to}, {how} (straight: "
@@ -270,6 +322,10 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
             result = checked(cm, m.urdf_pre, m.urdf_q)
             if not result.free:
                 collisions.append(collision(result, m.urdf_pre, m.urdf_q, words))
+        for b in (blocked_beams(cm, m.urdf_q, workspaces[id(cm)]) if m.measures else ()):
+            blocked.append(f"{_label(m)}, {m.load}: {b}")  # beams matter where it measures
         previous, where = m.urdf_q, _label(m)
         out.append(m)
-    return ProgramCheck(tuple(out), n_moves, n_samples, tuple(routed), tuple(collisions))
+    first = models[NO_LOAD]
+    return ProgramCheck(tuple(out), n_moves, n_samples, tuple(routed), tuple(collisions),
+                        tuple(dict.fromkeys(blocked)), _clearance_words(first))

@@ -64,11 +64,12 @@ def nearest_pose(design, q) -> tuple:
 def default_home(design, is_free=None, limits=None) -> tuple:
     """The home pose a program uses when none is given, and why, in words.
 
-    The URDF zero inside the limits (:func:`zero_home`) when ``is_free``
-    passes it (or no check is made: ``is_free`` None); otherwise the design
-    pose nearest to it (each design pose is free at the design's clearance) —
-    a UR arm's zero, stretched out level with its base, touches the floor it
-    stands on.
+    The design's own home, when its poses were checked reachable from one
+    (``design.constraints["reachability"]["home"]``, deg/mm); else the URDF
+    zero inside the limits (:func:`zero_home`) when ``is_free`` passes it (or
+    no check is made: ``is_free`` None); otherwise the design pose nearest to
+    it (each design pose is free at the design's clearance) — a UR arm's zero,
+    stretched out level with its base, touches the floor it stands on.
 
     Parameters
     ----------
@@ -86,6 +87,12 @@ def default_home(design, is_free=None, limits=None) -> tuple:
         rad (m).
     why : str
     """
+    reach = (design.constraints or {}).get("reachability") or {}
+    if reach.get("home") is not None:  # the design joined every pose to it by a free path
+        q = tuple(float(v) for v in np.asarray(reach["home"], float)
+                  / design.robot.display_factors)
+        if is_free is None or is_free(np.array(q)):
+            return q, "home: the design's home pose (every pose was checked reachable from it)"
     zero = zero_home(design.robot, limits)
     if is_free is None or is_free(np.array(zero)):
         return zero, "home: the URDF zero inside the joint limits"

@@ -1,0 +1,189 @@
+"""A joint-space motion planner for moves the straight line cannot clear: OMPL's RRT-Connect.
+
+The state space is a joint box: first the box spanned by start and goal
+widened by :data:`WIDEN` on each side, then, if no path is found there, the
+whole joint range (the limits; ±2π for a continuous joint). A state is valid
+when every checked pair keeps its move clearance
+(:attr:`CollisionModel.move_margins`, :func:`.clearance.too_close`); OMPL
+checks its motions at :data:`SEARCH_STEP` (Euclidean, hence on every joint).
+The path found is shortened and smoothed (``PathSimplifier``: vertices
+removed, shortcuts, until no change: ``simplifyMax``), and then every segment is checked again with
+:func:`.clearance.check_segment` at ≤ 1° steps — a path that fails that check
+is not returned (the next search is made at 1°).
+
+Planning is seeded (OMPL's global seed, set before each plan) and bounded in
+time (:attr:`PlannerSettings.time`): the same seed gives the same path as
+long as the search ends before the time bound, which the small searches of a
+measurement program do (a few hundred states, well under a second).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from doe_calib.collision.clearance import SEGMENT_STEP, Workspace, check_segment, too_close
+
+#: Joint step at which the search checks its motions, rad (the final check is at 1°).
+SEARCH_STEP = np.radians(3.0)
+#: Margin around the start–goal box searched first, rad (m).
+WIDEN = np.pi / 2
+
+
+@dataclass(frozen=True)
+class PlannerSettings:
+    """How hard the planner tries.
+
+    Attributes
+    ----------
+    time : float
+        Longest search for one move, s.
+    seed : int
+        Seed of OMPL's random sampling.
+    attempts : int
+        Searches (seeds ``seed``, ``seed + 1``, …) in each of the two boxes
+        (near start and goal, the whole joint range) before a move is given up.
+    """
+
+    time: float = 1.0
+    seed: int = 0
+    attempts: int = 1
+
+
+@dataclass(frozen=True)
+class PlannedMove:
+    """A collision-free path between two positions.
+
+    Attributes
+    ----------
+    via : tuple of ndarray, shape (N,) each
+        Intermediate positions, URDF values rad (m), both ends excluded.
+    samples : int
+        Poses checked along the final path at ≤ 1° steps.
+    """
+
+    via: tuple
+    samples: int
+
+
+def _bounds(lower, upper):
+    lo = np.where(np.isfinite(lower), lower, -2 * np.pi)
+    hi = np.where(np.isfinite(upper), upper, 2 * np.pi)
+    return lo, hi
+
+
+def _slots(cm) -> list:
+    """(index in the Pinocchio configuration, whether stored as cos, sin) of each chain joint."""
+    out = []
+    for name in cm.joint_names:
+        jm = cm.model.joints[cm.model.getJointId(name)]
+        out.append((jm.idx_q, jm.nq == 2))
+    return out
+
+
+def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, ws):
+    """One seeded RRT-Connect search, simplified; the path's positions (K, N) or None."""
+    import pinocchio as pin
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    n = len(qa)
+    level = ou.getLogLevel()
+    ou.setLogLevel(ou.LOG_NONE)  # OMPL says re-seeding is not deterministic; it is, from here
+    try:
+        ou.RNG.setSeed(int(seed) + 1)
+        space = ob.RealVectorStateSpace(n)
+        bounds = ob.RealVectorBounds(n)
+        for k in range(n):
+            bounds.setLow(k, float(lo[k]))
+            bounds.setHigh(k, float(hi[k]))
+        space.setBounds(bounds)
+        setup = og.SimpleSetup(space)
+
+        ws.set_margins(np.broadcast_to(np.asarray(margins, float), len(cm.margins)))
+        x = cm.configurations(qa)[:, 0]
+        slots = _slots(cm)
+
+        def valid(state) -> bool:
+            for k, (i, turns) in enumerate(slots):
+                v = state[k]
+                if turns:
+                    x[i], x[i + 1] = math.cos(v), math.sin(v)
+                else:
+                    x[i] = v
+            return not pin.computeCollisions(cm.model, ws.data, cm.geometry, ws.geometry, x, True)
+
+        setup.setStateValidityChecker(valid)
+        info = setup.getSpaceInformation()
+        info.setStateValidityCheckingResolution(step / space.getMaximumExtent())
+        start, goal = space.allocState(), space.allocState()
+        for k in range(n):
+            start[k], goal[k] = float(qa[k]), float(qb[k])
+        setup.setStartAndGoalStates(start, goal)
+        setup.setPlanner(og.RRTConnect(info))
+        solved = setup.solve(settings.time)
+        if not solved or not setup.haveExactSolutionPath():
+            return None
+        path = setup.getSolutionPath()
+        og.PathSimplifier(info).simplifyMax(path)
+        out = np.array([[path.getState(i)[k] for k in range(n)]
+                        for i in range(path.getStateCount())])
+        setup.clear()
+        return out
+    finally:
+        ou.setLogLevel(level)
+
+
+def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | None = None,
+              workspace: Workspace | None = None) -> PlannedMove | None:
+    """A collision-free joint-space path qa → qb (N,) at the move clearance, or None.
+
+    Parameters
+    ----------
+    cm : CollisionModel
+    qa, qb : array_like, shape (N,)
+        Start and goal, URDF values rad (m); both must keep the move clearance.
+    lower, upper : array_like, shape (N,), optional
+        Joint limits the path stays inside, rad (m); ±inf: ±2π. Default the
+        collision model's (:attr:`CollisionModel.lower`, ``upper``).
+    settings : PlannerSettings, optional
+
+    Returns
+    -------
+    PlannedMove or None
+        None when no path was found in ``settings.attempts`` searches (or a
+        start or goal is not free).
+
+    Examples
+    --------
+    >>> planned = plan_move(cm, qa, qb, robot.lower, robot.upper)  # doctest: +SKIP
+    >>> [np.degrees(q).round(1) for q in planned.via]  # doctest: +SKIP
+    """
+    settings = PlannerSettings() if settings is None else settings
+    ws = Workspace(cm) if workspace is None else workspace
+    qa, qb = np.asarray(qa, float), np.asarray(qb, float)
+    margins = cm.move_margins or cm.margins
+    lo, hi = _bounds(np.asarray(cm.lower if lower is None else lower, float),
+                     np.asarray(cm.upper if upper is None else upper, float))
+    if (too_close(cm, np.array([qa, qb]), margins, ws) >= 0).any():
+        return None
+    near = (np.maximum(lo, np.minimum(qa, qb) - WIDEN), np.minimum(hi, np.maximum(qa, qb) + WIDEN))
+    searches = [(near, SEARCH_STEP, settings.seed + a) for a in range(settings.attempts)]
+    searches += [((lo, hi), SEGMENT_STEP, settings.seed + a) for a in range(settings.attempts)]
+    for (low, high), step, seed in searches:
+        path = _search(cm, qa, qb, low, high, margins, settings, seed, step, ws)
+        if path is None:
+            continue
+        path[0], path[-1] = qa, qb
+        samples, free = 0, True
+        for a, b in zip(path[:-1], path[1:]):
+            check = check_segment(cm, a, b, margins, workspace=ws)
+            samples += check.samples
+            if not check.free:
+                free = False
+                break
+        if free:
+            return PlannedMove(tuple(path[1:-1]), samples)
+    return None

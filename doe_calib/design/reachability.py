@@ -1,0 +1,144 @@
+"""Poses a program can reach: a free path from the home pose, and the tracker's beams unblocked.
+
+A designed pose is kept only when the robot can get there from its home
+pose (the URDF zero clipped inside the joint bounds, or one given) without
+a collision at the move clearance — straight in joint space, or along a path
+the motion planner finds (:func:`doe_calib.collision.plan_move`) — and when
+no body of the cell cuts the tracker's beam to any marker
+(:func:`doe_calib.collision.blocked_beams`). Only the chosen poses are
+checked: a rejected one is replaced from the candidates by the caller.
+
+A joint with more than one turn of range reaches the same physical pose at
+q ± 360°; a pose whose angles no free path joins to home (a UR shoulder at
+280° lies beyond the table from 0°, at −80° it does not) is tried again at
+its equivalent nearest home (:func:`nearest_equivalent`), which measures
+exactly the same.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from doe_calib.collision import Workspace, blocked_beams, check_segment, plan_move, too_close
+from doe_calib.errors import OptionError
+
+#: Reason of a pose no free path joins to the home pose.
+NO_PATH = "no free path from the home pose"
+
+
+def home_pose(robot, constraints, home=None) -> np.ndarray:
+    """The home pose, rad (m): ``home`` if given (checked inside the bounds), else zero clipped.
+
+    Parameters
+    ----------
+    robot : Robot
+    constraints : DesignConstraints
+        Its bounds (:meth:`DesignConstraints.bounds`, margin applied).
+    home : array_like, shape (N,), optional
+        URDF joint values, rad (m).
+
+    Raises
+    ------
+    OptionError
+        A ``home`` of the wrong length or outside the joint bounds, naming the joint.
+    """
+    lo, hi = constraints.bounds(robot)
+    if home is None:
+        return np.clip(np.zeros(robot.n_joints), lo, hi)
+    home = np.asarray(home, float)
+    if home.shape != (robot.n_joints,):
+        raise OptionError(f"--home: {robot.n_joints} joint values expected, got {home.size}")
+    for joint, v, a, b in zip(robot.joints, home, lo, hi):
+        if not a - 1e-12 <= v <= b + 1e-12:
+            f, unit = joint.display_factor, joint.display_unit
+            raise OptionError(f"--home: joint {joint.name} = {v * f:.6g} {unit} is outside "
+                              f"[{a * f:.6g}, {b * f:.6g}] {unit} (the joint limits, margin "
+                              f"applied)")
+    return home
+
+
+def free_home(collision, home, robot, given: bool, candidates) -> tuple:
+    """The home pose checked free at the move clearance, and a note when it was replaced.
+
+    A given home (``--home``) that is not free is an error; the default one
+    (the URDF zero, e.g. a UR's wrist hanging below the base plane) is then
+    replaced by the free candidate pose nearest to it.
+
+    Returns
+    -------
+    (ndarray, str)
+        The home pose, rad (m), and "" or a sentence saying why it moved.
+    """
+    hit = too_close(collision, np.atleast_2d(home), collision.move_margins or None)[0]
+    if hit < 0:
+        return np.asarray(home, float), ""
+    deg = ", ".join(f"{v:.6g}" for v in np.asarray(home) * robot.display_factors)
+    if given or not len(candidates):
+        raise OptionError(f"the home pose ({deg}) is itself too close: "
+                          f"{collision.pair_name(int(hit))}; give a free one with --home")
+    near = candidates[int(np.argmin(np.linalg.norm(candidates - home, axis=1)))]
+    return near, (f"the URDF zero ({deg}) is too close ({collision.pair_name(int(hit))}): "
+                  f"the home pose is the free candidate nearest it")
+
+
+def nearest_equivalent(q, home, robot, lower, upper) -> np.ndarray:
+    """q (N,) with each revolute joint turned by whole turns to lie nearest ``home``, in bounds."""
+    q = np.asarray(q, float)
+    turned = q + 2 * np.pi * np.round((np.asarray(home) - q) / (2 * np.pi))
+    ok = np.array([j.kind != "prismatic" for j in robot.joints]) \
+        & (turned >= np.asarray(lower) - 1e-12) & (turned <= np.asarray(upper) + 1e-12)
+    return np.where(ok, turned, q)
+
+
+def _joined(collision, home, pose, ws) -> bool:
+    if check_segment(collision, home, pose, collision.move_margins or None, workspace=ws).free:
+        return True
+    return collision.planner is not None and plan_move(
+        collision, home, pose, settings=collision.planner, workspace=ws) is not None
+
+
+def unreachable(collision, q, home, robot, lower, upper,
+                workspace: Workspace | None = None) -> list:
+    """For each pose of q (M, N), why a program cannot use it, or the angles it is reached at.
+
+    Parameters
+    ----------
+    lower, upper : array_like, shape (N,)
+        Joint bounds an equivalent angle must stay in, rad (m).
+
+    Returns
+    -------
+    list of (str or None, ndarray)
+        Per pose: the reason — ``"line of sight: blocked by <body>"`` when a
+        beam to a marker is blocked, :data:`NO_PATH` when neither the
+        straight move from ``home`` nor a planned path (the collision model's
+        :attr:`~doe_calib.collision.CollisionModel.planner`) is free at the
+        move clearance, at the pose's angles or at their equivalent nearest
+        home —, or None; and the angles to use (the equivalent when only it
+        is joined).
+    """
+    ws = Workspace(collision) if workspace is None else workspace
+    out = []
+    for pose in np.atleast_2d(q):
+        blocked = blocked_beams(collision, pose, ws)
+        if blocked:
+            out.append((f"line of sight: blocked by {blocked[0].body}", pose))
+            continue
+        near = nearest_equivalent(pose, home, robot, lower, upper)
+        tries = [pose] + ([near] if not np.allclose(near, pose) else [])
+        used = next((t for t in tries if _joined(collision, home, t, ws)), None)
+        out.append((NO_PATH, pose) if used is None else (None, used))
+    return out
+
+
+def reachability_note(home, robot, replaced: dict, reverted: int, moved: str = "") -> str:
+    """One sentence: the home pose and how many chosen poses were replaced, and why."""
+    deg = ", ".join(f"{v:.4g}" for v in np.asarray(home) * robot.display_factors)
+    text = f"reachability: every pose joined to the home pose ({deg}) by a free path"
+    if moved:
+        text += f" ({moved})"
+    if replaced:
+        text += "; chosen poses replaced from the candidates: " + ", ".join(
+            f"{n} ({why})" for why, n in sorted(replaced.items(), key=lambda x: -x[1]))
+    if reverted:
+        text += f"; {reverted} refined pose(s) kept at their candidate (refined, unreachable)"
+    return text
