@@ -20,6 +20,7 @@ from doe_calib.design.criteria import (
     check,
     log_det,
 )
+from doe_calib.design.discovery import discovery_design
 from doe_calib.design.exchange import exact_design
 from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.pose_refinement import refine as refine_poses
@@ -69,7 +70,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
                    criterion="D", task=None, task_point=(0.0, 0.0, 0.0),
                    constraints: DesignConstraints | None = None, refine: bool = True,
                    params=None, rng=None, progress=None, collision=None,
-                   home=None) -> DesignResult:
+                   home=None, discovery=None) -> DesignResult:
     """Optimal N-pose design for ``model`` under constraints.
 
     Parameters
@@ -131,6 +132,12 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     cands = feasible_candidates(feasibility, model.robot, candidates, rng, collision)
     if len(cands.q) < n_poses:
         raise SolverError(f"only {len(cands.q)} feasible candidates for {n_poses} poses")
+    if discovery is not None:
+        if criterion != "D":
+            raise OptionError(f"--detect-size designs maximise the D criterion; got "
+                              f"--criterion {criterion}")
+        return discovery_design(model, params, cands.q, loads, n_poses, sigma, discovery,
+                                constraints, cands.to_dict(), progress=stage)
     params = design_parameters(model, params, cands.q, loads, rng=rng)
     t = None if task is None else task_matrix(model, params, task, task_point)
     crit = Criterion.from_name(criterion, t)

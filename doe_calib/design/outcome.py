@@ -18,7 +18,7 @@ import numpy as np
 
 from doe_calib.design.criteria import Criterion
 
-STAGES = ("relaxation", "exchange", "refinement")
+STAGES = ("relaxation", "exchange", "refinement", "discovery")
 
 
 @dataclass(frozen=True, eq=False)
@@ -27,7 +27,7 @@ class DesignOutcome:
 
     Attributes
     ----------
-    stage : {"relaxation", "exchange", "refinement"}
+    stage : {"relaxation", "exchange", "refinement", "discovery"}
         The solver that made it.
     criterion : Criterion
     weights : ndarray, shape (K,)

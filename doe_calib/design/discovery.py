@@ -1,0 +1,255 @@
+"""Designs that can discover: D-optimal poses, load cases and approach sides subject to every
+listed effect being detectable at a given size.
+
+``doe-calib design --criterion D --detect EFFECTS --min-power P --detect-size S``.
+Each candidate is a pose in one variant (:mod:`.discovery_candidates`):
+measured unloaded and under one allowed load case (``--load`` ×
+``--load-directions``, :mod:`.load_directions`), with the approach side of
+every joint whose approach backlash is listed. Effect e is detectable at
+size S with power P (χ² score test at level α, the model's own parameters
+estimated too, :mod:`.effect_detection`) when the smallest eigenvalue of its
+projected information ``N_e = Z⊥ᵀZ⊥`` reaches ``λ*(P)/S²``. The method is a
+constrained exchange (:mod:`.constrained_exchange`), started from the
+unconstrained D-optimal choice among the same variants: first lower the
+shortfall of the bounds, then raise log det M among the designs that meet
+them. An effect that no candidate (all of them together) reveals is left out
+of the bounds and said so; one that the n poses cannot reveal at S gets the
+best size reached. Each effect's ``min_detectable`` is then recomputed on the
+design (:func:`.effect_detection.with_detectability`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from doe_calib.design.constrained_exchange import constrained_exchange, projected_information
+from doe_calib.design.criteria import AOptimal, DOptimal, EOptimal, log_det
+from doe_calib.design.detectability import INVISIBLE
+from doe_calib.design.discovery_candidates import (
+    approach_joints,
+    detection_target,
+    effect_columns,
+    observation_rows,
+    variants,
+)
+from doe_calib.design.effect_detection import detect_effects, with_detectability
+from doe_calib.design.exchange import exact_design
+from doe_calib.design.load_directions import directed_loads, horizontal
+from doe_calib.design.relaxation import information, relax
+from doe_calib.design.result import DesignResult
+from doe_calib.errors import OptionError, SolverError
+from doe_calib.estimation.identifiability import analyse
+from doe_calib.io.measurements import Configurations
+
+#: Candidates searched by the exchange: the relaxation's best, and each effect's richest.
+POOL, POOL_PER_EFFECT = 1500, 300
+
+
+@dataclass(frozen=True)
+class DiscoveryGoal:
+    """What a discovery design must be able to reveal.
+
+    Attributes
+    ----------
+    effects : str
+        ``+``-joined effect strings (or ``catalogue``), as ``--detect``.
+    size : float
+        ``--detect-size``: the size each effect must be detected at, its display unit
+        (deg, mm, …; SI when its parameters' units differ).
+    power, alpha : float
+        Power asked (``--min-power``) of the χ² score test at level ``alpha``.
+    directions : tuple of tuple
+        Allowed unit force directions of the load cases (:func:`.load_directions.parse_directions`).
+    registry : EffectRegistry, optional
+    """
+
+    effects: str
+    size: float
+    power: float = 0.8
+    alpha: float = 0.05
+    directions: tuple = ((0.0, 0.0, -1.0),)
+    registry: object = None
+
+    def __post_init__(self):
+        if not self.size > 0:
+            raise OptionError(f"--detect-size {self.size:g}: give a positive size (the effect's "
+                              f"display unit, e.g. deg)")
+        if not 0 < self.alpha < self.power < 1:
+            raise OptionError(f"--alpha {self.alpha:g} and --min-power {self.power:g}: give "
+                              f"0 < alpha < power < 1")
+
+
+def _free_parameters(params, blocks_raw, cand):
+    """``params`` with what no variant identifies fixed, judged on a sample of variants."""
+    rng = np.random.default_rng(0)
+    pick = rng.choice(len(cand), size=min(400, len(cand)), replace=False)
+    ident = analyse(blocks_raw[pick].reshape(-1, blocks_raw.shape[2]), params)
+    for name, why in ident.dependent:
+        params = params.fixed([name], why + " (over the candidate poses and load cases)")
+    return params
+
+
+def _dedupe(start, blocks, pose_of):
+    """The start with repeated poses replaced by the best D candidate of an unused pose."""
+    chosen = []
+    for k in start:
+        if pose_of[k] in {pose_of[j] for j in chosen}:
+            m = information(blocks[chosen], np.ones(len(chosen))) if chosen else 0.0
+            free = np.flatnonzero(~np.isin(pose_of, [pose_of[j] for j in chosen]))
+            gain = [log_det(m + blocks[j].T @ blocks[j] + 1e-9 * np.eye(blocks.shape[2]))
+                    for j in free[:2000]]
+            k = int(free[int(np.argmax(gain))])
+        chosen.append(int(k))
+    return chosen
+
+
+def _pool(relaxed, zblocks):
+    order = list(np.argsort(-relaxed.weights)[:POOL])
+    for z in zblocks:
+        order += list(np.argsort(-(z ** 2).sum(axis=(1, 2)))[:POOL_PER_EFFECT])
+    return np.unique(order)
+
+
+def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: DiscoveryGoal,
+                     constraints, candidates: dict, progress=None) -> DesignResult:
+    """The D-optimal discovery design of ``n_poses`` poses from candidate poses ``q``.
+
+    Parameters
+    ----------
+    model : Model
+    params : ParameterSet
+        Expected values (SI); parameters no variant identifies are fixed here.
+    q : ndarray, shape (P, N)
+        Feasible candidate poses, rad/m.
+    loads : sequence of LoadCase
+        The payloads (``--load``); each becomes one load case per allowed direction.
+    n_poses : int
+    sigma : float
+        Tracker σ per coordinate, m.
+    goal : DiscoveryGoal
+    constraints : DesignConstraints
+    candidates : dict
+        What drawing ``q`` removed (:meth:`.candidate_poses.CandidateSet.to_dict`).
+    progress : callable(stage, note), optional
+
+    Returns
+    -------
+    DesignResult
+        Criterion D; ``stages["discovery"]`` holds, per effect, the size asked, the
+        size reached and whether the bound is met; ``detectability`` every effect's
+        ``min_detectable`` in the design.
+    """
+    say = progress or (lambda stage, note="": None)
+    effects = detect_effects(model, goal.effects, Configurations.from_arrays(q), goal.registry)
+    cases = directed_loads(loads, goal.directions)
+    cand = variants(q, cases, approach_joints(model, effects), model.robot.n_joints)
+    say("information", f"{len(cand)} candidates ({len(q)} poses × {max(len(cases), 1)} load "
+                       f"case(s) × {2 ** len(cand.approach_joints)} approach side(s))")
+    raw = observation_rows(model, params.values, cand) / sigma
+    params = _free_parameters(params, raw, cand)
+    blocks = raw[..., params.free] * params.scales[params.free]
+    p = blocks.shape[2]
+    columns = [effect_columns(model, params, e, cand, sigma) for e in effects]
+    zblocks = [z for z, _ in columns]
+    targets = np.array([detection_target(e, model, own, goal.size, goal.alpha, goal.power)
+                        for e, (_, own) in zip(effects, columns)])
+    # what every candidate together reveals: an effect they cannot is left out of the bounds
+    m_all = information(blocks, np.ones(len(cand)))
+    everything = projected_information(
+        m_all, [np.einsum("kri,krj->ij", blocks, z) for z in zblocks],
+        [np.einsum("kri,krj->ij", z, z) for z in zblocks])
+    reach = [np.sqrt(max(lam, 0.0)) * min(p_.scale for p_ in e.parameters(model.robot))
+             >= INVISIBLE for lam, e in zip(everything, effects)]
+    say("relaxation", f"D criterion over {len(cand)} candidates")
+    relaxed = relax(blocks, DOptimal())
+    start = exact_design(blocks, n_poses, "D", relaxed.weights).indices
+    pool = _pool(relaxed, zblocks)
+    say("exchange", f"{n_poses} poses, distinct")
+    free = constrained_exchange(blocks, [], [], _dedupe(start, blocks, cand.pose), cand.pose,
+                                pool)
+    keep = [i for i, ok in enumerate(reach) if ok]
+    say("discovery", f"{len(keep)} detection bound(s)")
+    found = constrained_exchange(blocks, [zblocks[i] for i in keep], targets[keep],
+                                 free.indices, cand.pose, pool)
+    chosen = found.indices
+    m = information(blocks[chosen], np.ones(n_poses))
+    value = log_det(m)
+    if not np.isfinite(value):
+        raise SolverError(f"the {n_poses} poses chosen cannot identify every parameter of the "
+                          f"model; ask for more poses")
+    bound = relaxed.bound(n_poses)
+    d_eff = DOptimal().efficiency(value, bound, p)
+    versus = float(np.exp((value - free.value) / p))
+    cfg = cand.configurations(model, params.values, chosen,
+                              [str(i + 1) for i in range(n_poses)])
+    std = np.sqrt(np.diag(np.linalg.inv(m))) * params.scales[params.free]
+    free_pars = [par for par, f in zip(params.parameters, params.free) if f]
+    used = constraints.to_dict(model.robot, model.tool)
+    used["loads"] = [ld.spec() for ld in cases]
+    result = DesignResult(
+        model.robot, model.tool, model.spec, cfg, "D", value, bound, d_eff,
+        {par.name: (float(s * par.display_factor), par.display_unit)
+         for par, s in zip(free_pars, std)}, used, (),
+        {"D": d_eff}, {c.name: c.value(m) for c in (DOptimal(), AOptimal(), EOptimal())},
+        {}, {**candidates, "variants": len(cand)}, {}, {}, {}, sigma_mm=1000.0 * sigma,
+        stages={"relaxation": relaxed.to_dict(), "exchange": free.to_dict()})
+    result = with_detectability(result, model, goal.effects, goal.alpha, goal.power,
+                                goal.registry)
+    return _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads)
+
+
+def _hint(loads, goal) -> str:
+    """What would allow more: sideways pulls, or a load at all."""
+    if not any(ld.mass > 0 for ld in loads):
+        return "; add a --load (and --load-directions z,x,y) to put torques on the joints"
+    if not horizontal(goal.directions):
+        return "; allow --load-directions z,x,y (a horizontal pull of the same force)"
+    return ""
+
+
+def _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads):
+    """``result`` with the discovery stage and its words."""
+    from dataclasses import replace
+
+    rows, notes = [], []
+    for det, ok in zip(result.detectability, reach):
+        met = det.detectable and det.min_detectable <= goal.size * (1 + 1e-6)
+        size = det.min_detectable if np.isfinite(det.min_detectable) else None
+        if not ok:
+            words = (f"{det.effect} cannot be detected: no allowed load or approach side "
+                     f"reveals it (none of the {len(cand)} candidates): {det.why}"
+                     f"{_hint(loads, goal)}")
+        elif met:
+            words = (f"{det.effect}: detectable from {det.min_detectable:.3g} {det.unit} "
+                     f"(asked {goal.size:g} {det.unit} at power {goal.power:.0%})")
+        elif det.detectable:
+            words = (f"{det.effect}: NOT detectable at {goal.size:g} {det.unit}; best size "
+                     f"reachable: {det.min_detectable:.3g} {det.unit} with these "
+                     f"{len(found.indices)} poses, candidates and loads")
+        else:
+            words = f"{det.effect}: NOT detectable in the design: {det.why}"
+        rows.append({"effect": det.effect, "unit": det.unit, "asked": goal.size,
+                     "min_detectable": size, "met": bool(met), "revealable": bool(ok),
+                     "words": words})
+        notes.append(words)
+    used = {}
+    for k in found.indices:
+        c = int(cand.case[k])
+        name = "unloaded only" if c < 0 else cand.cases[c].spec()
+        used[name] = used.get(name, 0) + 1
+    notes.insert(0, f"discovery design (constrained exchange): D-optimal subject to every "
+                    f"revealable effect detectable at {goal.size:g} (its unit) with power "
+                    f"{goal.power:.0%} (α = {goal.alpha:g}); D-efficiency {versus:.3f} of the "
+                    f"unconstrained D-optimal choice among the same candidates; load cases "
+                    f"used: " + ", ".join(f"{n}× {s}" for s, n in used.items()))
+    notes.append("discovery design: no continuous refinement (each pose keeps its one load "
+                  "case) and no reachability check from --home")
+    stage = {"method": "constrained exchange", "status": found.status, "size": goal.size,
+             "power": goal.power, "alpha": goal.alpha,
+             "load_directions": [list(d) for d in goal.directions],
+             "approach_joints": [result.robot.joints[j].name for j in cand.approach_joints],
+             "unconstrained_log_det": free.value, "d_efficiency_vs_unconstrained": versus,
+             "load_cases_used": used, "effects": rows}
+    return replace(result, notes=tuple(notes) + result.notes,
+                   stages={**result.stages, "discovery": stage})

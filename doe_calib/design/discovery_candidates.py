@@ -1,0 +1,133 @@
+"""The candidates of a discovery design: every pose in every variant (load case, approach side),
+with the model's information blocks and each effect's columns there.
+
+A variant of pose i is measured unloaded and under one load case c (a
+:class:`~doe_calib.design.load_directions.DirectedLoad`), every joint whose
+approach backlash is to be detected reached from side s (+1 or −1, the
+convention of :mod:`doe_calib.export.approach`). Without load cases a
+variant is the unloaded reading alone.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import product
+
+import numpy as np
+
+from doe_calib.design.detectability import noncentrality_for_power, own_directions
+from doe_calib.diagnosis.effect_tests import augmented
+from doe_calib.errors import OptionError
+from doe_calib.io.measurements import Configurations
+from doe_calib.model.effects.backlash import Backlash
+from doe_calib.model.effects.base import joint_index
+from doe_calib.model.evaluation import observation_matrix
+
+#: At most this many joints get their approach side chosen (2^J variants of each pose).
+MAX_APPROACH_JOINTS = 3
+
+
+@dataclass(frozen=True, eq=False)
+class Variants:
+    """Candidates of a discovery design.
+
+    Attributes
+    ----------
+    pose : ndarray of int, shape (K,)
+        The candidate pose (row of ``q``) each candidate is a variant of.
+    case : ndarray of int, shape (K,)
+        Its load case (index into ``cases``; −1: unloaded only).
+    approach : ndarray, shape (K, N)
+        Its approach side per joint (+1, −1, 0 not chosen).
+    q : ndarray, shape (P, N)
+        The candidate poses, rad/m.
+    cases : tuple of DirectedLoad
+    approach_joints : tuple of int
+        Joints (0-based) whose approach side is a design variable.
+    """
+
+    pose: np.ndarray
+    case: np.ndarray
+    approach: np.ndarray
+    q: np.ndarray
+    cases: tuple
+    approach_joints: tuple
+
+    def __len__(self) -> int:
+        return len(self.pose)
+
+    def configurations(self, model, values, chosen=None, ids=None) -> Configurations:
+        """Each variant's readings: unloaded, then (if it has one) under its load case."""
+        chosen = np.arange(len(self)) if chosen is None else np.asarray(chosen)
+        ids = [str(k) for k in chosen] if ids is None else list(ids)
+        q, w, a, pose = [], [], [], []
+        wrench = {}
+        for k, name in zip(chosen, ids):
+            qi, c = self.q[self.pose[k]], int(self.case[k])
+            rows = [np.zeros(6)]
+            if c >= 0:
+                key = (int(self.pose[k]), c)
+                if key not in wrench:
+                    wrench[key] = self.cases[c].wrench(model, values, qi[None])[0]
+                rows.append(wrench[key])
+            for row in rows:
+                q.append(qi), w.append(row), a.append(self.approach[k]), pose.append(name)
+        return Configurations.from_arrays(np.array(q), np.array(w), pose=pose,
+                                          approach=np.array(a))
+
+
+def approach_joints(model, effects) -> tuple:
+    """Joints whose approach backlash (mode ``approach`` or ``both``) is among ``effects``."""
+    joints = sorted({joint_index(model.robot, e.joint) for e in effects
+                     if isinstance(e, Backlash) and e.mode in ("approach", "both")})
+    if len(joints) > MAX_APPROACH_JOINTS:
+        raise OptionError(f"--detect asks for the approach backlash of {len(joints)} joints; a "
+                          f"discovery design chooses the approach side of at most "
+                          f"{MAX_APPROACH_JOINTS} (2^J variants of every candidate pose)")
+    return tuple(joints)
+
+
+def variants(q, cases, joints, n_joints: int) -> Variants:
+    """Every pose × load case × approach sides of ``joints``."""
+    sides = list(product((1.0, -1.0), repeat=len(joints)))
+    case_ids = list(range(len(cases))) or [-1]
+    rows = [(i, c, s) for i in range(len(q)) for c in case_ids for s in sides]
+    approach = np.zeros((len(rows), n_joints))
+    for r, (_, _, s) in enumerate(rows):
+        approach[r, list(joints)] = s
+    return Variants(np.array([r[0] for r in rows]), np.array([r[1] for r in rows]), approach,
+                    np.asarray(q), tuple(cases), tuple(joints))
+
+
+def observation_rows(model, values, cand: Variants, chunk: int = 1024) -> np.ndarray:
+    """Observation matrix ∂x/∂p (K, r, P), m per SI unit, of ``model`` at every variant's
+    readings (r = 3 markers' coordinates × readings per variant), in chunks of poses."""
+    out = []
+    per = 1 if cand.case.max(initial=-1) < 0 else 2
+    for lo in range(0, len(cand), chunk):
+        idx = np.arange(lo, min(lo + chunk, len(cand)))
+        _, b = observation_matrix(model, values, cand.configurations(model, values, idx))
+        out.append(b.reshape(len(idx), per * b.shape[1] * 3, -1))
+    return np.concatenate(out)
+
+
+def effect_columns(model, params, effect, cand: Variants, sigma: float):
+    """An effect's σ-weighted columns per variant on its own directions, (K, r, d) (SI
+    parameters; directions that are a free model parameter removed, as in
+    :func:`~doe_calib.design.detectability.assess`), with the orthonormal basis (q, d)."""
+    big, bp = augmented(model, params, effect)
+    b = observation_rows(big, bp.values, cand)[..., ~np.isin(bp.names, params.names)] / sigma
+    new = effect.parameters(model.robot)
+    basis = own_directions(new, params)
+    scale = np.array([p.scale for p in new])
+    own = (np.linalg.qr(basis * scale[:, None])[0] if basis.shape[1] < len(new)
+           else np.eye(len(new)))
+    return b @ own, own
+
+
+def detection_target(effect, model, own, size: float, alpha: float, power: float) -> float:
+    """``λ*(power) / S²``: the least projected information (in ``ZᵀZ`` units, SI) that detects
+    the effect at size ``size`` (its display unit; SI when its parameters' units differ)."""
+    new = effect.parameters(model.robot)
+    factor = new[0].display_factor if len({p.display_unit for p in new}) == 1 else 1.0
+    lam = noncentrality_for_power(own.shape[1], alpha, power)
+    return float(lam * (factor / size) ** 2)
