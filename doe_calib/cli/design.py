@@ -19,7 +19,9 @@ from doe_calib.cli.common import (
 )
 from doe_calib.cli.options import count, positive
 from doe_calib.design import CRITERIA, LoadCase, read_constraints
+from doe_calib.design.discovery import DiscoveryGoal
 from doe_calib.design.effect_detection import with_detectability
+from doe_calib.design.load_directions import parse_directions
 from doe_calib.design.optimal import optimal_design
 from doe_calib.errors import DoeCalibError, OptionError
 from doe_calib.io.csv_files import read_design, write_design
@@ -70,6 +72,18 @@ def add_arguments(c):
                    help="level of the detection test (--detect), default 0.05")
     c.add_argument("--power", type=positive("--power", "(a probability)"), default=0.8,
                    help="power asked of the detection test (--detect), default 0.8")
+    c.add_argument("--detect-size", type=positive("--detect-size", "(the effect's unit)"),
+                   metavar="S",
+                   help="design to discover: maximise D subject to every --detect effect being "
+                        "detectable at this size (its display unit, e.g. deg) with --min-power; "
+                        "load cases and approach sides become design variables, and the best "
+                        "size reachable is reported when S is not")
+    c.add_argument("--min-power", type=positive("--min-power", "(a probability)"),
+                   help="power asked at --detect-size (default --power)")
+    c.add_argument("--load-directions", metavar="DIRS",
+                   help="with --detect-size: directions each --load may pull along at a pose, "
+                        "e.g. z,x,y: z its weight (−z), x and y the same force as a horizontal "
+                        "pull along ±x, ±y of the base frame at its centre of mass (default z)")
     c.add_argument("--out", required=True, metavar="DESIGN.json",
                    help="design JSON to write (the design CSV is written beside it: same name, "
                         ".csv)")
@@ -89,6 +103,21 @@ def _csv_beside(out: str) -> Path:
     return Path(out).with_suffix(".csv")
 
 
+def _discovery_goal(args):
+    """The :class:`~doe_calib.design.discovery.DiscoveryGoal` of ``--detect-size``, or None."""
+    if args.detect_size is None:
+        for name in ("min_power", "load_directions"):
+            if getattr(args, name) is not None:
+                raise OptionError(f"--{name.replace('_', '-')} is for a design to discover: "
+                                  f"give --detect EFFECTS --detect-size S too")
+        return None
+    if not args.detect:
+        raise OptionError("--detect-size S: give the effects to discover with --detect EFFECTS")
+    return DiscoveryGoal(args.detect, args.detect_size,
+                         args.power if args.min_power is None else args.min_power, args.alpha,
+                         parse_directions(args.load_directions), effect_registry(args))
+
+
 def run(args):
     csv_path = _csv_beside(args.out)
     if args.report and Path(args.report).resolve() == csv_path.resolve():
@@ -106,16 +135,17 @@ def run(args):
     collision = None if build is None else build(loads)
     home = None if args.home is None else \
         parse_floats(args.home, robot.n_joints, "--home") / robot.display_factors
+    discovery = _discovery_goal(args)
     progress = stage_progress()
     result = optimal_design(model, args.poses, loads, candidates=args.candidates,
                             sigma=args.sigma / 1000.0, criterion=args.criterion, task=task,
                             task_point=parse_floats(args.task_point, 3, "--task-point") / 1000.0,
                             constraints=constraints, refine=not args.no_refine,
                             rng=np.random.default_rng(args.seed), progress=progress,
-                            collision=collision, home=home)
+                            collision=collision, home=home, discovery=discovery)
     if progress:
         print(file=sys.stderr)
-    if args.detect:
+    if args.detect and discovery is None:
         if not (0 < args.alpha < 1 and args.alpha < args.power < 1):
             raise OptionError(f"--alpha {args.alpha:g} and --power {args.power:g}: give "
                               f"0 < alpha < power < 1")
