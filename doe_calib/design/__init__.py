@@ -9,7 +9,10 @@ exchange (:mod:`.exchange`, :mod:`.updates`), the continuous IPOPT
 refinement (:mod:`.pose_refinement`, on the expressions of :mod:`.symbolic`)
 — three solvers that each return a :class:`.outcome.DesignOutcome` — and the
 pipeline (:mod:`.optimal`) behind ``doe-calib design`` with its result
-(:mod:`.result`, predicted std by name from :mod:`.predicted_std`).
+(:mod:`.result`, predicted std by name from :mod:`.predicted_std`). A design
+to discover effects (:mod:`.discovery`) chooses load cases (:mod:`.load_directions`)
+and approach sides per pose (:mod:`.discovery_candidates`) by a constrained
+exchange (:mod:`.constrained_exchange`).
 """
 from doe_calib.design.constraint_file import read_constraints
 from doe_calib.design.constraints import Box, Coverage, DesignConstraints, LineOfSight
