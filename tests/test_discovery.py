@@ -155,6 +155,17 @@ def test_a_horizontal_pull_makes_a1_torque_backlash_detectable_at_the_size_asked
     assert detected >= 0.8 - 0.07, detected
 
 
+def test_a_size_out_of_reach_reports_the_best_size_reached(kr270):
+    d = _design(kr270, BACKLASH, 0.0005, "z,x")
+    (row,) = d.stages["discovery"]["effects"]
+    (det,) = with_detectability(d, kr270, BACKLASH, 0.05, 0.8).detectability
+    assert row["revealable"] and not row["met"] and "cannot all be met" in \
+        d.stages["discovery"]["status"]
+    assert 0.0005 < det.min_detectable < 0.002  # closer than the unconstrained ~0.004 deg
+    assert row["min_detectable"] == det.min_detectable
+    assert f"best size reachable: {det.min_detectable:.3g} deg" in row["words"]
+
+
 def test_approach_sides_become_design_variables(kr270):
     d = _design(kr270, "backlash(j2,mode=approach)", 0.002, "z")
     sides = {int(a) for a in d.configurations.approach[:, 1]}

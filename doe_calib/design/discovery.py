@@ -244,7 +244,8 @@ def _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads
                     f"unconstrained D-optimal choice among the same candidates; load cases "
                     f"used: " + ", ".join(f"{n}× {s}" for s, n in used.items()))
     notes.append("discovery design: no continuous refinement (each pose keeps its one load "
-                  "case) and no reachability check from --home")
+                  "case), no reachability check from --home, and load-torque constraints "
+                  "judged with the weight only (not the sideways pulls)")
     stage = {"method": "constrained exchange", "status": found.status, "size": goal.size,
              "power": goal.power, "alpha": goal.alpha,
              "load_directions": [list(d) for d in goal.directions],
