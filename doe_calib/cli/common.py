@@ -3,16 +3,14 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
-
+from doe_calib.cli.choices import DEFAULT_CLEARANCE, DEFAULT_MODEL, DEFAULT_SELF_CLEARANCE
 from doe_calib.cli.options import at_least, count, positive
 from doe_calib.errors import OptionError
-from doe_calib.io.csv_files import read_measurements
-from doe_calib.model.effects import DEFAULT_MODEL, registry_with_files
-from doe_calib.model.marker_model import build_model, compile_in_background
-from doe_calib.model.robot import Robot
-from doe_calib.model.tool import Tool
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 def effect_file_argument(c):
@@ -55,11 +53,16 @@ def model_option(text: str) -> str:
 def effect_registry(args):
     """The effects ``--model`` and result files may name: the catalogue plus the
     ``--effect-file`` effects (a new :class:`~doe_calib.model.effects.EffectRegistry`)."""
+    from doe_calib.model.effects import registry_with_files
+
     return registry_with_files(getattr(args, "effect_file", None))
 
 
 def load_robot_tool(args):
     """The Robot and Tool named by ``--robot``, ``--tool`` and ``--flange``."""
+    from doe_calib.model.robot import Robot
+    from doe_calib.model.tool import Tool
+
     if args.tool is None:
         raise OptionError("--tool is needed: the tool YAML with the marker positions (mm); "
                           "for 6-DoF probe files give --angles instead")
@@ -81,6 +84,7 @@ def read_data(paths, robot, tool, sigma_mm=None, skip_bad=False, require_xyz=Tru
     Rows dropped on request are reported one line each; joint readings a hair
     past a limit (accepted) are summarised.
     """
+    from doe_calib.io.csv_files import read_measurements
     from doe_calib.io.measurements import concatenate
 
     paths = [paths] if isinstance(paths, str) else list(paths)
@@ -98,6 +102,8 @@ def read_data(paths, robot, tool, sigma_mm=None, skip_bad=False, require_xyz=Tru
 
 def excluding(meas, poses: str | None):
     """The measurements without the poses named in ``--exclude-poses``, each reported on stderr."""
+    import numpy as np
+
     if not poses:
         return meas
     names = [p.strip() for p in poses.split(",") if p.strip()]
@@ -147,6 +153,8 @@ def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
     σ is set to the σ̂ of the starting model (:func:`with_estimated_sigma`).
     ``registry`` names the effects ``--model`` may use (default :func:`effect_registry`).
     """
+    from doe_calib.model.marker_model import build_model, compile_in_background
+
     robot, tool = load_robot_tool(args)
     registry = effect_registry(args) if registry is None else registry
     model = build_model(robot, tool, args.model, registry=registry)
@@ -171,6 +179,8 @@ def with_estimated_sigma(model, meas):
 
 def parse_floats(text: str, n: int, what: str) -> np.ndarray:
     """``n`` comma-separated finite numbers, or an :class:`OptionError` naming ``what``."""
+    import numpy as np
+
     try:
         vals = np.array([float(v) for v in text.split(",")])
     except ValueError:
@@ -266,8 +276,6 @@ def collision_arguments(c, defaults_from: str | None = None):
     ``defaults_from``: what the clearances default to when not given (e.g.
     ``"the design's"``); None: the collision model's defaults.
     """
-    from doe_calib.collision import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE
-
     clear, self_clear = 1000.0 * DEFAULT_CLEARANCE, 1000.0 * DEFAULT_SELF_CLEARANCE
     said = f"{defaults_from}, else " if defaults_from else ""
     c.add_argument("--clearance", type=at_least("--clearance", 0.0, "mm"),
@@ -316,12 +324,7 @@ def collision_builder(args, robot, tool, constraints, recorded: dict | None = No
         A design's ``constraints["collision"]`` (``clearance_mm``,
         ``self_clearance_mm``): the clearances when the options give none.
     """
-    from doe_calib.collision import (
-        DEFAULT_CLEARANCE,
-        DEFAULT_SELF_CLEARANCE,
-        PlannerSettings,
-        build_collision_model,
-    )
+    from doe_calib.collision import PlannerSettings, build_collision_model
 
     if args.no_collision:
         return None

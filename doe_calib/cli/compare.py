@@ -6,8 +6,6 @@ from pathlib import Path
 
 from doe_calib.cli.common import effect_file_argument, effect_registry, parse_floats
 from doe_calib.cli.options import positive
-from doe_calib.design.comparison import compare, load_source, plot_std
-from doe_calib.io.csv_files import read_design
 from doe_calib.io.json_file import strict_json
 
 HELP = "compare designs and identification results: std per parameter, task-point accuracy"
@@ -42,6 +40,9 @@ def _labels(files) -> list[str]:
 
 
 def run(args):
+    from doe_calib.design.comparison import compare, load_source, plot_std
+    from doe_calib.io.csv_files import read_design
+
     registry = effect_registry(args)
     sources = [load_source(f, registry) for f in args.files]
     task = read_design(args.task, sources[0].robot) if args.task else None

@@ -5,20 +5,16 @@ import sys
 import warnings
 from pathlib import Path
 
+from doe_calib.cli.choices import EXPORT_FORMATS
 from doe_calib.cli.common import (
     effect_file_argument,
     effect_registry,
     parse_floats,
     report_warnings,
 )
-from doe_calib.compensation import build_problem, compensate, read_targets
 from doe_calib.cli.program_options import program_arguments, stations, tool_payload
-from doe_calib.compensation.program import compensated_design, export_compensated
 from doe_calib.errors import ConvergenceWarning, DataError, OptionError
-from doe_calib.estimation.result import IdentificationResult
-from doe_calib.export import FORMATS
 from doe_calib.io.json_file import strict_json
-from doe_calib.model.marker_model import build_model
 
 HELP = ("compensate a program: joint values that put the TCP on its targets with the "
         "identified model")
@@ -41,9 +37,9 @@ def add_arguments(c):
     c.add_argument("--out", required=True, help="compensated CSV to write")
     c.add_argument("--position-only", action="store_true",
                    help="reach the target positions only, the orientation free")
-    c.add_argument("--format", choices=list(FORMATS),
+    c.add_argument("--format", choices=list(EXPORT_FORMATS),
                    help="also write the compensated program: "
-                        + "; ".join(f"{k}: {f.description}" for k, f in FORMATS.items()))
+                        + "; ".join(f"{k}: {d}" for k, d in EXPORT_FORMATS.items()))
     c.add_argument("--program-out", help="directory (or file) for --format (default: the "
                                          "folder of --out)")
     c.add_argument("--name", default="compensated", help="program name (default compensated)")
@@ -65,6 +61,11 @@ def _tcp(text: str, result):
 
 
 def run(args):
+    from doe_calib.compensation import build_problem, compensate, read_targets
+    from doe_calib.compensation.program import compensated_design, export_compensated
+    from doe_calib.estimation.result import IdentificationResult
+    from doe_calib.model.marker_model import build_model
+
     if args.program_out is not None and args.format is None:
         raise OptionError("--program-out needs --format (krl, rapid, urscript or csv)")
     registry = effect_registry(args)

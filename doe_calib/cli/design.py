@@ -4,8 +4,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import numpy as np
-
+from doe_calib.cli.choices import CRITERIA
 from doe_calib.cli.common import (
     check_payloads,
     collision_arguments,
@@ -18,15 +17,8 @@ from doe_calib.cli.common import (
     stage_progress,
 )
 from doe_calib.cli.options import count, positive
-from doe_calib.design import CRITERIA, LoadCase, read_constraints
-from doe_calib.design.discovery import DiscoveryGoal
-from doe_calib.design.effect_detection import with_detectability
-from doe_calib.design.load_directions import parse_directions
-from doe_calib.design.optimal import optimal_design
 from doe_calib.errors import DoeCalibError, OptionError
-from doe_calib.io.csv_files import read_design, write_design
 from doe_calib.io.json_file import strict_json
-from doe_calib.model.marker_model import build_model
 
 HELP = "choose optimal measurement poses (D, A, E or task criterion; constraints; loads)"
 EXAMPLE = ("doe-calib design --robot kr270.urdf --tool tool.yaml --poses 15 "
@@ -105,6 +97,9 @@ def _csv_beside(out: str) -> Path:
 
 def _discovery_goal(args):
     """The :class:`~doe_calib.design.discovery.DiscoveryGoal` of ``--detect-size``, or None."""
+    from doe_calib.design.discovery import DiscoveryGoal
+    from doe_calib.design.load_directions import parse_directions
+
     if args.detect_size is None:
         for name in ("min_power", "load_directions"):
             if getattr(args, name) is not None:
@@ -119,6 +114,14 @@ def _discovery_goal(args):
 
 
 def run(args):
+    import numpy as np
+
+    from doe_calib.design import LoadCase, read_constraints
+    from doe_calib.design.effect_detection import with_detectability
+    from doe_calib.design.optimal import optimal_design
+    from doe_calib.io.csv_files import read_design, write_design
+    from doe_calib.model.marker_model import build_model
+
     csv_path = _csv_beside(args.out)
     if args.report and Path(args.report).resolve() == csv_path.resolve():
         raise OptionError(f"--report {args.report}: the design CSV is written there; give the "

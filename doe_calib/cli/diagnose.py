@@ -4,6 +4,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from doe_calib.cli.choices import CV_GROUPINGS
 from doe_calib.cli.common import (
     data_argument,
     effect_registry,
@@ -11,9 +12,6 @@ from doe_calib.cli.common import (
     robot_arguments,
 )
 from doe_calib.cli.options import positive
-from doe_calib.diagnosis import diagnose
-from doe_calib.diagnosis.cross_validation import GROUPINGS
-from doe_calib.estimation.identify import identify_quietly
 from doe_calib.io.json_file import strict_json
 
 HELP = "test the model against the measurements and rank the effects it is missing"
@@ -35,7 +33,7 @@ def measurement_arguments(c):
     c.add_argument("--tolerance", type=float, default=0.05,
                    help="σ̂ within this fraction of σ, with no material candidate, is adequate "
                         "(default 0.05)")
-    c.add_argument("--cv-by", choices=GROUPINGS, default="auto",
+    c.add_argument("--cv-by", choices=CV_GROUPINGS, default="auto",
                    help="what cross-validation holds out: pose, session, region of joint "
                         "space; auto = session when there are several, else pose")
     c.add_argument("--folds", type=int, default=5, help="folds for --cv-by pose|region "
@@ -69,6 +67,9 @@ def residual_figure(model, meas, fit, path):
 
 
 def run(args):
+    from doe_calib.diagnosis import diagnose
+    from doe_calib.estimation.identify import identify_quietly
+
     registry = effect_registry(args)
     model, meas = model_and_measurements(args, registry=registry)
     print(f"diagnosing {model.spec or '(base + markers)'} on {len(meas)} readings…",

@@ -9,24 +9,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from doe_calib.cli.choices import EXPORT_FORMATS, EXPORT_GROUPINGS, EXPORT_ORDERS
 from doe_calib.cli.common import collision_arguments, collision_builder, parse_load
 from doe_calib.cli.options import at_least, count, positive
 from doe_calib.cli.program_options import program_arguments, stations, tool_payload
-from doe_calib.collision import check_segment
-from doe_calib.design import LoadCase, read_constraints
-from doe_calib.design.result import DesignResult
 from doe_calib.errors import DataError, OptionError
-from doe_calib.export import (
-    FORMATS,
-    AxisMap,
-    Plan,
-    check_program,
-    cycle_time,
-    export_design,
-    moves,
-    program_models,
-)
-from doe_calib.export.sequence import GROUPINGS, ORDERS
 from doe_calib.io.json_file import strict_json
 
 HELP = "write a design as a KUKA KRL, ABB RAPID or URScript program, or a design CSV"
@@ -36,8 +23,8 @@ EXAMPLE = ("doe-calib export design.json --format krl --out programs/ --name cal
 
 def add_arguments(c):
     c.add_argument("design", help="design JSON written by doe-calib design")
-    c.add_argument("--format", required=True, choices=list(FORMATS),
-                   help="; ".join(f"{k}: {f.description}" for k, f in FORMATS.items()))
+    c.add_argument("--format", required=True, choices=list(EXPORT_FORMATS),
+                   help="; ".join(f"{k}: {d}" for k, d in EXPORT_FORMATS.items()))
     c.add_argument("--out", help="directory (files NAME.src/.dat/.mod/.script/.csv) or file "
                                  "(its stem is the program name); default: the design's folder")
     c.add_argument("--name", default="doe_calib", help="program name (default doe_calib)")
@@ -48,10 +35,10 @@ def add_arguments(c):
                    help="digital I/O number: set output N at the pose, wait for input N "
                         "(measured), reset; RAPID uses signals doCalibReady/diCalibDone. "
                         "Default: wait --dwell seconds only")
-    c.add_argument("--group-by", choices=GROUPINGS, default=GROUPINGS[0],
+    c.add_argument("--group-by", choices=EXPORT_GROUPINGS, default=EXPORT_GROUPINGS[0],
                    help="load: every unloaded visit, then every visit under each load (one load "
                         "change per load case; default); none: each pose's load cases together")
-    c.add_argument("--order", choices=ORDERS, default=ORDERS[0],
+    c.add_argument("--order", choices=EXPORT_ORDERS, default=EXPORT_ORDERS[0],
                    help="travel: order the poses of each group for short joint travel (default); "
                         "design: keep the design's order")
     c.add_argument("--approach-step", type=positive("--approach-step", "deg"), default=2.0,
@@ -88,6 +75,8 @@ OUTPUTS = {"out": "folder"}
 
 def _constraints(args, design):
     """The ``--constraints`` file, else the one the design names (beside it or as written)."""
+    from doe_calib.design import read_constraints
+
     named = args.constraints or design.constraints.get("source") or None
     if named is None:
         return None
@@ -102,6 +91,9 @@ def _constraints(args, design):
 
 def _models(args, design, constraints):
     """The collision model of each load case (:func:`program_models`); None with --no-collision."""
+    from doe_calib.design import LoadCase
+    from doe_calib.export import program_models
+
     build = collision_builder(args, design.robot, design.tool, constraints,
                               design.constraints.get("collision"))
     if build is None:
@@ -113,12 +105,17 @@ def _models(args, design, constraints):
 
 def _is_free(models):
     """``is_free(q)``: whether pose q keeps its clearances under every load; None: no check."""
+    from doe_calib.collision import check_segment
+
     if models is None:
         return None
     return lambda q: all(check_segment(cm, q, q).free for cm in models.values())
 
 
 def run(args):
+    from doe_calib.design.result import DesignResult
+    from doe_calib.export import AxisMap, Plan, check_program, cycle_time, export_design, moves
+
     try:
         design = DesignResult.from_json(args.design)
         axis_map = None if args.axis_map is None else AxisMap.parse(args.axis_map, design.robot)

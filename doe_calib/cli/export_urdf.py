@@ -8,10 +8,7 @@ from pathlib import Path
 
 from doe_calib.cli.common import effect_file_argument, effect_registry, report_warnings
 from doe_calib.cli.options import refuse_input
-from doe_calib.estimation.result import IdentificationResult
-from doe_calib.export.calibrated_urdf import export_urdf
 from doe_calib.io.json_file import strict_json
-from doe_calib.model.marker_model import build_model
 
 HELP = ("write a calibrated URDF (offsets, geometry and base folded into the joint origins) "
         "and a YAML of the parameters a URDF cannot hold")
@@ -30,6 +27,10 @@ OUTPUTS = {"out": "file"}
 
 
 def run(args):
+    from doe_calib.estimation.result import IdentificationResult
+    from doe_calib.export.calibrated_urdf import export_urdf
+    from doe_calib.model.marker_model import build_model
+
     registry = effect_registry(args)
     result = IdentificationResult.from_json(args.result)
     inputs = {os.path.realpath(args.result): f"--result {args.result}"}

@@ -4,6 +4,7 @@ from __future__ import annotations
 import sys
 import warnings
 
+from doe_calib.cli.choices import ESTIMATORS
 from doe_calib.cli.common import (
     data_argument,
     fix_and_free,
@@ -14,7 +15,6 @@ from doe_calib.cli.common import (
 )
 from doe_calib.cli.options import positive
 from doe_calib.cli.probe import probe_arguments, probe_model_and_measurements
-from doe_calib.estimation.identify import ESTIMATORS, identify
 from doe_calib.io.json_file import strict_json
 
 HELP = "identify parameters from a measurement CSV"
@@ -46,6 +46,8 @@ OUTPUTS = {"out": "file", "report": "file"}
 
 
 def run(args):
+    from doe_calib.estimation.identify import identify
+
     if args.angles:
         model, meas, params = probe_model_and_measurements(args)
     else:

@@ -4,14 +4,8 @@ from __future__ import annotations
 import sys
 from dataclasses import replace
 
-import numpy as np
-
 from doe_calib.cli.common import effect_file_argument, effect_registry, read_data
-from doe_calib.estimation.predict import predict
-from doe_calib.estimation.result import IdentificationResult
-from doe_calib.io.csv_files import write_measurements
 from doe_calib.io.json_file import strict_json
-from doe_calib.model.marker_model import build_model
 
 HELP = "marker positions predicted by a result, for validation"
 EXAMPLE = "doe-calib predict --result result.json --data held_out.csv --out predicted.csv"
@@ -43,11 +37,20 @@ def predicted_markers(model, result, meas):
     :func:`doe_calib.estimation.predict.predict` for the result's σ (a priori;
     σ̂ when σ was estimated), as this command writes them.
     """
+    from doe_calib.estimation.predict import predict
+
     pred = predict(result, meas, model, a_posteriori=False)
     return pred.xyz, pred.std
 
 
 def run(args):
+    import numpy as np
+
+    from doe_calib.estimation.predict import predict
+    from doe_calib.estimation.result import IdentificationResult
+    from doe_calib.io.csv_files import write_measurements
+    from doe_calib.model.marker_model import build_model
+
     registry = effect_registry(args)
     result = IdentificationResult.from_json(args.result)
     model = build_model(result.robot, result.tool, result.model, registry=registry)

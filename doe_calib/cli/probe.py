@@ -3,15 +3,10 @@ from __future__ import annotations
 
 import sys
 
-import numpy as np
-
+from doe_calib.cli.choices import ANGLE_CONVENTIONS
 from doe_calib.cli.common import effect_registry
 from doe_calib.cli.options import positive
 from doe_calib.errors import OptionError
-from doe_calib.estimation.probe_points import probe_parameters, probe_points
-from doe_calib.io.probe_file import ANGLE_CONVENTIONS, read_probe
-from doe_calib.model.marker_model import build_model
-from doe_calib.model.robot import Robot
 
 
 def probe_arguments(c):
@@ -31,6 +26,13 @@ def probe_model_and_measurements(args):
 
     Returns ``(model, measurements, params)``; what was made of the probe is said on stderr.
     """
+    import numpy as np
+
+    from doe_calib.estimation.probe_points import probe_parameters, probe_points
+    from doe_calib.io.probe_file import read_probe
+    from doe_calib.model.marker_model import build_model
+    from doe_calib.model.robot import Robot
+
     if args.sigma is None or args.angle_sigma_deg is None:
         raise OptionError("--angles (6-DoF probe files) needs --sigma MM (position σ) and "
                           "--angle-sigma-deg DEG (angle σ): the virtual points' σ follow them")

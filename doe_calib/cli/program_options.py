@@ -4,10 +4,13 @@ Shared by ``doe-calib export`` and ``doe-calib compensate --format``.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from doe_calib.cli.common import parse_floats
-from doe_calib.export import Payload, zero_home
 from doe_calib.errors import OptionError
-from doe_calib.export.stations import check_station, default_home
+
+if TYPE_CHECKING:
+    from doe_calib.export import Payload
 
 
 def program_arguments(c, home: str = "auto") -> None:
@@ -31,6 +34,8 @@ def program_arguments(c, home: str = "auto") -> None:
 
 
 def _pose(text: str, robot, option: str, limits) -> tuple:
+    from doe_calib.export.stations import check_station
+
     values = parse_floats(text, robot.n_joints, f"{option} (deg, mm for prismatic joints)")
     return check_station(robot, values / robot.display_factors, option, limits)
 
@@ -49,6 +54,9 @@ def stations(args, design, is_free=None, limits=None) -> tuple:
     str or None
         Which home ``auto`` chose, in words (None for the other choices).
     """
+    from doe_calib.export import zero_home
+    from doe_calib.export.stations import default_home
+
     robot, text, why = design.robot, args.home.strip().lower(), None
     if text == "auto":
         home, why = default_home(design, is_free, limits)
@@ -64,5 +72,7 @@ def stations(args, design, is_free=None, limits=None) -> tuple:
 
 def tool_payload(args) -> Payload:
     """The ``--tool-mass`` payload (no mass when not given)."""
+    from doe_calib.export import Payload
+
     return Payload() if args.tool_mass is None else Payload.from_spec(args.tool_mass,
                                                                       "--tool-mass")

@@ -4,8 +4,6 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from doe_calib.cli.common import (
     effect_registry,
     model_and_measurements,
@@ -13,10 +11,7 @@ from doe_calib.cli.common import (
     robot_arguments,
 )
 from doe_calib.cli.diagnose import measurement_arguments
-from doe_calib.diagnosis.effect_selection import refine
 from doe_calib.io.json_file import strict_json
-from doe_calib.model.marker_model import build_model
-from doe_calib.report.diagnosis_figures import error_falling
 
 HELP = "grow the model by the best significant effect until it is adequate; write the fit"
 EXAMPLE = ("doe-calib refine --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -42,6 +37,12 @@ OUTPUTS = {"out": "file", "history": "file", "plot": "file", "report": "file"}
 
 
 def run(args):
+    import numpy as np
+
+    from doe_calib.diagnosis.effect_selection import refine
+    from doe_calib.model.marker_model import build_model
+    from doe_calib.report.diagnosis_figures import error_falling
+
     registry = effect_registry(args)
     model, meas = model_and_measurements(args, registry=registry)
     val = None

@@ -3,8 +3,6 @@ from __future__ import annotations
 
 import sys
 
-import numpy as np
-
 from doe_calib.cli.common import (
     check_payloads,
     collision_arguments,
@@ -17,13 +15,7 @@ from doe_calib.cli.common import (
 )
 from doe_calib.cli.options import count, positive
 from doe_calib.errors import OptionError
-from doe_calib.estimation.result import load_parameters, save_parameters
-from doe_calib.io.csv_files import read_design, write_measurements
 from doe_calib.io.json_file import strict_json
-from doe_calib.io.measurements import Configurations
-from doe_calib.model.loads import unloaded_and_loaded
-from doe_calib.model.marker_model import build_model
-from doe_calib.model.simulate import random_configurations, random_truth, simulate
 
 HELP = "simulate a measurement campaign"
 EXAMPLE = ("doe-calib simulate --robot kr270.urdf --tool tool.yaml --poses 40 "
@@ -60,6 +52,15 @@ OUTPUTS = {"out": "file", "truth_out": "file"}
 
 
 def run(args):
+    import numpy as np
+
+    from doe_calib.estimation.result import load_parameters, save_parameters
+    from doe_calib.io.csv_files import read_design, write_measurements
+    from doe_calib.io.measurements import Configurations
+    from doe_calib.model.loads import unloaded_and_loaded
+    from doe_calib.model.marker_model import build_model
+    from doe_calib.model.simulate import random_configurations, random_truth, simulate
+
     robot, tool = load_robot_tool(args)
     check_payloads(robot, [args.load] if args.load else [])
     model = build_model(robot, tool, args.model, registry=effect_registry(args))

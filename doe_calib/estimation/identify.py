@@ -12,9 +12,7 @@ from dataclasses import replace
 from doe_calib.errors import DoeCalibWarning, PlausibilityWarning
 from doe_calib.estimation import plausibility
 from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
-from doe_calib.estimation.pose_estimator import identify_pose
 from doe_calib.estimation.sigma import resolve_sigma
-from doe_calib.estimation.two_step import identify_two_step
 from doe_calib.model.marker_model import for_workload
 
 ESTIMATORS = ("point", "two-step", "pose")
@@ -58,8 +56,12 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
     if estimator == "point":
         result = identify_point(model, measurements, params, progress=progress, **options)
     elif estimator == "two-step":
+        from doe_calib.estimation.two_step import identify_two_step
+
         result = identify_two_step(model, measurements, params, **options)
-    elif estimator == "pose":
+    elif estimator == "pose":  # SciPy's least_squares: loaded only for it
+        from doe_calib.estimation.pose_estimator import identify_pose
+
         result = identify_pose(model, measurements, params, **options)
     else:
         raise ValueError(f"unknown estimator {estimator!r}; choose one of "

@@ -2,11 +2,13 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 
 def register(source, target, weights=None):
-    """Least-squares rigid transform with ``target ≈ R @ source + t`` (Kabsch, via scipy).
+    """Least-squares rigid transform with ``target ≈ R @ source + t``.
+
+    Kabsch: the SVD of the weighted cross-covariance, as SciPy's
+    ``Rotation.align_vectors`` computes it.
 
     Parameters
     ----------
@@ -23,6 +25,8 @@ def register(source, target, weights=None):
     w = np.ones(len(source)) if weights is None else np.asarray(weights, float)
     cs = np.average(source, axis=0, weights=w)
     ct = np.average(target, axis=0, weights=w)
-    rot, _ = Rotation.align_vectors(target - ct, source - cs, weights=w)
-    r = rot.as_matrix()
+    u, _, vt = np.linalg.svd((w[:, None] * (target - ct)).T @ (source - cs))
+    if np.linalg.det(u @ vt) < 0:  # a reflection: turn the least certain axis instead
+        u[:, -1] = -u[:, -1]
+    r = u @ vt
     return r, ct - r @ cs

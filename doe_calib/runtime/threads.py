@@ -18,9 +18,15 @@ _CHOSEN = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 def single_threaded_blas():
     """Limit BLAS to one thread for this process unless the environment says otherwise.
 
+    The command line imports NumPy, SciPy and CasADi only when a command runs,
+    after this call: the environment variables set here give every BLAS loaded
+    later one thread (each reads them when it loads; child processes inherit
+    them), and threadpoolctl limits those already loaded.
+
     Returns the threadpoolctl limiter (keep it alive), or None when the user chose.
     """
     if any(v in os.environ for v in _CHOSEN):
         return None
+    os.environ.update({v: "1" for v in _CHOSEN})
     from threadpoolctl import threadpool_limits
     return threadpool_limits(limits=1, user_api="blas")
