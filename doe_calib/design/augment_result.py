@@ -11,7 +11,7 @@ from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.robot import Robot
 
-FORMAT = "doe_calib augment 1"
+FORMAT = "doe_calib.augment"
 
 
 def parameter_std(params, m: np.ndarray) -> dict:
