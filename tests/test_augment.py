@@ -154,7 +154,8 @@ def test_augmenting_a_one_branch_campaign_reveals_the_own_weight_deflection(tmp_
         [n for n in big.nominal().names if n not in r.std_after], "fixed")
     both = concatenate([meas, design_readings(big, params.values, r.configurations, 2e-5)])
     m = measured_information(big, params, both)
-    own = [i for i, n in enumerate(np.array(params.names)[params.free]) if n in model.nominal().names]
+    free_names = np.array(params.names)[params.free]
+    own = [i for i, n in enumerate(free_names) if n in model.nominal().names]
     assert log_det(m) - log_det(m[np.ix_(own, own)]) == pytest.approx(r.value_after, abs=1e-6)
     back = AugmentResult.from_dict(r.to_dict())
     assert back.summary() == r.summary()

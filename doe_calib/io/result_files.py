@@ -110,10 +110,10 @@ def load(path):
     -------
     object
         ``IdentificationResult``, ``ParameterSet``, ``DesignResult``,
-        ``AugmentResult`` (``design --augment``), ``DiagnosisResult``, ``RefineResult``, ``Comparison`` or
-        ``CompensationResult``, by the file's format (``doe_calib.identification``, ``.parameters``,
-        ``.design``, ``.diagnosis``, ``.refine``, ``.comparison``,
-        ``.compensation``).
+        ``AugmentResult`` (``design --augment``), ``DiagnosisResult``, ``RefineResult``,
+        ``Comparison`` or ``CompensationResult``, by the file's format
+        (``doe_calib.identification``, ``.parameters``, ``.design``, ``.augment``,
+        ``.diagnosis``, ``.refine``, ``.comparison``, ``.compensation``).
 
     Raises
     ------
