@@ -9,6 +9,7 @@ def markdown(s: dict) -> str:
     rows = [("first campaign only", s["refine_first"]),
             (f"+ {s['k']} poses from `design --augment`", s["refine_augmented"]),
             (f"+ {s['k']} random poses", s["refine_random"])]
+    rows = [(label, r) for label, r in rows if r is not None]
     lines = ["# Sequential design: a hidden effect found by augmenting a campaign", "",
              f"Truth (independent simulator, {s['truth']['simulator']}): a UR10 with random "
              f"geometry errors and the shoulder's own-weight deflection "
@@ -35,10 +36,12 @@ def markdown(s: dict) -> str:
     found = [label for label, r in rows if truth in r["added"]]
     aug, rnd = s["refine_augmented"], s["refine_random"]
     lines += ["", f"Refine finds the simulated `{truth}` with: "
-              + (", ".join(found) if found else "none of these") + ". "
-              f"Held-out error with the designed poses {aug['held_out_rms_3d_mm']:.4f} mm, "
-              f"with random poses over the whole joint range {rnd['held_out_rms_3d_mm']:.4f} "
-              f"mm: random poses drawn over every branch leave the first campaign's branch "
-              f"too; `--augment` chooses poses that do, and predicts before measuring what "
-              f"they will reveal."]
+              + (", ".join(found) if found else "none of these") + "."]
+    if rnd is not None:
+        lines[-1] += (f" Held-out error with the designed poses "
+                      f"{aug['held_out_rms_3d_mm']:.4f} mm, with random poses over the whole "
+                      f"joint range {rnd['held_out_rms_3d_mm']:.4f} mm: random poses drawn over "
+                      f"every branch leave the first campaign's branch too; `--augment` "
+                      f"chooses poses that do, and predicts before measuring what they will "
+                      f"reveal.")
     return "\n".join(lines) + "\n"

@@ -58,8 +58,9 @@ def _refined(model, meas, held, max_steps):
 
 
 def run(work: Path, n_first: int = 300, k: int = 20, n_candidates: int = 3000,
-        n_held: int = 200, seed: int = 5, max_steps: int = 3) -> dict:
-    """The whole study; plain data for the JSON."""
+        n_held: int = 200, seed: int = 5, max_steps: int = 3, control: bool = True) -> dict:
+    """The whole study; plain data for the JSON (``control`` False: without the random
+    poses, ``refine_random`` None)."""
     sim = independent_sim()
     urdf = sim.ur10_urdf()
     if urdf is None:
@@ -86,9 +87,12 @@ def run(work: Path, n_first: int = 300, k: int = 20, n_candidates: int = 3000,
     designed = _measure(sim, chain, truth, aug.configurations.q, robot, tool,
                         work / "designed.csv", rng)
     after = _refined(model, concatenate([first, designed]), held, max_steps)
-    q_random = sim.random_configurations(chain, k, np.random.default_rng(seed + 2))
-    randoms = _measure(sim, chain, truth, q_random, robot, tool, work / "random.csv", rng)
-    control = _refined(model, concatenate([first, randoms]), held, max_steps)
+    if control:
+        q_random = sim.random_configurations(chain, k, np.random.default_rng(seed + 2))
+        randoms = _measure(sim, chain, truth, q_random, robot, tool, work / "random.csv", rng)
+        control = _refined(model, concatenate([first, randoms]), held, max_steps)
+    else:
+        control = None
     outside = ((aug.configurations.q < ONE_BRANCH[:, 0])
                | (aug.configurations.q > ONE_BRANCH[:, 1])).any(axis=1)
     det_b, det_a = aug.detect_before[0], aug.detect_after[0]
