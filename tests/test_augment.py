@@ -185,3 +185,20 @@ def test_design_augment_from_the_command_line(tmp_path, capsys):
     assert main(["design", "--robot", str(urdf), "--flange", "tool0", "--tool", str(tool),
                  "--model", MODEL, "--diagnosis", "d.json", "--out", str(out)]) == 2
     assert "--diagnosis is read with --augment" in capsys.readouterr().err
+
+
+def test_design_candidates_from_the_command_line(kr270, tmp_path, capsys):
+    from doe_calib.cli import main
+    from doe_calib.design.result import DesignResult
+
+    _, names = _taught_file(kr270, tmp_path / "taught.csv", 80, np.random.default_rng(4))
+    out = tmp_path / "d.json"
+    assert main(["design", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
+                 "--model", MODEL, "--poses", "6", "--candidates-from",
+                 str(tmp_path / "taught.csv"), "--no-collision", "--seed", "1",
+                 "--out", str(out)]) == 0
+    d = DesignResult.from_json(out)
+    chosen = set(d.configurations.pose)
+    assert len(chosen) == 6 and chosen <= set(names[3:])
+    assert d.candidates["removed"]["joint limits (with margin)"] == 3
+    assert set(read_candidates(out.with_suffix(".csv"), kr270.robot).names) == chosen
