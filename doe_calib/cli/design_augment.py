@@ -12,10 +12,16 @@ from doe_calib.io.json_file import read_json, strict_json
 
 
 def run_augment(args, model, loads, candidates, constraints, collision, registry, csv_path):
-    """Propose ``--poses`` new poses for ``--augment``'s campaign; write ``--out`` and the CSV."""
+    """Propose ``--poses`` new poses for ``--augment``'s campaign; write ``--out`` and the CSV.
+
+    The candidates pass the constraints and the collision screening; a path from ``--home``
+    is not planned for them (as it is for a design's poses)."""
     if args.criterion == "task":
         raise OptionError("--augment designs for the model's parameters (D, A or E) or, with "
                           "--diagnosis, to separate its candidates; not for --task")
+    if args.report:
+        raise OptionError("--report is written for a design, not for --augment; the augment "
+                          "JSON and its summary say what the new poses add")
     measured = read_measurements(args.augment, model.robot, model.tool, sigma_mm=args.sigma)
     targets = ()
     if args.diagnosis:
