@@ -38,6 +38,17 @@ def add_arguments(c):
                         "load adds nothing")
     c.add_argument("--candidates", type=count("--candidates", 1), default=20000,
                    help="feasible random candidate poses")
+    c.add_argument("--candidates-from", metavar="FILE",
+                   help="design over the poses of this design CSV/JSON or measurement CSV "
+                        "(taught, known-safe or measured ones) instead of random candidates; "
+                        "they are screened by the same constraints, not refined, and the "
+                        "chosen poses keep their ids")
+    c.add_argument("--augment", metavar="M.csv",
+                   help="sequential design: propose --poses new poses that add most to this "
+                        "measured campaign (a measurement CSV), for the model's parameters")
+    c.add_argument("--diagnosis", metavar="D.json",
+                   help="with --augment: choose the new poses to separate this diagnosis' top "
+                        "and confounded candidates from the model")
     c.add_argument("--criterion", choices=CRITERIA, default="D",
                    help="D (log det), A (trace of the scaled covariance), E (smallest "
                         "eigenvalue) or task (position variance at --task poses)")
@@ -138,9 +149,23 @@ def run(args):
     collision = None if build is None else build(loads)
     home = None if args.home is None else \
         parse_floats(args.home, robot.n_joints, "--home") / robot.display_factors
+    if args.diagnosis and not args.augment:
+        raise OptionError("--diagnosis is read with --augment M.csv (the campaign it diagnosed)")
+    from doe_calib.design.candidate_file import read_candidates
+
+    candidates = args.candidates if not args.candidates_from else \
+        read_candidates(args.candidates_from, robot, tool)
+    if args.augment:
+        if args.detect and not (0 < args.alpha < 1 and args.alpha < args.power < 1):
+            raise OptionError(f"--alpha {args.alpha:g} and --power {args.power:g}: give "
+                              f"0 < alpha < power < 1")
+        from doe_calib.cli.design_augment import run_augment
+
+        return run_augment(args, model, loads, candidates, constraints, collision,
+                           effect_registry(args), csv_path)
     discovery = _discovery_goal(args)
     progress = stage_progress()
-    result = optimal_design(model, args.poses, loads, candidates=args.candidates,
+    result = optimal_design(model, args.poses, loads, candidates=candidates,
                             sigma=args.sigma / 1000.0, criterion=args.criterion, task=task,
                             task_point=parse_floats(args.task_point, 3, "--task-point") / 1000.0,
                             constraints=constraints, refine=not args.no_refine,

@@ -18,7 +18,9 @@ STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__mai
            "table2": "studies.table2.__main__", "diagnosis": "studies.diagnosis.__main__",
            "design_sweep": "studies.design_sweep.__main__",
            "compensation": "studies.compensation.__main__",
-           "tiago_compensation": "studies.tiago_compensation.__main__"}
+           "tiago_compensation": "studies.tiago_compensation.__main__",
+           "sequential": "studies.sequential.__main__",
+           "tiago_sequential": "studies.tiago_sequential.__main__"}
 
 HELP = "run a study and write its results"
 EXAMPLE = "doe-calib study table1 --out results [--scheduler tcp://host:8786]"

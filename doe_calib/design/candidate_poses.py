@@ -24,15 +24,25 @@ class CandidateSet:
     removed : dict
         Constraint name → number of drawn poses violating it (a pose may
         violate several).
+    names : tuple of str
+        Pose id of each candidate when they come from a file
+        (:mod:`.candidate_file`); empty for random candidates.
+    source : str
+        The file they come from ("" for random candidates).
     """
 
     q: np.ndarray
     drawn: int
     removed: dict
+    names: tuple = ()
+    source: str = ""
 
     def to_dict(self) -> dict:
-        return {"drawn": self.drawn, "kept": len(self.q), "removed": dict(self.removed),
-                "note": "removed counts overlap: a pose may violate several constraints"}
+        out = {"drawn": self.drawn, "kept": len(self.q), "removed": dict(self.removed),
+               "note": "removed counts overlap: a pose may violate several constraints"}
+        if self.source:
+            out["source"] = self.source
+        return out
 
 
 def feasible_candidates(feasibility, robot, n: int, rng, collision=None) -> CandidateSet:
@@ -61,7 +71,7 @@ def feasible_candidates(feasibility, robot, n: int, rng, collision=None) -> Cand
         q = rng.uniform(lo, hi, (batch, robot.n_joints))
         ok, violated = feasibility.feasible(q)
         if collision is not None:
-            ok, hits = _screen(collision, q, ok, workspace)
+            ok, hits = screen_collisions(collision, q, ok, workspace)
             violated.update(hits)
         kept.append(q[ok])
         drawn += batch
@@ -85,7 +95,7 @@ def feasible_candidates(feasibility, robot, n: int, rng, collision=None) -> Cand
     return CandidateSet(q, drawn, removed)
 
 
-def _screen(collision, q, ok, workspace) -> tuple[np.ndarray, dict]:
+def screen_collisions(collision, q, ok, workspace) -> tuple[np.ndarray, dict]:
     """Poses of ``q`` still ok once too-close pairs are rejected; pair → mask of rejected."""
     hit = np.full(len(q), -1)
     hit[ok] = too_close(collision, q[ok], workspace=workspace)

@@ -8,6 +8,7 @@ import time
 
 import numpy as np
 
+from doe_calib.design.candidate_file import CandidatePoses, screened_candidates
 from doe_calib.design.candidate_poses import feasible_candidates
 from doe_calib.design.clearances import collision_note, pose_clearances
 from doe_calib.design.constraints import DesignConstraints
@@ -66,8 +67,8 @@ class _Stages:
         return lambda it, gap: self(name, f"iteration {it}, gap {gap:.3g}")
 
 
-def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma: float = 2e-5,
-                   criterion="D", task=None, task_point=(0.0, 0.0, 0.0),
+def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePoses = 20000,
+                   sigma: float = 2e-5, criterion="D", task=None, task_point=(0.0, 0.0, 0.0),
                    constraints: DesignConstraints | None = None, refine: bool = True,
                    params=None, rng=None, progress=None, collision=None,
                    home=None, discovery=None) -> DesignResult:
@@ -81,8 +82,11 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         At least what the identifiable parameters need
         (:func:`.problem.check_enough_poses`).
     loads : sequence of LoadCase
-    candidates : int
-        Feasible candidate poses, drawn uniformly inside the joint bounds.
+    candidates : int or CandidatePoses
+        Feasible candidate poses, drawn uniformly inside the joint bounds; or
+        named poses (:func:`.candidate_file.read_candidates`: taught, known-safe
+        or measured ones) screened by the same constraints, designed over as
+        they are (no continuous refinement), the chosen ones keeping their names.
     sigma : float
         Tracker σ per coordinate, m.
     criterion : {"D", "A", "E", "task"} or Criterion
@@ -127,9 +131,13 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
     params = model.nominal() if params is None else params
     constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints
     stage = _Stages(progress)
-    stage("candidates", f"drawing {candidates} feasible poses")
     feasibility = build_feasibility(model, params.values, constraints, loads)
-    cands = feasible_candidates(feasibility, model.robot, candidates, rng, collision)
+    if isinstance(candidates, CandidatePoses):
+        stage("candidates", f"screening the {len(candidates)} poses of {candidates.source}")
+        cands, refine = screened_candidates(feasibility, model.robot, candidates, collision), False
+    else:
+        stage("candidates", f"drawing {candidates} feasible poses")
+        cands = feasible_candidates(feasibility, model.robot, candidates, rng, collision)
     if len(cands.q) < n_poses:
         raise SolverError(f"only {len(cands.q)} feasible candidates for {n_poses} poses")
     if discovery is not None:
@@ -255,7 +263,8 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int = 20000, sigma
         used_constraints["reachability"] = {
             "home": [float(v) for v in home * model.robot.display_factors],
             "replaced": dict(replaced), "refined_reverted": reverted}
-    cfg = load_configurations(model, params.values, q, loads)
+    names = [cands.names[k] for k in chosen] if cands.names else None
+    cfg = load_configurations(model, params.values, q, loads, names)
     return DesignResult(model.robot, model.tool, model.spec, cfg, crit.name, value, bound,
                         efficiencies[crit.name],
                         {par.name: (float(s * par.display_factor), par.display_unit)

@@ -32,14 +32,17 @@ class LoadCase:
         return f"{self.mass:g}@" + ",".join(f"{1000 * c:g}" for c in self.com) + size
 
 
-def load_configurations(model, values, q, loads) -> Configurations:
-    """Each pose unloaded, then under each load case: (len(loads) + 1)·M configurations."""
+def load_configurations(model, values, q, loads, names=None) -> Configurations:
+    """Each pose unloaded, then under each load case: (len(loads) + 1)·M configurations.
+
+    Poses are named ``names`` (M ids), default 1..M."""
     q = np.atleast_2d(q)
     m, n_cases = q.shape[0], len(loads) + 1
     w = np.zeros((m, n_cases, 6))
     for c, load in enumerate(loads, start=1):
         w[:, c] = hanging_mass_wrench(model, values, q, load.mass, load.com)
-    pose = np.repeat([str(i + 1) for i in range(m)], n_cases)
+    names = [str(i + 1) for i in range(m)] if names is None else [str(n) for n in names]
+    pose = np.repeat(names, n_cases)
     return Configurations.from_arrays(np.repeat(q, n_cases, axis=0), w.reshape(-1, 6), pose=pose)
 
 

@@ -31,6 +31,12 @@ def _design(d, path):
     return DesignResult.from_dict(d)
 
 
+def _augment(d, path):
+    from doe_calib.design.augment_result import AugmentResult
+
+    return AugmentResult.from_dict(d)
+
+
 def _diagnosis(d, path):
     from doe_calib.diagnosis.result import DiagnosisResult
 
@@ -85,6 +91,7 @@ READERS = {
     "doe_calib.identification": _identification,
     "doe_calib.parameters": _parameters,
     "doe_calib.design": _design,
+    "doe_calib.augment": _augment,
     "doe_calib.diagnosis": _diagnosis,
     "doe_calib.refine": _refine,
     "doe_calib.comparison": _comparison,
@@ -103,10 +110,10 @@ def load(path):
     -------
     object
         ``IdentificationResult``, ``ParameterSet``, ``DesignResult``,
-        ``DiagnosisResult``, ``RefineResult``, ``Comparison`` or
-        ``CompensationResult``, by the file's format (``doe_calib.identification``, ``.parameters``,
-        ``.design``, ``.diagnosis``, ``.refine``, ``.comparison``,
-        ``.compensation``).
+        ``AugmentResult`` (``design --augment``), ``DiagnosisResult``, ``RefineResult``,
+        ``Comparison`` or ``CompensationResult``, by the file's format
+        (``doe_calib.identification``, ``.parameters``, ``.design``, ``.augment``,
+        ``.diagnosis``, ``.refine``, ``.comparison``, ``.compensation``).
 
     Raises
     ------

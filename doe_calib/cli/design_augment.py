@@ -1,0 +1,41 @@
+"""``doe-calib design --augment M.csv``: the next poses for a campaign already measured."""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+from doe_calib.design.augment import augment_design, diagnosis_targets
+from doe_calib.errors import OptionError
+from doe_calib.io.csv_files import read_measurements, write_design
+from doe_calib.io.json_file import read_json, strict_json
+
+
+def run_augment(args, model, loads, candidates, constraints, collision, registry, csv_path):
+    """Propose ``--poses`` new poses for ``--augment``'s campaign; write ``--out`` and the CSV.
+
+    The candidates pass the constraints and the collision screening; a path from ``--home``
+    is not planned for them (as it is for a design's poses)."""
+    if args.criterion == "task":
+        raise OptionError("--augment designs for the model's parameters (D, A or E) or, with "
+                          "--diagnosis, to separate its candidates; not for --task")
+    if args.report:
+        raise OptionError("--report is written for a design, not for --augment; the augment "
+                          "JSON and its summary say what the new poses add")
+    measured = read_measurements(args.augment, model.robot, model.tool, sigma_mm=args.sigma)
+    targets = ()
+    if args.diagnosis:
+        targets = tuple(diagnosis_targets(read_json(args.diagnosis, what="diagnosis")))
+        if not targets:
+            raise OptionError(f"--diagnosis {args.diagnosis}: the diagnosis lists no candidate "
+                              f"effect to separate")
+    result = augment_design(model, measured, args.poses, loads,
+                            candidates=candidates, sigma=args.sigma / 1000.0,
+                            criterion=args.criterion, targets=targets, detect=args.detect or "",
+                            constraints=constraints, collision=collision,
+                            rng=np.random.default_rng(args.seed), alpha=args.alpha,
+                            power=args.power, registry=registry)
+    result.to_json(args.out)
+    write_design(csv_path, result.configurations, model.robot)
+    print(strict_json(result.to_dict()) if args.json else result.summary())
+    print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)

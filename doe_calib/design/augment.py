@@ -1,0 +1,216 @@
+"""Sequential design: the K poses that add most to a campaign already measured.
+
+The measured configurations' information ``M₀ = J₀ᵀJ₀`` (their weighted,
+scaled Jacobian, each reading divided by its σ) is the starting information;
+K candidates are chosen greedily, then exchanged one at a time (Fedorov), to
+maximise the criterion of ``M₀ + Σ BⱼᵀBⱼ`` with the criteria's rank updates
+(:meth:`.criteria.Criterion.added_values`). Either for the model's own
+parameters, or, given target effects (a diagnosis' top and confounded
+candidates), to separate them: the D criterion of their information after
+the model's parameters are projected out, the Schur complement
+``M_ee − M_em M_mm⁻¹ M_me`` (whose log det is ``log det M − log det M_mm``):
+the information of ``Z⊥``, their columns orthogonal to the model's
+(:func:`doe_calib.diagnosis.effect_tests.projected_columns`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import ClassVar
+
+import numpy as np
+
+from doe_calib.design.augment_result import AugmentResult, parameter_std
+from doe_calib.design.candidate_file import CandidatePoses, screened_candidates
+from doe_calib.design.candidate_poses import feasible_candidates
+from doe_calib.design.constraints import DesignConstraints
+from doe_calib.design.criteria import Criterion, DOptimal, log_det
+from doe_calib.design.effect_detection import design_readings, detect_effects, detectability
+from doe_calib.design.feasibility import build_feasibility
+from doe_calib.design.problem import blocks_for, design_parameters, load_configurations
+from doe_calib.design.updates import regularised
+from doe_calib.errors import OptionError, SolverError
+from doe_calib.estimation.weighted_residuals import weighted_residual
+from doe_calib.io.measurements import concatenate
+from doe_calib.model.marker_model import build_model
+
+#: Targets taken from a diagnosis: its top candidate and its confounded ones, at most this many.
+MAX_TARGETS = 3
+#: A candidate whose cross-validated RMS is within this share of the top one's predicts as well.
+LOOK_ALIKE = 0.02
+
+
+@dataclass(frozen=True)
+class Separation(Criterion):
+    """Ds: log det of the information on the target parameters once the model's own
+    (columns ``own``) are projected out, ``log det M − log det M[own, own]``."""
+
+    own: tuple = ()
+    name: ClassVar[str] = "Ds"
+    statistic: ClassVar[str] = "max_i tr(M⁻¹ M_i) − tr(M_mm⁻¹ M_i,mm)"
+    words: ClassVar[str] = ("the most information on the target effects after the model's own "
+                            "parameters are projected out (log det of the Schur complement)")
+
+    def value(self, m):
+        own = list(self.own)
+        return log_det(m) - log_det(m[np.ix_(own, own)])
+
+    def added_values(self, m, blocks):
+        own, d = list(self.own), DOptimal()
+        return d.added_values(m, blocks) - d.added_values(m[np.ix_(own, own)],
+                                                          blocks[:, :, own])
+
+
+def diagnosis_targets(diagnosis: dict, top: int = MAX_TARGETS) -> list:
+    """Effect strings to separate, from a diagnosis (its JSON as a dict): its top candidate,
+    the candidates that predict as well (cross-validated RMS within :data:`LOOK_ALIKE` of the
+    top's) and those the model's parameters absorb (``absorbed_by``), strongest first, one per
+    effect and joint, at most ``top``."""
+    cands = diagnosis.get("candidates", [])
+    if not cands:
+        return []
+    best = cands[0].get("cv_rms_mm")
+    alike = [c for c in cands[1:] if best is not None and c.get("cv_rms_mm") is not None
+             and c["cv_rms_mm"] <= best * (1.0 + LOOK_ALIKE)]
+    picked, seen = [], set()
+    for c in [cands[0], *alike, *(c for c in cands[1:] if c.get("absorbed_by"))]:
+        key = (c.get("effect"), c.get("joint"))
+        if key not in seen:
+            seen.add(key)
+            picked.append(c["spec"])
+    return picked[:top]
+
+
+def measured_information(model, params, measurements) -> np.ndarray:
+    """M₀ = J₀ᵀJ₀ of the free parameters, scaled as :func:`.problem.blocks_for` (its σ per
+    reading)."""
+    _, jac = weighted_residual(model, measurements, params.values)
+    j = jac[:, params.free] * params.scales[params.free]
+    return j.T @ j
+
+
+def exchange_from(m0, blocks, n: int, crit, max_sweeps: int = 30) -> np.ndarray:
+    """Indices of ``n`` distinct candidates maximising ``crit`` of M₀ + Σ BⱼᵀBⱼ: greedy
+    additions, then single exchanges until none improves."""
+    if len(blocks) < n:
+        raise SolverError(f"only {len(blocks)} feasible candidates for {n} new poses")
+    chosen, m = [], m0.copy()
+    for _ in range(n):
+        values = crit.added_values(regularised(m), blocks)
+        values[chosen] = -np.inf
+        j = int(np.argmax(values))
+        chosen.append(j)
+        m = m + blocks[j].T @ blocks[j]
+    current = crit.value(regularised(m))
+    for _ in range(max_sweeps):
+        improved = False
+        for slot in range(n):
+            i = chosen[slot]
+            m_minus = m - blocks[i].T @ blocks[i]
+            values = crit.added_values(regularised(m_minus), blocks)
+            values[[c for c in chosen if c != i]] = -np.inf
+            j = int(np.argmax(values))
+            if j != i and values[j] > current + 1e-10 * max(1.0, abs(current)):
+                chosen[slot], m = j, m_minus + blocks[j].T @ blocks[j]
+                current = crit.value(regularised(m))
+                improved = True
+        if not improved:
+            break
+    return np.array(chosen)
+
+
+def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
+                   sigma: float = 2e-5, criterion="D", targets=(), detect: str = "",
+                   params=None, constraints: DesignConstraints | None = None, collision=None,
+                   rng=None, alpha: float = 0.05, power: float = 0.8,
+                   registry=None) -> AugmentResult:
+    """K new poses (each unloaded and under every load) that add most to ``measured``.
+
+    Parameters
+    ----------
+    model : Model
+    measured : Measurements
+        The campaign already measured (its configurations, wrenches and σ per
+        reading, m; the readings themselves are not used).
+    n_poses : int
+        K, the new poses.
+    loads : sequence of LoadCase
+    candidates : int or CandidatePoses
+        Random feasible candidates, or named poses (e.g. another session's
+        measured postures, :func:`.candidate_file.read_candidates`).
+    sigma : float
+        σ of the new readings per coordinate, m.
+    criterion : {"D", "A", "E"} or Criterion
+        For the model's parameters when no ``targets`` are given.
+    targets : sequence of str
+        Effect strings to separate from the model (e.g. :func:`diagnosis_targets`):
+        the Ds criterion on their parameters at zero effect.
+    detect : str
+        Effects whose detectability is reported before and after (default the targets).
+    params : ParameterSet, optional
+        Values the information is computed at (default nominal).
+    constraints, collision, rng :
+        As for :func:`.optimal.optimal_design`.
+    alpha, power : float
+        Of the detectability (:mod:`.effect_detection`).
+    registry : EffectRegistry, optional
+
+    Returns
+    -------
+    AugmentResult
+    """
+    if n_poses < 1:
+        raise OptionError(f"{n_poses} poses (--poses): augmenting needs at least 1 new pose")
+    rng = np.random.default_rng() if rng is None else rng
+    params = model.nominal() if params is None else params
+    constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints
+    feasibility = build_feasibility(model, params.values, constraints, loads)
+    if isinstance(candidates, CandidatePoses):
+        cands = screened_candidates(feasibility, model.robot, candidates, collision)
+    else:
+        cands = feasible_candidates(feasibility, model.robot, candidates, rng, collision)
+    params = design_parameters(model, params, np.r_[cands.q, measured.configurations.q],
+                               loads, rng=rng)
+    targets = tuple(targets)
+    design_model, design_params, crit = model, params, Criterion.from_name(criterion)
+    if targets:
+        effects = [e for spec in targets for e in detect_effects(model, spec, None, registry)]
+        design_model = build_model(model.robot, model.tool, tuple(model.effects) + tuple(effects))
+        design_params = design_parameters(design_model, with_new_free(design_model, params),
+                                          np.r_[cands.q, measured.configurations.q], loads,
+                                          rng=rng)
+        free_names = np.array(design_params.names)[design_params.free]
+        own = np.flatnonzero(np.isin(free_names, np.array(params.names)[params.free]))
+        crit = Separation(tuple(int(i) for i in own))
+    m0 = measured_information(design_model, design_params, measured)
+    blocks = blocks_for(design_model, design_params, cands.q, loads, sigma)
+    chosen = exchange_from(m0, blocks, n_poses, crit)
+    added = blocks[chosen]
+    m1 = m0 + np.einsum("kri,krj->ij", added, added)
+    names = [cands.names[k] for k in chosen] if cands.names else \
+        [f"new{i + 1}" for i in range(n_poses)]
+    cfg = load_configurations(model, params.values, cands.q[chosen], loads, names)
+    before = detect or "+".join(targets)
+    detected = ((), ())
+    if before:
+        effects = detect_effects(model, before, None, registry)
+        after = concatenate([measured, design_readings(model, params.values, cfg, sigma)])
+        detected = tuple(detectability(model, params, m, effects, alpha, power)
+                         for m in (measured, after))
+    return AugmentResult(
+        configurations=cfg, criterion=crit.name, targets=targets,
+        value_before=float(crit.value(m0)), value_after=float(crit.value(m1)),
+        std_before=parameter_std(design_params, m0), std_after=parameter_std(design_params, m1),
+        detect_before=detected[0], detect_after=detected[1], candidates=cands.to_dict(),
+        measured_configurations=len(measured.configurations), sigma_mm=1000.0 * sigma,
+        robot=model.robot, model=model.spec)
+
+
+def with_new_free(big, params):
+    """``big``'s parameter set: ``params``' values and free flags, its new parameters free at 0
+    (as :func:`doe_calib.diagnosis.effect_tests.augmented`, for several effects)."""
+    start = big.nominal()
+    values, free, reasons = start.values.copy(), start.free.copy(), list(start.fixed_reason)
+    for i, name in enumerate(params.names):
+        k = start.names.index(name)
+        values[k], free[k], reasons[k] = params.values[i], params.free[i], params.fixed_reason[i]
+    return replace(start, values=values, free=free, fixed_reason=tuple(reasons))
