@@ -18,6 +18,7 @@ from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
 from doe_calib.diagnosis.effect_tests import augmented, candidate_tests
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
+from doe_calib.diagnosis.sign_lead import sign_lead
 from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.design.detectability import SEPARATE
 from doe_calib.errors import DoeCalibError, ModelError
@@ -174,66 +175,6 @@ def _rivals_words(tests, proposed, level) -> str:
     return (f" These poses cannot tell {proposed.spec} ({best:.4g} mm) apart from {names}: "
             f"they predict equally well here; {SEPARATE.replace('them', 'the effects')}, "
             f"before either is trusted away from these poses.")
-
-
-#: An implausible candidate leads the verdict when it removes this many times the
-#: cross-validated RMS the best plausible one removes (or any, when none is material).
-LEAD_FACTOR = 2.0
-
-#: Why an effect driven by the approach directions fits with the impossible sign.
-APPROACH_CAUSES = ("the approach directions are reversed (the file's approach1 … columns "
-                   "follow the opposite convention), the rows are not in measurement order "
-                   "(directions derived from the order are then wrong), or the joint readings "
-                   "are link-side (an output encoder sees the band the other way)")
-
-
-def _wrong_signs(candidate, robot, registry=None) -> list:
-    """(parameter, fitted row) of the candidate's parameters whose fitted value has the sign
-    their bounds forbid (a negative width)."""
-    try:
-        pars = {p.name: p for p in parse_effect(candidate.spec, registry=registry)
-                .parameters(robot)}
-    except (DoeCalibError, ValueError):
-        return []
-    out = []
-    for row in candidate.fitted:
-        p = pars.get(row["name"])
-        if p is not None and ((p.bounds[0] == 0 and row["value"] < 0)
-                              or (p.bounds[1] == 0 and row["value"] > 0)):
-            out.append((p, row))
-    return out
-
-
-def _sign_lead(model, odd, proposed, cv, folds, registry=None) -> str:
-    """The verdict's lead when a sign-defined effect fits far best with the impossible sign:
-    what the sign means, the likely causes and the option that accepts the reversed
-    convention ("" otherwise)."""
-    wrong = _wrong_signs(odd, model.robot, registry)
-    best_gain = 0.0 if proposed is None else cv - proposed.cv_rms_mm
-    if not wrong or cv - odd.cv_rms_mm < LEAD_FACTOR * best_gain:
-        return ""
-    effect = parse_effect(odd.spec, registry=registry)
-    words = describe(odd, model.robot, registry)
-    values = "; ".join(f"{r['name']} = {r['value']:.3g}"
-                       + (f" ± {r['std']:.2g}" if r["std"] is not None else "")
-                       + f" {r['unit']}" for _, r in wrong)
-    meaning = "; ".join(dict.fromkeys(p.sign for p, _ in wrong if p.sign))
-    other = "" if proposed is None else \
-        (f", against {100 * best_gain / cv:.0f} % for the best plausible candidate, "
-         f"{proposed.spec}")
-    text = (f"{words[0].upper()}{words[1:]} explains the data far better than any other "
-            f"candidate, but with the impossible sign: adding {odd.spec} lowers the "
-            f"cross-validated RMS {cv:.3g} mm ({folds.description}) to {odd.cv_rms_mm:.3g} mm "
-            f"({100 * (1 - odd.cv_rms_mm / cv):.0f} %{other}), fitting {values}"
-            + (f" ({meaning})" if meaning else "") + ".")
-    if getattr(effect, "mode", None) in ("approach", "both"):
-        text += (f" Likely causes: {APPROACH_CAUSES}. If the convention is reversed, rerun "
-                 f"diagnose, refine or identify with --approach-sign reversed: {odd.spec} "
-                 f"then fits a positive width.")
-    else:
-        text += (" Likely cause: the sign convention of what drives it (a load written as "
-                 "the reaction, an axis reversed) is the opposite of the model's.")
-    return text
 
 
 def _verdict(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross, level,
@@ -393,7 +334,8 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     verdict = _verdict(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
                        gross, level, min_gain, tolerance, practical_um, registry)
     odd = next((t for t in _material(ranked, cv, level, min_gain) if t.implausible), None)
-    lead = "" if odd is None else _sign_lead(model, odd, proposed, cv, split, registry)
+    lead = "" if odd is None else sign_lead(model, odd, proposed, cv, split,
+                                            describe(odd, model.robot, registry), registry)
     if lead and proposed is None:
         verdict = (f"{lead} Until that is settled the model is NOT adequate "
                    f"({_adequacy_words(test)})." + _confounded_words(ranked, None, level))
