@@ -78,7 +78,9 @@ def sign_lead(model, odd, proposed, cv, folds, words: str, registry=None) -> str
             f"({100 * (1 - odd.cv_rms_mm / cv):.0f} %{other}), fitting {values}"
             + (f" ({meaning})" if meaning else "") + ".")
     if getattr(effect, "mode", None) in ("approach", "both"):
-        text += (f" Likely causes: {APPROACH_CAUSES}. If the convention is reversed, rerun "
+        loads = "" if effect.mode == "approach" else \
+            "; in loaded poses, the load may be written with the opposite sign"
+        text += (f" Likely causes: {APPROACH_CAUSES}{loads}. If the convention is reversed, rerun "
                  f"diagnose, refine or identify with --approach-sign reversed: {odd.spec} "
                  f"then fits a positive width.")
     else:
