@@ -114,6 +114,19 @@ class TorqueSignBacklash:
 
 
 @dataclass(frozen=True)
+class ApproachBacklash:
+    """θ = −(width/2)·a_k: a static joint's output lags half the band behind the motor that
+    brought it there, a_k the direction joint k approached from (+1 moving up, −1 down, 0
+    unknown); width in rad (m if prismatic). Needs the approach (``uses_approach``)."""
+    joint: int
+    width: float
+    uses_approach = True
+
+    def delta(self, q, tau, g, approach):
+        return -0.5 * self.width * approach[:, self.joint]
+
+
+@dataclass(frozen=True)
 class CrossCoupling:
     """Δq_joint = amplitude·sin(q_source): an error driven by another joint's angle."""
     joint: int
@@ -218,14 +231,17 @@ def gravity_torques(chain, q_si) -> np.ndarray:
                      [chain.idx_v] for q in np.atleast_2d(q_si)])
 
 
-def marker_positions(chain, truth, q_si, wrench) -> np.ndarray:
+def marker_positions(chain, truth, q_si, wrench, approach=None) -> np.ndarray:
     """True marker positions (M, n, 3) in the tracker frame, m, for commanded q (M, N) SI and
-    wrench (M, 6) N, N·m (flange origin, root axes)."""
+    wrench (M, 6) N, N·m (flange origin, root axes); ``approach`` (M, N) of ±1/0, the
+    direction each joint came from (0 when not given), for effects that use it."""
     q = np.atleast_2d(np.asarray(q_si, float))
     tau, g = joint_torques(chain, q, wrench), gravity_torques(chain, q)
+    approach = np.zeros_like(q) if approach is None else np.asarray(approach, float)
     x = q + truth.offsets
     for e in truth.effects:
-        x[:, e.joint] += e.delta(q, tau, g)
+        x[:, e.joint] += (e.delta(q, tau, g, approach) if getattr(e, "uses_approach", False)
+                          else e.delta(q, tau, g))
     model = truth.robot_model(chain)
     data = model.createData()
     rot = pin.exp3(np.asarray(truth.base_rotvec, float))
@@ -267,7 +283,8 @@ def random_configurations(chain, m: int, rng, margin: float = 0.05, within=None)
 
 
 def write_campaign(path, chain, truth, q_si, wrench, marker_names, sigma_mm: float, rng,
-                   outliers=(), shuffle: bool = False, write_sigma: bool = True) -> dict:
+                   outliers=(), shuffle: bool = False, write_sigma: bool = True,
+                   approach=None, written_approach_sign: float = 1.0) -> dict:
     """Write a measurement CSV (formats.md §3) of every marker in every configuration.
 
     Configurations with identical q share a pose id ("1", "2", … by first appearance) and
@@ -279,6 +296,9 @@ def write_campaign(path, chain, truth, q_si, wrench, marker_names, sigma_mm: flo
     marker_names : n names, in the order of ``truth.markers``
     sigma_mm : Gaussian noise σ per coordinate, mm (also written in ``sigma``)
     outliers : (row, displacement (3,) mm) pairs; row counts data rows as written, from 0
+    approach : (M, N) of ±1, optional: the direction each joint came from, simulated and
+        written in the columns ``approach1`` … ``approachN`` times ``written_approach_sign``
+        (−1: a file whose approach convention is reversed)
 
     Returns
     -------
@@ -289,7 +309,7 @@ def write_campaign(path, chain, truth, q_si, wrench, marker_names, sigma_mm: flo
     """
     q = np.atleast_2d(np.asarray(q_si, float))
     wrench = np.atleast_2d(np.asarray(wrench, float))
-    exact = marker_positions(chain, truth, q, wrench)
+    exact = marker_positions(chain, truth, q, wrench, approach)
     _, first, pose = np.unique(q, axis=0, return_index=True, return_inverse=True)
     pose_id = np.argsort(np.argsort(first))[pose.ravel()]  # 0-based, by first appearance
     poses = rng.permutation(pose_id.max() + 1) if shuffle else np.arange(pose_id.max() + 1)
@@ -300,14 +320,18 @@ def write_campaign(path, chain, truth, q_si, wrench, marker_names, sigma_mm: flo
         xyz[r] += d
     qf = q * chain.file_units()
     header = ["pose", *(f"q{k + 1}" for k in range(q.shape[1])), *WRENCH, "marker", "x", "y",
-              "z", *(["sigma"] if write_sigma else [])]
+              "z", *(["sigma"] if write_sigma else []),
+              *([f"approach{k + 1}" for k in range(q.shape[1])] if approach is not None else [])]
+    shown = None if approach is None else \
+        (written_approach_sign * np.asarray(approach, float)).astype(int)
     with open(path, "w", newline="", encoding="utf-8") as fh:
         out = csv.writer(fh)
         out.writerow(header)
         for (c, j), p in zip(rows, xyz):
             out.writerow([str(pose_id[c] + 1), *map(repr, qf[c].tolist()),
                           *map(repr, wrench[c].tolist()), marker_names[j], *map(repr, p.tolist()),
-                          *([repr(float(sigma_mm))] if write_sigma else [])])
+                          *([repr(float(sigma_mm))] if write_sigma else []),
+                          *(shown[c].tolist() if shown is not None else [])])
     return {"exact": exact, "order": order, "rows": rows,
             "outlier_rows": tuple(int(r) for r, _ in outliers)}
 

@@ -78,11 +78,26 @@ def data_argument(c, required: bool = True):
                         "sessions (a 'session' column also says so)")
 
 
-def read_data(paths, robot, tool, sigma_mm=None, skip_bad=False, require_xyz=True):
+#: ``--approach-sign``: the file's approach convention (formats.md §3) or its reverse.
+APPROACH_SIGNS = ("as-read", "reversed")
+
+
+def approach_argument(c):
+    """``--approach-sign as-read|reversed``: accept files whose approach directions are the
+    reverse of formats.md §3 (a diagnosis proposes it when backlash fits negative)."""
+    c.add_argument("--approach-sign", choices=APPROACH_SIGNS, default=APPROACH_SIGNS[0],
+                   help="reversed: negate every approach direction read or derived from the "
+                        "row order (a file whose convention is the reverse: backlash by "
+                        "approach then fits positive); default as-read")
+
+
+def read_data(paths, robot, tool, sigma_mm=None, skip_bad=False, require_xyz=True,
+              approach_sign: str = APPROACH_SIGNS[0]):
     """Measurements of one or several files (sessions), with what was dropped or doubted on stderr.
 
     Rows dropped on request are reported one line each; joint readings a hair
-    past a limit (accepted) are summarised.
+    past a limit (accepted) are summarised. ``approach_sign`` ``"reversed"``
+    negates every approach direction (said on stderr).
     """
     from doe_calib.io.csv_files import read_measurements
     from doe_calib.io.measurements import concatenate
@@ -97,6 +112,10 @@ def read_data(paths, robot, tool, sigma_mm=None, skip_bad=False, require_xyz=Tru
     if len(meas.warnings) > 3:
         print(f"warning: … and {len(meas.warnings) - 3} more joint readings slightly past a "
               f"limit (accepted as measured)", file=sys.stderr)
+    if approach_sign == APPROACH_SIGNS[1]:
+        print("approach directions reversed at your request (--approach-sign reversed)",
+              file=sys.stderr)
+        meas = meas.with_approach_reversed()
     return meas
 
 
@@ -147,7 +166,7 @@ def _data_bytes(paths) -> int:
 
 def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
     """The model (``--model``) and the measurements (``--data``, ``--sigma``, ``--skip-bad``,
-    ``--exclude-poses``).
+    ``--exclude-poses``, ``--approach-sign``).
 
     With no σ given (no ``--sigma``, no ``sigma`` column) and ``estimate_sigma``,
     σ is set to the σ̂ of the starting model (:func:`with_estimated_sigma`).
@@ -160,7 +179,8 @@ def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
     model = build_model(robot, tool, args.model, registry=registry)
     if _data_bytes(args.data) > LARGE_DATA_BYTES:  # the fit will run native code: compile
         compile_in_background(model)               # it while the file is read
-    meas = read_data(args.data, robot, tool, args.sigma, args.skip_bad)
+    meas = read_data(args.data, robot, tool, args.sigma, args.skip_bad,
+                     approach_sign=getattr(args, "approach_sign", APPROACH_SIGNS[0]))
     meas = excluding(meas, getattr(args, "exclude_poses", None))
     if estimate_sigma and meas.sigma_estimated:
         meas = with_estimated_sigma(model, meas)

@@ -6,6 +6,7 @@ from pathlib import Path
 
 from doe_calib.cli.choices import CV_GROUPINGS
 from doe_calib.cli.common import (
+    approach_argument,
     data_argument,
     effect_registry,
     model_and_measurements,
@@ -41,11 +42,15 @@ def measurement_arguments(c):
     c.add_argument("--exclude-poses", metavar="P1,P2",
                    help="leave these poses out (each exclusion is reported)")
     c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")
+    approach_argument(c)
 
 
 def add_arguments(c):
     robot_arguments(c)
     measurement_arguments(c)
+    c.add_argument("--practical-um", type=positive("--practical-um", "µm"), default=2.0,
+                   help="practical size: a misfit beyond the noise √(σ̂² − σ²) below this "
+                        "many µm, with no material candidate, is adequate (default 2)")
     c.add_argument("--out", required=True, help="diagnosis JSON to write")
     c.add_argument("--plot", help="PNG of the residual against every variable "
                                   "(default: beside --out)")
@@ -77,6 +82,7 @@ def run(args):
     fit = identify_quietly(model, meas)
     d = diagnose(model, meas, fit, level=args.level, folds=args.folds, grouping=args.cv_by,
                  min_gain=args.min_gain, tolerance=args.tolerance, registry=registry,
+                 practical_um=args.practical_um,
                  progress=lambda i, n, s: print(f"  cross-validating {s} ({i + 1}/{n})",
                                                 file=sys.stderr))
     d.to_json(args.out)

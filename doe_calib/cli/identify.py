@@ -6,6 +6,7 @@ import warnings
 
 from doe_calib.cli.choices import ESTIMATORS
 from doe_calib.cli.common import (
+    approach_argument,
     data_argument,
     fix_and_free,
     model_and_measurements,
@@ -35,6 +36,7 @@ def add_arguments(c):
     c.add_argument("--normalisation", type=positive("--normalisation", "m/rad"),
                    help="pose estimator only: m per rad")
     c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")
+    approach_argument(c)
     c.add_argument("--out", required=True, help="result JSON to write")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
     c.add_argument("--report", metavar="FILE.html", help="also write an HTML report")

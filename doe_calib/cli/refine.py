@@ -48,7 +48,8 @@ def run(args):
     val = None
     if args.validation:
         sigma_mm = args.sigma or float(np.median(meas.sigma)) * 1000.0  # σ̂ when not given
-        val = read_data(args.validation, model.robot, model.tool, sigma_mm)
+        val = read_data(args.validation, model.robot, model.tool, sigma_mm,
+                        approach_sign=args.approach_sign)
     print(f"refining from {model.spec or '(base + markers)'} on {len(meas)} readings…",
           file=sys.stderr)
     out = refine(model, meas, val, level=args.level, max_steps=args.max_steps,

@@ -157,8 +157,10 @@ class AddedVariables:
 def strongest_added_variables(diagnosis, model, measurements, fit, top: int = 4,
                               registry=None) -> AddedVariables:
     """Added-variable data of the ``top`` strongest candidates of ``diagnosis`` that can be
-    rebuilt; a candidate whose plot fails is named in ``failed``, never skipped silently.
-    ``registry`` names the effects the diagnosis tested (default the built-in ones).
+    rebuilt, one per (effect, joint): the first (best-ranked) shape of each group, so that
+    ``cyclic(j3)`` with 1, 2 and 3 harmonics take one panel, not three. A candidate whose
+    plot fails is named in ``failed``, never skipped silently (the group's next shape is
+    tried). ``registry`` names the effects the diagnosis tested (default the built-in ones).
 
     The toolkit's warnings of the rebuilt models are held back (they are about
     the candidate, not the fit); numpy's still reach the caller.
@@ -167,18 +169,19 @@ def strongest_added_variables(diagnosis, model, measurements, fit, top: int = 4,
                                                       registry)}
     variables = configuration_variables(model.robot, measurements.configurations)
     basis = fitted_basis(model, measurements, fit.parameters)  # shared by every candidate
-    plots, failed = [], []
+    plots, failed, shown = [], [], set()
     for c in diagnosis.candidates:
         if len(plots) == top:
             break
         effect = effects.get(c.spec)
-        if effect is None:
+        if effect is None or (c.effect, c.joint) in shown:
             continue
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", DoeCalibWarning)
                 plots.append(added_variable(model, measurements, fit.parameters, effect,
                                             variables, basis))
+            shown.add((c.effect, c.joint))
         except (DoeCalibError, ValueError, np.linalg.LinAlgError) as exc:
             failed.append((c.spec, str(exc) or type(exc).__name__))
     return AddedVariables(tuple(plots), tuple(failed))

@@ -5,7 +5,9 @@ every candidate and shape tried) and lowers the cross-validated RMS by a
 material margin (``min_gain``); among those, the lowest cross-validated RMS
 wins. Whether the model is adequate is a separate verdict: the χ² test of the
 residual against σ, or, where that test is too sharp to be useful (large
-N), σ̂ within ``tolerance`` of σ with no candidate making a material gain.
+N), no candidate making a material gain and either σ̂ within ``tolerance`` of σ
+or the misfit beyond the noise, √(σ̂² − σ²), below a stated practical size
+(``practical_um``).
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
 from doe_calib.diagnosis.effect_tests import augmented, candidate_tests
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
+from doe_calib.diagnosis.sign_lead import sign_lead
 from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.design.detectability import SEPARATE
 from doe_calib.errors import DoeCalibError, ModelError
@@ -121,7 +124,25 @@ def _gross_errors(test, flagged, follow, n_poses):
 def _adequacy_words(test):
     lo, hi = test.ratio_interval()
     return (f"σ̂/σ = {test.ratio:.3f} (95 % interval {lo:.3f}–{hi:.3f}; χ² p = "
-            f"{test.p_value:.2g}, σ {test.sigma_source} {test.sigma_mm:.3g} mm)")
+            f"{test.p_value:.2g}, σ {test.sigma_source} {test.sigma_mm:.3g} mm); misfit beyond "
+            f"the noise √(σ̂² − σ²) = {test.misfit_um:.3g} µm")
+
+
+def _adequate_why(test, tolerance, practical_um) -> str:
+    """Which rule found the model adequate, in words."""
+    if test.adequate:
+        return "consistent with the noise"
+    if test.ratio <= 1 + tolerance:
+        return f"within {tolerance:.0%} of the noise"
+    return (f"{test.misfit_um:.3g} µm beyond the noise per coordinate, below the practical "
+            f"size of {practical_um:g} µm (--practical-um): the χ² test at this N detects a "
+            f"misfit too small to matter — second-order effects of parameters held at "
+            f"nominal, or σ a few % optimistic")
+
+
+def _is_adequate(test, proposed, tolerance, practical_um) -> bool:
+    return test.adequate or (proposed is None and (test.ratio <= 1 + tolerance
+                                                   or test.practically_adequate(practical_um)))
 
 
 def _confounded_words(tests, proposed, level) -> str:
@@ -157,14 +178,14 @@ def _rivals_words(tests, proposed, level) -> str:
 
 
 def _verdict(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross, level,
-             min_gain, tolerance, registry=None):
+             min_gain, tolerance, practical_um, registry=None):
     return _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, flagged,
-                          gross, level, min_gain, tolerance, registry) \
+                          gross, level, min_gain, tolerance, practical_um, registry) \
         + _confounded_words(tests, proposed, level)
 
 
 def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross,
-                   level, min_gain, tolerance, registry=None):
+                   level, min_gain, tolerance, practical_um, registry=None):
     ratio = _adequacy_words(test)
     cv_words = f"cross-validated RMS {cv:.3g} mm ({folds.description})"
     if proposed is not None:
@@ -186,8 +207,7 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
                      f"time while they help")
         return text + "."
     if adequate:
-        why = "consistent with the noise" if test.adequate else \
-            f"within {tolerance:.0%} of the noise"
+        why = _adequate_why(test, tolerance, practical_um)
         return (f"The model is adequate: the residual is {why} ({ratio}); no candidate effect "
                 f"lowers the {cv_words} by {min_gain:.0%}.")
     where = ", ".join(p["pose"] + (f" (line {p['worst_line']})" if p["worst_line"] else "")
@@ -220,7 +240,7 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
 def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
              grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
              tolerance: float = 0.05, progress=None, registry=None,
-             sigma_mm: float | None = None) -> DiagnosisResult:
+             sigma_mm: float | None = None, practical_um: float = 2.0) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
 
     Parameters
@@ -255,6 +275,10 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         ``DEFAULT_REGISTRY.with_file(path)``).
     sigma_mm : float, optional
         σ per coordinate, mm, for every reading (replacing the readings' own).
+    practical_um : float
+        Practical size, µm per coordinate: a misfit beyond the noise
+        √(σ̂² − σ²) below it, with no material candidate, is adequate even when
+        the χ² test and ``tolerance`` reject (the size is stated in the verdict).
 
     Returns
     -------
@@ -296,7 +320,7 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                                                      t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]
     proposed = _proposal(ranked, cv, level, min_gain)
-    adequate = test.adequate or (test.ratio <= 1 + tolerance and proposed is None)
+    adequate = _is_adequate(test, proposed, tolerance, practical_um)
     m = len(measurements.configurations)
     size = np.bincount(res.config, (res.weighted ** 2).sum(axis=1), minlength=m)
     count = np.bincount(res.config, minlength=m) * 3
@@ -308,16 +332,24 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     n_poses = len(set(measurements.configurations.pose))
     gross = not adequate and proposed is None and _gross_errors(test, flagged, follow, n_poses)
     verdict = _verdict(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
-                       gross, level, min_gain, tolerance, registry)
+                       gross, level, min_gain, tolerance, practical_um, registry)
     odd = next((t for t in _material(ranked, cv, level, min_gain) if t.implausible), None)
-    if odd is not None and (proposed is None or odd.cv_rms_mm < proposed.cv_rms_mm):
+    lead = "" if odd is None else sign_lead(model, odd, proposed, cv, split,
+                                            describe(odd, model.robot, registry), registry)
+    if lead and proposed is None:
+        verdict = (f"{lead} Until that is settled the model is NOT adequate "
+                   f"({_adequacy_words(test)})." + _confounded_words(ranked, None, level))
+    elif lead:
+        verdict = f"{lead} Taking the data as they are: {verdict[0].lower()}{verdict[1:]}"
+    elif odd is not None and (proposed is None or odd.cv_rms_mm < proposed.cv_rms_mm):
         verdict += (f" Not proposed although it predicts better (cross-validated RMS "
                     f"{odd.cv_rms_mm:.3g} mm): {odd.spec}, {odd.implausible}.")
     lo, hi = test.ratio_interval()
     chi2 = {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
             "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,
             "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
-            "tolerance": tolerance, "chi2_adequate": test.adequate}
+            "tolerance": tolerance, "chi2_adequate": test.adequate,
+            "misfit_um": test.misfit_um, "practical_um": practical_um}
     spec = None if proposed is None else proposed.spec
     candidates = candidate_records(ranked, model.robot,
                                    [describe(t, model.robot, registry) for t in ranked],

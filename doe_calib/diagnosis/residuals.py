@@ -89,6 +89,19 @@ class Adequacy:
         """σ̂/σ: how many times the noise the residual is."""
         return float(np.sqrt(self.statistic / max(self.dof, 1)))
 
+    @property
+    def misfit_um(self) -> float:
+        """The misfit beyond the noise, µm per coordinate: √(σ̂² − σ²), 0 when σ̂ ≤ σ.
+
+        At large N the χ² test rejects a residual a few µm above the noise (second-order
+        effects of parameters held at nominal, σ a few % optimistic): this is that size.
+        """
+        return float(1e3 * self.sigma_mm * np.sqrt(max(self.ratio ** 2 - 1.0, 0.0)))
+
+    def practically_adequate(self, practical_um: float) -> bool:
+        """Whether the misfit beyond the noise (:attr:`misfit_um`) is below ``practical_um``."""
+        return self.misfit_um < practical_um
+
     def ratio_interval(self, confidence: float = 0.95) -> tuple:
         """Interval of the true σ over the assumed σ at ``confidence`` (from χ²(dof))."""
         if self.dof <= 0:

@@ -29,11 +29,13 @@ class DiagnosisResult:
         The measurement σ per coordinate, mm (given, or from repeated readings).
     adequate : bool
         Residuals consistent with the noise: the χ² test at ``level`` passes,
-        or σ̂/σ ≤ 1 + ``chi2["tolerance"]`` and no candidate makes a material gain.
+        or no candidate makes a material gain and either σ̂/σ ≤ 1 + ``chi2["tolerance"]``
+        or the misfit beyond the noise is below ``chi2["practical_um"]``.
     chi2 : dict
         ``statistic``, ``dof``, ``p_value``, ``sigma_source``, ``sigma_hat_mm``,
         ``sigma_ratio`` (σ̂/σ) and its 95 % ``sigma_ratio_interval``,
-        ``tolerance``, ``chi2_adequate`` (the χ² test alone).
+        ``tolerance``, ``chi2_adequate`` (the χ² test alone), ``misfit_um``
+        (√(σ̂² − σ²), µm) and ``practical_um`` (the practical size it is judged by).
     candidates : tuple of Candidate
         Best first: significant ones by cross-validated RMS, then by statistic.
     follows : tuple of Follows
@@ -120,6 +122,9 @@ class DiagnosisResult:
                        f"{interval[0]:.3f}–{interval[1]:.3f})"
                        + (f"; tolerance {c['tolerance']:.0%}" if "tolerance" in c
                           else ""))
+        if "misfit_um" in c:
+            out.append(f"misfit beyond the noise √(σ̂² − σ²) = {c['misfit_um']:.3g} µm "
+                       f"(practical size {c['practical_um']:g} µm)")
         return out
 
     def candidate_table(self, top: int = 8) -> list[str]:

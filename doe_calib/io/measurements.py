@@ -5,7 +5,7 @@ units (mm, deg) happens in :mod:`doe_calib.io.csv_files`.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -245,6 +245,19 @@ class Measurements:
         """Session name of each configuration, shape (M,) (the source when none was given)."""
         m = len(self.configurations)
         return np.array(self.session if self.session else (self.source,) * m, dtype=object)
+
+    def with_approach_reversed(self) -> "Measurements":
+        """The same readings with every approach direction negated (+1 ↔ −1, 0 stays).
+
+        For files whose approach convention is the reverse of formats.md §3 (a
+        controller that logs the direction the joint will leave by, rows written
+        in reverse measurement order): ``backlash`` in ``approach`` mode then fits
+        the band's width positive (``--approach-sign reversed`` on the command line).
+        """
+        cfg = self.configurations
+        env = cfg.env.copy()
+        env[:, len(ENV_FIELDS):] = -env[:, len(ENV_FIELDS):] + 0.0  # no -0.0
+        return replace(self, configurations=Configurations(cfg.pose, cfg.q, cfg.wrench, env))
 
     def split_by_pose(self, held_out_poses) -> tuple["Measurements", "Measurements"]:
         """Split into (kept, held out) by pose id, for validation on unseen poses."""
