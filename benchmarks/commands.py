@@ -35,17 +35,9 @@ CASES = {"help": "doe-calib --help (imports)", "identify": "identify, 60 poses",
          "diagnose": "diagnose, 60 poses", "refine": "refine, 60 poses (one effect found)",
          "design": "design 15 poses, 20 000 candidates",
          "export": "export with the collision check, 30 poses (UR5 cell)"}
-UR_TOOL = ("flange: tool0\nmarkers:\n  A: [100.0, 0.0, 60.0]\n  B: [-50.0, 86.6, 60.0]\n"
-           "  C: [-50.0, -86.6, 60.0]\n")
-UR5_CELL = """cartesian:
-  floor: -900
-  keep_out:
-    - {name: table, min: [-800, -800, -900], max: [800, 800, -100]}
-    - {name: wall, min: [900, -1500, -900], max: [1000, 1500, 2000]}
-line_of_sight:
-  tracker: [-1500, 300, 600]
-  max_incidence: 70
-"""
+UR_TOOL = Path(examples.UR_TOOL_YAML).read_text(encoding="utf-8")
+# a table under the UR5 (its top 100 mm below the base), a wall at x = 900 mm, the room floor
+UR5_CELL = Path(examples.UR5_CELL_YAML).read_text(encoding="utf-8")
 TOP = 8
 
 

@@ -24,18 +24,9 @@ from doe_calib import Robot, Tool, examples
 from doe_calib.cli import main
 
 ONE_DEG = math.radians(1.0)
-UR_TOOL = ("flange: tool0\nmarkers:\n  A: [100.0, 0.0, 60.0]\n  B: [-50.0, 86.6, 60.0]\n"
-           "  C: [-50.0, -86.6, 60.0]\n")
+UR_TOOL = Path(examples.UR_TOOL_YAML).read_text(encoding="utf-8")
 # a table under the UR5 (its top 100 mm below the base), a wall at x = 900 mm, the room floor
-UR5_CELL = """cartesian:
-  floor: -900
-  keep_out:
-    - {name: table, min: [-800, -800, -900], max: [800, 800, -100]}
-    - {name: wall, min: [900, -1500, -900], max: [1000, 1500, 2000]}
-line_of_sight:
-  tracker: [-1500, 300, 600]
-  max_incidence: 70
-"""
+UR5_CELL = Path(examples.UR5_CELL_YAML).read_text(encoding="utf-8")
 UR5_BOXES = [((-0.8, -0.8, -0.9), (0.8, 0.8, -0.1)), ((0.9, -1.5, -0.9), (1.0, 1.5, 2.0))]
 UR_LOAD = (3.0, (0.0, 0.0, 0.08), 0.04)  # kg, centre of mass (m, flange), sphere radius (m)
 KR270_LOAD = (250.0, (0.0, 0.0, 0.2), 0.1)

@@ -16,3 +16,7 @@ THREE_DOF_TOOL_YAML = str(_DATA / "three_dof_tool.yaml")
 CELL_YAML = str(_DATA / "kr270_cell.yaml")
 #: A user effect file (``progressive_stiffness``: a joint stiffening with its torque).
 EFFECT_FILE = str(_DATA / "example_effect.py")
+#: A UR5 cell: table 100 mm below the base, wall at x = 900 mm, floor and tracker (mm).
+UR5_CELL_YAML = str(_DATA / "ur5_cell.yaml")
+#: A three-SMR plate for a UR flange ``tool0`` (mm).
+UR_TOOL_YAML = str(_DATA / "ur_tool.yaml")
