@@ -5,6 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from doe_calib.estimation.chi_square import chi2_quantile, chi2_survival
+
 #: Level of the σ̂/σ interval.
 RATIO_LEVEL = 0.95
 
@@ -104,14 +106,11 @@ class FitStatistics:
 
 def ratio_interval(chi2: float, dof: int, level: float = RATIO_LEVEL) -> tuple:
     """Interval of σ_true/σ from ‖r_w‖² ~ (σ_true/σ)² χ²_dof, two-sided at ``level``."""
-    from scipy.special import gammaincinv
-
     if dof <= 0 or not np.isfinite(chi2):
         return (float("nan"), float("nan"))
     a = (1 - level) / 2
-    # the χ²_dof quantiles (scipy.stats.chi2.ppf's own formula; scipy.stats loads in 0.6 s)
-    return (float(np.sqrt(chi2 / (2 * gammaincinv(dof / 2, 1 - a)))),
-            float(np.sqrt(chi2 / (2 * gammaincinv(dof / 2, a)))))
+    return (float(np.sqrt(chi2 / chi2_quantile(1 - a, dof))),
+            float(np.sqrt(chi2 / chi2_quantile(a, dof))))
 
 
 def fit_statistics(result) -> FitStatistics:
@@ -121,14 +120,12 @@ def fit_statistics(result) -> FitStatistics:
     6-DoF probe), as ``σ̂/σ`` was computed from
     ‖r_w‖² (:func:`~doe_calib.estimation.assembly.finish`).
     """
-    from scipy.special import chdtrc  # χ² survival function (scipy.stats.chi2.sf's own)
-
     p, conv = result.parameters, result.convergence
     n_free = int(p.free.sum())
     dof = int(result.n_observations - n_free)
     estimated = result.sigma_source == "estimated"
     chi2 = float(result.sigma_ratio ** 2 * dof) if dof > 0 else float("nan")
-    p_value = (float(chdtrc(dof, chi2)) if dof > 0 and not estimated
+    p_value = (chi2_survival(chi2, dof) if dof > 0 and not estimated
                else float("nan"))
 
     def count(key):
