@@ -67,6 +67,19 @@ def reduce_blocks(blocks, n_columns: int) -> Reduction:
     return Reduction(acc[:k, :n_columns], acc[:k, -1], norm2)
 
 
+def restrict(reduction: Reduction, columns, scale) -> Reduction:
+    """The reduction of ``[J[:, columns]·diag(scale) | r]`` from that of ``[J | r]``.
+
+    ``[J | r] = Q [[R, z], [0, ρ]]``, so the selected, scaled problem is ``Q`` times
+    ``[[R[:, columns]·diag(scale), z], [0, ρ]]``, whose own QR factor is a small one.
+    """
+    r_factor, z = reduction.r_factor, reduction.z
+    rho = np.sqrt(max(reduction.norm2 - float(z @ z), 0.0))
+    cols = r_factor[:, columns] * np.asarray(scale, float)
+    rows = np.vstack([cols, np.zeros((1, cols.shape[1]))])
+    return reduce_blocks([(rows, np.append(z, rho))], cols.shape[1])
+
+
 @dataclass(frozen=True)
 class Solution:
     """Where :func:`levenberg_marquardt` stopped.
@@ -100,7 +113,7 @@ class Solution:
 
 def levenberg_marquardt(norm2, reduce, x0, scale, ftol: float = 1e-12, xtol: float = 1e-12,
                         gtol: float = 1e-12, max_iterations: int = 200,
-                        progress=None) -> Solution:
+                        progress=None, first: Reduction | None = None) -> Solution:
     """Minimise ``‖r(x)‖²`` given its value and the QR factor of its Jacobian.
 
     Parameters
@@ -120,10 +133,12 @@ def levenberg_marquardt(norm2, reduce, x0, scale, ftol: float = 1e-12, xtol: flo
         Jacobian passes allowed; residual passes are limited to 10× that.
     progress : callable(iteration, norm2), optional
         Called after every Jacobian pass.
+    first : Reduction, optional
+        ``reduce(x0)`` when the caller has it already (saves one pass over the data).
     """
     x = np.asarray(x0, float).copy()
     scale = np.asarray(scale, float)
-    red = reduce(x)
+    red = reduce(x) if first is None else first
     f = red.norm2
     damping = _column_norms(red)  # Marquardt's scaling: λ acts relative to each column
     lam = 1e-3

@@ -43,8 +43,8 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
     progress : callable(stage, note), optional
         Told of each iteration (weighted RMS of the residuals).
     """
-    params, notes = prepare(model, measurements, params, register)
-    sol = point_fit(model, measurements, params, max_iterations, progress)
+    params, notes, start = prepare(model, measurements, params, register)
+    sol = point_fit(model, measurements, params, max_iterations, progress, start)
     scale = params.scales[params.free]
     if not sol.converged:
         msg = f"Levenberg–Marquardt stopped before converging: {sol.message}"

@@ -11,11 +11,12 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.errors import SolverError
-from doe_calib.estimation.least_squares import levenberg_marquardt
+from doe_calib.estimation.least_squares import levenberg_marquardt, restrict
 from doe_calib.estimation.weighted_residuals import reduce_jacobian, residual_norm2
 
 
-def point_fit(model, measurements, params, max_iterations: int = 200, progress=None):
+def point_fit(model, measurements, params, max_iterations: int = 200, progress=None,
+              start=None):
     """Levenberg–Marquardt on the free parameters of ``params``, the others held.
 
     Parameters
@@ -28,6 +29,10 @@ def point_fit(model, measurements, params, max_iterations: int = 200, progress=N
         Jacobian evaluations allowed.
     progress : callable(stage, note), optional
         Told of each iteration (weighted RMS of the residuals).
+    start : Reduction, optional
+        Of ``[J | r]`` for all parameters, unscaled, at ``params.values`` (the rank
+        analysis' own, :func:`~doe_calib.estimation.preparation.prepare`): the first
+        Jacobian pass is then taken from it instead of the data.
 
     Returns
     -------
@@ -51,6 +56,7 @@ def point_fit(model, measurements, params, max_iterations: int = 200, progress=N
         lambda x: residual_norm2(model, measurements, values(x)),
         lambda x: reduce_jacobian(model, measurements, values(x), free, scale),
         params.free_values(), scale, max_iterations=max_iterations,
+        first=None if start is None else restrict(start, np.flatnonzero(free), scale),
         progress=None if progress is None else lambda k, f: progress(
             "Levenberg–Marquardt", f"iteration {k}, weighted RMS {np.sqrt(f / n_obs):.4g}"))
     if not np.all(np.isfinite(sol.x)):

@@ -7,10 +7,12 @@ the reason in words.
 from __future__ import annotations
 
 import warnings
+from typing import NamedTuple
 
 from doe_calib.errors import ConditioningWarning, DataError, IdentifiabilityWarning
 from doe_calib.estimation.identifiability import analyse, blind_motion_words
 from doe_calib.estimation.registration import register
+from doe_calib.estimation.least_squares import Reduction
 from doe_calib.estimation.weighted_residuals import reduce_jacobian
 from doe_calib.model.evaluation import marker_positions
 from doe_calib.model.rotations import matrix_to_rotation_vector
@@ -46,12 +48,14 @@ def _fixed_sentence(params, names) -> str:
             f"doe-calib identify --verbose prints them)")
 
 
-def fix_unidentifiable(model, measurements, params, tol: float = 1e-7):
+def fix_unidentifiable(model, measurements, params, tol: float = 1e-7, reduction=None):
     """Fix (at their current values) the free parameters the data cannot separate.
 
+    ``reduction``: of ``[J | r]`` for all parameters at ``params.values``, when at hand.
     Returns the new parameter set and the warnings issued, in words.
     """
-    red = reduce_jacobian(model, measurements, params.values)
+    red = reduce_jacobian(model, measurements, params.values) if reduction is None \
+        else reduction
     ident = analyse(red.r_factor, params, tol=tol)  # RᵀR = JᵀJ: same columns' geometry
     notes = []
     blind, unseen = blind_motion_words(model.tool), False
@@ -85,7 +89,26 @@ def check_counts(measurements, params):
                         measurements.source or "<measurements>")
 
 
-def prepare(model, measurements, params=None, register: bool = True):
+class Prepared(NamedTuple):
+    """What :func:`prepare` gives an estimator.
+
+    Attributes
+    ----------
+    params : ParameterSet
+        Start values, with the parameters the data cannot separate fixed.
+    notes : list of str
+        The warnings issued, in words.
+    reduction : Reduction
+        Of ``[J | r]`` for all parameters at the start values (the rank analysis' own;
+        the point estimator's first Jacobian pass).
+    """
+
+    params: object
+    notes: list
+    reduction: Reduction
+
+
+def prepare(model, measurements, params=None, register: bool = True) -> Prepared:
     """Common start of every estimator: start values, base registration, rank analysis."""
     params = model.nominal() if params is None else params
     if len(measurements) == 0:
@@ -93,4 +116,5 @@ def prepare(model, measurements, params=None, register: bool = True):
     if register and params.free[params.index("base")].all():
         params = register_base(model, measurements, params)
     check_counts(measurements, params)
-    return fix_unidentifiable(model, measurements, params)
+    red = reduce_jacobian(model, measurements, params.values)
+    return Prepared(*fix_unidentifiable(model, measurements, params, reduction=red), red)
