@@ -25,6 +25,7 @@ from doe_calib.model.effects.base import ChainSymbols
 from doe_calib.model.kinematics import flange_pose
 from doe_calib.model.parameters import Parameter, ParameterSet
 from doe_calib.model.rotations import rotation_vector
+from doe_calib.model.twist_jacobian import marker_jacobian
 
 log = logging.getLogger(__name__)
 
@@ -355,6 +356,12 @@ def _build(description, compile: bool) -> Model:
     markers = ca.Function("markers", ins, [x], in_names, ["x"])
     observation = ca.Function("observation", ins, [x, ca.densify(ca.jacobian(x, p))], in_names,
                               ["x", "B"])
+    if all(e.exact_rotations for e in effects):  # the flange's twist, when it is shorter
+        jac = marker_jacobian(rot_b @ rot_f, in_tracker(pos_f), p,
+                              [(u[j], slice(6 + 3 * j, 9 + 3 * j)) for j in range(n)])
+        twist = ca.Function("observation", ins, [x, ca.densify(jac)], in_names, ["x", "B"])
+        if twist.n_instructions() < observation.n_instructions():
+            observation = twist
     point = ca.Function("point", ins + [t], [x_t, ca.densify(ca.jacobian(x_t, p))],
                         in_names + ["t"], ["x", "J"])
     point_robot = ca.Function("point_robot", ins + [t], [x_r, ca.densify(ca.jacobian(x_r, p))],

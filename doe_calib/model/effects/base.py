@@ -94,6 +94,10 @@ class Effect:
     per_joint = False
     #: Whether the effect reads ``ChainSymbols.gravity`` (the robot's own weight).
     uses_gravity = False
+    #: Whether every rotation its ``placement`` returns is an exact rotation at any parameter
+    #: value (the observation matrix is then formed from the flange's twist,
+    #: :mod:`doe_calib.model.twist_jacobian`).
+    exact_rotations = True
     #: What a verdict calls the effect when it is missing, e.g. "backlash of joint {joint}";
     #: ``{joint}`` becomes "3 (a3)". Empty: "effect <spec>".
     phrase = ""

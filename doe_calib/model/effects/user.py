@@ -119,6 +119,8 @@ class UserEffect(Effect):
     """An effect declared in a user file; :func:`load_effect_file` makes one subclass per file."""
 
     name = ""
+    #: A user's ``flange_correction`` may return any 3×3 matrix, not only a rotation.
+    exact_rotations = False
     #: Resolved path of the declaring file.
     source = ""
     #: ((suffix, unit, scale, description, {"bounds", "plausible", "sign"}), …)
