@@ -12,16 +12,14 @@ from doe_calib.io.json_file import read_json, strict_json
 
 
 def run_augment(args, model, loads, candidates, constraints, collision, registry, csv_path):
-    """Propose ``--poses`` new poses for ``--augment``'s campaign; write ``--out`` and the CSV.
+    """Propose ``--poses`` new poses for ``--augment``'s campaign; write ``--out``, the CSV and
+    the ``--report``.
 
     The candidates pass the constraints and the collision screening; a path from ``--home``
     is not planned for them (as it is for a design's poses)."""
     if args.criterion == "task":
         raise OptionError("--augment designs for the model's parameters (D, A or E) or, with "
                           "--diagnosis, to separate its candidates; not for --task")
-    if args.report:
-        raise OptionError("--report is written for a design, not for --augment; the augment "
-                          "JSON and its summary say what the new poses add")
     measured = read_measurements(args.augment, model.robot, model.tool, sigma_mm=args.sigma)
     targets = ()
     if args.diagnosis:
@@ -39,3 +37,8 @@ def run_augment(args, model, loads, candidates, constraints, collision, registry
     write_design(csv_path, result.configurations, model.robot)
     print(strict_json(result.to_dict()) if args.json else result.summary())
     print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
+    if args.report:
+        from doe_calib.report import augment_report
+
+        augment_report(result, args.report, measured)
+        print(f"report: {args.report}", file=sys.stderr)
