@@ -6,6 +6,7 @@ import sys
 import numpy as np
 
 from doe_calib.design.augment import augment_design, diagnosis_targets
+from doe_calib.design.load_directions import parse_directions
 from doe_calib.errors import OptionError
 from doe_calib.io.csv_files import read_measurements, write_design
 from doe_calib.io.json_file import read_json, strict_json
@@ -32,7 +33,9 @@ def run_augment(args, model, loads, candidates, constraints, collision, registry
                             criterion=args.criterion, targets=targets, detect=args.detect or "",
                             constraints=constraints, collision=collision,
                             rng=np.random.default_rng(args.seed), alpha=args.alpha,
-                            power=args.power, registry=registry)
+                            power=args.power, registry=registry,
+                            directions=None if args.load_directions is None else
+                            parse_directions(args.load_directions))
     result.to_json(args.out)
     write_design(csv_path, result.configurations, model.robot)
     print(strict_json(result.to_dict()) if args.json else result.summary())

@@ -24,8 +24,10 @@ from doe_calib.design.candidate_file import CandidatePoses, screened_candidates
 from doe_calib.design.candidate_poses import feasible_candidates
 from doe_calib.design.constraints import DesignConstraints
 from doe_calib.design.criteria import Criterion, DOptimal, log_det
+from doe_calib.design.discovery_candidates import approach_joints, observation_rows, variants
 from doe_calib.design.effect_detection import design_readings, detect_effects, detectability
 from doe_calib.design.feasibility import build_feasibility
+from doe_calib.design.load_directions import directed_loads
 from doe_calib.design.problem import blocks_for, design_parameters, load_configurations
 from doe_calib.design.updates import regularised
 from doe_calib.errors import OptionError, SolverError
@@ -37,6 +39,8 @@ from doe_calib.model.marker_model import build_model
 MAX_TARGETS = 3
 #: A candidate whose cross-validated RMS is within this share of the top one's predicts as well.
 LOOK_ALIKE = 0.02
+#: The direction of a load hanging on the flange (its weight), base frame.
+DOWN = (0.0, 0.0, -1.0)
 
 
 @dataclass(frozen=True)
@@ -88,15 +92,18 @@ def measured_information(model, params, measurements) -> np.ndarray:
     return j.T @ j
 
 
-def exchange_from(m0, blocks, n: int, crit, max_sweeps: int = 30) -> np.ndarray:
+def exchange_from(m0, blocks, n: int, crit, max_sweeps: int = 30, pose_of=None) -> np.ndarray:
     """Indices of ``n`` distinct candidates maximising ``crit`` of M₀ + Σ BⱼᵀBⱼ: greedy
-    additions, then single exchanges until none improves."""
-    if len(blocks) < n:
-        raise SolverError(f"only {len(blocks)} feasible candidates for {n} new poses")
+    additions, then single exchanges until none improves. ``pose_of`` (K,), optional: the
+    pose each candidate is a variant of; no two chosen candidates share one."""
+    pose_of = np.arange(len(blocks)) if pose_of is None else np.asarray(pose_of)
+    if len(np.unique(pose_of)) < n:
+        raise SolverError(f"only {len(np.unique(pose_of))} feasible candidates for {n} new "
+                          f"poses")
     chosen, m = [], m0.copy()
     for _ in range(n):
         values = crit.added_values(regularised(m), blocks)
-        values[chosen] = -np.inf
+        values[np.isin(pose_of, pose_of[chosen])] = -np.inf
         j = int(np.argmax(values))
         chosen.append(j)
         m = m + blocks[j].T @ blocks[j]
@@ -107,7 +114,7 @@ def exchange_from(m0, blocks, n: int, crit, max_sweeps: int = 30) -> np.ndarray:
             i = chosen[slot]
             m_minus = m - blocks[i].T @ blocks[i]
             values = crit.added_values(regularised(m_minus), blocks)
-            values[[c for c in chosen if c != i]] = -np.inf
+            values[np.isin(pose_of, pose_of[[c for c in chosen if c != i]])] = -np.inf
             j = int(np.argmax(values))
             if j != i and values[j] > current + 1e-10 * max(1.0, abs(current)):
                 chosen[slot], m = j, m_minus + blocks[j].T @ blocks[j]
@@ -122,8 +129,12 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
                    sigma: float = 2e-5, criterion="D", targets=(), detect: str = "",
                    params=None, constraints: DesignConstraints | None = None, collision=None,
                    rng=None, alpha: float = 0.05, power: float = 0.8,
-                   registry=None) -> AugmentResult:
+                   registry=None, directions=None) -> AugmentResult:
     """K new poses (each unloaded and under every load) that add most to ``measured``.
+
+    The approach side of every joint whose approach backlash is among the targets or
+    ``detect`` is chosen per pose, as in a discovery design (:mod:`.discovery_candidates`);
+    with ``directions`` each pose also picks the one load case it is measured under.
 
     Parameters
     ----------
@@ -153,6 +164,11 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     alpha, power : float
         Of the detectability (:mod:`.effect_detection`).
     registry : EffectRegistry, optional
+    directions : tuple of tuple, optional
+        Unit force directions each load may pull along
+        (:func:`.load_directions.parse_directions`, ``--load-directions``): each new
+        pose is then measured unloaded and under one of those load cases, chosen here.
+        Default: under every load, hanging.
 
     Returns
     -------
@@ -182,17 +198,30 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
         own = np.flatnonzero(np.isin(free_names, np.array(params.names)[params.free]))
         crit = Separation(tuple(int(i) for i in own))
     m0 = measured_information(design_model, design_params, measured)
-    blocks = blocks_for(design_model, design_params, cands.q, loads, sigma)
-    chosen = exchange_from(m0, blocks, n_poses, crit)
+    before = detect or "+".join(targets)
+    effects = detect_effects(model, before, None, registry) if before else []
+    joints = approach_joints(model, effects)
+    chosen_variants = directions is not None or bool(joints)
+    if not chosen_variants:
+        blocks = blocks_for(design_model, design_params, cands.q, loads, sigma)
+        chosen = exchange_from(m0, blocks, n_poses, crit)
+        poses = chosen
+    else:
+        cand = variants(cands.q, directed_loads(loads, directions or (DOWN,)), joints,
+                        model.robot.n_joints, every=directions is None)
+        free = design_params.free
+        blocks = (observation_rows(design_model, design_params.values, cand)[..., free]
+                  * design_params.scales[free] / sigma)
+        chosen = exchange_from(m0, blocks, n_poses, crit, pose_of=cand.pose)
+        poses = cand.pose[chosen]
     added = blocks[chosen]
     m1 = m0 + np.einsum("kri,krj->ij", added, added)
-    names = [cands.names[k] for k in chosen] if cands.names else \
+    names = [cands.names[k] for k in poses] if cands.names else \
         [f"new{i + 1}" for i in range(n_poses)]
-    cfg = load_configurations(model, params.values, cands.q[chosen], loads, names)
-    before = detect or "+".join(targets)
+    cfg = (cand.configurations(model, params.values, chosen, names) if chosen_variants else
+           load_configurations(model, params.values, cands.q[chosen], loads, names))
     detected = ((), ())
     if before:
-        effects = detect_effects(model, before, None, registry)
         after = concatenate([measured, design_readings(model, params.values, cfg, sigma)])
         detected = tuple(detectability(model, params, m, effects, alpha, power)
                          for m in (measured, after))

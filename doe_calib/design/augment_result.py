@@ -33,8 +33,9 @@ class AugmentResult:
     Attributes
     ----------
     configurations : Configurations
-        The new poses, each unloaded then under every load case; pose ids from
-        the candidate file, or ``new1`` … ``newK``.
+        The new poses, each unloaded then under every load case (or the one it
+        picked, with load directions); pose ids from the candidate file, or ``new1``
+        … ``newK``; the approach side of each joint (0 where not chosen).
     criterion : str
         ``D``, ``A``, ``E`` (the model's parameters) or ``Ds`` (the targets'
         information with the model's parameters projected out).
@@ -112,8 +113,10 @@ class AugmentResult:
                 "candidates": self.candidates,
                 "measured_configurations": self.measured_configurations,
                 "sigma_mm": self.sigma_mm, "robot": self.robot.to_dict(),
-                "configurations": [{"pose": p, "q": list(q * f), "wrench": list(w)}
-                                   for p, q, w in zip(cfg.pose, cfg.q, cfg.wrench)]}
+                "configurations": [{"pose": p, "q": list(q * f), "wrench": list(w),
+                                    "approach": [int(s) for s in a]}
+                                   for p, q, w, a in zip(cfg.pose, cfg.q, cfg.wrench,
+                                                         cfg.approach)]}
 
     def to_json(self, path=None) -> str:
         return write_json(self.to_dict(), path)
@@ -124,7 +127,9 @@ class AugmentResult:
         rows = d["configurations"]
         cfg = Configurations.from_arrays(
             np.array([r["q"] for r in rows], float).reshape(len(rows), robot.n_joints)
-            / robot.display_factors, [r["wrench"] for r in rows], pose=[r["pose"] for r in rows])
+            / robot.display_factors, [r["wrench"] for r in rows], pose=[r["pose"] for r in rows],
+            approach=np.array([r.get("approach", [0] * robot.n_joints) for r in rows],
+                              float).reshape(len(rows), robot.n_joints))
         std = {k: {n: (np.inf if s is None else float(s), u) for n, (s, u) in d[k].items()}
                for k in ("std_before", "std_after")}
         return cls(cfg, d["criterion"], tuple(d["targets"]), float(d["value_before"]),

@@ -54,9 +54,11 @@ class DiscoveryGoal:
     ----------
     effects : str
         ``+``-joined effect strings (or ``catalogue``), as ``--detect``.
-    size : float
+    size : float or None
         ``--detect-size``: the size each effect must be detected at, its display unit
-        (deg, mm, …; SI when its parameters' units differ).
+        (deg, mm, …; SI when its parameters' units differ). None: no detection bound, the
+        D-optimal choice of poses, load cases and approach sides (``--load-directions``
+        with plain ``--detect``); the detectability is reported.
     power, alpha : float
         Power asked (``--min-power``) of the χ² score test at level ``alpha``.
     directions : tuple of tuple
@@ -65,14 +67,14 @@ class DiscoveryGoal:
     """
 
     effects: str
-    size: float
+    size: float | None
     power: float = 0.8
     alpha: float = 0.05
     directions: tuple = ((0.0, 0.0, -1.0),)
     registry: object = None
 
     def __post_init__(self):
-        if not self.size > 0:
+        if self.size is not None and not self.size > 0:
             raise OptionError(f"--detect-size {self.size:g}: give a positive size (the effect's "
                               f"display unit, e.g. deg)")
         if not 0 < self.alpha < self.power < 1:
@@ -152,7 +154,8 @@ def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: 
     p = blocks.shape[2]
     columns = [effect_columns(model, params, e, cand, sigma) for e in effects]
     zblocks = [z for z, _ in columns]
-    targets = np.array([detection_target(e, model, own, goal.size, goal.alpha, goal.power)
+    targets = np.array([] if goal.size is None else
+                       [detection_target(e, model, own, goal.size, goal.alpha, goal.power)
                         for e, (_, own) in zip(effects, columns)])
     # what every candidate together reveals: an effect they cannot is left out of the bounds
     m_all = information(blocks, np.ones(len(cand)))
@@ -168,10 +171,12 @@ def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: 
     say("exchange", f"{n_poses} poses, distinct")
     free = constrained_exchange(blocks, [], [], _dedupe(start, blocks, cand.pose), cand.pose,
                                 pool)
-    keep = [i for i, ok in enumerate(reach) if ok]
-    say("discovery", f"{len(keep)} detection bound(s)")
-    found = constrained_exchange(blocks, [zblocks[i] for i in keep], targets[keep],
-                                 free.indices, cand.pose, pool)
+    keep = [i for i, ok in enumerate(reach) if ok and goal.size is not None]
+    found = free
+    if keep:
+        say("discovery", f"{len(keep)} detection bound(s)")
+        found = constrained_exchange(blocks, [zblocks[i] for i in keep], targets[keep],
+                                     free.indices, cand.pose, pool)
     chosen = found.indices
     m = information(blocks[chosen], np.ones(n_poses))
     value = log_det(m)
@@ -212,6 +217,8 @@ def _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads
     """``result`` with the discovery stage and its words."""
     from dataclasses import replace
 
+    if goal.size is None:
+        return _with_load_choice(result, goal, cand, found)
     rows, notes = [], []
     for det, ok in zip(result.detectability, reach):
         met = det.detectable and det.min_detectable <= goal.size * (1 + 1e-6)
@@ -233,11 +240,7 @@ def _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads
                      "min_detectable": size, "met": bool(met), "revealable": bool(ok),
                      "words": words})
         notes.append(words)
-    used = {}
-    for k in found.indices:
-        c = int(cand.case[k])
-        name = "unloaded only" if c < 0 else cand.cases[c].spec()
-        used[name] = used.get(name, 0) + 1
+    used = _cases_used(cand, found.indices)
     notes.insert(0, f"discovery design (constrained exchange): D-optimal subject to every "
                     f"revealable effect detectable at {goal.size:g} (its unit) with power "
                     f"{goal.power:.0%} (α = {goal.alpha:g}); D-efficiency {versus:.3f} of the "
@@ -254,3 +257,30 @@ def _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads
              "load_cases_used": used, "effects": rows}
     return replace(result, notes=tuple(notes) + result.notes,
                    stages={**result.stages, "discovery": stage})
+
+
+def _cases_used(cand, chosen) -> dict:
+    """Load case (its spec) → how many chosen poses are measured under it."""
+    used = {}
+    for k in chosen:
+        c = int(cand.case[k])
+        name = "unloaded only" if c < 0 else cand.cases[c].spec()
+        used[name] = used.get(name, 0) + 1
+    return used
+
+
+def _with_load_choice(result, goal, cand, found):
+    """``result`` of a design without detection bounds whose poses chose their load case and
+    approach sides: the stage ``load_choice`` and its note."""
+    from dataclasses import replace
+
+    used = _cases_used(cand, found.indices)
+    note = ("D-optimal choice of poses, load cases and approach sides (each pose measured "
+            "unloaded and under one allowed load case; no detection bound, --detect-size not "
+            "given); load cases used: " + ", ".join(f"{n}× {s}" for s, n in used.items()))
+    stage = {"method": "exchange over poses × load cases × approach sides",
+             "status": found.status, "load_directions": [list(d) for d in goal.directions],
+             "approach_joints": [result.robot.joints[j].name for j in cand.approach_joints],
+             "load_cases_used": used}
+    return replace(result, notes=(note,) + result.notes,
+                   stages={**result.stages, "load_choice": stage})

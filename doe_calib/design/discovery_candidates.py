@@ -24,6 +24,8 @@ from doe_calib.model.evaluation import observation_matrix
 
 #: At most this many joints get their approach side chosen (2^J variants of each pose).
 MAX_APPROACH_JOINTS = 3
+#: The ``case`` of a variant measured unloaded and under every load case in turn.
+EVERY = -2
 
 
 @dataclass(frozen=True, eq=False)
@@ -35,7 +37,8 @@ class Variants:
     pose : ndarray of int, shape (K,)
         The candidate pose (row of ``q``) each candidate is a variant of.
     case : ndarray of int, shape (K,)
-        Its load case (index into ``cases``; −1: unloaded only).
+        Its load case (index into ``cases``; −1: unloaded only; :data:`EVERY`: under every
+        case in turn, as an ordinary design measures each pose).
     approach : ndarray, shape (K, N)
         Its approach side per joint (+1, −1, 0 not chosen).
     q : ndarray, shape (P, N)
@@ -64,10 +67,10 @@ class Variants:
         for k, name in zip(chosen, ids):
             qi, c = self.q[self.pose[k]], int(self.case[k])
             rows = [np.zeros(6)]
-            if c >= 0:
-                key = (int(self.pose[k]), c)
+            for case in (range(len(self.cases)) if c == EVERY else [c] if c >= 0 else []):
+                key = (int(self.pose[k]), case)
                 if key not in wrench:
-                    wrench[key] = self.cases[c].wrench(model, values, qi[None])[0]
+                    wrench[key] = self.cases[case].wrench(model, values, qi[None])[0]
                 rows.append(wrench[key])
             for row in rows:
                 q.append(qi), w.append(row), a.append(self.approach[k]), pose.append(name)
@@ -86,10 +89,11 @@ def approach_joints(model, effects) -> tuple:
     return tuple(joints)
 
 
-def variants(q, cases, joints, n_joints: int) -> Variants:
-    """Every pose × load case × approach sides of ``joints``."""
+def variants(q, cases, joints, n_joints: int, every: bool = False) -> Variants:
+    """Every pose × load case × approach sides of ``joints``; with ``every``, each pose is
+    measured under every load case in turn (only the approach sides vary)."""
     sides = list(product((1.0, -1.0), repeat=len(joints)))
-    case_ids = list(range(len(cases))) or [-1]
+    case_ids = ([EVERY] if every else list(range(len(cases)))) if cases else [-1]
     rows = [(i, c, s) for i in range(len(q)) for c in case_ids for s in sides]
     approach = np.zeros((len(rows), n_joints))
     for r, (_, _, s) in enumerate(rows):
@@ -102,7 +106,8 @@ def observation_rows(model, values, cand: Variants, chunk: int = 1024) -> np.nda
     """Observation matrix ∂x/∂p (K, r, P), m per SI unit, of ``model`` at every variant's
     readings (r = 3 markers' coordinates × readings per variant), in chunks of poses."""
     out = []
-    per = 1 if cand.case.max(initial=-1) < 0 else 2
+    per = (1 + len(cand.cases) if cand.case.min(initial=0) == EVERY else
+           1 if cand.case.max(initial=-1) < 0 else 2)
     for lo in range(0, len(cand), chunk):
         idx = np.arange(lo, min(lo + chunk, len(cand)))
         _, b = observation_matrix(model, values, cand.configurations(model, values, idx))

@@ -142,7 +142,8 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
         raise SolverError(f"only {len(cands.q)} feasible candidates for {n_poses} poses")
     if discovery is not None:
         if criterion != "D":
-            raise OptionError(f"--detect-size designs maximise the D criterion; got "
+            raise OptionError(f"--detect-size and --load-directions designs maximise the D "
+                              f"criterion; got "
                               f"--criterion {criterion}")
         return discovery_design(model, params, cands.q, loads, n_poses, sigma, discovery,
                                 constraints, cands.to_dict(), progress=stage)
