@@ -24,7 +24,12 @@ from doe_calib.design.candidate_file import CandidatePoses, screened_candidates
 from doe_calib.design.candidate_poses import feasible_candidates
 from doe_calib.design.constraints import DesignConstraints
 from doe_calib.design.criteria import Criterion, DOptimal, log_det
-from doe_calib.design.discovery_candidates import approach_joints, observation_rows, variants
+from doe_calib.design.discovery_candidates import (
+    approach_joints,
+    free_parameters,
+    observation_rows,
+    variants,
+)
 from doe_calib.design.effect_detection import design_readings, detect_effects, detectability
 from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.load_directions import directed_loads
@@ -184,31 +189,40 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
         cands = screened_candidates(feasibility, model.robot, candidates, collision)
     else:
         cands = feasible_candidates(feasibility, model.robot, candidates, rng, collision)
-    params = design_parameters(model, params, np.r_[cands.q, measured.configurations.q],
-                               loads, rng=rng)
     targets = tuple(targets)
+    before = detect or "+".join(targets)
+    effects = detect_effects(model, before, None, registry) if before else []
+    joints = approach_joints(model, effects)
+    cand = None
+    if directions is not None or joints:
+        cand = variants(cands.q, directed_loads(loads, directions or (DOWN,)), joints,
+                        model.robot.n_joints, every=directions is None)
+
+    def identifiable(mdl, start):
+        """``start`` with what the candidates (each variant of them, or, without variants,
+        they and the campaign's poses) cannot identify fixed."""
+        if cand is None:
+            return design_parameters(mdl, start, np.r_[cands.q, measured.configurations.q],
+                                     loads, rng=rng)
+        return free_parameters(start, observation_rows(mdl, start.values, cand) / sigma, cand)
+
+    params = identifiable(model, params)
     design_model, design_params, crit = model, params, Criterion.from_name(criterion)
     if targets:
-        effects = [e for spec in targets for e in detect_effects(model, spec, None, registry)]
-        design_model = build_model(model.robot, model.tool, tuple(model.effects) + tuple(effects))
-        design_params = design_parameters(design_model, with_new_free(design_model, params),
-                                          np.r_[cands.q, measured.configurations.q], loads,
-                                          rng=rng)
+        added_effects = [e for spec in targets
+                         for e in detect_effects(model, spec, None, registry)]
+        design_model = build_model(model.robot, model.tool,
+                                   tuple(model.effects) + tuple(added_effects))
+        design_params = identifiable(design_model, with_new_free(design_model, params))
         free_names = np.array(design_params.names)[design_params.free]
         own = np.flatnonzero(np.isin(free_names, np.array(params.names)[params.free]))
         crit = Separation(tuple(int(i) for i in own))
     m0 = measured_information(design_model, design_params, measured)
-    before = detect or "+".join(targets)
-    effects = detect_effects(model, before, None, registry) if before else []
-    joints = approach_joints(model, effects)
-    chosen_variants = directions is not None or bool(joints)
-    if not chosen_variants:
+    if cand is None:
         blocks = blocks_for(design_model, design_params, cands.q, loads, sigma)
         chosen = exchange_from(m0, blocks, n_poses, crit)
         poses = chosen
     else:
-        cand = variants(cands.q, directed_loads(loads, directions or (DOWN,)), joints,
-                        model.robot.n_joints, every=directions is None)
         free = design_params.free
         blocks = (observation_rows(design_model, design_params.values, cand)[..., free]
                   * design_params.scales[free] / sigma)
@@ -218,8 +232,8 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     m1 = m0 + np.einsum("kri,krj->ij", added, added)
     names = [cands.names[k] for k in poses] if cands.names else \
         [f"new{i + 1}" for i in range(n_poses)]
-    cfg = (cand.configurations(model, params.values, chosen, names) if chosen_variants else
-           load_configurations(model, params.values, cands.q[chosen], loads, names))
+    cfg = (load_configurations(model, params.values, cands.q[chosen], loads, names)
+           if cand is None else cand.configurations(model, params.values, chosen, names))
     detected = ((), ())
     if before:
         after = concatenate([measured, design_readings(model, params.values, cfg, sigma)])

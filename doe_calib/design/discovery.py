@@ -30,6 +30,7 @@ from doe_calib.design.discovery_candidates import (
     approach_joints,
     detection_target,
     effect_columns,
+    free_parameters,
     observation_rows,
     variants,
 )
@@ -39,7 +40,6 @@ from doe_calib.design.load_directions import directed_loads, horizontal
 from doe_calib.design.relaxation import information, relax
 from doe_calib.design.result import DesignResult
 from doe_calib.errors import OptionError, SolverError
-from doe_calib.estimation.identifiability import analyse
 from doe_calib.io.measurements import Configurations
 
 #: Candidates searched by the exchange: the relaxation's best, and each effect's richest.
@@ -80,16 +80,6 @@ class DiscoveryGoal:
         if not 0 < self.alpha < self.power < 1:
             raise OptionError(f"--alpha {self.alpha:g} and --min-power {self.power:g}: give "
                               f"0 < alpha < power < 1")
-
-
-def _free_parameters(params, blocks_raw, cand):
-    """``params`` with what no variant identifies fixed, judged on a sample of variants."""
-    rng = np.random.default_rng(0)
-    pick = rng.choice(len(cand), size=min(400, len(cand)), replace=False)
-    ident = analyse(blocks_raw[pick].reshape(-1, blocks_raw.shape[2]), params)
-    for name, why in ident.dependent:
-        params = params.fixed([name], why + " (over the candidate poses and load cases)")
-    return params
 
 
 def _dedupe(start, blocks, pose_of):
@@ -149,7 +139,7 @@ def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: 
     say("information", f"{len(cand)} candidates ({len(q)} poses × {max(len(cases), 1)} load "
                        f"case(s) × {2 ** len(cand.approach_joints)} approach side(s))")
     raw = observation_rows(model, params.values, cand) / sigma
-    params = _free_parameters(params, raw, cand)
+    params = free_parameters(params, raw, cand)
     blocks = raw[..., params.free] * params.scales[params.free]
     p = blocks.shape[2]
     columns = [effect_columns(model, params, e, cand, sigma) for e in effects]

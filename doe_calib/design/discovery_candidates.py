@@ -17,6 +17,7 @@ import numpy as np
 from doe_calib.design.detectability import noncentrality_for_power, own_directions
 from doe_calib.diagnosis.effect_tests import augmented
 from doe_calib.errors import OptionError
+from doe_calib.estimation.identifiability import analyse
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.effects.backlash import Backlash
 from doe_calib.model.effects.base import joint_index
@@ -113,6 +114,17 @@ def observation_rows(model, values, cand: Variants, chunk: int = 1024) -> np.nda
         _, b = observation_matrix(model, values, cand.configurations(model, values, idx))
         out.append(b.reshape(len(idx), per * b.shape[1] * 3, -1))
     return np.concatenate(out)
+
+
+def free_parameters(params, blocks_raw, cand: Variants, sample: int = 400):
+    """``params`` with what no variant identifies fixed, judged on a sample of variants
+    (``blocks_raw`` (K, r, P): :func:`observation_rows` over σ)."""
+    rng = np.random.default_rng(0)
+    pick = rng.choice(len(cand), size=min(sample, len(cand)), replace=False)
+    ident = analyse(blocks_raw[pick].reshape(-1, blocks_raw.shape[2]), params)
+    for name, why in ident.dependent:
+        params = params.fixed([name], why + " (over the candidate poses and load cases)")
+    return params
 
 
 def effect_columns(model, params, effect, cand: Variants, sigma: float):
