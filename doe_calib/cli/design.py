@@ -170,7 +170,7 @@ def run(args):
         from doe_calib.cli.design_augment import run_augment
 
         return run_augment(args, model, loads, candidates, constraints, collision,
-                           effect_registry(args), csv_path)
+                           effect_registry(args), csv_path, home)
     discovery = _discovery_goal(args)
     progress = stage_progress()
     result = optimal_design(model, args.poses, loads, candidates=candidates,

@@ -12,12 +12,14 @@ from doe_calib.io.csv_files import read_measurements, write_design
 from doe_calib.io.json_file import read_json, strict_json
 
 
-def run_augment(args, model, loads, candidates, constraints, collision, registry, csv_path):
+def run_augment(args, model, loads, candidates, constraints, collision, registry, csv_path,
+                home=None):
     """Propose ``--poses`` new poses for ``--augment``'s campaign; write ``--out``, the CSV and
     the ``--report``.
 
-    The candidates pass the constraints and the collision screening; a path from ``--home``
-    is not planned for them (as it is for a design's poses)."""
+    The candidates pass the constraints and the collision screening, and, with the collision
+    check, only poses a free path joins to ``home`` (rad, m; default the URDF zero) are
+    chosen, as for a design."""
     if args.criterion == "task":
         raise OptionError("--augment designs for the model's parameters (D, A or E) or, with "
                           "--diagnosis, to separate its candidates; not for --task")
@@ -35,7 +37,7 @@ def run_augment(args, model, loads, candidates, constraints, collision, registry
                             rng=np.random.default_rng(args.seed), alpha=args.alpha,
                             power=args.power, registry=registry,
                             directions=None if args.load_directions is None else
-                            parse_directions(args.load_directions))
+                            parse_directions(args.load_directions), home=home)
     result.to_json(args.out)
     write_design(csv_path, result.configurations, model.robot)
     print(strict_json(result.to_dict()) if args.json else result.summary())

@@ -34,6 +34,12 @@ from doe_calib.design.effect_detection import design_readings, detect_effects, d
 from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.load_directions import directed_loads
 from doe_calib.design.problem import blocks_for, design_parameters, load_configurations
+from doe_calib.design.reachability import (
+    free_home,
+    home_pose,
+    reachability_note,
+    reachable_choice,
+)
 from doe_calib.design.updates import regularised
 from doe_calib.errors import OptionError, SolverError
 from doe_calib.estimation.weighted_residuals import weighted_residual
@@ -134,7 +140,7 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
                    sigma: float = 2e-5, criterion="D", targets=(), detect: str = "",
                    params=None, constraints: DesignConstraints | None = None, collision=None,
                    rng=None, alpha: float = 0.05, power: float = 0.8,
-                   registry=None, directions=None) -> AugmentResult:
+                   registry=None, directions=None, home=None) -> AugmentResult:
     """K new poses (each unloaded and under every load) that add most to ``measured``.
 
     The approach side of every joint whose approach backlash is among the targets or
@@ -164,8 +170,10 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
         Effects whose detectability is reported before and after (default the targets).
     params : ParameterSet, optional
         Values the information is computed at (default nominal).
-    constraints, collision, rng :
-        As for :func:`.optimal.optimal_design`.
+    constraints, collision, rng, home :
+        As for :func:`.optimal.optimal_design`: with a collision model, only new poses
+        joined to the home pose by a free path, their tracker beams free, are chosen
+        (:func:`.reachability.reachable_choice`).
     alpha, power : float
         Of the detectability (:mod:`.effect_detection`).
     registry : EffectRegistry, optional
@@ -220,20 +228,37 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     m0 = measured_information(design_model, design_params, measured)
     if cand is None:
         blocks = blocks_for(design_model, design_params, cands.q, loads, sigma)
-        chosen = exchange_from(m0, blocks, n_poses, crit)
-        poses = chosen
+        pose_of = np.arange(len(cands.q))
     else:
         free = design_params.free
         blocks = (observation_rows(design_model, design_params.values, cand)[..., free]
                   * design_params.scales[free] / sigma)
-        chosen = exchange_from(m0, blocks, n_poses, crit, pose_of=cand.pose)
-        poses = cand.pose[chosen]
+        pose_of = cand.pose
+
+    def choose(allowed):
+        sub = np.flatnonzero(allowed[pose_of])
+        return sub[exchange_from(m0, blocks[sub], n_poses, crit, pose_of=pose_of[sub])]
+
+    q_used, reach = cands.q, {}
+    if collision is None:
+        chosen = choose(np.ones(len(cands.q), bool))
+    else:
+        start = home_pose(model.robot, constraints, home)
+        start, moved = free_home(collision, start, model.robot, home is not None, cands.q)
+        chosen, q_used, replaced = reachable_choice(choose, cands.q, pose_of, collision, start,
+                                                    model.robot,
+                                                    *constraints.bounds(model.robot))
+        reach = {"home": [float(v) for v in start * model.robot.display_factors],
+                 "replaced": dict(replaced),
+                 "note": reachability_note(start, model.robot, replaced, 0, moved)}
+    poses = pose_of[chosen]
     added = blocks[chosen]
     m1 = m0 + np.einsum("kri,krj->ij", added, added)
     names = [cands.names[k] for k in poses] if cands.names else \
         [f"new{i + 1}" for i in range(n_poses)]
-    cfg = (load_configurations(model, params.values, cands.q[chosen], loads, names)
-           if cand is None else cand.configurations(model, params.values, chosen, names))
+    cfg = (load_configurations(model, params.values, q_used[chosen], loads, names)
+           if cand is None else
+           replace(cand, q=q_used).configurations(model, params.values, chosen, names))
     detected = ((), ())
     if before:
         after = concatenate([measured, design_readings(model, params.values, cfg, sigma)])
@@ -245,7 +270,7 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
         std_before=parameter_std(design_params, m0), std_after=parameter_std(design_params, m1),
         detect_before=detected[0], detect_after=detected[1], candidates=cands.to_dict(),
         measured_configurations=len(measured.configurations), sigma_mm=1000.0 * sigma,
-        robot=model.robot, model=model.spec)
+        robot=model.robot, model=model.spec, reachability=reach)
 
 
 def with_new_free(big, params):

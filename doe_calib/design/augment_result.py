@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import textwrap
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -55,6 +55,10 @@ class AugmentResult:
         σ of the new readings, mm.
     robot : Robot
     model : str
+    reachability : dict
+        With a collision model: ``home`` (deg, mm), ``replaced`` (reason → chosen
+        poses replaced because no free path joins them to home, or a beam is
+        blocked) and ``note``, in words; empty without.
     """
 
     configurations: Configurations
@@ -71,6 +75,7 @@ class AugmentResult:
     sigma_mm: float
     robot: Robot
     model: str
+    reachability: dict = field(default_factory=dict)
 
     def summary(self) -> str:
         k = len(dict.fromkeys(self.configurations.pose))
@@ -85,6 +90,8 @@ class AugmentResult:
                  + (f" from {self.candidates['source']}" if self.candidates.get("source")
                     else ""),
                  "  poses: " + ", ".join(dict.fromkeys(self.configurations.pose)),
+                 *([f"  {self.reachability['note']}"] if self.reachability.get("note")
+                   else []),
                  "", "Predicted std (before → after)"]
         for name, (after, unit) in self.std_after.items():
             lines.append(f"  {name:<28} {self.std_before[name][0]:>10.4g} → {after:<10.4g} "
@@ -113,6 +120,7 @@ class AugmentResult:
                 "candidates": self.candidates,
                 "measured_configurations": self.measured_configurations,
                 "sigma_mm": self.sigma_mm, "robot": self.robot.to_dict(),
+                "reachability": self.reachability,
                 "configurations": [{"pose": p, "q": list(q * f), "wrench": list(w),
                                     "approach": [int(s) for s in a]}
                                    for p, q, w, a in zip(cfg.pose, cfg.q, cfg.wrench,
@@ -137,7 +145,7 @@ class AugmentResult:
                    tuple(Detectability.from_dict(r) for r in d["detectability_before"]),
                    tuple(Detectability.from_dict(r) for r in d["detectability_after"]),
                    dict(d["candidates"]), int(d["measured_configurations"]),
-                   float(d["sigma_mm"]), robot, d["model"])
+                   float(d["sigma_mm"]), robot, d["model"], dict(d.get("reachability", {})))
 
     @classmethod
     def from_json(cls, path) -> "AugmentResult":
