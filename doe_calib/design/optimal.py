@@ -146,7 +146,8 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
                               f"criterion; got "
                               f"--criterion {criterion}")
         return discovery_design(model, params, cands.q, loads, n_poses, sigma, discovery,
-                                constraints, cands.to_dict(), progress=stage)
+                                constraints, cands.to_dict(), progress=stage, refine=refine,
+                                feasibility=feasibility, collision=collision, home=home)
     params = design_parameters(model, params, cands.q, loads, rng=rng)
     t = None if task is None else task_matrix(model, params, task, task_point)
     crit = Criterion.from_name(criterion, t)
