@@ -29,6 +29,7 @@ from doe_calib.design.discovery_candidates import (
     free_parameters,
     observation_rows,
     variants,
+    within_torque_limits,
 )
 from doe_calib.design.effect_detection import design_readings, detect_effects, detectability
 from doe_calib.design.feasibility import build_feasibility
@@ -192,7 +193,9 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     rng = np.random.default_rng() if rng is None else rng
     params = model.nominal() if params is None else params
     constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints
-    feasibility = build_feasibility(model, params.values, constraints, loads)
+    # with load directions each pose's load torques are judged with its own load case
+    feasibility = build_feasibility(model, params.values, constraints if directions is None
+                                    else replace(constraints, torque_limits=None), loads)
     if isinstance(candidates, CandidatePoses):
         cands = screened_candidates(feasibility, model.robot, candidates, collision)
     else:
@@ -205,6 +208,7 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     if directions is not None or joints:
         cand = variants(cands.q, directed_loads(loads, directions or (DOWN,)), joints,
                         model.robot.n_joints, every=directions is None)
+        cand = cand.subset(within_torque_limits(model, params.values, constraints, cand))
 
     def identifiable(mdl, start):
         """``start`` with what the candidates (each variant of them, or, without variants,

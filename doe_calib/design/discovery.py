@@ -33,6 +33,7 @@ from doe_calib.design.discovery_candidates import (
     free_parameters,
     observation_rows,
     variants,
+    within_torque_limits,
 )
 from doe_calib.design.clearances import pose_clearances
 from doe_calib.design.discovery_refinement import chosen_variants, refine_discovery
@@ -138,7 +139,9 @@ def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: 
         Refine the chosen poses with IPOPT, each keeping its load case and approach
         sides, without breaking a detection bound (:mod:`.discovery_refinement`).
     feasibility : Feasibility
-        The pose constraints, for the refinement.
+        The pose constraints, for the refinement, without the load torques
+        (:func:`.optimal.optimal_design` builds it so): each variant's own load case is
+        judged here (:func:`.discovery_candidates.within_torque_limits`).
     collision : CollisionModel, optional
         With it, only poses joined to ``home`` by a free path are chosen
         (:func:`.reachability.reachable_choice`), and refined poses stay so.
@@ -156,6 +159,12 @@ def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: 
     effects = detect_effects(model, goal.effects, Configurations.from_arrays(q), goal.registry)
     cases = directed_loads(loads, goal.directions)
     cand = variants(q, cases, approach_joints(model, effects), model.robot.n_joints)
+    within = within_torque_limits(model, params.values, constraints, cand)
+    if not within.all():
+        cand = cand.subset(within)
+        removed = {**candidates.get("removed", {}),
+                   "load torque (the variant's own load case)": int((~within).sum())}
+        candidates = {**candidates, "removed": removed}
     say("information", f"{len(cand)} candidates ({len(q)} poses × {max(len(cases), 1)} load "
                        f"case(s) × {2 ** len(cand.approach_joints)} approach side(s))")
     raw = observation_rows(model, params.values, cand) / sigma
@@ -212,7 +221,7 @@ def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: 
         polished = refine_discovery(model, params, cand, chosen, sigma, feasibility,
                                     [effects[i] for i in keep], targets[keep], collision,
                                     None if reachability is None else reachability[0],
-                                    constraints.bounds(model.robot))
+                                    constraints)
         design_blocks = polished.blocks
     else:
         design_blocks = blocks[chosen]

@@ -14,7 +14,9 @@ from itertools import product
 
 import numpy as np
 
+from doe_calib.design.batch import map_poses
 from doe_calib.design.detectability import noncentrality_for_power, own_directions
+from doe_calib.design.feasibility import build_feasibility
 from doe_calib.diagnosis.effect_tests import augmented
 from doe_calib.errors import OptionError
 from doe_calib.estimation.identifiability import analyse
@@ -59,6 +61,12 @@ class Variants:
     def __len__(self) -> int:
         return len(self.pose)
 
+    def subset(self, keep) -> "Variants":
+        """The variants where the mask ``keep`` (K,) is true (the poses ``q`` unchanged)."""
+        keep = np.asarray(keep, bool)
+        return Variants(self.pose[keep], self.case[keep], self.approach[keep], self.q,
+                        self.cases, self.approach_joints)
+
     def configurations(self, model, values, chosen=None, ids=None) -> Configurations:
         """Each variant's readings: unloaded, then (if it has one) under its load case."""
         chosen = np.arange(len(self)) if chosen is None else np.asarray(chosen)
@@ -77,6 +85,31 @@ class Variants:
                 q.append(qi), w.append(row), a.append(self.approach[k]), pose.append(name)
         return Configurations.from_arrays(np.array(q), np.array(w), pose=pose,
                                           approach=np.array(a))
+
+
+def within_torque_limits(model, values, constraints, cand: Variants) -> np.ndarray:
+    """Mask (K,) of the variants whose own load case keeps every joint torque within
+    ``constraints.torque_limits``.
+
+    The torque of a load case is ``τ = J_cᵀ F``: its force ``F`` (the weight, or the
+    same force as a pull, :class:`~.load_directions.DirectedLoad`) acting at its
+    centre of mass ``c`` — the force and the moment ``(c − o) × F`` of the centre's
+    offset at the flange — on the nominal chain (:mod:`.feasibility`).
+    """
+    ok = np.ones(len(cand), bool)
+    if constraints.torque_limits is None or not cand.cases:
+        return ok
+    limits = np.asarray(constraints.torque_limits, float)
+    tau = map_poses(build_feasibility(model, values, constraints, cand.cases).geometry,
+                    cand.q)[2]  # (P, N, C)
+    within = np.all((np.abs(tau) <= limits[None, :, None] * (1 + 1e-9))
+                    | ~np.isfinite(limits)[None, :, None], axis=1)  # (P, C)
+    for k, (i, c) in enumerate(zip(cand.pose, cand.case)):
+        if c == EVERY:
+            ok[k] = within[i].all()
+        elif c >= 0:
+            ok[k] = within[i, c]
+    return ok
 
 
 def approach_joints(model, effects) -> tuple:

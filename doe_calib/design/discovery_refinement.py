@@ -18,7 +18,12 @@ import numpy as np
 
 from doe_calib.design.constrained_exchange import projected_information, shortfall
 from doe_calib.design.criteria import log_det
-from doe_calib.design.discovery_candidates import EVERY, effect_columns, observation_rows
+from doe_calib.design.discovery_candidates import (
+    EVERY,
+    effect_columns,
+    observation_rows,
+    within_torque_limits,
+)
 from doe_calib.design.pose_refinement import refine as refine_poses
 from doe_calib.design.reachability import unreachable
 
@@ -80,7 +85,7 @@ def _lambda(b, zs):
 
 
 def refine_discovery(model, params, cand, chosen, sigma: float, feasibility, effects, targets,
-                     collision=None, home=None, bounds=None) -> RefinedDiscovery:
+                     collision=None, home=None, constraints=None) -> RefinedDiscovery:
     """Refine the chosen variants' poses, keeping the detection bounds the exchange met.
 
     Parameters
@@ -100,8 +105,10 @@ def refine_discovery(model, params, cand, chosen, sigma: float, feasibility, eff
     collision : CollisionModel, optional
     home : ndarray, shape (N,), optional
         With ``collision``: refined poses must stay joined to it.
-    bounds : (lower, upper), optional
-        Joint bounds for the equivalent angles (:func:`.reachability.unreachable`).
+    constraints : DesignConstraints, optional
+        Its joint bounds (for the equivalent angles, :func:`.reachability.unreachable`)
+        and load-torque limits: a refined pose whose own load case exceeds them goes
+        back to its candidate (default ``feasibility.constraints``).
 
     Returns
     -------
@@ -114,9 +121,14 @@ def refine_discovery(model, params, cand, chosen, sigma: float, feasibility, eff
     b0, z0 = _columns(model, params, sub0, effects, sigma)
     if not outcome.accepted:
         return RefinedDiscovery(q0, b0, outcome, 0, 0)
+    constraints = feasibility.constraints if constraints is None else constraints
     q1, far = outcome.q, 0
+    heavy = ~within_torque_limits(model, params.values, constraints,
+                                  chosen_variants(cand, chosen, q1))
+    q1 = np.where(heavy[:, None], q0, q1)
     if home is not None:
-        checked = unreachable(collision, q1, home, model.robot, *bounds)
+        checked = unreachable(collision, q1, home, model.robot,
+                              *constraints.bounds(model.robot))
         back = np.array([why is not None for why, _ in checked])
         q1, far = np.where(back[:, None], q0, [used for _, used in checked]), int(back.sum())
     b1, z1 = _columns(model, params, chosen_variants(cand, chosen, q1), effects, sigma)

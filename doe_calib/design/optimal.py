@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -131,7 +132,9 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     params = model.nominal() if params is None else params
     constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints
     stage = _Stages(progress)
-    feasibility = build_feasibility(model, params.values, constraints, loads)
+    # a discovery design judges each pose's load torques with its own load case
+    feasibility = build_feasibility(model, params.values, constraints if discovery is None
+                                    else replace(constraints, torque_limits=None), loads)
     if isinstance(candidates, CandidatePoses):
         stage("candidates", f"screening the {len(candidates)} poses of {candidates.source}")
         cands, refine = screened_candidates(feasibility, model.robot, candidates, collision), False
