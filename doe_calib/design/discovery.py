@@ -239,7 +239,8 @@ def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: 
         stages["refinement"] = polished.to_dict()
     bound = relaxed.bound(n_poses)
     d_eff = DOptimal().efficiency(value, bound, p)
-    versus = float(np.exp((value - free.value) / p))
+    # against the unconstrained exchange, both before any refinement
+    versus = float(np.exp(((value if polished is None else found.value) - free.value) / p))
     final = chosen_variants(cand, chosen, None if polished is None else polished.q)
     cfg = final.configurations(model, params.values, None, [str(i + 1) for i in range(n_poses)])
     std = np.sqrt(np.diag(np.linalg.inv(m))) * params.scales[params.free]
