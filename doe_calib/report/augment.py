@@ -83,7 +83,7 @@ def poses_section(result):
     rows = []
     for pose in dict.fromkeys(cfg.pose):
         idx = [i for i, p in enumerate(cfg.pose) if p == pose]
-        loads = "; ".join("(" + ", ".join(f"{v:.4g}" for v in cfg.wrench[i]) + ")"
+        loads = "; ".join("(" + ", ".join(f"{v + 0.0:.4g}" for v in cfg.wrench[i]) + ")"
                           for i in idx if np.any(cfg.wrench[i])) or "unloaded only"
         side = cfg.approach[idx[0]]
         sides = ", ".join(f"{robot.joints[j].name} {'+' if side[j] > 0 else '−'}"
