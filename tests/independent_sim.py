@@ -266,6 +266,19 @@ def payload_wrench(chain, q_si, mass_kg: float, com_flange_m) -> np.ndarray:
     return np.array(out)
 
 
+def pull_wrench(chain, q_si, mass_kg: float, com_flange_m, direction, g: float = 9.80665):
+    """Wrench (M, 6) of the force ``mass·g`` along the unit ``direction`` (root axes) acting at
+    the centre ``com_flange_m`` (flange frame, m): the force and its moment about the flange
+    origin, root axes; flange placed on the nominal model at q (M, N)."""
+    f = mass_kg * g * np.asarray(direction, float)
+    out = []
+    for q in np.atleast_2d(q_si):
+        pin.framesForwardKinematics(chain.model, chain.data, chain.full(q))
+        arm = chain.data.oMf[chain.flange].rotation @ np.asarray(com_flange_m, float)
+        out.append(np.r_[f, np.cross(arm, f)])
+    return np.array(out)
+
+
 def unloaded_and_loaded(chain, q_si, mass_kg: float, com_flange_m):
     """Each pose twice, unloaded then with the payload: q (2M, N) and wrench (2M, 6)."""
     q = np.repeat(np.atleast_2d(q_si), 2, axis=0)

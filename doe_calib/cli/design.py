@@ -84,9 +84,11 @@ def add_arguments(c):
     c.add_argument("--min-power", type=positive("--min-power", "(a probability)"),
                    help="power asked at --detect-size (default --power)")
     c.add_argument("--load-directions", metavar="DIRS",
-                   help="with --detect-size: directions each --load may pull along at a pose, "
-                        "e.g. z,x,y: z its weight (−z), x and y the same force as a horizontal "
-                        "pull along ±x, ±y of the base frame at its centre of mass (default z)")
+                   help="with --detect (with or without --detect-size) or --augment: "
+                        "directions each --load may pull along at a pose, each pose measured "
+                        "unloaded and under one of them, chosen by the design; e.g. z,x,y: z "
+                        "its weight (−z), x and y the same force as a horizontal pull along "
+                        "±x, ±y of the base frame at its centre of mass (default z)")
     c.add_argument("--out", required=True, metavar="DESIGN.json",
                    help="design JSON to write (the design CSV is written beside it: same name, "
                         ".csv)")
@@ -107,16 +109,22 @@ def _csv_beside(out: str) -> Path:
 
 
 def _discovery_goal(args):
-    """The :class:`~doe_calib.design.discovery.DiscoveryGoal` of ``--detect-size``, or None."""
+    """The :class:`~doe_calib.design.discovery.DiscoveryGoal` of ``--detect-size``, or of
+    ``--load-directions`` with plain ``--detect`` (no size: each pose picks its load case for
+    the D criterion), or None."""
     from doe_calib.design.discovery import DiscoveryGoal
     from doe_calib.design.load_directions import parse_directions
 
     if args.detect_size is None:
-        for name in ("min_power", "load_directions"):
-            if getattr(args, name) is not None:
-                raise OptionError(f"--{name.replace('_', '-')} is for a design to discover: "
-                                  f"give --detect EFFECTS --detect-size S too")
-        return None
+        if args.min_power is not None:
+            raise OptionError("--min-power is for a design to discover: give --detect EFFECTS "
+                              "--detect-size S too")
+        if args.load_directions is None:
+            return None
+        if not args.detect:
+            raise OptionError("--load-directions is for a design that reveals effects: give "
+                              "--detect EFFECTS --detect-size S too (or --detect EFFECTS alone: "
+                              "each pose then picks its load case for the D criterion)")
     if not args.detect:
         raise OptionError("--detect-size S: give the effects to discover with --detect EFFECTS")
     return DiscoveryGoal(args.detect, args.detect_size,
@@ -162,7 +170,7 @@ def run(args):
         from doe_calib.cli.design_augment import run_augment
 
         return run_augment(args, model, loads, candidates, constraints, collision,
-                           effect_registry(args), csv_path)
+                           effect_registry(args), csv_path, home)
     discovery = _discovery_goal(args)
     progress = stage_progress()
     result = optimal_design(model, args.poses, loads, candidates=candidates,

@@ -6,22 +6,23 @@ import sys
 import numpy as np
 
 from doe_calib.design.augment import augment_design, diagnosis_targets
+from doe_calib.design.load_directions import parse_directions
 from doe_calib.errors import OptionError
 from doe_calib.io.csv_files import read_measurements, write_design
 from doe_calib.io.json_file import read_json, strict_json
 
 
-def run_augment(args, model, loads, candidates, constraints, collision, registry, csv_path):
-    """Propose ``--poses`` new poses for ``--augment``'s campaign; write ``--out`` and the CSV.
+def run_augment(args, model, loads, candidates, constraints, collision, registry, csv_path,
+                home=None):
+    """Propose ``--poses`` new poses for ``--augment``'s campaign; write ``--out``, the CSV and
+    the ``--report``.
 
-    The candidates pass the constraints and the collision screening; a path from ``--home``
-    is not planned for them (as it is for a design's poses)."""
+    The candidates pass the constraints and the collision screening, and, with the collision
+    check, only poses a free path joins to ``home`` (rad, m; default the URDF zero) are
+    chosen, as for a design."""
     if args.criterion == "task":
         raise OptionError("--augment designs for the model's parameters (D, A or E) or, with "
                           "--diagnosis, to separate its candidates; not for --task")
-    if args.report:
-        raise OptionError("--report is written for a design, not for --augment; the augment "
-                          "JSON and its summary say what the new poses add")
     measured = read_measurements(args.augment, model.robot, model.tool, sigma_mm=args.sigma)
     targets = ()
     if args.diagnosis:
@@ -34,8 +35,15 @@ def run_augment(args, model, loads, candidates, constraints, collision, registry
                             criterion=args.criterion, targets=targets, detect=args.detect or "",
                             constraints=constraints, collision=collision,
                             rng=np.random.default_rng(args.seed), alpha=args.alpha,
-                            power=args.power, registry=registry)
+                            power=args.power, registry=registry,
+                            directions=None if args.load_directions is None else
+                            parse_directions(args.load_directions), home=home)
     result.to_json(args.out)
     write_design(csv_path, result.configurations, model.robot)
     print(strict_json(result.to_dict()) if args.json else result.summary())
     print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
+    if args.report:
+        from doe_calib.report import augment_report
+
+        augment_report(result, args.report, measured)
+        print(f"report: {args.report}", file=sys.stderr)

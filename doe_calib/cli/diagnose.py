@@ -43,14 +43,14 @@ def measurement_arguments(c):
                    help="leave these poses out (each exclusion is reported)")
     c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")
     approach_argument(c)
+    c.add_argument("--practical-um", type=positive("--practical-um", "µm"), default=2.0,
+                   help="practical size: a misfit beyond the noise √(σ̂² − σ²) below this "
+                        "many µm, with no material candidate, is adequate (default 2)")
 
 
 def add_arguments(c):
     robot_arguments(c)
     measurement_arguments(c)
-    c.add_argument("--practical-um", type=positive("--practical-um", "µm"), default=2.0,
-                   help="practical size: a misfit beyond the noise √(σ̂² − σ²) below this "
-                        "many µm, with no material candidate, is adequate (default 2)")
     c.add_argument("--out", required=True, help="diagnosis JSON to write")
     c.add_argument("--plot", help="PNG of the residual against every variable "
                                   "(default: beside --out)")

@@ -55,7 +55,7 @@ def run(args):
     out = refine(model, meas, val, level=args.level, max_steps=args.max_steps,
                  min_gain=args.min_gain, folds=args.folds, grouping=args.cv_by,
                  progress=lambda i, text: print(f"  step {i}: {text}", file=sys.stderr),
-                 registry=registry)
+                 registry=registry, practical_um=args.practical_um)
     stem = str(Path(args.out).with_suffix(""))
     history = args.history or stem + "_refine.json"
     plot = args.plot or stem + "_refine.png"

@@ -24,9 +24,23 @@ from doe_calib.design.candidate_file import CandidatePoses, screened_candidates
 from doe_calib.design.candidate_poses import feasible_candidates
 from doe_calib.design.constraints import DesignConstraints
 from doe_calib.design.criteria import Criterion, DOptimal, log_det
+from doe_calib.design.discovery_candidates import (
+    approach_joints,
+    free_parameters,
+    observation_rows,
+    variants,
+    within_torque_limits,
+)
 from doe_calib.design.effect_detection import design_readings, detect_effects, detectability
 from doe_calib.design.feasibility import build_feasibility
+from doe_calib.design.load_directions import directed_loads
 from doe_calib.design.problem import blocks_for, design_parameters, load_configurations
+from doe_calib.design.reachability import (
+    free_home,
+    home_pose,
+    reachability_note,
+    reachable_choice,
+)
 from doe_calib.design.updates import regularised
 from doe_calib.errors import OptionError, SolverError
 from doe_calib.estimation.weighted_residuals import weighted_residual
@@ -37,6 +51,8 @@ from doe_calib.model.marker_model import build_model
 MAX_TARGETS = 3
 #: A candidate whose cross-validated RMS is within this share of the top one's predicts as well.
 LOOK_ALIKE = 0.02
+#: The direction of a load hanging on the flange (its weight), base frame.
+DOWN = (0.0, 0.0, -1.0)
 
 
 @dataclass(frozen=True)
@@ -88,15 +104,18 @@ def measured_information(model, params, measurements) -> np.ndarray:
     return j.T @ j
 
 
-def exchange_from(m0, blocks, n: int, crit, max_sweeps: int = 30) -> np.ndarray:
+def exchange_from(m0, blocks, n: int, crit, max_sweeps: int = 30, pose_of=None) -> np.ndarray:
     """Indices of ``n`` distinct candidates maximising ``crit`` of M₀ + Σ BⱼᵀBⱼ: greedy
-    additions, then single exchanges until none improves."""
-    if len(blocks) < n:
-        raise SolverError(f"only {len(blocks)} feasible candidates for {n} new poses")
+    additions, then single exchanges until none improves. ``pose_of`` (K,), optional: the
+    pose each candidate is a variant of; no two chosen candidates share one."""
+    pose_of = np.arange(len(blocks)) if pose_of is None else np.asarray(pose_of)
+    if len(np.unique(pose_of)) < n:
+        raise SolverError(f"only {len(np.unique(pose_of))} feasible candidates for {n} new "
+                          f"poses")
     chosen, m = [], m0.copy()
     for _ in range(n):
         values = crit.added_values(regularised(m), blocks)
-        values[chosen] = -np.inf
+        values[np.isin(pose_of, pose_of[chosen])] = -np.inf
         j = int(np.argmax(values))
         chosen.append(j)
         m = m + blocks[j].T @ blocks[j]
@@ -107,7 +126,7 @@ def exchange_from(m0, blocks, n: int, crit, max_sweeps: int = 30) -> np.ndarray:
             i = chosen[slot]
             m_minus = m - blocks[i].T @ blocks[i]
             values = crit.added_values(regularised(m_minus), blocks)
-            values[[c for c in chosen if c != i]] = -np.inf
+            values[np.isin(pose_of, pose_of[[c for c in chosen if c != i]])] = -np.inf
             j = int(np.argmax(values))
             if j != i and values[j] > current + 1e-10 * max(1.0, abs(current)):
                 chosen[slot], m = j, m_minus + blocks[j].T @ blocks[j]
@@ -122,8 +141,12 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
                    sigma: float = 2e-5, criterion="D", targets=(), detect: str = "",
                    params=None, constraints: DesignConstraints | None = None, collision=None,
                    rng=None, alpha: float = 0.05, power: float = 0.8,
-                   registry=None) -> AugmentResult:
+                   registry=None, directions=None, home=None) -> AugmentResult:
     """K new poses (each unloaded and under every load) that add most to ``measured``.
+
+    The approach side of every joint whose approach backlash is among the targets or
+    ``detect`` is chosen per pose, as in a discovery design (:mod:`.discovery_candidates`);
+    with ``directions`` each pose also picks the one load case it is measured under.
 
     Parameters
     ----------
@@ -148,11 +171,18 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
         Effects whose detectability is reported before and after (default the targets).
     params : ParameterSet, optional
         Values the information is computed at (default nominal).
-    constraints, collision, rng :
-        As for :func:`.optimal.optimal_design`.
+    constraints, collision, rng, home :
+        As for :func:`.optimal.optimal_design`: with a collision model, only new poses
+        joined to the home pose by a free path, their tracker beams free, are chosen
+        (:func:`.reachability.reachable_choice`).
     alpha, power : float
         Of the detectability (:mod:`.effect_detection`).
     registry : EffectRegistry, optional
+    directions : tuple of tuple, optional
+        Unit force directions each load may pull along
+        (:func:`.load_directions.parse_directions`, ``--load-directions``): each new
+        pose is then measured unloaded and under one of those load cases, chosen here.
+        Default: under every load, hanging.
 
     Returns
     -------
@@ -163,36 +193,78 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     rng = np.random.default_rng() if rng is None else rng
     params = model.nominal() if params is None else params
     constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints
-    feasibility = build_feasibility(model, params.values, constraints, loads)
+    # with load directions each pose's load torques are judged with its own load case
+    feasibility = build_feasibility(model, params.values, constraints if directions is None
+                                    else replace(constraints, torque_limits=None), loads)
     if isinstance(candidates, CandidatePoses):
         cands = screened_candidates(feasibility, model.robot, candidates, collision)
     else:
         cands = feasible_candidates(feasibility, model.robot, candidates, rng, collision)
-    params = design_parameters(model, params, np.r_[cands.q, measured.configurations.q],
-                               loads, rng=rng)
     targets = tuple(targets)
+    before = detect or "+".join(targets)
+    effects = detect_effects(model, before, None, registry) if before else []
+    joints = approach_joints(model, effects)
+    cand = None
+    if directions is not None or joints:
+        cand = variants(cands.q, directed_loads(loads, directions or (DOWN,)), joints,
+                        model.robot.n_joints, every=directions is None)
+        cand = cand.subset(within_torque_limits(model, params.values, constraints, cand))
+
+    def identifiable(mdl, start):
+        """``start`` with what the candidates (each variant of them, or, without variants,
+        they and the campaign's poses) cannot identify fixed."""
+        if cand is None:
+            return design_parameters(mdl, start, np.r_[cands.q, measured.configurations.q],
+                                     loads, rng=rng)
+        return free_parameters(start, observation_rows(mdl, start.values, cand) / sigma, cand)
+
+    params = identifiable(model, params)
     design_model, design_params, crit = model, params, Criterion.from_name(criterion)
     if targets:
-        effects = [e for spec in targets for e in detect_effects(model, spec, None, registry)]
-        design_model = build_model(model.robot, model.tool, tuple(model.effects) + tuple(effects))
-        design_params = design_parameters(design_model, with_new_free(design_model, params),
-                                          np.r_[cands.q, measured.configurations.q], loads,
-                                          rng=rng)
+        added_effects = [e for spec in targets
+                         for e in detect_effects(model, spec, None, registry)]
+        design_model = build_model(model.robot, model.tool,
+                                   tuple(model.effects) + tuple(added_effects))
+        design_params = identifiable(design_model, with_new_free(design_model, params))
         free_names = np.array(design_params.names)[design_params.free]
         own = np.flatnonzero(np.isin(free_names, np.array(params.names)[params.free]))
         crit = Separation(tuple(int(i) for i in own))
     m0 = measured_information(design_model, design_params, measured)
-    blocks = blocks_for(design_model, design_params, cands.q, loads, sigma)
-    chosen = exchange_from(m0, blocks, n_poses, crit)
+    if cand is None:
+        blocks = blocks_for(design_model, design_params, cands.q, loads, sigma)
+        pose_of = np.arange(len(cands.q))
+    else:
+        free = design_params.free
+        blocks = (observation_rows(design_model, design_params.values, cand)[..., free]
+                  * design_params.scales[free] / sigma)
+        pose_of = cand.pose
+
+    def choose(allowed):
+        sub = np.flatnonzero(allowed[pose_of])
+        return sub[exchange_from(m0, blocks[sub], n_poses, crit, pose_of=pose_of[sub])]
+
+    q_used, reach = cands.q, {}
+    if collision is None:
+        chosen = choose(np.ones(len(cands.q), bool))
+    else:
+        start = home_pose(model.robot, constraints, home)
+        start, moved = free_home(collision, start, model.robot, home is not None, cands.q)
+        chosen, q_used, replaced = reachable_choice(choose, cands.q, pose_of, collision, start,
+                                                    model.robot,
+                                                    *constraints.bounds(model.robot))
+        reach = {"home": [float(v) for v in start * model.robot.display_factors],
+                 "replaced": dict(replaced),
+                 "note": reachability_note(start, model.robot, replaced, 0, moved)}
+    poses = pose_of[chosen]
     added = blocks[chosen]
     m1 = m0 + np.einsum("kri,krj->ij", added, added)
-    names = [cands.names[k] for k in chosen] if cands.names else \
+    names = [cands.names[k] for k in poses] if cands.names else \
         [f"new{i + 1}" for i in range(n_poses)]
-    cfg = load_configurations(model, params.values, cands.q[chosen], loads, names)
-    before = detect or "+".join(targets)
+    cfg = (load_configurations(model, params.values, q_used[chosen], loads, names)
+           if cand is None else
+           replace(cand, q=q_used).configurations(model, params.values, chosen, names))
     detected = ((), ())
     if before:
-        effects = detect_effects(model, before, None, registry)
         after = concatenate([measured, design_readings(model, params.values, cfg, sigma)])
         detected = tuple(detectability(model, params, m, effects, alpha, power)
                          for m in (measured, after))
@@ -202,7 +274,7 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
         std_before=parameter_std(design_params, m0), std_after=parameter_std(design_params, m1),
         detect_before=detected[0], detect_after=detected[1], candidates=cands.to_dict(),
         measured_configurations=len(measured.configurations), sigma_mm=1000.0 * sigma,
-        robot=model.robot, model=model.spec)
+        robot=model.robot, model=model.spec, reachability=reach)
 
 
 def with_new_free(big, params):

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import textwrap
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -33,8 +33,9 @@ class AugmentResult:
     Attributes
     ----------
     configurations : Configurations
-        The new poses, each unloaded then under every load case; pose ids from
-        the candidate file, or ``new1`` … ``newK``.
+        The new poses, each unloaded then under every load case (or the one it
+        picked, with load directions); pose ids from the candidate file, or ``new1``
+        … ``newK``; the approach side of each joint (0 where not chosen).
     criterion : str
         ``D``, ``A``, ``E`` (the model's parameters) or ``Ds`` (the targets'
         information with the model's parameters projected out).
@@ -54,6 +55,10 @@ class AugmentResult:
         σ of the new readings, mm.
     robot : Robot
     model : str
+    reachability : dict
+        With a collision model: ``home`` (deg, mm), ``replaced`` (reason → chosen
+        poses replaced because no free path joins them to home, or a beam is
+        blocked) and ``note``, in words; empty without.
     """
 
     configurations: Configurations
@@ -70,6 +75,7 @@ class AugmentResult:
     sigma_mm: float
     robot: Robot
     model: str
+    reachability: dict = field(default_factory=dict)
 
     def summary(self) -> str:
         k = len(dict.fromkeys(self.configurations.pose))
@@ -84,6 +90,8 @@ class AugmentResult:
                  + (f" from {self.candidates['source']}" if self.candidates.get("source")
                     else ""),
                  "  poses: " + ", ".join(dict.fromkeys(self.configurations.pose)),
+                 *([f"  {self.reachability['note']}"] if self.reachability.get("note")
+                   else []),
                  "", "Predicted std (before → after)"]
         for name, (after, unit) in self.std_after.items():
             lines.append(f"  {name:<28} {self.std_before[name][0]:>10.4g} → {after:<10.4g} "
@@ -112,8 +120,11 @@ class AugmentResult:
                 "candidates": self.candidates,
                 "measured_configurations": self.measured_configurations,
                 "sigma_mm": self.sigma_mm, "robot": self.robot.to_dict(),
-                "configurations": [{"pose": p, "q": list(q * f), "wrench": list(w)}
-                                   for p, q, w in zip(cfg.pose, cfg.q, cfg.wrench)]}
+                "reachability": self.reachability,
+                "configurations": [{"pose": p, "q": list(q * f), "wrench": list(w),
+                                    "approach": [int(s) for s in a]}
+                                   for p, q, w, a in zip(cfg.pose, cfg.q, cfg.wrench,
+                                                         cfg.approach)]}
 
     def to_json(self, path=None) -> str:
         return write_json(self.to_dict(), path)
@@ -124,7 +135,9 @@ class AugmentResult:
         rows = d["configurations"]
         cfg = Configurations.from_arrays(
             np.array([r["q"] for r in rows], float).reshape(len(rows), robot.n_joints)
-            / robot.display_factors, [r["wrench"] for r in rows], pose=[r["pose"] for r in rows])
+            / robot.display_factors, [r["wrench"] for r in rows], pose=[r["pose"] for r in rows],
+            approach=np.array([r.get("approach", [0] * robot.n_joints) for r in rows],
+                              float).reshape(len(rows), robot.n_joints))
         std = {k: {n: (np.inf if s is None else float(s), u) for n, (s, u) in d[k].items()}
                for k in ("std_before", "std_after")}
         return cls(cfg, d["criterion"], tuple(d["targets"]), float(d["value_before"]),
@@ -132,7 +145,7 @@ class AugmentResult:
                    tuple(Detectability.from_dict(r) for r in d["detectability_before"]),
                    tuple(Detectability.from_dict(r) for r in d["detectability_after"]),
                    dict(d["candidates"]), int(d["measured_configurations"]),
-                   float(d["sigma_mm"]), robot, d["model"])
+                   float(d["sigma_mm"]), robot, d["model"], dict(d.get("reachability", {})))
 
     @classmethod
     def from_json(cls, path) -> "AugmentResult":

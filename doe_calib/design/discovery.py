@@ -19,7 +19,7 @@ design (:func:`.effect_detection.with_detectability`).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -30,16 +30,25 @@ from doe_calib.design.discovery_candidates import (
     approach_joints,
     detection_target,
     effect_columns,
+    free_parameters,
     observation_rows,
     variants,
+    within_torque_limits,
 )
+from doe_calib.design.clearances import pose_clearances
+from doe_calib.design.discovery_refinement import chosen_variants, refine_discovery
 from doe_calib.design.effect_detection import detect_effects, with_detectability
 from doe_calib.design.exchange import exact_design
 from doe_calib.design.load_directions import directed_loads, horizontal
+from doe_calib.design.reachability import (
+    free_home,
+    home_pose,
+    reachability_note,
+    reachable_choice,
+)
 from doe_calib.design.relaxation import information, relax
 from doe_calib.design.result import DesignResult
 from doe_calib.errors import OptionError, SolverError
-from doe_calib.estimation.identifiability import analyse
 from doe_calib.io.measurements import Configurations
 
 #: Candidates searched by the exchange: the relaxation's best, and each effect's richest.
@@ -54,9 +63,11 @@ class DiscoveryGoal:
     ----------
     effects : str
         ``+``-joined effect strings (or ``catalogue``), as ``--detect``.
-    size : float
+    size : float or None
         ``--detect-size``: the size each effect must be detected at, its display unit
-        (deg, mm, …; SI when its parameters' units differ).
+        (deg, mm, …; SI when its parameters' units differ). None: no detection bound, the
+        D-optimal choice of poses, load cases and approach sides (``--load-directions``
+        with plain ``--detect``); the detectability is reported.
     power, alpha : float
         Power asked (``--min-power``) of the χ² score test at level ``alpha``.
     directions : tuple of tuple
@@ -65,14 +76,14 @@ class DiscoveryGoal:
     """
 
     effects: str
-    size: float
+    size: float | None
     power: float = 0.8
     alpha: float = 0.05
     directions: tuple = ((0.0, 0.0, -1.0),)
     registry: object = None
 
     def __post_init__(self):
-        if not self.size > 0:
+        if self.size is not None and not self.size > 0:
             raise OptionError(f"--detect-size {self.size:g}: give a positive size (the effect's "
                               f"display unit, e.g. deg)")
         if not 0 < self.alpha < self.power < 1:
@@ -80,23 +91,14 @@ class DiscoveryGoal:
                               f"0 < alpha < power < 1")
 
 
-def _free_parameters(params, blocks_raw, cand):
-    """``params`` with what no variant identifies fixed, judged on a sample of variants."""
-    rng = np.random.default_rng(0)
-    pick = rng.choice(len(cand), size=min(400, len(cand)), replace=False)
-    ident = analyse(blocks_raw[pick].reshape(-1, blocks_raw.shape[2]), params)
-    for name, why in ident.dependent:
-        params = params.fixed([name], why + " (over the candidate poses and load cases)")
-    return params
-
-
-def _dedupe(start, blocks, pose_of):
-    """The start with repeated poses replaced by the best D candidate of an unused pose."""
+def _dedupe(start, blocks, pose_of, allowed):
+    """The start with repeated poses replaced by the best D candidate of an unused pose
+    (among the ``allowed`` candidates)."""
     chosen = []
     for k in start:
         if pose_of[k] in {pose_of[j] for j in chosen}:
             m = information(blocks[chosen], np.ones(len(chosen))) if chosen else 0.0
-            free = np.flatnonzero(~np.isin(pose_of, [pose_of[j] for j in chosen]))
+            free = np.flatnonzero(~np.isin(pose_of, [pose_of[j] for j in chosen]) & allowed)
             gain = [log_det(m + blocks[j].T @ blocks[j] + 1e-9 * np.eye(blocks.shape[2]))
                     for j in free[:2000]]
             k = int(free[int(np.argmax(gain))])
@@ -112,7 +114,8 @@ def _pool(relaxed, zblocks):
 
 
 def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: DiscoveryGoal,
-                     constraints, candidates: dict, progress=None) -> DesignResult:
+                     constraints, candidates: dict, progress=None, refine: bool = False,
+                     feasibility=None, collision=None, home=None) -> DesignResult:
     """The D-optimal discovery design of ``n_poses`` poses from candidate poses ``q``.
 
     Parameters
@@ -132,6 +135,18 @@ def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: 
     candidates : dict
         What drawing ``q`` removed (:meth:`.candidate_poses.CandidateSet.to_dict`).
     progress : callable(stage, note), optional
+    refine : bool
+        Refine the chosen poses with IPOPT, each keeping its load case and approach
+        sides, without breaking a detection bound (:mod:`.discovery_refinement`).
+    feasibility : Feasibility
+        The pose constraints, for the refinement, without the load torques
+        (:func:`.optimal.optimal_design` builds it so): each variant's own load case is
+        judged here (:func:`.discovery_candidates.within_torque_limits`).
+    collision : CollisionModel, optional
+        With it, only poses joined to ``home`` by a free path are chosen
+        (:func:`.reachability.reachable_choice`), and refined poses stay so.
+    home : ndarray, shape (N,), optional
+        The home pose, rad/m (:func:`.reachability.home_pose`); checked free.
 
     Returns
     -------
@@ -144,15 +159,22 @@ def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: 
     effects = detect_effects(model, goal.effects, Configurations.from_arrays(q), goal.registry)
     cases = directed_loads(loads, goal.directions)
     cand = variants(q, cases, approach_joints(model, effects), model.robot.n_joints)
+    within = within_torque_limits(model, params.values, constraints, cand)
+    if not within.all():
+        cand = cand.subset(within)
+        removed = {**candidates.get("removed", {}),
+                   "load torque (the variant's own load case)": int((~within).sum())}
+        candidates = {**candidates, "removed": removed}
     say("information", f"{len(cand)} candidates ({len(q)} poses × {max(len(cases), 1)} load "
                        f"case(s) × {2 ** len(cand.approach_joints)} approach side(s))")
     raw = observation_rows(model, params.values, cand) / sigma
-    params = _free_parameters(params, raw, cand)
+    params = free_parameters(params, raw, cand)
     blocks = raw[..., params.free] * params.scales[params.free]
     p = blocks.shape[2]
     columns = [effect_columns(model, params, e, cand, sigma) for e in effects]
     zblocks = [z for z, _ in columns]
-    targets = np.array([detection_target(e, model, own, goal.size, goal.alpha, goal.power)
+    targets = np.array([] if goal.size is None else
+                       [detection_target(e, model, own, goal.size, goal.alpha, goal.power)
                         for e, (_, own) in zip(effects, columns)])
     # what every candidate together reveals: an effect they cannot is left out of the bounds
     m_all = information(blocks, np.ones(len(cand)))
@@ -163,26 +185,64 @@ def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: 
              >= INVISIBLE for lam, e in zip(everything, effects)]
     say("relaxation", f"D criterion over {len(cand)} candidates")
     relaxed = relax(blocks, DOptimal())
-    start = exact_design(blocks, n_poses, "D", relaxed.weights).indices
-    pool = _pool(relaxed, zblocks)
-    say("exchange", f"{n_poses} poses, distinct")
-    free = constrained_exchange(blocks, [], [], _dedupe(start, blocks, cand.pose), cand.pose,
-                                pool)
-    keep = [i for i, ok in enumerate(reach) if ok]
-    say("discovery", f"{len(keep)} detection bound(s)")
-    found = constrained_exchange(blocks, [zblocks[i] for i in keep], targets[keep],
-                                 free.indices, cand.pose, pool)
-    chosen = found.indices
-    m = information(blocks[chosen], np.ones(n_poses))
+    keep = [i for i, ok in enumerate(reach) if ok and goal.size is not None]
+    outcomes = {}
+
+    def choose(allowed):
+        ok = allowed[cand.pose]
+        sub = np.flatnonzero(ok)
+        start = sub[exact_design(blocks[sub], n_poses, "D", relaxed.weights[sub]).indices]
+        pool = _pool(relaxed, zblocks)
+        pool = pool[ok[pool]]
+        say("exchange", f"{n_poses} poses, distinct")
+        free = constrained_exchange(blocks, [], [], _dedupe(start, blocks, cand.pose, ok),
+                                    cand.pose, pool)
+        found = free
+        if keep:
+            say("discovery", f"{len(keep)} detection bound(s)")
+            found = constrained_exchange(blocks, [zblocks[i] for i in keep], targets[keep],
+                                         free.indices, cand.pose, pool)
+        outcomes.update(free=free, found=found)
+        return found.indices
+
+    reachability = None
+    if collision is None:
+        chosen = choose(np.ones(len(q), bool))
+    else:
+        start, moved = free_home(collision, home_pose(model.robot, constraints, home),
+                                 model.robot, home is not None, q)
+        chosen, q_used, replaced = reachable_choice(choose, q, cand.pose, collision, start,
+                                                    model.robot, *constraints.bounds(model.robot))
+        cand, reachability = replace(cand, q=q_used), (start, replaced, moved)
+    free, found = outcomes["free"], outcomes["found"]
+    polished = None
+    if refine:
+        say("refinement", f"IPOPT on {n_poses} poses, each keeping its load case")
+        polished = refine_discovery(model, params, cand, chosen, sigma, feasibility,
+                                    [effects[i] for i in keep], targets[keep], collision,
+                                    None if reachability is None else reachability[0],
+                                    constraints)
+        design_blocks = polished.blocks
+    else:
+        design_blocks = blocks[chosen]
+    m = information(design_blocks, np.ones(n_poses))
     value = log_det(m)
     if not np.isfinite(value):
         raise SolverError(f"the {n_poses} poses chosen cannot identify every parameter of the "
                           f"model; ask for more poses")
+    stages = {"relaxation": relaxed.to_dict(), "exchange": free.to_dict()}
+    if polished is not None and polished.outcome.accepted:
+        say("bound", "relaxation with the refined poses as candidates")
+        relaxed = relax(np.concatenate([blocks, design_blocks]), DOptimal(),
+                        start=np.r_[relaxed.weights, np.zeros(n_poses)])
+    if polished is not None:
+        stages["refinement"] = polished.to_dict()
     bound = relaxed.bound(n_poses)
     d_eff = DOptimal().efficiency(value, bound, p)
-    versus = float(np.exp((value - free.value) / p))
-    cfg = cand.configurations(model, params.values, chosen,
-                              [str(i + 1) for i in range(n_poses)])
+    # against the unconstrained exchange, both before any refinement
+    versus = float(np.exp(((value if polished is None else found.value) - free.value) / p))
+    final = chosen_variants(cand, chosen, None if polished is None else polished.q)
+    cfg = final.configurations(model, params.values, None, [str(i + 1) for i in range(n_poses)])
     std = np.sqrt(np.diag(np.linalg.inv(m))) * params.scales[params.free]
     free_pars = [par for par, f in zip(params.parameters, params.free) if f]
     used = constraints.to_dict(model.robot, model.tool)
@@ -192,11 +252,28 @@ def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: 
         {par.name: (float(s * par.display_factor), par.display_unit)
          for par, s in zip(free_pars, std)}, used, (),
         {"D": d_eff}, {c.name: c.value(m) for c in (DOptimal(), AOptimal(), EOptimal())},
-        {}, {**candidates, "variants": len(cand)}, {}, {}, {}, sigma_mm=1000.0 * sigma,
-        stages={"relaxation": relaxed.to_dict(), "exchange": free.to_dict()})
+        {}, {**candidates, "variants": len(cand)},
+        {} if polished is None else polished.to_dict(), {}, {}, sigma_mm=1000.0 * sigma,
+        stages=stages)
+    if reachability is not None:
+        result = _with_reachability(result, model, collision, cfg, reachability, polished)
     result = with_detectability(result, model, goal.effects, goal.alpha, goal.power,
                                 goal.registry)
-    return _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads)
+    return _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads,
+                         polished)
+
+
+def _with_reachability(result, model, collision, cfg, reachability, polished):
+    """``result`` with the clearances, the collision summary and the reachability note."""
+    start, replaced, moved = reachability
+    first = sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())
+    clearances = pose_clearances(collision, cfg.q[first])
+    back = 0 if polished is None else polished.unreachable
+    used = {**result.constraints, "collision": collision.summary(),
+            "reachability": {"home": [float(v) for v in start * model.robot.display_factors],
+                             "replaced": dict(replaced), "refined_reverted": back}}
+    notes = result.notes + (reachability_note(start, model.robot, replaced, back, moved),)
+    return replace(result, constraints=used, notes=notes, clearances=clearances)
 
 
 def _hint(loads, goal) -> str:
@@ -208,10 +285,11 @@ def _hint(loads, goal) -> str:
     return ""
 
 
-def _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads):
+def _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads,
+                  polished=None):
     """``result`` with the discovery stage and its words."""
-    from dataclasses import replace
-
+    if goal.size is None:
+        return _with_load_choice(result, goal, cand, found)
     rows, notes = [], []
     for det, ok in zip(result.detectability, reach):
         met = det.detectable and det.min_detectable <= goal.size * (1 + 1e-6)
@@ -233,19 +311,17 @@ def _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads
                      "min_detectable": size, "met": bool(met), "revealable": bool(ok),
                      "words": words})
         notes.append(words)
-    used = {}
-    for k in found.indices:
-        c = int(cand.case[k])
-        name = "unloaded only" if c < 0 else cand.cases[c].spec()
-        used[name] = used.get(name, 0) + 1
+    used = _cases_used(cand, found.indices)
     notes.insert(0, f"discovery design (constrained exchange): D-optimal subject to every "
                     f"revealable effect detectable at {goal.size:g} (its unit) with power "
                     f"{goal.power:.0%} (α = {goal.alpha:g}); D-efficiency {versus:.3f} of the "
                     f"unconstrained D-optimal choice among the same candidates; load cases "
                     f"used: " + ", ".join(f"{n}× {s}" for s, n in used.items()))
-    notes.append("discovery design: no continuous refinement (each pose keeps its one load "
-                  "case), no reachability check from --home, and load-torque constraints "
-                  "judged with the weight only (not the sideways pulls)")
+    if polished is not None:
+        notes.append(f"discovery design refined (IPOPT, each pose keeping its load case and "
+                     f"approach sides): {polished.outcome.status}; "
+                     f"{polished.detection} refined pose(s) kept at their candidate so that no "
+                     f"detection bound is lost")
     stage = {"method": "constrained exchange", "status": found.status, "size": goal.size,
              "power": goal.power, "alpha": goal.alpha,
              "load_directions": [list(d) for d in goal.directions],
@@ -254,3 +330,28 @@ def _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads
              "load_cases_used": used, "effects": rows}
     return replace(result, notes=tuple(notes) + result.notes,
                    stages={**result.stages, "discovery": stage})
+
+
+def _cases_used(cand, chosen) -> dict:
+    """Load case (its spec) → how many chosen poses are measured under it."""
+    used = {}
+    for k in chosen:
+        c = int(cand.case[k])
+        name = "unloaded only" if c < 0 else cand.cases[c].spec()
+        used[name] = used.get(name, 0) + 1
+    return used
+
+
+def _with_load_choice(result, goal, cand, found):
+    """``result`` of a design without detection bounds whose poses chose their load case and
+    approach sides: the stage ``load_choice`` and its note."""
+    used = _cases_used(cand, found.indices)
+    note = ("D-optimal choice of poses, load cases and approach sides (each pose measured "
+            "unloaded and under one allowed load case; no detection bound, --detect-size not "
+            "given); load cases used: " + ", ".join(f"{n}× {s}" for s, n in used.items()))
+    stage = {"method": "exchange over poses × load cases × approach sides",
+             "status": found.status, "load_directions": [list(d) for d in goal.directions],
+             "approach_joints": [result.robot.joints[j].name for j in cand.approach_joints],
+             "load_cases_used": used}
+    return replace(result, notes=(note,) + result.notes,
+                   stages={**result.stages, "load_choice": stage})

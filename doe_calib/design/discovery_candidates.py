@@ -14,9 +14,12 @@ from itertools import product
 
 import numpy as np
 
+from doe_calib.design.batch import map_poses
 from doe_calib.design.detectability import noncentrality_for_power, own_directions
+from doe_calib.design.feasibility import build_feasibility
 from doe_calib.diagnosis.effect_tests import augmented
 from doe_calib.errors import OptionError
+from doe_calib.estimation.identifiability import analyse
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.effects.backlash import Backlash
 from doe_calib.model.effects.base import joint_index
@@ -24,6 +27,8 @@ from doe_calib.model.evaluation import observation_matrix
 
 #: At most this many joints get their approach side chosen (2^J variants of each pose).
 MAX_APPROACH_JOINTS = 3
+#: The ``case`` of a variant measured unloaded and under every load case in turn.
+EVERY = -2
 
 
 @dataclass(frozen=True, eq=False)
@@ -35,7 +40,8 @@ class Variants:
     pose : ndarray of int, shape (K,)
         The candidate pose (row of ``q``) each candidate is a variant of.
     case : ndarray of int, shape (K,)
-        Its load case (index into ``cases``; −1: unloaded only).
+        Its load case (index into ``cases``; −1: unloaded only; :data:`EVERY`: under every
+        case in turn, as an ordinary design measures each pose).
     approach : ndarray, shape (K, N)
         Its approach side per joint (+1, −1, 0 not chosen).
     q : ndarray, shape (P, N)
@@ -55,6 +61,12 @@ class Variants:
     def __len__(self) -> int:
         return len(self.pose)
 
+    def subset(self, keep) -> "Variants":
+        """The variants where the mask ``keep`` (K,) is true (the poses ``q`` unchanged)."""
+        keep = np.asarray(keep, bool)
+        return Variants(self.pose[keep], self.case[keep], self.approach[keep], self.q,
+                        self.cases, self.approach_joints)
+
     def configurations(self, model, values, chosen=None, ids=None) -> Configurations:
         """Each variant's readings: unloaded, then (if it has one) under its load case."""
         chosen = np.arange(len(self)) if chosen is None else np.asarray(chosen)
@@ -64,15 +76,40 @@ class Variants:
         for k, name in zip(chosen, ids):
             qi, c = self.q[self.pose[k]], int(self.case[k])
             rows = [np.zeros(6)]
-            if c >= 0:
-                key = (int(self.pose[k]), c)
+            for case in (range(len(self.cases)) if c == EVERY else [c] if c >= 0 else []):
+                key = (int(self.pose[k]), case)
                 if key not in wrench:
-                    wrench[key] = self.cases[c].wrench(model, values, qi[None])[0]
+                    wrench[key] = self.cases[case].wrench(model, values, qi[None])[0]
                 rows.append(wrench[key])
             for row in rows:
                 q.append(qi), w.append(row), a.append(self.approach[k]), pose.append(name)
         return Configurations.from_arrays(np.array(q), np.array(w), pose=pose,
                                           approach=np.array(a))
+
+
+def within_torque_limits(model, values, constraints, cand: Variants) -> np.ndarray:
+    """Mask (K,) of the variants whose own load case keeps every joint torque within
+    ``constraints.torque_limits``.
+
+    The torque of a load case is ``τ = J_cᵀ F``: its force ``F`` (the weight, or the
+    same force as a pull, :class:`~.load_directions.DirectedLoad`) acting at its
+    centre of mass ``c`` — the force and the moment ``(c − o) × F`` of the centre's
+    offset at the flange — on the nominal chain (:mod:`.feasibility`).
+    """
+    ok = np.ones(len(cand), bool)
+    if constraints.torque_limits is None or not cand.cases:
+        return ok
+    limits = np.asarray(constraints.torque_limits, float)
+    tau = map_poses(build_feasibility(model, values, constraints, cand.cases).geometry,
+                    cand.q)[2]  # (P, N, C)
+    within = np.all((np.abs(tau) <= limits[None, :, None] * (1 + 1e-9))
+                    | ~np.isfinite(limits)[None, :, None], axis=1)  # (P, C)
+    for k, (i, c) in enumerate(zip(cand.pose, cand.case)):
+        if c == EVERY:
+            ok[k] = within[i].all()
+        elif c >= 0:
+            ok[k] = within[i, c]
+    return ok
 
 
 def approach_joints(model, effects) -> tuple:
@@ -86,10 +123,11 @@ def approach_joints(model, effects) -> tuple:
     return tuple(joints)
 
 
-def variants(q, cases, joints, n_joints: int) -> Variants:
-    """Every pose × load case × approach sides of ``joints``."""
+def variants(q, cases, joints, n_joints: int, every: bool = False) -> Variants:
+    """Every pose × load case × approach sides of ``joints``; with ``every``, each pose is
+    measured under every load case in turn (only the approach sides vary)."""
     sides = list(product((1.0, -1.0), repeat=len(joints)))
-    case_ids = list(range(len(cases))) or [-1]
+    case_ids = ([EVERY] if every else list(range(len(cases)))) if cases else [-1]
     rows = [(i, c, s) for i in range(len(q)) for c in case_ids for s in sides]
     approach = np.zeros((len(rows), n_joints))
     for r, (_, _, s) in enumerate(rows):
@@ -102,12 +140,24 @@ def observation_rows(model, values, cand: Variants, chunk: int = 1024) -> np.nda
     """Observation matrix ∂x/∂p (K, r, P), m per SI unit, of ``model`` at every variant's
     readings (r = 3 markers' coordinates × readings per variant), in chunks of poses."""
     out = []
-    per = 1 if cand.case.max(initial=-1) < 0 else 2
+    per = (1 + len(cand.cases) if cand.case.min(initial=0) == EVERY else
+           1 if cand.case.max(initial=-1) < 0 else 2)
     for lo in range(0, len(cand), chunk):
         idx = np.arange(lo, min(lo + chunk, len(cand)))
         _, b = observation_matrix(model, values, cand.configurations(model, values, idx))
         out.append(b.reshape(len(idx), per * b.shape[1] * 3, -1))
     return np.concatenate(out)
+
+
+def free_parameters(params, blocks_raw, cand: Variants, sample: int = 400):
+    """``params`` with what no variant identifies fixed, judged on a sample of variants
+    (``blocks_raw`` (K, r, P): :func:`observation_rows` over σ)."""
+    rng = np.random.default_rng(0)
+    pick = rng.choice(len(cand), size=min(sample, len(cand)), replace=False)
+    ident = analyse(blocks_raw[pick].reshape(-1, blocks_raw.shape[2]), params)
+    for name, why in ident.dependent:
+        params = params.fixed([name], why + " (over the candidate poses and load cases)")
+    return params
 
 
 def effect_columns(model, params, effect, cand: Variants, sigma: float):

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -131,7 +132,9 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     params = model.nominal() if params is None else params
     constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints
     stage = _Stages(progress)
-    feasibility = build_feasibility(model, params.values, constraints, loads)
+    # a discovery design judges each pose's load torques with its own load case
+    feasibility = build_feasibility(model, params.values, constraints if discovery is None
+                                    else replace(constraints, torque_limits=None), loads)
     if isinstance(candidates, CandidatePoses):
         stage("candidates", f"screening the {len(candidates)} poses of {candidates.source}")
         cands, refine = screened_candidates(feasibility, model.robot, candidates, collision), False
@@ -142,10 +145,12 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
         raise SolverError(f"only {len(cands.q)} feasible candidates for {n_poses} poses")
     if discovery is not None:
         if criterion != "D":
-            raise OptionError(f"--detect-size designs maximise the D criterion; got "
+            raise OptionError(f"--detect-size and --load-directions designs maximise the D "
+                              f"criterion; got "
                               f"--criterion {criterion}")
         return discovery_design(model, params, cands.q, loads, n_poses, sigma, discovery,
-                                constraints, cands.to_dict(), progress=stage)
+                                constraints, cands.to_dict(), progress=stage, refine=refine,
+                                feasibility=feasibility, collision=collision, home=home)
     params = design_parameters(model, params, cands.q, loads, rng=rng)
     t = None if task is None else task_matrix(model, params, task, task_point)
     crit = Criterion.from_name(criterion, t)

@@ -67,9 +67,27 @@ def _bounds(q0, constraints, robot):
     return lbx, ubx
 
 
+def _groups(model, params, loads, sigma, n, variants):
+    """(pose_information Function, pose indices) per distinct (load cases, approach sides)."""
+    if variants is None:
+        return [(pose_information(model, params, loads, sigma), list(range(n)))]
+    keys = {}
+    for i, (cases, approach) in enumerate(variants):
+        key = (tuple(cases), tuple(float(a) for a in approach))
+        keys.setdefault(key, []).append(i)
+    return [(pose_information(model, params, list(cases), sigma, approach), idx)
+            for (cases, approach), idx in keys.items()]
+
+
+def _information(groups, q: np.ndarray, p: int) -> np.ndarray:
+    """Σ_i M(q_i) (p, p) of the poses q (n, N), numerically."""
+    return sum(np.array(info.map(len(idx))(q[idx].T)).reshape(-1, len(idx), p).sum(axis=1)
+               for info, idx in groups)
+
+
 def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
            criterion="D", task: np.ndarray | None = None,
-           max_iterations: int = 300, collision=None) -> DesignOutcome:
+           max_iterations: int = 300, collision=None, variants=None) -> DesignOutcome:
     """Optimise the poses q0 (N, n_joints) jointly with IPOPT (L-BFGS Hessian).
 
     Parameters
@@ -88,6 +106,10 @@ def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
         Task Jacobians (scaled), for the task criterion named by a string.
     collision : CollisionModel, optional
         Refined poses closer than its clearances step back (:func:`step_back`).
+    variants : sequence of (sequence of load cases, array_like (n_joints,)), optional
+        Per pose, the load cases it is measured under (besides unloaded) and the
+        approach sides it is reached from, when they differ between poses (a
+        discovery design); default every pose under ``loads``, approach 0.
 
     Returns
     -------
@@ -99,13 +121,14 @@ def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
     crit = Criterion.from_name(criterion, task)
     t0 = time.perf_counter()
     n, dof = q0.shape
-    info = pose_information(model, params, loads, sigma)
-    m0 = np.array(info.map(n)(q0.T)).reshape(-1, n, info.size1_out(0)).sum(axis=1)
+    groups = _groups(model, params, loads, sigma, n, variants)
+    p = groups[0][0].size1_out(0)
+    m0 = _information(groups, q0, p)
     start_value = crit.value(m0)
-    p = m0.shape[0]
     objective = log_criterion(crit, p, reference=crit.reference(m0))
     q = ca.MX.sym("q", dof, n)
-    m = info.map(n)(q) @ ca.repmat(ca.DM.eye(p), n, 1)
+    m = sum(info.map(len(idx))(q[:, idx]) @ ca.repmat(ca.DM.eye(p), len(idx), 1)
+            for info, idx in groups)
     g = ca.vertcat(*[feasibility.expressions(q[:, i], q0[i]) for i in range(n)])
     lbx, ubx = _bounds(q0, feasibility.constraints, model.robot)
     solver = ca.nlpsol("refine", "ipopt", {"x": ca.vec(q), "f": -objective(m), "g": g},
@@ -122,7 +145,7 @@ def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
         status += (f"; {stepped} pose(s) failing the re-check "
                    f"({'constraints or clearance' if collision is not None else 'constraints'}) "
                    f"stepped back toward the start")
-    m1 = np.array(info.map(n)(q1.T)).reshape(-1, n, p).sum(axis=1)
+    m1 = _information(groups, q1, p)
     value = crit.value(m1)
     accepted = bool(value > start_value)
     if not accepted:

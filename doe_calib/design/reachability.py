@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.collision import Workspace, blocked_beams, check_segment, plan_move, too_close
-from doe_calib.errors import OptionError
+from doe_calib.errors import OptionError, SolverError
 
 #: Reason of a pose no free path joins to the home pose.
 NO_PATH = "no free path from the home pose"
@@ -142,3 +142,53 @@ def reachability_note(home, robot, replaced: dict, reverted: int, moved: str = "
     if reverted:
         text += f"; {reverted} refined pose(s) kept at their candidate (refined, unreachable)"
     return text
+
+
+def reachable_choice(choose, q, pose_of, collision, home, robot, lower, upper,
+                     rounds: int = 8) -> tuple:
+    """The candidates ``choose`` picks once every chosen pose is joined to ``home``.
+
+    An unreachable chosen pose (:func:`unreachable`) is removed, with all its
+    variants, and ``choose`` asked again, at most ``rounds`` times.
+
+    Parameters
+    ----------
+    choose : callable(allowed) -> ndarray of int
+        Candidate indices chosen among the candidates whose pose is ``allowed``
+        (bool mask over the poses, shape (P,)).
+    q : ndarray, shape (P, N)
+        The candidate poses, rad (m).
+    pose_of : ndarray of int, shape (K,)
+        The pose (row of ``q``) of each candidate.
+    collision, home, robot, lower, upper :
+        As for :func:`unreachable`.
+
+    Returns
+    -------
+    (ndarray, ndarray, dict)
+        The chosen candidates; ``q`` with each checked pose at the angles it is
+        reached at; reason → how many chosen poses were replaced for it.
+
+    Raises
+    ------
+    SolverError
+        When too few reachable poses are left, or some are still unreachable
+        after ``rounds`` choices.
+    """
+    allowed, verdict, used, replaced = np.ones(len(q), bool), {}, np.array(q, float), {}
+    for _ in range(rounds):
+        chosen = np.asarray(choose(allowed))
+        poses = [int(k) for k in np.asarray(pose_of)[chosen]]
+        todo = [k for k in dict.fromkeys(poses) if k not in verdict]
+        for k, (why, angles) in zip(todo, unreachable(collision, q[todo], home, robot, lower,
+                                                      upper)):
+            verdict[k], used[k] = why, angles
+        bad = [k for k in poses if verdict[k] is not None]
+        if not bad:
+            return chosen, used, replaced
+        for k in bad:
+            allowed[k] = False
+            replaced[verdict[k]] = replaced.get(verdict[k], 0) + 1
+    raise SolverError(f"after {rounds} choices some chosen poses are still unreachable: "
+                      + ", ".join(f"{n} {why}" for why, n in replaced.items())
+                      + "; give more candidates, another --home or fewer constraints")

@@ -6,10 +6,10 @@ Positions are in the robot base frame, unloaded (the deflection under a
 load, a fraction of a millimetre, is neglected for placing things).
 
 The environment is unknown at design time: temperature NaN (no thermal
-correction) and every joint's approach direction 0 (a design cannot plan
-from which side a joint reaches a pose, so ``backlash`` enters the design
-only through the applied loads). Planning the approach would belong to the
-robot-program export, which does not do it.
+correction) and, unless a pose's approach sides are design variables (a
+discovery design, :mod:`.discovery_candidates`), every joint's approach
+direction 0, so ``backlash`` enters the design only through the applied
+loads.
 """
 from __future__ import annotations
 
@@ -22,10 +22,12 @@ from doe_calib.model.loads import GRAVITY
 from doe_calib.model.marker_model import build_model
 
 
-def design_env(robot) -> ca.DM:
-    """The environment of a planned pose: temperature NaN, every approach direction 0."""
-    fields = env_fields(robot.n_joints)
-    return ca.DM([np.nan if f == "temperature" else 0.0 for f in fields])
+def design_env(robot, approach=None) -> ca.DM:
+    """The environment of a planned pose: temperature NaN, the approach directions
+    ``approach`` (N values of ±1 or 0; default every one 0)."""
+    sides = np.zeros(robot.n_joints) if approach is None else np.asarray(approach, float)
+    return ca.DM([np.nan if f == "temperature" else float(sides[int(f[len("approach"):]) - 1])
+                  for f in env_fields(robot.n_joints)])
 
 
 def symbolic_model(model):
@@ -44,17 +46,21 @@ def flange_frame(model, values, q):
 
 
 def hanging_wrench(rotation, load) -> ca.SX:
-    """Wrench (N, N·m) at the flange origin, base frame, of ``load`` on a flange turned by R."""
-    f = ca.DM([0.0, 0.0, -load.mass * GRAVITY])
+    """Wrench (N, N·m) at the flange origin, base frame, of ``load`` on a flange turned by R:
+    its weight, or, for a load with a ``direction`` (a
+    :class:`~.load_directions.DirectedLoad`), the force ``m·g`` along it, at its centre."""
+    direction = np.asarray(getattr(load, "direction", (0.0, 0.0, -1.0)), float)
+    f = ca.DM(load.mass * GRAVITY * direction)
     return ca.vertcat(f, ca.cross(rotation @ ca.DM(load.com), f))
 
 
-def pose_information(model, params, loads, sigma: float) -> ca.Function:
+def pose_information(model, params, loads, sigma: float, approach=None) -> ca.Function:
     """``pose_information(q) -> M``: one pose's scaled information (as :func:`.problem.blocks_for`).
 
     M = Σ_c B̃_cᵀB̃_c over the unloaded case and every load case c, with
     B̃ = ∂x/∂p_free · scale / σ and the load's wrench a function of q through
-    the flange rotation; shape (F, F), per unit σ² (``sigma`` in m).
+    the flange rotation; shape (F, F), per unit σ² (``sigma`` in m); the pose
+    reached from the sides ``approach`` (N values, default 0).
     """
     model = symbolic_model(model)
     q = ca.SX.sym("q", model.robot.n_joints)
@@ -62,7 +68,7 @@ def pose_information(model, params, loads, sigma: float) -> ca.Function:
     rotation, _ = flange_frame(model, values, q)
     free = np.flatnonzero(params.free).tolist()
     weight = ca.DM(params.scales[params.free] / sigma)
-    rows, env = [], design_env(model.robot)
+    rows, env = [], design_env(model.robot, approach)
     for w in [ca.DM.zeros(6)] + [hanging_wrench(rotation, load) for load in loads]:
         b = model.observation(q, w, env, values)[1]
         rows.append(b[:, free] @ ca.diag(weight))

@@ -30,7 +30,8 @@ def _size_words(sizes) -> str:
 
 def refine(model, measurements, validation=None, level: float = 0.01, max_steps: int = 5,
            min_gain: float = 0.02, folds: int = 5, grouping: str = "auto", progress=None,
-           fit=None, registry=None, sigma_mm: float | None = None) -> RefineResult:
+           fit=None, registry=None, sigma_mm: float | None = None,
+           practical_um: float = 2.0) -> RefineResult:
     """Grow ``model`` one effect at a time while an effect predicts materially better.
 
     Parameters
@@ -64,6 +65,9 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         plausible ranges, :func:`~doe_calib.diagnosis.engine.diagnose`) is not added.
     sigma_mm : float, optional
         σ per coordinate, mm, for every reading (replacing the readings' own).
+    practical_um : float
+        Practical size, µm: a misfit beyond the noise below it, with no material
+        candidate, is adequate (as :func:`~doe_calib.diagnosis.engine.diagnose`).
 
     Returns
     -------
@@ -76,7 +80,7 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
     steps, added, reason, effect = [], None, "starting model", None
     while True:
         diag = diagnose(model, measurements, fit, level, folds, grouping, min_gain=min_gain,
-                        registry=registry)
+                        registry=registry, practical_um=practical_um)
         val = validation_rms(model, fit.parameters.values, validation) \
             if validation is not None else None
         steps.append(RefineStep(model.spec, added, diag.rms_mm, diag.cv_rms_mm, val,
