@@ -9,6 +9,7 @@ power ``power`` in the least favourable direction.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -84,6 +85,7 @@ class Detectability:
                    tuple(d.get("direction", ())))
 
 
+@functools.lru_cache(maxsize=256)  # a pure function of three numbers, asked per candidate
 def noncentrality_for_power(dof: int, alpha: float, power: float) -> float:
     """λ at which the χ² test of ``dof`` degrees of freedom at level ``alpha`` has ``power``.
 
