@@ -25,6 +25,7 @@ from dataclasses import dataclass, replace
 import casadi as ca
 import numpy as np
 
+from doe_calib.errors import DoeCalibError
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects.base import Effect
 from doe_calib.model.evaluation import marker_positions
@@ -167,12 +168,34 @@ def candidate_batch(model, effects) -> CandidateBatch:
     return CandidateBatch(model, tuple(effects), big, tuple(blocks))
 
 
-def grown_models(model, effects, measurements, values) -> list:
-    """``model + e`` for each of ``effects``: through one batch when it is inert at ``values``
-    (SI) on ``measurements``' configurations, else built one by one."""
+def batched_columns(model, measurements, values, effects) -> list:
+    """Each candidate's weighted columns Z (3K, q) at ``values`` (SI, the fit of ``model``), or
+    None for a candidate to be built alone: a group whose batch cannot be built or is not
+    inert is split in two, down to single candidates."""
     if not effects:
         return []
-    batch = candidate_batch(model, effects)
-    if batch.inert(measurements, values):
-        return [batch.augmented(i) for i in range(len(effects))]
+    try:
+        batch = candidate_batch(model, effects)
+        if batch.inert(measurements, values):
+            return batch.columns(measurements, values)
+    except (DoeCalibError, ValueError, np.linalg.LinAlgError):
+        pass
+    if len(effects) == 1:
+        return [None]
+    half = len(effects) // 2
+    return (batched_columns(model, measurements, values, effects[:half])
+            + batched_columns(model, measurements, values, effects[half:]))
+
+
+def grown_models(model, effects, measurements, values) -> list:
+    """``model + e`` for each of ``effects``: through one batch when it builds and is inert
+    at ``values`` (SI) on ``measurements``' configurations, else built one by one."""
+    if not effects:
+        return []
+    try:
+        batch = candidate_batch(model, effects)
+        if batch.inert(measurements, values):
+            return [batch.augmented(i) for i in range(len(effects))]
+    except (DoeCalibError, ValueError):
+        pass
     return [build_model(model.robot, model.tool, tuple(model.effects) + (e,)) for e in effects]

@@ -22,7 +22,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy import stats
 
-from doe_calib.diagnosis.candidate_batch import candidate_batch
+from doe_calib.diagnosis.candidate_batch import batched_columns
 from doe_calib.design.detectability import (MOSTLY_ABSORBED, Detectability, absorbing_parameters,
                                             assess)
 from doe_calib.errors import DoeCalibError
@@ -143,9 +143,9 @@ def candidate_columns(model, measurements, params, effects, q_basis) -> tuple:
     """Every candidate's columns ``(effect, Z, Z⊥)`` (:func:`projected_columns`), and
     ``(spec, reason)`` of those that could not be built.
 
-    The columns come from one batch of every candidate
-    (:mod:`~doe_calib.diagnosis.candidate_batch`) when it is inert at the fit; else
-    from one model per candidate.
+    The columns come from one batch of the candidates
+    (:func:`~doe_calib.diagnosis.candidate_batch.batched_columns`); a candidate that does
+    not fit in it is built alone.
     """
     ok, failed = [], []
     for e in effects:  # what building model + e alone would refuse (clashing parameters)
@@ -154,18 +154,11 @@ def candidate_columns(model, measurements, params, effects, q_basis) -> tuple:
             ok.append(e)
         except (DoeCalibError, ValueError) as exc:
             failed.append((e.spec(), _failure(exc)))
-    try:
-        batch = candidate_batch(model, ok)
-        zs = batch.columns(measurements, params.values) \
-            if batch.inert(measurements, params.values) else None
-    except (DoeCalibError, ValueError, np.linalg.LinAlgError):
-        zs = None
-    if zs is not None:
-        return [(e, z, z - q_basis @ (q_basis.T @ z)) for e, z in zip(ok, zs)], failed
     out = []
-    for e in ok:
+    for e, z in zip(ok, batched_columns(model, measurements, params.values, ok)):
         try:
-            out.append((e, *projected_columns(model, measurements, params, e, q_basis)))
+            out.append((e, z, z - q_basis @ (q_basis.T @ z)) if z is not None else
+                       (e, *projected_columns(model, measurements, params, e, q_basis)))
         except (DoeCalibError, ValueError, np.linalg.LinAlgError) as exc:
             failed.append((e.spec(), _failure(exc)))
     return out, failed
