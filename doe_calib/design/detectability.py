@@ -103,7 +103,7 @@ def noncentrality_for_power(dof: int, alpha: float, power: float) -> float:
 
 
 def assess(spec: str, new, params, z, zp, jacobian, alpha: float = 0.05,
-           power: float = 0.8) -> Detectability:
+           power: float = 0.8, zp_svd=None) -> Detectability:
     """The detectability of one effect from its weighted columns.
 
     Parameters
@@ -120,6 +120,8 @@ def assess(spec: str, new, params, z, zp, jacobian, alpha: float = 0.05,
         ``jacobian()`` → the model's free weighted Jacobian (3K, F), asked only for the
         words of an effect the model absorbs.
     alpha, power : float
+    zp_svd : tuple, optional
+        ``np.linalg.svd(zp, full_matrices=False)`` when the caller has it already.
     """
     names = tuple(p.name for p in new)
     units = {p.display_unit for p in new}
@@ -144,9 +146,12 @@ def assess(spec: str, new, params, z, zp, jacobian, alpha: float = 0.05,
         return Detectability(spec, names, unit, alpha, power, np.inf, False, words, absorbed,
                              tuple(_unit(null * scale)))
     # sizes in the parameters' own units: the SVD of Z⊥ on the same directions, unscaled
-    own = np.linalg.qr(basis * scale[:, None])[0] if basis.shape[1] < len(new) \
-        else np.eye(len(new))
-    _, s, vt = np.linalg.svd(zp @ own, full_matrices=False)
+    if basis.shape[1] < len(new):
+        own = np.linalg.qr(basis * scale[:, None])[0]
+        _, s, vt = np.linalg.svd(zp @ own, full_matrices=False)
+    else:  # every direction is the effect's own
+        own = np.eye(len(new))
+        _, s, vt = np.linalg.svd(zp, full_matrices=False) if zp_svd is None else zp_svd
     lam = noncentrality_for_power(own.shape[1], alpha, power)
     return Detectability(spec, names, unit, alpha, power, float(np.sqrt(lam) / s[-1] * factor),
                          True, "", absorbed, tuple(own @ vt[-1]))

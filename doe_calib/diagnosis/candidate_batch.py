@@ -38,9 +38,9 @@ INERT_M = 1e-12
 class _Tagged(Effect):
     """``effect`` with its parameters named ``tag + name``: its own copy in a shared chain."""
 
-    def __init__(self, effect, tag: str):
+    def __init__(self, effect, tag: str, names):
         super().__init__()
-        self.effect, self.tag = effect, tag
+        self.effect, self.tag, self.names = effect, tag, tuple(names)
         self.name = effect.name
 
     @property
@@ -59,9 +59,7 @@ class _Tagged(Effect):
         return [replace(p, name=self.tag + p.name) for p in self.effect.parameters(robot)]
 
     def _own(self, s):
-        n = len(self.tag)
-        return replace(s, p={**s.p, **{k[n:]: v for k, v in s.p.items()
-                                       if k.startswith(self.tag)}})
+        return replace(s, p={**s.p, **{n: s.p[self.tag + n] for n in self.names}})
 
     def joint_correction(self, s):
         return self.effect.joint_correction(self._own(s))
@@ -158,13 +156,13 @@ def candidate_batch(model, effects) -> CandidateBatch:
     ModelError
         A candidate whose parameters clash or whose chain cannot be built.
     """
-    tagged = tuple(_Tagged(e, f"c{i}:") for i, e in enumerate(effects))
+    names = [[p.name for p in e.parameters(model.robot)] for e in effects]
+    tagged = tuple(_Tagged(e, f"c{i}:", n) for i, (e, n) in enumerate(zip(effects, names)))
     big = build_model(model.robot, model.tool, tuple(model.effects) + tagged)
     blocks, start = [], model.n_parameters
-    for e in effects:
-        n = len(e.parameters(model.robot))
-        blocks.append(slice(start, start + n))
-        start += n
+    for n in names:
+        blocks.append(slice(start, start + len(n)))
+        start += len(n)
     return CandidateBatch(model, tuple(effects), big, tuple(blocks))
 
 

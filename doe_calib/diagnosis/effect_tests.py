@@ -148,9 +148,12 @@ def candidate_columns(model, measurements, params, effects, q_basis) -> tuple:
     not fit in it is built alone.
     """
     ok, failed = [], []
+    names = set(model.description.nominal().names)
     for e in effects:  # what building model + e alone would refuse (clashing parameters)
         try:
-            describe_model(model.robot, model.tool, tuple(model.effects) + (e,))
+            own = [p.name for p in e.parameters(model.robot)]
+            if names.intersection(own) or len(set(own)) < len(own):
+                describe_model(model.robot, model.tool, tuple(model.effects) + (e,))  # says it
             ok.append(e)
         except (DoeCalibError, ValueError) as exc:
             failed.append((e.spec(), _failure(exc)))
@@ -240,9 +243,10 @@ def candidate_tests(model, measurements, params, effects=None,
         new = e.parameters(model.robot)
         norm2 = float((z ** 2).sum())
         absorbed = 1.0 - float((zp ** 2).sum()) / norm2 if norm2 > 0 else 1.0
-        detection = assess(e.spec(), new, params, z, zp, jacobian)
+        svd = np.linalg.svd(zp, full_matrices=False)
+        detection = assess(e.spec(), new, params, z, zp, jacobian, zp_svd=svd)
         scale = np.sqrt(max(norm2, 1e-300) / max(z.shape[1], 1))
-        u, s, _ = np.linalg.svd(zp, full_matrices=False)
+        u, s, _ = svd
         keep = s > 1e-6 * scale
         q = int(keep.sum())
         dof = len(r) - rank_j - q
