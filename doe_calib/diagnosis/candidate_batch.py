@@ -6,7 +6,8 @@ parameters ``θ_e`` at nominal). Building ``model + e`` for every candidate
 re-derives the whole chain and its Jacobian some seventy times. Here the
 model and every candidate make one chain, each candidate reading its own
 copy of its parameters (shapes of one effect share parameter names, so each
-candidate's are tagged ``c<i>:``). Every catalogue effect is inert at its
+candidate's are tagged ``b<batch>c<i>:``; each batch is built afresh, from the
+effects' code as it is). Every catalogue effect is inert at its
 nominal parameters (a zero correction, an identity placement), so with every
 candidate at nominal the chain is the model's, and along ``θ_e`` alone, the
 others at nominal, it is ``model + e``'s: its columns for ``θ_e`` are exactly
@@ -20,6 +21,7 @@ cross-validation need no model built each.
 """
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, replace
 
 import casadi as ca
@@ -30,6 +32,8 @@ from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects.base import Effect
 from doe_calib.model.evaluation import marker_positions
 from doe_calib.model.marker_model import Model, build_model, describe_model
+
+_BATCHES = itertools.count()
 
 #: Largest difference (m) between the batch at nominal and the model that counts as inert.
 INERT_M = 1e-12
@@ -157,7 +161,9 @@ def candidate_batch(model, effects) -> CandidateBatch:
         A candidate whose parameters clash or whose chain cannot be built.
     """
     names = [[p.name for p in e.parameters(model.robot)] for e in effects]
-    tagged = tuple(_Tagged(e, f"c{i}:", n) for i, (e, n) in enumerate(zip(effects, names)))
+    batch = next(_BATCHES)  # a batch of its own: built from the effects' code as it is now
+    tagged = tuple(_Tagged(e, f"b{batch}c{i}:", n)
+                   for i, (e, n) in enumerate(zip(effects, names)))
     big = build_model(model.robot, model.tool, tuple(model.effects) + tagged)
     blocks, start = [], model.n_parameters
     for n in names:
