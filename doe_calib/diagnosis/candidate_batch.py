@@ -12,12 +12,14 @@ nominal parameters (a zero correction, an identity placement), so with every
 candidate at nominal the chain is the model's, and along ``θ_e`` alone, the
 others at nominal, it is ``model + e``'s: its columns for ``θ_e`` are exactly
 ``model + e``'s. That is checked on the data (the positions at nominal must be
-the model's, :meth:`CandidateBatch.inert`); a batch that fails it is not used.
+the model's, :meth:`CandidateBatch.inert`): a batch that fails it, or cannot be
+built, is split until the candidate at fault is alone (:func:`batched_columns`),
+and that one is built by itself, as without a batch.
 
 The same holds away from nominal: :meth:`CandidateBatch.augmented` is
-``model + e`` evaluated through the batch (its Functions select ``θ_e`` and hold
-the other candidates at nominal), so that the candidates' fits for
-cross-validation need no model built each.
+``model + e`` made from the batch's Functions (the other candidates' parameters
+held at nominal fold away: the same instructions as ``model + e`` built alone),
+so that the candidates' fits for cross-validation need no chain built each.
 """
 from __future__ import annotations
 
