@@ -9,7 +9,8 @@ revolution), refined from ``joint_offset+geometry``. Each call is timed once
 after the starting fit, in this process (start-up and imports excluded: the
 command rows of section (g) include them), by CPU time (user + system: what a
 loaded machine does not inflate) and wall time. The "before" figures are the
-same calls on the code before the candidate batch, measured on this machine.
+same calls on commit 1bdc1d4 (before the candidate batch), measured on this machine at
+the same load; the 100 000-reading diagnose is section (f).
 """
 from __future__ import annotations
 
