@@ -9,10 +9,12 @@ power ``power`` in the least favourable direction.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize
+from scipy.special import chdtri, chndtr  # scipy.stats loads in 0.3 s
 
 #: A direction of the effect whose typical size (its parameters' scales) changes the
 #: weighted readings by less than this (in σ, root of the sum of squares) is invisible.
@@ -84,16 +86,17 @@ class Detectability:
                    tuple(d.get("direction", ())))
 
 
+@functools.lru_cache(maxsize=256)  # a pure function of three numbers, asked per candidate
 def noncentrality_for_power(dof: int, alpha: float, power: float) -> float:
     """λ at which the χ² test of ``dof`` degrees of freedom at level ``alpha`` has ``power``.
 
     >>> round(noncentrality_for_power(1, 0.05, 0.8), 3)   # (1.96 + 0.8416)²
     7.849
     """
-    critical = stats.chi2.isf(alpha, dof)
+    critical = chdtri(dof, alpha)  # the χ² upper quantile, scipy.stats.chi2.isf's own
     if power <= alpha:
         return 0.0
-    f = lambda lam: stats.ncx2.sf(critical, dof, lam) - power  # noqa: E731
+    f = lambda lam: 1.0 - chndtr(critical, dof, lam) - power  # noncentral χ² sf  # noqa: E731
     high = 1.0
     while f(high) < 0:
         high *= 2.0
@@ -101,7 +104,7 @@ def noncentrality_for_power(dof: int, alpha: float, power: float) -> float:
 
 
 def assess(spec: str, new, params, z, zp, jacobian, alpha: float = 0.05,
-           power: float = 0.8) -> Detectability:
+           power: float = 0.8, zp_svd=None) -> Detectability:
     """The detectability of one effect from its weighted columns.
 
     Parameters
@@ -118,6 +121,8 @@ def assess(spec: str, new, params, z, zp, jacobian, alpha: float = 0.05,
         ``jacobian()`` → the model's free weighted Jacobian (3K, F), asked only for the
         words of an effect the model absorbs.
     alpha, power : float
+    zp_svd : tuple, optional
+        ``np.linalg.svd(zp, full_matrices=False)`` when the caller has it already.
     """
     names = tuple(p.name for p in new)
     units = {p.display_unit for p in new}
@@ -132,7 +137,7 @@ def assess(spec: str, new, params, z, zp, jacobian, alpha: float = 0.05,
     zs, zps = (z * scale) @ basis, (zp * scale) @ basis
     s_raw = np.linalg.svd(zs, compute_uv=False)
     if s_raw.size == 0 or s_raw[-1] < INVISIBLE:
-        null = basis @ np.linalg.svd(zs)[2][-1]
+        null = basis @ np.linalg.svd(zs, full_matrices=False)[2][-1]  # V only: no 3K × 3K U
         return Detectability(spec, names, unit, alpha, power, np.inf, False,
                              invisible_words(new, null), absorbed, tuple(_unit(null * scale)))
     _, s_scaled, vt_scaled = np.linalg.svd(zps, full_matrices=False)
@@ -142,9 +147,12 @@ def assess(spec: str, new, params, z, zp, jacobian, alpha: float = 0.05,
         return Detectability(spec, names, unit, alpha, power, np.inf, False, words, absorbed,
                              tuple(_unit(null * scale)))
     # sizes in the parameters' own units: the SVD of Z⊥ on the same directions, unscaled
-    own = np.linalg.qr(basis * scale[:, None])[0] if basis.shape[1] < len(new) \
-        else np.eye(len(new))
-    _, s, vt = np.linalg.svd(zp @ own, full_matrices=False)
+    if basis.shape[1] < len(new):
+        own = np.linalg.qr(basis * scale[:, None])[0]
+        _, s, vt = np.linalg.svd(zp @ own, full_matrices=False)
+    else:  # every direction is the effect's own
+        own = np.eye(len(new))
+        _, s, vt = np.linalg.svd(zp, full_matrices=False) if zp_svd is None else zp_svd
     lam = noncentrality_for_power(own.shape[1], alpha, power)
     return Detectability(spec, names, unit, alpha, power, float(np.sqrt(lam) / s[-1] * factor),
                          True, "", absorbed, tuple(own @ vt[-1]))

@@ -20,14 +20,15 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy import stats
+from scipy.special import fdtrc  # the F survival function, scipy.stats.f's own
 
+from doe_calib.diagnosis.candidate_batch import batched_columns
 from doe_calib.design.detectability import (MOSTLY_ABSORBED, Detectability, absorbing_parameters,
                                             assess)
 from doe_calib.errors import DoeCalibError
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects import DEFAULT_REGISTRY, joint_index
-from doe_calib.model.marker_model import build_model
+from doe_calib.model.marker_model import build_model, describe_model
 
 
 @dataclass(frozen=True)
@@ -103,6 +104,12 @@ def candidate_effects(model, configurations=None, registry=None) -> list:
 def augmented(model, params, effect):
     """(model + effect, its parameter set: current values and free flags, new ones free at 0)."""
     big = build_model(model.robot, model.tool, tuple(model.effects) + (effect,))
+    return big, grown_parameters(big, params)
+
+
+def grown_parameters(big, params):
+    """The parameter set of ``big`` (a model grown from the one ``params`` fit): the values and
+    free flags of ``params``, the new parameters free at nominal."""
     start = big.nominal()
     values = start.values.copy()
     free = start.free.copy()
@@ -110,7 +117,7 @@ def augmented(model, params, effect):
     for i, name in enumerate(params.names):
         k = start.names.index(name)
         values[k], free[k], reasons[k] = params.values[i], params.free[i], params.fixed_reason[i]
-    return big, replace(start, values=values, free=free, fixed_reason=tuple(reasons))
+    return replace(start, values=values, free=free, fixed_reason=tuple(reasons))
 
 
 def fitted_basis(model, measurements, params):
@@ -126,6 +133,38 @@ def projected_columns(model, measurements, params, effect, q_basis):
     _, z = weighted_residual(big, measurements, bp.values)
     z = z[:, ~np.isin(bp.names, params.names)]
     return z, z - q_basis @ (q_basis.T @ z)
+
+
+def _failure(exc) -> str:
+    return str(exc) or type(exc).__name__
+
+
+def candidate_columns(model, measurements, params, effects, q_basis) -> tuple:
+    """Every candidate's columns ``(effect, Z, Z⊥)`` (:func:`projected_columns`), and
+    ``(spec, reason)`` of those that could not be built.
+
+    The columns come from one batch of the candidates
+    (:func:`~doe_calib.diagnosis.candidate_batch.batched_columns`); a candidate that does
+    not fit in it is built alone.
+    """
+    ok, failed = [], []
+    names = set(model.description.nominal().names)
+    for e in effects:  # what building model + e alone would refuse (clashing parameters)
+        try:
+            own = [p.name for p in e.parameters(model.robot)]
+            if names.intersection(own) or len(set(own)) < len(own):
+                describe_model(model.robot, model.tool, tuple(model.effects) + (e,))  # says it
+            ok.append(e)
+        except (DoeCalibError, ValueError) as exc:
+            failed.append((e.spec(), _failure(exc)))
+    out = []
+    for e, z in zip(ok, batched_columns(model, measurements, params.values, ok)):
+        try:
+            out.append((e, z, z - q_basis @ (q_basis.T @ z)) if z is not None else
+                       (e, *projected_columns(model, measurements, params, e, q_basis)))
+        except (DoeCalibError, ValueError, np.linalg.LinAlgError) as exc:
+            failed.append((e.spec(), _failure(exc)))
+    return out, failed
 
 
 def _basis(jac: np.ndarray, tol: float = 1e-9) -> np.ndarray:
@@ -191,7 +230,7 @@ def candidate_tests(model, measurements, params, effects=None,
     r, q_basis = fitted_basis(model, measurements, params)
     rank_j = q_basis.shape[1]
     ss = float(r @ r)
-    raw, failed = [], []
+    raw = []
     jac = []  # the free weighted Jacobian, made once and only when words need it
 
     def jacobian():
@@ -199,18 +238,15 @@ def candidate_tests(model, measurements, params, effects=None,
             jac.append(weighted_residual(model, measurements, params.values)[1][:, params.free])
         return jac[0]
 
-    for e in effects:
-        try:
-            z, zp = projected_columns(model, measurements, params, e, q_basis)
-            new = e.parameters(model.robot)
-        except (DoeCalibError, ValueError, np.linalg.LinAlgError) as exc:
-            failed.append((e.spec(), str(exc) or type(exc).__name__))
-            continue
+    columns, failed = candidate_columns(model, measurements, params, effects, q_basis)
+    for e, z, zp in columns:
+        new = e.parameters(model.robot)
         norm2 = float((z ** 2).sum())
         absorbed = 1.0 - float((zp ** 2).sum()) / norm2 if norm2 > 0 else 1.0
-        detection = assess(e.spec(), new, params, z, zp, jacobian)
+        svd = np.linalg.svd(zp, full_matrices=False)
+        detection = assess(e.spec(), new, params, z, zp, jacobian, zp_svd=svd)
         scale = np.sqrt(max(norm2, 1e-300) / max(z.shape[1], 1))
-        u, s, _ = np.linalg.svd(zp, full_matrices=False)
+        u, s, _ = svd
         keep = s > 1e-6 * scale
         q = int(keep.sum())
         dof = len(r) - rank_j - q
@@ -219,7 +255,8 @@ def candidate_tests(model, measurements, params, effects=None,
             continue
         dss = float(((u[:, keep].T @ r) ** 2).sum())
         f = (dss / q) / max((ss - dss) / dof, 1e-300)
-        log_p = float(stats.f.logsf(f, q, dof))  # −inf (p = 0) past underflow, no warning
+        with np.errstate(divide="ignore"):  # −inf (p = 0) past underflow, no warning
+            log_p = float(np.log(fdtrc(q, dof, f)))
         by = ()
         if absorbed > MOSTLY_ABSORBED and log_p < np.log(SIGNIFICANT_RAW):
             # what the model's own parameters made of the signature the residual asks for

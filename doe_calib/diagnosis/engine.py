@@ -14,8 +14,9 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.diagnosis.candidate import candidate_records
+from doe_calib.diagnosis.candidate_batch import grown_models
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
-from doe_calib.diagnosis.effect_tests import augmented, candidate_tests
+from doe_calib.diagnosis.effect_tests import candidate_tests, grown_parameters
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.sign_lead import sign_lead
@@ -302,11 +303,12 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     tests = list(tried.tests)
     chosen = _groups_to_try(tests, level, cv_top)
     scored = {}
-    for i, t in enumerate(chosen):
+    effects = [parse_effect(t.spec, registry=registry) for t in chosen]
+    grown = grown_models(model, effects, screen, params.values)
+    for i, (t, effect, big) in enumerate(zip(chosen, effects, grown)):
         if progress:
             progress(i, len(chosen), t.spec)
-        effect = parse_effect(t.spec, registry=registry)
-        big, bp = augmented(model, params, effect)
+        bp = grown_parameters(big, params)
         try:  # folds start from the grown model's own fit: what they hold fixed is then right
             big_fit = identify_quietly(big, screen, bp, register=False)
         except DoeCalibError:
