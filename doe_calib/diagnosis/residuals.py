@@ -10,8 +10,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import chdtrc, gammaincinv  # scipy.stats's own χ² (it loads in 0.3 s)
+from scipy.special import chdtrc  # scipy.stats's own χ² survival function (it loads in 0.3 s)
 
+from doe_calib.estimation.chi_square import chi2_survival
+from doe_calib.estimation.fit_statistics import ratio_interval
 from doe_calib.estimation.weighted_residuals import marker_residuals
 
 
@@ -104,11 +106,7 @@ class Adequacy:
 
     def ratio_interval(self, confidence: float = 0.95) -> tuple:
         """Interval of the true σ over the assumed σ at ``confidence`` (from χ²(dof))."""
-        if self.dof <= 0:
-            return float("nan"), float("nan")
-        a = (1 - confidence) / 2
-        lo, hi = 2 * gammaincinv(self.dof / 2, np.array([1 - a, a]))  # χ²(dof) quantiles
-        return (float(np.sqrt(self.statistic / lo)), float(np.sqrt(self.statistic / hi)))
+        return ratio_interval(self.statistic, self.dof, confidence)
 
 
 def repeatability_sigma(measurements):
@@ -152,7 +150,7 @@ def adequacy(res: Residuals, rank: int, sigma_mm: float, level: float = 0.01,
         sigma_mm, source = repeat_sigma_m * 1e3, "repeated readings"
     t = float((w ** 2).sum())
     dof = int(w.size - rank)
-    p = float(chdtrc(dof, t)) if dof > 0 else float("nan")
+    p = chi2_survival(t, dof) if dof > 0 else float("nan")
     return Adequacy(t, dof, p, float(sigma_mm), source, bool(p >= level), level)
 
 
