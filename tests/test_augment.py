@@ -185,6 +185,12 @@ def test_design_augment_from_the_command_line(tmp_path, capsys):
     assert main(["design", "--robot", str(urdf), "--flange", "tool0", "--tool", str(tool),
                  "--model", MODEL, "--diagnosis", "d.json", "--out", str(out)]) == 2
     assert "--diagnosis is read with --augment" in capsys.readouterr().err
+    assert main(["design", "--robot", str(urdf), "--flange", "tool0", "--tool", str(tool),
+                 "--model", MODEL, "--augment", str(tmp_path / "m.csv"), "--poses", "4",
+                 "--detect", "gravity_compliance(j2)", "--detect-size", "0.01",
+                 "--out", str(tmp_path / "never.json")]) == 2
+    assert "--detect-size is for a new design to discover" in capsys.readouterr().err
+    assert not (tmp_path / "never.json").exists()
 
 
 def test_design_candidates_from_the_command_line(kr270, tmp_path, capsys):

@@ -64,3 +64,19 @@ def test_refine_practical_um_from_the_command_line_calls_it_adequate(campaign, c
     assert history["diagnosis"]["adequate"] and len(history["steps"]) == 1
     assert "below the practical size of 4 µm" in history["diagnosis"]["verdict"]
     assert "the model is adequate" in capsys.readouterr().out
+
+
+def test_refine_tolerance_from_the_command_line(campaign):
+    """``--tolerance 0.2`` reaches refine's diagnoses: σ̂/σ ≈ 1.15 is then within the noise."""
+    from doe_calib.cli import main
+
+    tmp, _, _, tool_yaml = campaign
+    out = tmp / "t.json"
+    assert main(["refine", "--robot", examples.ROBOT_URDF, "--flange", "tool0", "--tool",
+                 str(tool_yaml), "--data", str(tmp / "m.csv"), "--model", START,
+                 "--sigma", f"{STATED_MM:.9f}", "--max-steps", "2", "--tolerance", "0.2",
+                 "--out", str(out)]) == 0
+    history = json.loads((tmp / "t_refine.json").read_text())
+    assert 1.05 < history["diagnosis"]["chi2"]["sigma_ratio"] < 1.2
+    assert history["diagnosis"]["adequate"] and len(history["steps"]) == 1
+    assert "within 20% of the noise" in history["diagnosis"]["verdict"]

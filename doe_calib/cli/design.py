@@ -164,6 +164,12 @@ def run(args):
     candidates = args.candidates if not args.candidates_from else \
         read_candidates(args.candidates_from, robot, tool)
     if args.augment:
+        for name in ("detect_size", "min_power"):
+            if getattr(args, name) is not None:
+                raise OptionError(f"--{name.replace('_', '-')} is for a new design to discover; "
+                                  f"--augment chooses the poses that add most to the campaign "
+                                  f"(give --diagnosis D.json to separate its candidates) and "
+                                  f"reports the detectability of --detect before and after")
         if args.detect and not (0 < args.alpha < 1 and args.alpha < args.power < 1):
             raise OptionError(f"--alpha {args.alpha:g} and --power {args.power:g}: give "
                               f"0 < alpha < power < 1")

@@ -55,7 +55,8 @@ def run(args):
     out = refine(model, meas, val, level=args.level, max_steps=args.max_steps,
                  min_gain=args.min_gain, folds=args.folds, grouping=args.cv_by,
                  progress=lambda i, text: print(f"  step {i}: {text}", file=sys.stderr),
-                 registry=registry, practical_um=args.practical_um)
+                 registry=registry, practical_um=args.practical_um,
+                 tolerance=args.tolerance)
     stem = str(Path(args.out).with_suffix(""))
     history = args.history or stem + "_refine.json"
     plot = args.plot or stem + "_refine.png"

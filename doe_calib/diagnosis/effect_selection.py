@@ -31,7 +31,7 @@ def _size_words(sizes) -> str:
 def refine(model, measurements, validation=None, level: float = 0.01, max_steps: int = 5,
            min_gain: float = 0.02, folds: int = 5, grouping: str = "auto", progress=None,
            fit=None, registry=None, sigma_mm: float | None = None,
-           practical_um: float = 2.0) -> RefineResult:
+           practical_um: float = 2.0, tolerance: float = 0.05) -> RefineResult:
     """Grow ``model`` one effect at a time while an effect predicts materially better.
 
     Parameters
@@ -68,6 +68,9 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
     practical_um : float
         Practical size, µm: a misfit beyond the noise below it, with no material
         candidate, is adequate (as :func:`~doe_calib.diagnosis.engine.diagnose`).
+    tolerance : float
+        σ̂ within this fraction of σ, with no material candidate, is adequate (as
+        :func:`~doe_calib.diagnosis.engine.diagnose`).
 
     Returns
     -------
@@ -80,7 +83,8 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
     steps, added, reason, effect = [], None, "starting model", None
     while True:
         diag = diagnose(model, measurements, fit, level, folds, grouping, min_gain=min_gain,
-                        registry=registry, practical_um=practical_um)
+                        registry=registry, practical_um=practical_um,
+                        tolerance=tolerance)
         val = validation_rms(model, fit.parameters.values, validation) \
             if validation is not None else None
         steps.append(RefineStep(model.spec, added, diag.rms_mm, diag.cv_rms_mm, val,
