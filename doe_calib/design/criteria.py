@@ -44,6 +44,7 @@ from typing import ClassVar
 
 import casadi as ca
 import numpy as np
+from scipy.linalg import solve_triangular
 from scipy.optimize import minimize_scalar
 
 CRITERIA = ("D", "A", "E", "task")
@@ -225,9 +226,12 @@ class DOptimal(Criterion):
         """log det(M + BᵀB) = log det M + log det(I + B M⁻¹ Bᵀ)."""
         k, r, p = blocks.shape
         chol = np.linalg.cholesky(m)
-        x = np.linalg.solve(chol, blocks.reshape(-1, p).T).T.reshape(k, r, p)
-        g = np.einsum("kri,ksi->krs", x, x) + np.eye(r)
-        return np.linalg.slogdet(m)[1] + np.linalg.slogdet(g)[1]
+        inv = solve_triangular(chol, np.eye(p), lower=True, check_finite=False)  # L⁻¹
+        x = np.matmul(blocks, inv.T)                                             # B L⁻ᵀ
+        g = np.matmul(x, x.transpose(0, 2, 1))
+        g[:, np.arange(r), np.arange(r)] += 1.0                                  # I + B M⁻¹ Bᵀ
+        half = np.log(np.diagonal(np.linalg.cholesky(g), axis1=1, axis2=2)).sum(axis=1)
+        return 2.0 * np.log(np.diag(chol)).sum() + 2.0 * half
 
     def cvxpy_value(self, m):
         import cvxpy as cp

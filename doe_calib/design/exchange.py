@@ -104,13 +104,14 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
         chosen = _cover(blocks, chosen, candidates, bins, min_bins, crit)
     m = information(blocks[chosen], np.ones(n))
     current = crit.value(m)
+    searched = blocks[candidates]
     sweeps, status = 0, f"stopped at {max_sweeps} sweeps, still improving"
     for _ in range(max_sweeps):
         sweeps, improved = sweeps + 1, False
         for slot in range(n):
             i = chosen[slot]
             m_minus = m - blocks[i].T @ blocks[i]
-            values = added_values(crit, m_minus, blocks[candidates])
+            values = added_values(crit, m_minus, searched)
             values[np.isin(candidates, chosen) & (candidates != i)] = -np.inf  # distinct poses
             if bins is not None and min_bins > 0:
                 values[~_allowed(bins, chosen, slot, candidates, min_bins)] = -np.inf

@@ -17,6 +17,8 @@ for every exact N-pose design drawn from the candidates.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from doe_calib.design.criteria import Criterion
@@ -58,17 +60,58 @@ def information(blocks: np.ndarray, weights: np.ndarray) -> np.ndarray:
     return root.T @ root
 
 
-def _solve_working_set(mi, w, crit, tol, max_iterations, progress, done):
-    """Multiplicative iterations on one candidate set (``mi``: (S, p²) information).
+@lru_cache(maxsize=8)
+def _upper(p: int) -> tuple:
+    """Row and column indices of the upper triangle of a (p, p) matrix, row-major."""
+    rows, cols = np.triu_indices(p)
+    rows.flags.writeable = cols.flags.writeable = False
+    return rows, cols
 
-    Returns (indices kept, their weights, iterations used).
+
+def packed_information(blocks: np.ndarray) -> np.ndarray:
+    """Upper triangles of every M_i = B_iᵀB_i (row-major), shape (K, p(p+1)/2).
+
+    M_i is symmetric, so its p(p+1)/2 distinct entries say all of it: the
+    relaxation's sums over candidates then read half the memory. Built by
+    batched matrix products, in chunks of :data:`_CHUNK` candidates.
     """
-    p = int(round(np.sqrt(mi.shape[1])))
+    k, _, p = blocks.shape
+    upper = _upper(p)
+    out = np.empty((k, len(upper[0])))
+    for s in range(0, k, _CHUNK):
+        b = blocks[s:s + _CHUNK]
+        out[s:s + _CHUNK] = np.matmul(b.transpose(0, 2, 1), b)[:, upper[0], upper[1]]
+    return out
+
+
+def unpack(packed: np.ndarray, p: int) -> np.ndarray:
+    """The symmetric (p, p) matrix whose upper triangle is ``packed``."""
+    m = np.empty((p, p))
+    rows, cols = _upper(p)
+    m[rows, cols] = packed
+    m[cols, rows] = packed
+    return m
+
+
+def packed_weights(h: np.ndarray) -> np.ndarray:
+    """c with c · packed(M_i) = tr(H M_i) for every symmetric M_i, shape (p(p+1)/2,)."""
+    rows, cols = _upper(h.shape[0])
+    return np.where(rows == cols, 1.0, 2.0) * ((h + h.T) / 2)[rows, cols]
+
+
+def _solve_working_set(mi, w, crit, tol, max_iterations, progress, done):
+    """Multiplicative iterations on one candidate set (``mi``: (S, p(p+1)/2) packed information,
+    :func:`packed_information`).
+
+    Returns (indices kept, their weights, M of those weights, iterations used).
+    """
+    p = int(round((np.sqrt(8 * mi.shape[1] + 1) - 1) / 2))
     active = np.arange(len(mi))
+    m = unpack(w @ mi, p)
     it = 0
     for it in range(1, max_iterations + 1):
-        h, _ = crit.sensitivity((w @ mi).reshape(p, p))
-        psi = mi @ h.ravel()
+        h, _ = crit.sensitivity(m)
+        psi = mi @ packed_weights(h)
         gap = float(psi.max() - 1.0)
         if progress is not None and (done + it) % 50 == 0:
             progress(done + it, gap)
@@ -80,12 +123,15 @@ def _solve_working_set(mi, w, crit, tol, max_iterations, progress, done):
             w = w / w.sum()
         w = w * psi ** crit.power
         w /= w.sum()
+        m = unpack(w @ mi, p)
         j = int(np.argmax(psi))  # vertex-direction step toward the most informative candidate
-        alpha = crit.step((w @ mi).reshape(p, p), mi[j].reshape(p, p), p * psi[j])
+        m_j = unpack(mi[j], p)
+        alpha = crit.step(m, m_j, p * psi[j])
         if 0 < alpha < 1:
             w *= 1 - alpha
             w[j] += alpha
-    return active, w, it
+            m = (1 - alpha) * m + alpha * m_j  # M(w) of the new weights, without a sweep
+    return active, w, m, it
 
 
 def relax(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
@@ -140,12 +186,11 @@ def relax(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
     w /= w.sum()
     iterations = 0
     while True:
-        mi = np.einsum("kri,krj->kij", blocks[work], blocks[work]).reshape(len(work), -1)
-        kept, w, used = _solve_working_set(mi, w, crit, tol,
-                                           max_iterations - iterations, progress, iterations)
+        mi = packed_information(blocks[work])
+        kept, w, m, used = _solve_working_set(mi, w, crit, tol,
+                                              max_iterations - iterations, progress, iterations)
         iterations += used
         work = work[kept]
-        m = information(blocks[work], w)
         h, c = crit.sensitivity(m)
         psi_all = traces(blocks, h)
         violators = np.setdiff1d(np.flatnonzero(psi_all > 1 + tol), work)
