@@ -44,7 +44,6 @@ from typing import ClassVar
 
 import casadi as ca
 import numpy as np
-from scipy.linalg import solve_triangular
 from scipy.optimize import minimize_scalar
 
 CRITERIA = ("D", "A", "E", "task")
@@ -226,7 +225,7 @@ class DOptimal(Criterion):
         """log det(M + BᵀB) = log det M + log det(I + B M⁻¹ Bᵀ)."""
         k, r, p = blocks.shape
         chol = np.linalg.cholesky(m)
-        inv = solve_triangular(chol, np.eye(p), lower=True, check_finite=False)  # L⁻¹
+        inv = np.linalg.inv(chol)                                                # L⁻¹
         x = np.matmul(blocks, inv.T)                                             # B L⁻ᵀ
         g = np.matmul(x, x.transpose(0, 2, 1))
         g[:, np.arange(r), np.arange(r)] += 1.0                                  # I + B M⁻¹ Bᵀ

@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.design.criteria import Criterion
+from doe_calib.design.criteria import Criterion, DOptimal
 from doe_calib.design.outcome import DesignOutcome
-from doe_calib.design.relaxation import information, traces
-from doe_calib.design.updates import added_values, regularised
+from doe_calib.design.relaxation import information, packed_information, traces
+from doe_calib.design.updates import added_values, best_added, regularised
 from doe_calib.errors import SolverError
 
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
@@ -18,7 +18,8 @@ _PER_BIN = 50  # best candidates of each bin always searched when coverage is as
 
 def _pool(blocks, weights, crit, size, bins):
     """Candidates worth searching: the largest weights, then sensitivities, and each bin's best."""
-    h, _ = crit.sensitivity(regularised(information(blocks, weights)))
+    support = weights > 0  # zero weights add nothing to the information
+    h, _ = crit.sensitivity(regularised(information(blocks[support], weights[support])))
     order = np.lexsort((-traces(blocks, h), -weights))
     pool = order[:size]
     if bins is not None:
@@ -105,17 +106,20 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
     m = information(blocks[chosen], np.ones(n))
     current = crit.value(m)
     searched = blocks[candidates]
+    packed = packed_information(searched) if isinstance(crit, DOptimal) else None
     sweeps, status = 0, f"stopped at {max_sweeps} sweeps, still improving"
     for _ in range(max_sweeps):
         sweeps, improved = sweeps + 1, False
         for slot in range(n):
             i = chosen[slot]
             m_minus = m - blocks[i].T @ blocks[i]
-            values = added_values(crit, m_minus, searched)
-            values[np.isin(candidates, chosen) & (candidates != i)] = -np.inf  # distinct poses
+            allowed = ~np.isin(candidates, chosen) | (candidates == i)  # distinct poses
             if bins is not None and min_bins > 0:
-                values[~_allowed(bins, chosen, slot, candidates, min_bins)] = -np.inf
-            j = int(candidates[np.argmax(values)])
+                allowed &= _allowed(bins, chosen, slot, candidates, min_bins)
+            best, _ = best_added(crit, m_minus, searched, allowed, packed)
+            if best < 0:
+                continue
+            j = int(candidates[best])
             m_new = m_minus + blocks[j].T @ blocks[j]
             value = crit.value(m_new)
             if j != i and value > current + 1e-10 * max(1.0, abs(current)):
