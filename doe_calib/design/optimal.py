@@ -38,7 +38,12 @@ from doe_calib.design.problem import (
     load_configurations,
     task_matrix,
 )
-from doe_calib.design.relaxation import equivalence_ratio, information, relax
+from doe_calib.design.relaxation import (
+    equivalence_ratio,
+    information,
+    packed_information,
+    relax,
+)
 from doe_calib.design.result import DesignResult
 from doe_calib.errors import OptionError, SolverError
 
@@ -153,7 +158,8 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     blocks = blocks_for(model, params, cands.q, loads, sigma)
     check_enough_poses(n_poses, blocks, model.tool.n_markers, len(loads), rng)
     stage("relaxation", f"{crit.name} criterion over {len(blocks)} candidates")
-    relaxed = relax(blocks, crit, progress=stage.iterations("relaxation"))
+    packed = packed_information(blocks)  # kept: every sweep over the candidates reads it
+    relaxed = relax(blocks, crit, progress=stage.iterations("relaxation"), packed=packed)
     stages = {"relaxation": relaxed.to_dict()}
     stage("exchange", f"{n_poses} poses")
     cov = constraints.coverage
@@ -202,9 +208,11 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
             reverted = int(back.sum())
         if refinement.accepted:
             stage("bound", "relaxation with the refined poses as candidates")
-            blocks = np.concatenate([blocks, blocks_for(model, params, q, loads, sigma)])
+            refined = blocks_for(model, params, q, loads, sigma)
+            blocks = np.concatenate([blocks, refined])
+            packed = np.concatenate([packed, packed_information(refined)])
             relaxed = relax(blocks, crit, start=np.r_[relaxed.weights, np.zeros(n_poses)],
-                            progress=stage.iterations("bound"))
+                            progress=stage.iterations("bound"), packed=packed)
     design = blocks_for(model, params, q, loads, sigma)
     m = information(design, np.ones(n_poses))
     value, bound = crit.value(m), relaxed.bound(n_poses)
@@ -212,11 +220,12 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     efficiencies = {crit.name: crit.efficiency(value, bound, p)}
     if not isinstance(crit, DOptimal):
         stage("bound", "D relaxation for the D-efficiency")
-        efficiencies["D"] = DOptimal().efficiency(log_det(m), relax(blocks).bound(n_poses), p)
+        d_bound = relax(blocks, packed=packed).bound(n_poses)
+        efficiencies["D"] = DOptimal().efficiency(log_det(m), d_bound, p)
     stage("report")
     reported = [DOptimal(), AOptimal(), EOptimal()] + ([] if t is None else [TaskOptimal(t)])
     criteria = {c.name: c.value(m) for c in reported}
-    ratio = equivalence_ratio(blocks, m / n_poses, crit)
+    ratio = equivalence_ratio(blocks, m / n_poses, crit, packed=packed)
     target = crit.target(p)
     equivalence = {"criterion": crit.name, "statistic": crit.statistic, "target": target,
                    "relaxation": target * relaxed.ratio, "design": target * ratio,
