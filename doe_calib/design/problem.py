@@ -97,12 +97,11 @@ def poses_needed(blocks, rng=None) -> int | None:
     """
     rng = np.random.default_rng(0) if rng is None else rng
     k_all, rows, f = blocks.shape
-    cols = blocks.reshape(-1, f)
-    norms = np.linalg.norm(cols, axis=0)
-    unit = blocks / np.where(norms > 0, norms, 1.0)
+    norms = np.sqrt(np.einsum("kri,kri->i", blocks, blocks))
+    scale = np.where(norms > 0, norms, 1.0)
     order = rng.permutation(k_all)
-    for k in range(max(1, ceil(f / rows)), k_all + 1):
-        if np.linalg.matrix_rank(unit[order[:k]].reshape(-1, f)) == f:
+    for k in range(max(1, ceil(f / rows)), k_all + 1):  # unit columns, of the k poses only
+        if np.linalg.matrix_rank(blocks[order[:k]].reshape(-1, f) / scale) == f:
             return k
     return None
 

@@ -25,8 +25,6 @@ from doe_calib.design.criteria import Criterion
 from doe_calib.design.outcome import DesignOutcome
 
 _CHUNK = 4096  # candidates per step when sweeping all of them (bounds memory)
-_LOOSE = 1
-_DROP = 0
 _PACK_CHUNK = 1024  # candidates per batched product of packed_information (stays in cache)
 
 
@@ -199,27 +197,18 @@ def relax(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
     w = w_all[work] if start is not None else np.full(len(work), 1.0 / len(work))
     w = np.where(w > 0, w, 0.1 / len(work))
     w /= w.sum()
-    iterations, round_tol = 0, _LOOSE * tol
+    iterations = 0
     while True:
         mi = packed[work]
-        kept, w, m, used = _solve_working_set(mi, w, crit, round_tol,
+        kept, w, m, used = _solve_working_set(mi, w, crit, tol,
                                               max_iterations - iterations, progress, iterations)
         iterations += used
         work = work[kept]
-        if _DROP:
-            heavy = w > _DROP * w.max()
-            work, w = work[heavy], w[heavy] / w[heavy].sum()
-            m = unpack(w @ packed[work], p)
         h, c = crit.sensitivity(m)
         psi_all = packed @ packed_weights(h)
-        violators = np.setdiff1d(np.flatnonzero(psi_all > 1 + round_tol), work)
-        if iterations >= max_iterations:
+        violators = np.setdiff1d(np.flatnonzero(psi_all > 1 + tol), work)
+        if violators.size == 0 or iterations >= max_iterations:
             break
-        if violators.size == 0:
-            if round_tol == tol and not (_DROP and psi_all.max() > 1 + tol):
-                break
-            round_tol = tol
-            continue
         add = violators[np.argsort(-psi_all[violators])][:working_set]
         work = np.concatenate([work, add])
         w = np.concatenate([w * 0.9, np.full(add.size, 0.1 / add.size)])
