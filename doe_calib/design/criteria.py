@@ -227,10 +227,8 @@ class DOptimal(Criterion):
         chol = np.linalg.cholesky(m)
         inv = np.linalg.inv(chol)                                                # L⁻¹
         x = np.matmul(blocks, inv.T)                                             # B L⁻ᵀ
-        g = np.matmul(x, x.transpose(0, 2, 1))
-        g[:, np.arange(r), np.arange(r)] += 1.0                                  # I + B M⁻¹ Bᵀ
-        half = np.log(np.diagonal(np.linalg.cholesky(g), axis1=1, axis2=2)).sum(axis=1)
-        return 2.0 * np.log(np.diag(chol)).sum() + 2.0 * half
+        g = np.matmul(x, x.transpose(0, 2, 1)) + np.eye(r)                       # I + B M⁻¹ Bᵀ
+        return np.linalg.slogdet(m)[1] + np.linalg.slogdet(g)[1]
 
     def cvxpy_value(self, m):
         import cvxpy as cp

@@ -14,13 +14,21 @@ from doe_calib.design.updates import added_values, best_added, regularised
 from doe_calib.errors import SolverError
 
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
+_NOISE = 1e-6  # relaxation weights below this fraction of the largest rank as zero
 
 
 def _pool(blocks, weights, crit, size, bins):
-    """Candidates worth searching: the largest weights, then sensitivities, and each bin's best."""
+    """Candidates worth searching: the largest weights, then sensitivities, and each bin's best.
+
+    Weights below :data:`_NOISE` of the largest rank as zero: the first-order
+    relaxation leaves such traces on thousands of candidates, and their order
+    says how the iterations went rather than which candidates are good; they
+    are ranked by their sensitivity instead.
+    """
     support = weights > 0  # zero weights add nothing to the information
     h, _ = crit.sensitivity(regularised(information(blocks[support], weights[support])))
-    order = np.lexsort((-traces(blocks, h), -weights))
+    ranked = np.where(weights > _NOISE * weights.max(), weights, 0.0)
+    order = np.lexsort((-traces(blocks, h), -ranked))
     pool = order[:size]
     if bins is not None:
         ranked = bins[order]

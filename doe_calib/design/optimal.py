@@ -212,7 +212,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
             blocks = np.concatenate([blocks, refined])
             packed = np.concatenate([packed, packed_information(refined)])
             relaxed = relax(blocks, crit, start=np.r_[relaxed.weights, np.zeros(n_poses)],
-                            progress=stage.iterations("bound"), packed=packed)
+                            progress=stage.iterations("bound"), packed=packed, screen=True)
     design = blocks_for(model, params, q, loads, sigma)
     m = information(design, np.ones(n_poses))
     value, bound = crit.value(m), relaxed.bound(n_poses)
@@ -220,7 +220,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     efficiencies = {crit.name: crit.efficiency(value, bound, p)}
     if not isinstance(crit, DOptimal):
         stage("bound", "D relaxation for the D-efficiency")
-        d_bound = relax(blocks, packed=packed).bound(n_poses)
+        d_bound = relax(blocks, packed=packed, screen=True).bound(n_poses)
         efficiencies["D"] = DOptimal().efficiency(log_det(m), d_bound, p)
     stage("report")
     reported = [DOptimal(), AOptimal(), EOptimal()] + ([] if t is None else [TaskOptimal(t)])

@@ -25,6 +25,11 @@ from doe_calib.design.criteria import Criterion
 from doe_calib.design.outcome import DesignOutcome
 
 _CHUNK = 4096  # candidates per step when sweeping all of them (bounds memory)
+#: With ``screen``: rounds while candidates outside the working set still violate the
+#: theorem stop at this many times ``tol`` (the last round goes to ``tol``) ...
+_LOOSE = 10.0
+#: ... and weights below this fraction of the largest leave the working set.
+_NEGLIGIBLE = 1e-8
 _PACK_CHUNK = 1024  # candidates per batched product of packed_information (stays in cache)
 
 
@@ -144,7 +149,7 @@ def _solve_working_set(mi, w, crit, tol, max_iterations, progress, done):
 def relax(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
           tol: float = 2e-3, max_iterations: int = 20000, working_set: int = 1500,
           start: np.ndarray | None = None, progress=None,
-          packed: np.ndarray | None = None) -> DesignOutcome:
+          packed: np.ndarray | None = None, screen: bool = False) -> DesignOutcome:
     """Optimal approximate design over candidates for any criterion of :mod:`.criteria`.
 
     The ``working_set`` candidates with the largest sensitivity under the
@@ -172,6 +177,14 @@ def relax(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
         The blocks' :func:`packed_information`, when the caller keeps it
         (computed here otherwise): every sweep over all the candidates is then
         one matrix-vector product.
+    screen : bool
+        Fewer iterations for the same certificate: rounds are solved to
+        10 · ``tol`` while candidates outside the working set still violate
+        it (the last round to ``tol``), and candidates whose weight falls
+        below 1e-8 of the largest leave the working set (they come back if
+        they violate). The weights then differ from the plain path's within
+        the tolerance (the weights of an optimum are not unique), so it
+        serves where only the bound is wanted.
 
     Returns
     -------
@@ -197,18 +210,24 @@ def relax(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
     w = w_all[work] if start is not None else np.full(len(work), 1.0 / len(work))
     w = np.where(w > 0, w, 0.1 / len(work))
     w /= w.sum()
-    iterations = 0
+    iterations, round_tol = 0, (_LOOSE if screen else 1.0) * tol
     while True:
-        mi = packed[work]
-        kept, w, m, used = _solve_working_set(mi, w, crit, tol,
+        kept, w, m, used = _solve_working_set(packed[work], w, crit, round_tol,
                                               max_iterations - iterations, progress, iterations)
         iterations += used
         work = work[kept]
+        heavy = w > (_NEGLIGIBLE if screen else 0.0) * w.max()
+        if not heavy.all():  # dropped ones come back below if they violate the theorem
+            work, w = work[heavy], w[heavy] / w[heavy].sum()
+            m = unpack(w @ packed[work], p)
         h, c = crit.sensitivity(m)
         psi_all = packed @ packed_weights(h)
-        violators = np.setdiff1d(np.flatnonzero(psi_all > 1 + tol), work)
-        if violators.size == 0 or iterations >= max_iterations:
+        if iterations >= max_iterations or (round_tol == tol and psi_all.max() <= 1 + tol):
             break
+        violators = np.setdiff1d(np.flatnonzero(psi_all > 1 + round_tol), work)
+        if violators.size == 0:  # the working set holds the optimum: solve it to tol
+            round_tol = tol
+            continue
         add = violators[np.argsort(-psi_all[violators])][:working_set]
         work = np.concatenate([work, add])
         w = np.concatenate([w * 0.9, np.full(add.size, 0.1 / add.size)])
