@@ -44,7 +44,6 @@ from typing import ClassVar
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 CRITERIA = ("D", "A", "E", "task")
 
@@ -139,6 +138,8 @@ class Criterion:
 
     def step(self, m: np.ndarray, m_j: np.ndarray, d_j: float) -> float:
         """Best step α ∈ [0, 1/2] from M towards candidate information M_j (a line search)."""
+        from scipy.optimize import minimize_scalar  # only A, E and task search (slow import)
+
         res = minimize_scalar(lambda a: -self.smooth_value((1 - a) * m + a * m_j),
                               bounds=(0.0, 0.5), method="bounded", options={"xatol": 1e-4})
         return float(res.x)

@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize, stats
 
 #: A direction of the effect whose typical size (its parameters' scales) changes the
 #: weighted readings by less than this (in σ, root of the sum of squares) is invisible.
@@ -90,6 +89,8 @@ def noncentrality_for_power(dof: int, alpha: float, power: float) -> float:
     >>> round(noncentrality_for_power(1, 0.05, 0.8), 3)   # (1.96 + 0.8416)²
     7.849
     """
+    from scipy import optimize, stats  # slow to import; only detectability needs them
+
     critical = stats.chi2.isf(alpha, dof)
     if power <= alpha:
         return 0.0

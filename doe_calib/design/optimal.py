@@ -21,7 +21,6 @@ from doe_calib.design.criteria import (
     check,
     log_det,
 )
-from doe_calib.design.discovery import discovery_design
 from doe_calib.design.exchange import exact_design
 from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.pose_refinement import refine as refine_poses
@@ -149,6 +148,8 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
         if criterion != "D":
             raise OptionError(f"--detect-size designs maximise the D criterion; got "
                               f"--criterion {criterion}")
+        from doe_calib.design.discovery import discovery_design  # its statistics load slowly
+
         return discovery_design(model, params, cands.q, loads, n_poses, sigma, discovery,
                                 constraints, cands.to_dict(), progress=stage)
     params = design_parameters(model, params, cands.q, loads, rng=rng)
