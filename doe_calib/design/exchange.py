@@ -9,7 +9,12 @@ import numpy as np
 
 from doe_calib.design.criteria import Criterion, DOptimal
 from doe_calib.design.outcome import DesignOutcome
-from doe_calib.design.relaxation import information, packed_information, traces
+from doe_calib.design.relaxation import (
+    information,
+    packed_information,
+    packed_weights,
+    traces,
+)
 from doe_calib.design.updates import added_values, best_added, regularised
 from doe_calib.errors import SolverError
 
@@ -17,7 +22,7 @@ _PER_BIN = 50  # best candidates of each bin always searched when coverage is as
 _NOISE = 1e-6  # relaxation weights below this fraction of the largest rank as zero
 
 
-def _pool(blocks, weights, crit, size, bins):
+def _pool(blocks, weights, crit, size, bins, packed=None):
     """Candidates worth searching: the largest weights, then sensitivities, and each bin's best.
 
     Weights below :data:`_NOISE` of the largest rank as zero: the first-order
@@ -28,7 +33,8 @@ def _pool(blocks, weights, crit, size, bins):
     support = weights > 0  # zero weights add nothing to the information
     h, _ = crit.sensitivity(regularised(information(blocks[support], weights[support])))
     ranked = np.where(weights > _NOISE * weights.max(), weights, 0.0)
-    order = np.lexsort((-traces(blocks, h), -ranked))
+    psi = traces(blocks, h) if packed is None else packed @ packed_weights(h)
+    order = np.lexsort((-psi, -ranked))
     pool = order[:size]
     if bins is not None:
         ranked = bins[order]
@@ -72,7 +78,7 @@ def _allowed(bins, chosen, slot, candidates, min_bins):
 def exact_design(blocks: np.ndarray, n: int, criterion="D",
                  weights: np.ndarray | None = None, task: np.ndarray | None = None,
                  bins: np.ndarray | None = None, min_bins: int = 0, pool: int = 2000,
-                 max_sweeps: int = 50) -> DesignOutcome:
+                 max_sweeps: int = 50, packed: np.ndarray | None = None) -> DesignOutcome:
     """n distinct candidates with a (locally) maximal criterion of Σ B_iᵀB_i.
 
     Parameters
@@ -91,6 +97,8 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
         Coverage bin of every candidate (−1: in none).
     min_bins : int
         Distinct bins the n poses must use.
+    packed : ndarray, shape (K, p(p+1)/2), optional
+        The blocks' :func:`.relaxation.packed_information`, if at hand.
 
     Returns
     -------
@@ -107,14 +115,17 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
     crit = Criterion.from_name(criterion, task)
     k = blocks.shape[0]
     weights = np.full(k, 1.0 / k) if weights is None else weights
-    order, candidates = _pool(blocks, weights, crit, min(pool, k), bins)
+    order, candidates = _pool(blocks, weights, crit, min(pool, k), bins, packed)
     chosen = [int(c) for c in order[:n]]
     if bins is not None and min_bins > 0:
         chosen = _cover(blocks, chosen, candidates, bins, min_bins, crit)
     m = information(blocks[chosen], np.ones(n))
     current = crit.value(m)
     searched = blocks[candidates]
-    packed = packed_information(searched) if isinstance(crit, DOptimal) else None
+    if not isinstance(crit, DOptimal):
+        packed = None  # the bound search is D's
+    else:
+        packed = packed_information(searched) if packed is None else packed[candidates]
     sweeps, status = 0, f"stopped at {max_sweeps} sweeps, still improving"
     for _ in range(max_sweeps):
         sweeps, improved = sweeps + 1, False

@@ -175,9 +175,12 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
         if len(pool) < n_poses:
             raise SolverError(f"only {len(pool)} candidates a program can reach for {n_poses} "
                               f"poses: " + ", ".join(f"{n} {why}" for why, n in replaced.items()))
-        exchanged = exact_design(blocks[pool], n_poses, crit, relaxed.weights[pool], None,
+        every = len(pool) == len(keep)  # no copy of every block when none is removed
+        exchanged = exact_design(blocks if every else blocks[pool], n_poses, crit,
+                                 relaxed.weights[pool], None,
                                  None if cov is None else cov.bins(cands.q)[pool],
-                                 0 if cov is None else cov.min_bins)
+                                 0 if cov is None else cov.min_bins,
+                                 packed=packed if every else packed[pool])
         chosen = pool[exchanged.indices]
         if home is None:
             break
