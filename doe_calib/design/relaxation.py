@@ -83,6 +83,12 @@ def packed_information(blocks: np.ndarray) -> np.ndarray:
     M_i is symmetric, so its p(p+1)/2 distinct entries say all of it: the
     relaxation's sums over candidates then read half the memory. Built by
     batched matrix products, in chunks of :data:`_PACK_CHUNK` candidates.
+
+    Examples
+    --------
+    >>> b = np.arange(12.0).reshape(2, 2, 3)
+    >>> bool(np.allclose(unpack(packed_information(b)[1], 3), b[1].T @ b[1]))
+    True
     """
     k, _, p = blocks.shape
     out = np.empty((k, p * (p + 1) // 2))

@@ -69,6 +69,15 @@ def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray
     -------
     (int, float)
         Index into ``blocks`` (−1 if none is allowed) and the criterion value.
+
+    Examples
+    --------
+    >>> from doe_calib.design.relaxation import packed_information
+    >>> blocks = np.random.default_rng(0).normal(size=(100, 2, 3))
+    >>> j, _ = best_added(DOptimal(), np.eye(3), blocks, np.ones(100, bool),
+    ...                   packed_information(blocks))
+    >>> j == int(np.argmax(added_values("D", np.eye(3), blocks)))
+    True
     """
     m = regularised(m)
     index = np.flatnonzero(allowed)
