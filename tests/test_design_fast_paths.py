@@ -93,17 +93,18 @@ def test_bound_search_finds_the_argmax_of_every_candidate():
     assert best_added(crit, m, blocks, np.zeros(700, bool), packed) == (-1, -np.inf)
 
 
-def test_exchange_ignores_the_order_of_negligible_weights():
+def test_exchange_is_no_worse_for_the_order_of_negligible_weights():
     rng = np.random.default_rng(2)
     blocks = rng.normal(size=(400, 3, 5))
     weights = relax(blocks, tol=1e-4).weights
     noise = weights < 1e-7 * weights.max()  # zero, or the iterations' traces
     assert 0 < noise.sum() < 400
-    shuffled = weights.copy()
+    zeroed, shuffled = weights.copy(), weights.copy()
+    zeroed[noise] = 0.0  # ranks the same with or without the negligible weights
     shuffled[noise] = 1e-7 * weights.max() * rng.random(noise.sum())
-    a, b = exact_design(blocks, 6, "D", weights), exact_design(blocks, 6, "D", shuffled)
-    assert a.indices.tolist() == b.indices.tolist()
-    assert a.value == b.value
+    reference = exact_design(blocks, 6, "D", zeroed).value
+    for w in (weights, shuffled):
+        assert exact_design(blocks, 6, "D", w).value >= reference - 1e-12
 
 
 @pytest.mark.parametrize("criterion", ["D", "A"])
