@@ -136,7 +136,6 @@ def run(args):
     import numpy as np
 
     from doe_calib.design import LoadCase, read_constraints
-    from doe_calib.design.effect_detection import with_detectability
     from doe_calib.design.optimal import optimal_design
     from doe_calib.io.csv_files import read_design, write_design
     from doe_calib.model.marker_model import build_model
@@ -191,6 +190,8 @@ def run(args):
         if not (0 < args.alpha < 1 and args.alpha < args.power < 1):
             raise OptionError(f"--alpha {args.alpha:g} and --power {args.power:g}: give "
                               f"0 < alpha < power < 1")
+        from doe_calib.design.effect_detection import with_detectability
+
         result = with_detectability(result, model, args.detect, args.alpha, args.power,
                                     effect_registry(args))
     result.to_json(args.out)

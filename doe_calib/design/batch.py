@@ -2,8 +2,9 @@
 
 ``Function.map`` costs about 25 µs per mapped copy to build, so mapping once
 over 40 000 configurations takes seconds; chunks of one fixed size build the
-map once and reuse it (the last chunk is padded). The maps are kept per
-thread, a few at a time.
+map once and reuse it (the last chunk is padded). Each map is evaluated
+through CasADi's buffers straight into numpy arrays (no DM conversion). The
+maps are kept per thread, a few at a time.
 """
 from __future__ import annotations
 
@@ -28,6 +29,36 @@ def chunks(m: int, size: int = CHUNK):
         yield slice(start, min(start + size, m)), np.where(index < m, index, 0)
 
 
+class _Mapped:
+    """A Function of one pose mapped over ``m`` poses, with numpy buffers it reads and writes.
+
+    CasADi's buffer interface evaluates straight from and into the numpy
+    arrays: no DM is made, which for a large output costs several times the
+    evaluation itself.
+    """
+
+    def __init__(self, function: ca.Function, m: int):
+        self.function = function
+        self.mapped = function.map(f"{function.name()}_map", "serial", m, [], []) \
+            if m > 1 else function
+        self.arg = np.zeros(self.mapped.size_in(0)[::-1])
+        self.res = [np.zeros(self.mapped.size_out(i)[::-1]) for i in range(function.n_out())]
+        self.buffer, self.call = self.mapped.buffer()
+        self.buffer.set_arg(0, memoryview(self.arg))
+        for i, r in enumerate(self.res):
+            self.buffer.set_res(i, memoryview(r))
+
+    def __call__(self, q: np.ndarray) -> list:
+        """Outputs at the m rows of q (m, N): each (m, rows, cols), views of the buffers."""
+        self.arg[...] = q  # a column-major (N, m) buffer is the same memory as C-order (m, N)
+        self.call()
+        m = len(q)
+        shapes = (self.function.size_out(i) for i in range(self.function.n_out()))
+        # each output buffer holds m column-major (rows, cols) blocks side by side
+        return [r.reshape(m, cols, rows).transpose(0, 2, 1) for r, (rows, cols) in
+                zip(self.res, shapes)]
+
+
 def map_poses(function: ca.Function, q: np.ndarray) -> list[np.ndarray]:
     """A Function of one pose, ``f(q) -> (y_1, …)``, at every row of q (M, N).
 
@@ -36,7 +67,7 @@ def map_poses(function: ca.Function, q: np.ndarray) -> list[np.ndarray]:
     list of ndarray
         One per output, shape (M, rows, cols).
     """
-    q = np.atleast_2d(q)
+    q = np.atleast_2d(np.asarray(q, float))
     m = len(q)
     shapes = [function.size_out(i) for i in range(function.n_out())]
     out = [np.empty((m, *s)) for s in shapes]
@@ -45,13 +76,10 @@ def map_poses(function: ca.Function, q: np.ndarray) -> list[np.ndarray]:
         maps = _LOCAL.maps = {}
     for rows, index in chunks(m):
         key = (id(function), len(index))
-        if key not in maps or maps[key][0] is not function:  # the Function, not a reused id
+        if key not in maps or maps[key].function is not function:  # the Function, not a reused id
             if len(maps) >= _MAPS_KEPT:
                 maps.pop(next(iter(maps)))
-            maps[key] = (function, function.map(len(index)))
-        res = maps[key][1](q[index].T)
-        res = res if isinstance(res, (list, tuple)) else [res]
-        for o, r, (nr, nc) in zip(out, res, shapes):
-            block = np.asarray(r).reshape(nr, len(index), nc).transpose(1, 0, 2)
-            o[rows] = block[: rows.stop - rows.start]
+            maps[key] = _Mapped(function, len(index))
+        for o, r in zip(out, maps[key](q[index])):
+            o[rows] = r[: rows.stop - rows.start]
     return out

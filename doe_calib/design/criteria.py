@@ -44,7 +44,6 @@ from typing import ClassVar
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 CRITERIA = ("D", "A", "E", "task")
 
@@ -139,6 +138,8 @@ class Criterion:
 
     def step(self, m: np.ndarray, m_j: np.ndarray, d_j: float) -> float:
         """Best step α ∈ [0, 1/2] from M towards candidate information M_j (a line search)."""
+        from scipy.optimize import minimize_scalar  # only A, E and task search (slow import)
+
         res = minimize_scalar(lambda a: -self.smooth_value((1 - a) * m + a * m_j),
                               bounds=(0.0, 0.5), method="bounded", options={"xatol": 1e-4})
         return float(res.x)
@@ -225,8 +226,9 @@ class DOptimal(Criterion):
         """log det(M + BᵀB) = log det M + log det(I + B M⁻¹ Bᵀ)."""
         k, r, p = blocks.shape
         chol = np.linalg.cholesky(m)
-        x = np.linalg.solve(chol, blocks.reshape(-1, p).T).T.reshape(k, r, p)
-        g = np.einsum("kri,ksi->krs", x, x) + np.eye(r)
+        inv = np.linalg.inv(chol)                                                # L⁻¹
+        x = np.matmul(blocks, inv.T)                                             # B L⁻ᵀ
+        g = np.matmul(x, x.transpose(0, 2, 1)) + np.eye(r)                       # I + B M⁻¹ Bᵀ
         return np.linalg.slogdet(m)[1] + np.linalg.slogdet(g)[1]
 
     def cvxpy_value(self, m):

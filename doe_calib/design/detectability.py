@@ -13,8 +13,6 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize
-from scipy.special import chdtri, chndtr  # scipy.stats loads in 0.3 s
 
 #: A direction of the effect whose typical size (its parameters' scales) changes the
 #: weighted readings by less than this (in σ, root of the sum of squares) is invisible.
@@ -93,6 +91,9 @@ def noncentrality_for_power(dof: int, alpha: float, power: float) -> float:
     >>> round(noncentrality_for_power(1, 0.05, 0.8), 3)   # (1.96 + 0.8416)²
     7.849
     """
+    from scipy import optimize  # slow to import; only detectability needs it
+    from scipy.special import chdtri, chndtr  # scipy.stats's own (it loads in 0.3 s)
+
     critical = chdtri(dof, alpha)  # the χ² upper quantile, scipy.stats.chi2.isf's own
     if power <= alpha:
         return 0.0

@@ -7,19 +7,38 @@ from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.design.criteria import Criterion
+from doe_calib.design.criteria import Criterion, DOptimal
 from doe_calib.design.outcome import DesignOutcome
-from doe_calib.design.relaxation import information, traces
-from doe_calib.design.updates import added_values, regularised
+from doe_calib.design.relaxation import (
+    information,
+    packed_information,
+    packed_weights,
+    traces,
+)
+from doe_calib.design.updates import added_values, best_added, regularised
 from doe_calib.errors import SolverError
 
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
+_NOISE = 1e-6  # relaxation weights below this fraction of the largest rank as zero
 
 
-def _pool(blocks, weights, crit, size, bins):
-    """Candidates worth searching: the largest weights, then sensitivities, and each bin's best."""
-    h, _ = crit.sensitivity(regularised(information(blocks, weights)))
-    order = np.lexsort((-traces(blocks, h), -weights))
+def _sensitivities(blocks, weights, crit, packed=None):
+    """ψ_i of every candidate at the relaxation's information."""
+    support = weights > 0  # zero weights add nothing to the information
+    h, _ = crit.sensitivity(regularised(information(blocks[support], weights[support])))
+    return traces(blocks, h) if packed is None else packed @ packed_weights(h)
+
+
+def _pool(weights, psi, size, bins, noise=0.0):
+    """Candidates worth searching: the largest weights, then sensitivities, and each bin's best.
+
+    Weights below ``noise`` times the largest rank as zero, i.e. by their
+    sensitivity: the first-order relaxation leaves traces on thousands of
+    candidates whose order tells how the iterations went more than which
+    candidates are good.
+    """
+    ranked = np.where(weights > noise * weights.max(), weights, 0.0)
+    order = np.lexsort((-psi, -ranked))
     pool = order[:size]
     if bins is not None:
         ranked = bins[order]
@@ -60,10 +79,45 @@ def _allowed(bins, chosen, slot, candidates, min_bins):
     return after >= min_bins
 
 
+def _exchange(blocks, n, crit, chosen, candidates, bins, min_bins, max_sweeps, packed):
+    """Fedorov exchange from ``chosen`` over ``candidates``: (chosen, value, sweeps, status)."""
+    chosen = [int(c) for c in chosen]
+    if bins is not None and min_bins > 0:
+        chosen = _cover(blocks, chosen, candidates, bins, min_bins, crit)
+    m = information(blocks[chosen], np.ones(n))
+    current = crit.value(m)
+    searched = blocks[candidates]
+    if not isinstance(crit, DOptimal):
+        packed = None  # the bound search is D's
+    elif packed is None:
+        packed = packed_information(searched)
+    sweeps, status = 0, f"stopped at {max_sweeps} sweeps, still improving"
+    for _ in range(max_sweeps):
+        sweeps, improved = sweeps + 1, False
+        for slot in range(n):
+            i = chosen[slot]
+            m_minus = m - blocks[i].T @ blocks[i]
+            allowed = ~np.isin(candidates, chosen) | (candidates == i)  # distinct poses
+            if bins is not None and min_bins > 0:
+                allowed &= _allowed(bins, chosen, slot, candidates, min_bins)
+            best, _ = best_added(crit, m_minus, searched, allowed, packed)
+            if best < 0:
+                continue
+            j = int(candidates[best])
+            m_new = m_minus + blocks[j].T @ blocks[j]
+            value = crit.value(m_new)
+            if j != i and value > current + 1e-10 * max(1.0, abs(current)):
+                chosen[slot], m, current, improved = j, m_new, value, True
+        if not improved:
+            status = "converged: no single exchange improves the criterion"
+            break
+    return chosen, float(current), sweeps, status
+
+
 def exact_design(blocks: np.ndarray, n: int, criterion="D",
                  weights: np.ndarray | None = None, task: np.ndarray | None = None,
                  bins: np.ndarray | None = None, min_bins: int = 0, pool: int = 2000,
-                 max_sweeps: int = 50) -> DesignOutcome:
+                 max_sweeps: int = 50, packed: np.ndarray | None = None) -> DesignOutcome:
     """n distinct candidates with a (locally) maximal criterion of Σ B_iᵀB_i.
 
     Parameters
@@ -75,13 +129,18 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
     weights : ndarray, shape (K,), optional
         Relaxation weights: the start is their n largest; the exchange
         searches the ``pool`` candidates with the largest weights and
-        sensitivities.
+        sensitivities. It runs twice, the second time with the weights
+        below 1e-6 of the largest ranked as zero (by sensitivity: their order
+        is the relaxation's noise), unless both give the same start and pool,
+        and keeps the better design.
     task : ndarray, shape (rows, p), optional
         For the task criterion named by a string.
     bins : ndarray of int, shape (K,), optional
         Coverage bin of every candidate (−1: in none).
     min_bins : int
         Distinct bins the n poses must use.
+    packed : ndarray, shape (K, p(p+1)/2), optional
+        The blocks' :func:`.relaxation.packed_information`, if at hand.
 
     Returns
     -------
@@ -98,30 +157,19 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
     crit = Criterion.from_name(criterion, task)
     k = blocks.shape[0]
     weights = np.full(k, 1.0 / k) if weights is None else weights
-    order, candidates = _pool(blocks, weights, crit, min(pool, k), bins)
-    chosen = [int(c) for c in order[:n]]
-    if bins is not None and min_bins > 0:
-        chosen = _cover(blocks, chosen, candidates, bins, min_bins, crit)
-    m = information(blocks[chosen], np.ones(n))
-    current = crit.value(m)
-    sweeps, status = 0, f"stopped at {max_sweeps} sweeps, still improving"
-    for _ in range(max_sweeps):
-        sweeps, improved = sweeps + 1, False
-        for slot in range(n):
-            i = chosen[slot]
-            m_minus = m - blocks[i].T @ blocks[i]
-            values = added_values(crit, m_minus, blocks[candidates])
-            values[np.isin(candidates, chosen) & (candidates != i)] = -np.inf  # distinct poses
-            if bins is not None and min_bins > 0:
-                values[~_allowed(bins, chosen, slot, candidates, min_bins)] = -np.inf
-            j = int(candidates[np.argmax(values)])
-            m_new = m_minus + blocks[j].T @ blocks[j]
-            value = crit.value(m_new)
-            if j != i and value > current + 1e-10 * max(1.0, abs(current)):
-                chosen[slot], m, current, improved = j, m_new, value, True
-        if not improved:
-            status = "converged: no single exchange improves the criterion"
-            break
+    psi = _sensitivities(blocks, weights, crit, packed)
+    best, tried = None, []
+    for noise in (0.0, _NOISE):  # the pool as ranked by every weight, then by the heavy ones
+        order, candidates = _pool(weights, psi, min(pool, k), bins, noise)
+        start = order[:n].tolist()
+        if any(np.array_equal(candidates, c) and start == s for c, s in tried):
+            continue
+        tried.append((candidates, start))
+        run = _exchange(blocks, n, crit, start, candidates, bins, min_bins, max_sweeps,
+                        None if packed is None else packed[candidates])
+        if best is None or run[1] > best[1]:
+            best = run
+    chosen, current, sweeps, status = best
     indices = np.array(chosen)
     selected = np.zeros(k)
     selected[indices] = 1.0

@@ -22,7 +22,6 @@ from doe_calib.design.criteria import (
     check,
     log_det,
 )
-from doe_calib.design.discovery import discovery_design
 from doe_calib.design.exchange import exact_design
 from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.pose_refinement import refine as refine_poses
@@ -39,7 +38,12 @@ from doe_calib.design.problem import (
     load_configurations,
     task_matrix,
 )
-from doe_calib.design.relaxation import equivalence_ratio, information, relax
+from doe_calib.design.relaxation import (
+    equivalence_ratio,
+    information,
+    packed_information,
+    relax,
+)
 from doe_calib.design.result import DesignResult
 from doe_calib.errors import OptionError, SolverError
 
@@ -148,6 +152,8 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
             raise OptionError(f"--detect-size and --load-directions designs maximise the D "
                               f"criterion; got "
                               f"--criterion {criterion}")
+        from doe_calib.design.discovery import discovery_design  # its statistics load slowly
+
         return discovery_design(model, params, cands.q, loads, n_poses, sigma, discovery,
                                 constraints, cands.to_dict(), progress=stage, refine=refine,
                                 feasibility=feasibility, collision=collision, home=home)
@@ -158,7 +164,8 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     blocks = blocks_for(model, params, cands.q, loads, sigma)
     check_enough_poses(n_poses, blocks, model.tool.n_markers, len(loads), rng)
     stage("relaxation", f"{crit.name} criterion over {len(blocks)} candidates")
-    relaxed = relax(blocks, crit, progress=stage.iterations("relaxation"))
+    packed = packed_information(blocks)  # kept: every sweep over the candidates reads it
+    relaxed = relax(blocks, crit, progress=stage.iterations("relaxation"), packed=packed)
     stages = {"relaxation": relaxed.to_dict()}
     stage("exchange", f"{n_poses} poses")
     cov = constraints.coverage
@@ -173,9 +180,12 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
         if len(pool) < n_poses:
             raise SolverError(f"only {len(pool)} candidates a program can reach for {n_poses} "
                               f"poses: " + ", ".join(f"{n} {why}" for why, n in replaced.items()))
-        exchanged = exact_design(blocks[pool], n_poses, crit, relaxed.weights[pool], None,
+        every = len(pool) == len(keep)  # no copy of every block when none is removed
+        exchanged = exact_design(blocks if every else blocks[pool], n_poses, crit,
+                                 relaxed.weights[pool], None,
                                  None if cov is None else cov.bins(cands.q)[pool],
-                                 0 if cov is None else cov.min_bins)
+                                 0 if cov is None else cov.min_bins,
+                                 packed=packed if every else packed[pool])
         chosen = pool[exchanged.indices]
         if home is None:
             break
@@ -207,9 +217,11 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
             reverted = int(back.sum())
         if refinement.accepted:
             stage("bound", "relaxation with the refined poses as candidates")
-            blocks = np.concatenate([blocks, blocks_for(model, params, q, loads, sigma)])
+            refined = blocks_for(model, params, q, loads, sigma)
+            blocks = np.concatenate([blocks, refined])
+            packed = np.concatenate([packed, packed_information(refined)])
             relaxed = relax(blocks, crit, start=np.r_[relaxed.weights, np.zeros(n_poses)],
-                            progress=stage.iterations("bound"))
+                            progress=stage.iterations("bound"), packed=packed, screen=True)
     design = blocks_for(model, params, q, loads, sigma)
     m = information(design, np.ones(n_poses))
     value, bound = crit.value(m), relaxed.bound(n_poses)
@@ -217,11 +229,12 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     efficiencies = {crit.name: crit.efficiency(value, bound, p)}
     if not isinstance(crit, DOptimal):
         stage("bound", "D relaxation for the D-efficiency")
-        efficiencies["D"] = DOptimal().efficiency(log_det(m), relax(blocks).bound(n_poses), p)
+        d_bound = relax(blocks, packed=packed, screen=True).bound(n_poses)
+        efficiencies["D"] = DOptimal().efficiency(log_det(m), d_bound, p)
     stage("report")
     reported = [DOptimal(), AOptimal(), EOptimal()] + ([] if t is None else [TaskOptimal(t)])
     criteria = {c.name: c.value(m) for c in reported}
-    ratio = equivalence_ratio(blocks, m / n_poses, crit)
+    ratio = equivalence_ratio(blocks, m / n_poses, crit, packed=packed)
     target = crit.target(p)
     equivalence = {"criterion": crit.name, "statistic": crit.statistic, "target": target,
                    "relaxation": target * relaxed.ratio, "design": target * ratio,

@@ -6,7 +6,8 @@ from math import ceil
 
 import numpy as np
 
-from doe_calib.design.batch import chunks
+from doe_calib.design.batch import map_poses
+from doe_calib.design.symbolic import pose_blocks
 from doe_calib.errors import OptionError
 from doe_calib.estimation.identifiability import analyse
 from doe_calib.io.measurements import Configurations
@@ -49,19 +50,17 @@ def load_configurations(model, values, q, loads, names=None) -> Configurations:
 def blocks_for(model, params, q, loads, sigma: float) -> np.ndarray:
     """Scaled, σ-weighted observation blocks of the free parameters, shape (K, r, F).
 
-    ``r = (len(loads) + 1) · 3n`` rows per pose; columns are ``∂x/∂p_i · scale_i / σ``
-    (``sigma`` in m). Evaluated in chunks of :data:`.batch.CHUNK` poses.
+    ``r = (len(loads) + 1) · 3n`` rows per pose (each pose unloaded, then
+    under each load case, as :func:`load_configurations`); columns are
+    ``∂x/∂p_i · scale_i / σ`` (``sigma`` in m). One Function of the pose
+    gives them all, the wrenches included (:func:`.symbolic.pose_blocks`),
+    evaluated in chunks of :data:`.batch.CHUNK` poses.
     """
-    q = np.atleast_2d(q)
-    scale = params.scales[params.free]
-    f = int(params.free.sum())
-    out = np.empty((len(q), (len(loads) + 1) * 3 * model.tool.n_markers, f))
-    for rows, index in chunks(len(q)):
-        cfg = load_configurations(model, params.values, q[index], loads)
-        _, b = observation_matrix(model, params.values, cfg)
-        block = (b[..., params.free] * scale / sigma).reshape(len(index), -1, f)
-        out[rows] = block[: rows.stop - rows.start]
-    return out
+    q = np.atleast_2d(np.asarray(q, float))
+    if not params.free.any():
+        return np.zeros((len(q), (len(loads) + 1) * 3 * model.tool.n_markers, 0))
+    (blocks,) = map_poses(pose_blocks(model, params, loads, sigma), q)
+    return blocks
 
 
 def task_matrix(model, params, configurations, point=(0.0, 0.0, 0.0)) -> np.ndarray:
@@ -98,12 +97,11 @@ def poses_needed(blocks, rng=None) -> int | None:
     """
     rng = np.random.default_rng(0) if rng is None else rng
     k_all, rows, f = blocks.shape
-    cols = blocks.reshape(-1, f)
-    norms = np.linalg.norm(cols, axis=0)
-    unit = blocks / np.where(norms > 0, norms, 1.0)
+    norms = np.sqrt(np.einsum("kri,kri->i", blocks, blocks))
+    scale = np.where(norms > 0, norms, 1.0)
     order = rng.permutation(k_all)
-    for k in range(max(1, ceil(f / rows)), k_all + 1):
-        if np.linalg.matrix_rank(unit[order[:k]].reshape(-1, f)) == f:
+    for k in range(max(1, ceil(f / rows)), k_all + 1):  # unit columns, of the k poses only
+        if np.linalg.matrix_rank(blocks[order[:k]].reshape(-1, f) / scale) == f:
             return k
     return None
 

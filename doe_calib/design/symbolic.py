@@ -54,13 +54,17 @@ def hanging_wrench(rotation, load) -> ca.SX:
     return ca.vertcat(f, ca.cross(rotation @ ca.DM(load.com), f))
 
 
-def pose_information(model, params, loads, sigma: float, approach=None) -> ca.Function:
-    """``pose_information(q) -> M``: one pose's scaled information (as :func:`.problem.blocks_for`).
+def pose_blocks(model, params, loads, sigma: float, approach=None) -> ca.Function:
+    """``pose_blocks(q) -> B``: one pose's scaled, σ-weighted observation block (as
+    :func:`.problem.blocks_for`).
 
-    M = Σ_c B̃_cᵀB̃_c over the unloaded case and every load case c, with
-    B̃ = ∂x/∂p_free · scale / σ and the load's wrench a function of q through
-    the flange rotation; shape (F, F), per unit σ² (``sigma`` in m); the pose
-    reached from the sides ``approach`` (N values, default 0).
+    B stacks, for the unloaded case and then every load case, the rows
+    ∂x/∂p_free · scale / σ of every marker coordinate, the load's wrench a
+    function of q through the flange rotation; shape ((len(loads) + 1) · 3n, F),
+    ``sigma`` in m; the pose reached from the sides ``approach`` (N values,
+    default 0). The fixed parameters enter as numbers, so only the free
+    columns are differentiated and their constants folded: evaluated over
+    many poses it costs a fraction of the full observation matrix.
     """
     model = symbolic_model(model)
     q = ca.SX.sym("q", model.robot.n_joints)
@@ -72,7 +76,20 @@ def pose_information(model, params, loads, sigma: float, approach=None) -> ca.Fu
     for w in [ca.DM.zeros(6)] + [hanging_wrench(rotation, load) for load in loads]:
         b = model.observation(q, w, env, values)[1]
         rows.append(b[:, free] @ ca.diag(weight))
-    bt = ca.vertcat(*rows)
+    return ca.Function("pose_blocks", [q], [ca.vertcat(*rows)], ["q"], ["B"])
+
+
+def pose_information(model, params, loads, sigma: float, approach=None) -> ca.Function:
+    """``pose_information(q) -> M``: one pose's scaled information (as :func:`.problem.blocks_for`).
+
+    M = Σ_c B̃_cᵀB̃_c over the unloaded case and every load case c, with
+    B̃ = ∂x/∂p_free · scale / σ and the load's wrench a function of q through
+    the flange rotation (:func:`pose_blocks`); shape (F, F), per unit σ²
+    (``sigma`` in m); the pose reached from the sides ``approach`` (N values,
+    default 0).
+    """
+    q = ca.SX.sym("q", model.robot.n_joints)
+    bt = pose_blocks(model, params, loads, sigma, approach)(q)
     return ca.Function("pose_information", [q], [bt.T @ bt], ["q"], ["M"])
 
 

@@ -1,0 +1,135 @@
+"""The design's fast paths give the numbers of the slow, reference ones.
+
+Candidate blocks from one Function of the pose against the model's general
+observation matrix and against finite differences of the marker positions;
+packed information against B_iᵀB_i; the exchange's bound search against the
+argmax over every candidate; the screened relaxation's certificate against
+an interior-point solve; buffered pose maps against direct calls.
+"""
+import casadi as ca
+import numpy as np
+import pytest
+
+from doe_calib.design import LoadCase, blocks_for, design_parameters, load_configurations
+from doe_calib.design.batch import CHUNK, map_poses
+from doe_calib.design.criteria import DOptimal
+from doe_calib.design.exchange import exact_design
+from doe_calib.design.relaxation import (
+    convex_relaxation,
+    packed_information,
+    packed_weights,
+    relax,
+    traces,
+    unpack,
+)
+from doe_calib.design.updates import added_values, best_added
+from doe_calib.model.evaluation import marker_positions, observation_matrix
+from doe_calib.model.simulate import random_configurations
+
+SIGMA = 2e-5
+LOADS = [LoadCase(250.0, (0.0, 0.0, 0.2)), LoadCase(80.0, (0.1, -0.05, 0.15))]
+
+
+@pytest.fixture(scope="module")
+def kr270(model6, robot6):
+    q = random_configurations(robot6, 60, np.random.default_rng(3))
+    params = design_parameters(model6, model6.nominal(), q, LOADS)
+    return model6, params, q
+
+
+def test_blocks_equal_the_observation_matrix_of_the_load_configurations(kr270):
+    model, params, q = kr270
+    blocks = blocks_for(model, params, q, LOADS, SIGMA)
+    cfg = load_configurations(model, params.values, q, LOADS)  # wrenches from the model
+    _, b = observation_matrix(model, params.values, cfg)
+    free = int(params.free.sum())
+    ref = (b[..., params.free] * params.scales[params.free] / SIGMA).reshape(len(q), -1, free)
+    assert blocks.shape == ref.shape == (60, 3 * 3 * 3, free)
+    assert np.abs(blocks - ref).max() <= 1e-12 * np.abs(ref).max()
+
+
+def test_blocks_equal_finite_differences_of_marker_positions(kr270):
+    model, params, q = kr270
+    q = q[:3]
+    blocks = blocks_for(model, params, q, LOADS, SIGMA)
+    cfg = load_configurations(model, params.values, q, LOADS)  # wrenches held fixed
+    free = np.flatnonzero(params.free)
+    fd = np.empty((len(cfg), 3 * model.tool.n_markers, free.size))
+    for col, i in enumerate(free):
+        h = 1e-6 * max(1.0, abs(params.values[i]))
+        up, down = params.values.copy(), params.values.copy()
+        up[i] += h
+        down[i] -= h
+        diff = marker_positions(model, up, cfg) - marker_positions(model, down, cfg)
+        fd[:, :, col] = diff.reshape(len(cfg), -1) / (2 * h)
+    fd = (fd * params.scales[free] / SIGMA).reshape(len(q), -1, free.size)
+    assert np.abs(blocks - fd).max() <= 1e-6 * np.abs(fd).max()
+
+
+def test_packed_information_is_every_candidates_information():
+    rng = np.random.default_rng(0)
+    blocks = rng.normal(size=(1500, 5, 7))  # more than one chunk of packed_information
+    packed = packed_information(blocks)
+    assert packed.shape == (1500, 28)
+    for i in (0, 1023, 1024, 1499):
+        assert np.abs(unpack(packed[i], 7) - blocks[i].T @ blocks[i]).max() < 1e-12
+    a = rng.normal(size=(7, 7))  # not symmetric: packed_weights must use its symmetric part
+    assert np.allclose(packed @ packed_weights(a), traces(blocks, a), rtol=1e-12, atol=1e-12)
+
+
+def test_bound_search_finds_the_argmax_of_every_candidate():
+    rng = np.random.default_rng(1)
+    blocks = rng.normal(size=(700, 6, 8)) * rng.lognormal(size=(700, 1, 1))
+    packed = packed_information(blocks)
+    design = blocks[:3]  # 18 rows: M minus one pose of a small design, nearly singular
+    m = np.einsum("kri,krj->ij", design[:2], design[:2])
+    crit = DOptimal()
+    for allowed in (np.ones(700, bool), rng.random(700) < 0.3):
+        values = added_values(crit, m, blocks)
+        values[~allowed] = -np.inf
+        j, value = best_added(crit, m, blocks, allowed, packed)
+        assert j == int(np.argmax(values))
+        assert value == pytest.approx(values.max(), rel=1e-12)
+    assert best_added(crit, m, blocks, np.zeros(700, bool), packed) == (-1, -np.inf)
+
+
+def test_exchange_is_no_worse_for_the_order_of_negligible_weights():
+    rng = np.random.default_rng(2)
+    blocks = rng.normal(size=(400, 3, 5))
+    weights = relax(blocks, tol=1e-4).weights
+    noise = weights < 1e-7 * weights.max()  # zero, or the iterations' traces
+    assert 0 < noise.sum() < 400
+    zeroed, shuffled = weights.copy(), weights.copy()
+    zeroed[noise] = 0.0  # ranks the same with or without the negligible weights
+    shuffled[noise] = 1e-7 * weights.max() * rng.random(noise.sum())
+    reference = exact_design(blocks, 6, "D", zeroed).value
+    for w in (weights, shuffled):
+        assert exact_design(blocks, 6, "D", w).value >= reference - 1e-12
+
+
+@pytest.mark.parametrize("criterion", ["D", "A"])
+def test_screened_relaxation_certifies_the_optimum(criterion):
+    blocks = np.random.default_rng(4).normal(size=(3000, 3, 5))
+    plain = relax(blocks, criterion, tol=1e-3, working_set=200)
+    screened = relax(blocks, criterion, tol=1e-3, working_set=200, screen=True)
+    exact = convex_relaxation(blocks, criterion)  # interior point, every candidate
+    scale = max(1.0, abs(exact.value))
+    for rel in (plain, screened):
+        assert 1.0 <= rel.ratio <= 1.0 + 1e-3
+        assert rel.value <= exact.value + 1e-6 * scale
+        # the equivalence-theorem certificate: no design does better than the bound
+        assert exact.value <= rel.criterion.bound_value(rel.value, rel.ratio, 1, 5) + 1e-6 * scale
+
+
+def test_buffered_pose_map_equals_direct_calls():
+    q = ca.SX.sym("q", 3)
+    f = ca.Function("f", [q], [ca.horzcat(ca.sin(q[0]) * q[1], q[2] ** 2), q[0] * q[2]])
+    poses = np.random.default_rng(5).normal(size=(CHUNK + 7, 3))  # two chunks, one padded
+    a, b = map_poses(f, poses)
+    assert a.shape == (CHUNK + 7, 1, 2) and b.shape == (CHUNK + 7, 1, 1)
+    for i in (0, CHUNK - 1, CHUNK, CHUNK + 6):
+        ra, rb = f(poses[i])
+        assert np.abs(a[i] - np.asarray(ra)).max() < 1e-15
+        assert np.abs(b[i] - np.asarray(rb)).max() < 1e-15
+    (one,) = map_poses(ca.Function("g", [q], [q * 2]), poses[:1])
+    assert np.allclose(one[0, :, 0], 2 * poses[0])
