@@ -83,13 +83,21 @@ class Workspace:
 
     Create one per thread with ``Workspace(cm)`` and pass it to the functions
     of this module; they create a fresh one when none is given.
+
+    Parameters
+    ----------
+    cm : CollisionModel
+    bounded : bool
+        Let :func:`check_segment` skip the poses where a pair is proven clear
+        (default); False: test every pair at every pose (the reference the
+        benchmarks and tests compare with: the same answers, slower).
     """
 
-    def __init__(self, cm):
+    def __init__(self, cm, bounded: bool = True):
         self.data = cm.model.createData()
         self.geometry = cm.geometry.createData()
         self.margins = None
-        self._weights = False
+        self._weights = False if bounded else None
 
     def weights(self, cm) -> np.ndarray | None:
         """Per pair and joint, how fast the pair can close (:func:`.bounds.motion_weights`)."""
