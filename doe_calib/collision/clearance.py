@@ -4,12 +4,23 @@ Screening asks coal only whether each checked pair is closer than the
 clearance (a collision test with a security margin, stopping at the first
 pair: cheap); distances, which cost more, are computed only for the poses
 whose clearance is reported.
+
+A move is checked at every pose of its ≤ 1° grid, but a pair is tested only
+where it may be too close: the collision test that finds a pair clear also
+bounds its distance, and :mod:`.bounds` bounds how fast a joint step can close
+it, so the poses before that bound is used up are skipped for that pair. The
+first pose found too close and its pair are those the test of every pair at
+every pose finds (the argument is in :mod:`.bounds`); the count of poses
+checked is the grid's.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from doe_calib.collision.bounds import SLACK, motion_weights
 
 #: Largest joint step between the checked samples of a move, rad (m for prismatic joints).
 SEGMENT_STEP = np.radians(1.0)
@@ -72,12 +83,27 @@ class Workspace:
 
     Create one per thread with ``Workspace(cm)`` and pass it to the functions
     of this module; they create a fresh one when none is given.
+
+    Parameters
+    ----------
+    cm : CollisionModel
+    bounded : bool
+        Let :func:`check_segment` skip the poses where a pair is proven clear
+        (default); False: test every pair at every pose (the reference the
+        benchmarks and tests compare with: the same answers, slower).
     """
 
-    def __init__(self, cm):
+    def __init__(self, cm, bounded: bool = True):
         self.data = cm.model.createData()
         self.geometry = cm.geometry.createData()
         self.margins = None
+        self._weights = False if bounded else None
+
+    def weights(self, cm) -> np.ndarray | None:
+        """Per pair and joint, how fast the pair can close (:func:`.bounds.motion_weights`)."""
+        if self._weights is False:
+            self._weights = motion_weights(cm.model, cm.geometry, cm.joint_names)
+        return self._weights
 
     def set_margins(self, margins) -> None:
         """Make the collision tests report each pair closer than its margin (m)."""
@@ -176,8 +202,50 @@ def check_segment(cm, qa, qb, margin: float | None = None, step: float = SEGMENT
     """
     qa, qb = np.asarray(qa, float), np.asarray(qb, float)
     t = np.linspace(0.0, 1.0, max(2, int(np.ceil(np.max(np.abs(qb - qa)) / step)) + 1))
-    hit = too_close(cm, qa + t[:, None] * (qb - qa), margin, workspace)
-    bad = np.flatnonzero(hit >= 0)
-    if not len(bad):
+    ws = Workspace(cm) if workspace is None else workspace
+    weights = ws.weights(cm)
+    if weights is None or not len(cm.geometry.collisionPairs):
+        hit = too_close(cm, qa + t[:, None] * (qb - qa), margin, ws)
+        bad = np.flatnonzero(hit >= 0)
+        if not len(bad):
+            return SegmentCheck(len(t), None, None)
+        return SegmentCheck(len(t), float(t[bad[0]]), cm.pair_name(int(hit[bad[0]])))
+    found = _first_too_close(cm, qa, qb, t, margin, weights, ws)
+    if found is None:
         return SegmentCheck(len(t), None, None)
-    return SegmentCheck(len(t), float(t[bad[0]]), cm.pair_name(int(hit[bad[0]])))
+    i, k = found
+    return SegmentCheck(len(t), float(t[i]), cm.pair_name(k))
+
+
+def _first_too_close(cm, qa, qb, t, margin, weights, ws):
+    """(pose index, pair index) of the first pose of qa + t (qb − qa) a pair is too close at.
+
+    Each pair is tested at a pose only when the bound from its last test
+    (:mod:`.bounds`) no longer proves it clear there; None when every pose is free.
+    """
+    import pinocchio as pin
+
+    ws.set_margins(cm.margins if margin is None
+                   else np.broadcast_to(np.asarray(margin, float), len(cm.margins)))
+    margins = ws.margins
+    configurations = cm.configurations(qa + t[:, None] * (qb - qa))
+    n = len(t)
+    # the largest closing of each pair between neighbouring poses, m (the grid is uniform)
+    per_step = ((weights @ np.abs(qb - qa)) / (n - 1)).tolist()
+    due = np.zeros(len(margins), int)
+    results = ws.geometry.collisionResults
+    i = 0
+    while i < n:
+        pin.updateGeometryPlacements(cm.model, ws.data, cm.geometry, ws.geometry,
+                                     configurations[:, i])
+        for k in np.flatnonzero(due <= i).tolist():
+            if pin.computeCollision(cm.geometry, ws.geometry, k):
+                return i, k
+            # clear while the closing since this pose stays below its lower bound less margin
+            spare = results[k].distance_lower_bound - margins[k] - SLACK
+            skip = 0
+            if spare > 0 and math.isfinite(spare):
+                skip = n if per_step[k] <= 0 else min(n, int(spare / per_step[k]))
+            due[k] = i + 1 + skip
+        i = int(due.min())
+    return None
