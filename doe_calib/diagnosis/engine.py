@@ -101,10 +101,20 @@ def _groups_to_try(tests, level, top):
 
 
 def _material(tests, cv_rms, level, min_gain):
-    """Significant candidates that lower the cross-validated RMS by ``min_gain``, best first."""
+    """Significant candidates that lower the cross-validated RMS by ``min_gain``, best first.
+
+    Cross-validated RMS equal to 9 significant digits are a tie (two shapes of one effect
+    that these data cannot tell apart differ only by rounding): the order of ``tests``
+    decides, the stronger test and then the catalogue's order (an effect's default shape
+    first)."""
     return sorted([t for t in tests if t.p_value < level and t.cv_rms_mm is not None
                    and np.isfinite(t.cv_rms_mm) and t.cv_rms_mm < cv_rms * (1 - min_gain)],
-                  key=lambda t: t.cv_rms_mm)
+                  key=_cv_key)
+
+
+def _cv_key(t) -> float:
+    """A candidate's cross-validated RMS to 9 significant digits (ties: module order)."""
+    return float(f"{np.nan_to_num(t.cv_rms_mm, nan=np.inf):.9g}")
 
 
 def _proposal(tests, cv_rms, level, min_gain):
@@ -318,8 +328,7 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         rows, odd = _fitted(big_fit, new, effect)
         scored[t.spec] = t.with_cv(cross_validated_rms(big, screen, big_fit.parameters, split),
                                    rows, odd)
-    ranked = sorted(scored.values(), key=lambda t: (np.nan_to_num(t.cv_rms_mm, nan=np.inf),
-                                                     t.log10_p))
+    ranked = sorted(scored.values(), key=lambda t: (_cv_key(t), t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]
     proposed = _proposal(ranked, cv, level, min_gain)
     adequate = _is_adequate(test, proposed, tolerance, practical_um)
