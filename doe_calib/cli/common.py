@@ -315,11 +315,11 @@ def collision_arguments(c, defaults_from: str | None = None):
                    metavar="MM",
                    help=f"distance the robot's links keep from one another along the moves, mm "
                         f"(default {said}half the self-clearance)")
-    c.add_argument("--planner-checks", type=count("--planner-checks", 1), default=2000,
+    c.add_argument("--planner-checks", type=count("--planner-checks", 1), default=5000,
                    metavar="N",
                    help="work budget of one search of the motion planner (OMPL RRT-Connect) "
                         "for a move that no straight line or simple route clears: state "
-                        "checks (default 2000; a search near the move, then one over the "
+                        "checks (default 5000; a search near the move, then one over the "
                         "whole joint range); the same budget gives the same path on any "
                         "machine")
     c.add_argument("--planner-time", type=positive("--planner-time", "s"), default=30.0,

@@ -60,14 +60,14 @@ class PlannerSettings:
     checks : int
         Work budget of one search: the state validity checks after which it
         ends without a path (about 0.1 ms each). The searches of a measurement
-        program take a hundred to ~1 500; on the benchmark's UR5 cell the moves
-        not found by 2 000 were not found by 45 000–78 000 either.
+        program take a hundred to a few thousand (one in the benchmark's UR5
+        cell needs 3 000–5 000: what 1 s of wall time gave on a loaded machine).
     """
 
     time: float = 30.0
     seed: int = 0
     attempts: int = 1
-    checks: int = 2000
+    checks: int = 5000
 
     def __post_init__(self):
         if not self.time > 0:
