@@ -9,7 +9,7 @@ checks its motions at :data:`SEARCH_STEP` (Euclidean, hence on every joint).
 The path found is shortened (:func:`_shorten`: OMPL's ``PathSimplifier``,
 vertices removed until none can be, one deterministic rope shortcut, vertices
 removed again: under half the state checks of ``simplifyMax``, which also
-smooths by B-splines, and on the benchmark cell 12 % less joint travel), and
+smooths by B-splines, and on the benchmark cell 7 % less joint travel), and
 then every segment is checked again with :func:`.clearance.check_segment` at
 ≤ 1° steps — a path that fails that check is not returned (the next search is
 made at 1°).
