@@ -20,7 +20,7 @@ from .isolated import isolated
 
 #: Benchmark modules (each has ``run(quick) -> Section``), in the order they run.
 BENCHMARKS = ("observation", "identification", "monte_carlo", "scaling", "design",
-              "large_campaign", "commands", "diagnosis_speed", "collision_check")
+              "large_campaign", "commands", "diagnosis_speed", "collision_check", "planner")
 #: Always run first: the machine and the one-off compile cost the other figures exclude.
 PREAMBLE = "compile_cost"
 _MARKER = re.compile(r"^<!-- benchmark: (\w+) -->$", re.MULTILINE)

@@ -315,11 +315,18 @@ def collision_arguments(c, defaults_from: str | None = None):
                    metavar="MM",
                    help=f"distance the robot's links keep from one another along the moves, mm "
                         f"(default {said}half the self-clearance)")
-    c.add_argument("--planner-time", type=positive("--planner-time", "s"), default=1.0,
+    c.add_argument("--planner-checks", type=count("--planner-checks", 1), default=5000,
+                   metavar="N",
+                   help="work budget of one search of the motion planner (OMPL RRT-Connect) "
+                        "for a move that no straight line or simple route clears: state "
+                        "checks (default 5000; a search near the move, then one over the "
+                        "whole joint range); the same budget gives the same path on any "
+                        "machine")
+    c.add_argument("--planner-time", type=positive("--planner-time", "s"), default=30.0,
                    metavar="S",
-                   help="longest search of the motion planner (OMPL RRT-Connect) for one move "
-                        "that no straight line or simple route clears, s (default 1; a search "
-                        "near the move, then one over the whole joint range)")
+                   help="safety net: wall time after which a search of the motion planner "
+                        "ends whatever its budget, s (default 30, never reached on a working "
+                        "machine; a search it ends depends on the machine's speed)")
     c.add_argument("--planner-seed", type=count("--planner-seed", 0), default=0, metavar="N",
                    help="seed of the motion planner's sampling (default 0: the same path on "
                         "every run)")
@@ -358,8 +365,8 @@ def collision_builder(args, robot, tool, constraints, recorded: dict | None = No
         args.clearance is not None else recorded.get("move_clearance_mm")
     move_self = args.move_self_clearance if args.move_self_clearance is not None else None if \
         args.self_clearance is not None else recorded.get("move_self_clearance_mm")
-    planner = None if args.no_planner else PlannerSettings(time=args.planner_time,
-                                                            seed=args.planner_seed)
+    planner = None if args.no_planner else PlannerSettings(
+        time=args.planner_time, seed=args.planner_seed, checks=args.planner_checks)
 
     def build(loads):
         return build_collision_model(

@@ -6,19 +6,27 @@ whole joint range (the limits; ±2π for a continuous joint). A state is valid
 when every checked pair keeps its move clearance
 (:attr:`CollisionModel.move_margins`, :func:`.clearance.too_close`); OMPL
 checks its motions at :data:`SEARCH_STEP` (Euclidean, hence on every joint).
-The path found is shortened and smoothed (``PathSimplifier``: vertices
-removed, shortcuts, until no change: ``simplifyMax``), and then every segment is checked again with
-:func:`.clearance.check_segment` at ≤ 1° steps — a path that fails that check
-is not returned (the next search is made at 1°).
+The path found is shortened (:func:`_shorten`: OMPL's ``PathSimplifier``,
+vertices removed until none can be, one deterministic rope shortcut, vertices
+removed again: under half the state checks of ``simplifyMax``, which also
+smooths by B-splines, and on the benchmark cell 7 % less joint travel), and
+then every segment is checked again with :func:`.clearance.check_segment` at
+≤ 1° steps — a path that fails that check is not returned (the next search is
+made at 1°).
 
-Planning is seeded (OMPL's global seed, set before each plan) and bounded in
-time (:attr:`PlannerSettings.time`): the same seed gives the same path as
-long as the search ends before the time bound, which the small searches of a
-measurement program do (a few hundred states, well under a second).
+Planning is seeded (OMPL's global seed, set before each plan) and ends by
+work, not by the clock: a search stops after :attr:`PlannerSettings.checks`
+state validity checks (counted in the checker, evaluated by an
+``ompl.base.PlannerTerminationCondition`` between the planner's iterations),
+so the same seed gives the same path on any machine under any load. The wall
+time :attr:`PlannerSettings.time` is only a safety net (30 s by default, far
+beyond what the check budget takes); a search it ends is the only case whose
+outcome depends on the machine.
 """
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +37,8 @@ from doe_calib.collision.clearance import SEGMENT_STEP, Workspace, check_segment
 SEARCH_STEP = np.radians(3.0)
 #: Margin around the start–goal box searched first, rad (m).
 WIDEN = np.pi / 2
+#: Most rounds of vertex removal in each pass of :func:`_shorten`.
+ROUNDS = 5
 
 
 @dataclass(frozen=True)
@@ -38,17 +48,33 @@ class PlannerSettings:
     Attributes
     ----------
     time : float
-        Longest search for one move, s.
+        Safety net: wall time after which a search ends whatever its budget, s.
+        Well above what ``checks`` takes (0.1 ms a check), it never ends a
+        search on a working machine; a search it ends is the only one whose
+        outcome depends on the machine's speed and load.
     seed : int
         Seed of OMPL's random sampling.
     attempts : int
         Searches (seeds ``seed``, ``seed + 1``, …) in each of the two boxes
         (near start and goal, the whole joint range) before a move is given up.
+    checks : int
+        Work budget of one search: the state validity checks after which it
+        ends without a path (about 0.1 ms each). The searches of a measurement
+        program take a hundred to a few thousand (one in the benchmark's UR5
+        cell needs 3 000–5 000: what 1 s of wall time gave on a loaded machine).
     """
 
-    time: float = 1.0
+    time: float = 30.0
     seed: int = 0
     attempts: int = 1
+    checks: int = 5000
+
+    def __post_init__(self):
+        if not self.time > 0:
+            raise ValueError(f"the planner's time cap must be positive, s; got {self.time}")
+        if int(self.checks) != self.checks or self.checks < 1:
+            raise ValueError(f"the planner's check budget must be a positive whole number; "
+                             f"got {self.checks}")
 
 
 @dataclass(frozen=True)
@@ -105,8 +131,10 @@ def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, ws):
         ws.set_margins(np.broadcast_to(np.asarray(margins, float), len(cm.margins)))
         x = cm.configurations(qa)[:, 0]
         slots = _slots(cm)
+        done = [0]  # validity checks so far: the search's work
 
         def valid(state) -> bool:
+            done[0] += 1
             for k, (i, turns) in enumerate(slots):
                 v = state[k]
                 if turns:
@@ -123,17 +151,32 @@ def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, ws):
             start[k], goal[k] = float(qa[k]), float(qb[k])
         setup.setStartAndGoalStates(start, goal)
         setup.setPlanner(og.RRTConnect(info))
-        solved = setup.solve(settings.time)
+        deadline = time.monotonic() + settings.time
+        ptc = ob.PlannerTerminationCondition(
+            lambda: done[0] >= settings.checks or time.monotonic() > deadline)
+        solved = setup.solve(ptc)
         if not solved or not setup.haveExactSolutionPath():
             return None
         path = setup.getSolutionPath()
-        og.PathSimplifier(info).simplifyMax(path)
+        _shorten(og.PathSimplifier(info), path)
         out = np.array([[path.getState(i)[k] for k in range(n)]
                         for i in range(path.getStateCount())])
         setup.clear()
         return out
     finally:
         ou.setLogLevel(level)
+
+
+def _shorten(simplifier, path) -> None:
+    """Shorten an OMPL path in place, deterministically (seeded): vertices removed, a rope
+    shortcut, vertices removed; every motion kept is checked at the search step."""
+    for _ in range(ROUNDS):
+        if not simplifier.reduceVertices(path):
+            break
+    simplifier.ropeShortcutPath(path)
+    for _ in range(ROUNDS):
+        if not simplifier.reduceVertices(path):
+            break
 
 
 def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | None = None,
