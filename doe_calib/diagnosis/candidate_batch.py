@@ -135,7 +135,10 @@ class CandidateBatch:
         (x,) = m.markers.call([*ins, full])
         names = m.markers.name_in()
         markers = ca.Function("markers", [*ins, p], [x], names, ["x"])
-        observation = ca.Function("observation", [*ins, p], [x, ca.densify(ca.jacobian(x, p))],
+        # the batch's own observation (its Jacobian from the flange's twist when that is
+        # shorter), its columns for p kept: the instructions of model + e built alone
+        x_obs, jac = m.observation.call([*ins, full])
+        observation = ca.Function("observation", [*ins, p], [x_obs, ca.densify(jac[:, index])],
                                   names, ["x", "B"])
         # the others, seldom evaluated, call the batch's own with p placed among the constants
         fixed = nominal.copy()

@@ -82,9 +82,10 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
     fit = identify_quietly(model, measurements) if fit is None else fit
     steps, added, reason, effect = [], None, "starting model", None
     while True:
+        fitted = {}  # the candidates diagnose fitted: the chosen one is not fitted again
         diag = diagnose(model, measurements, fit, level, folds, grouping, min_gain=min_gain,
                         registry=registry, practical_um=practical_um,
-                        tolerance=tolerance)
+                        tolerance=tolerance, candidate_fits=fitted)
         val = validation_rms(model, fit.parameters.values, validation) \
             if validation is not None else None
         steps.append(RefineStep(model.spec, added, diag.rms_mm, diag.cv_rms_mm, val,
@@ -102,9 +103,12 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         if len(steps) > max_steps:
             stopped = f"stopped after {max_steps} added effects ({best.spec} would be next)"
             break
-        model, start = augmented(model, fit.parameters, parse_effect(best.spec,
-                                                                     registry=registry))
-        fit = identify_quietly(model, measurements, start, register=False)
+        if best.spec in fitted:  # the same fit: model + effect from this fit's values
+            model, fit = fitted[best.spec]
+        else:
+            model, start = augmented(model, fit.parameters, parse_effect(best.spec,
+                                                                         registry=registry))
+            fit = identify_quietly(model, measurements, start, register=False)
         added, effect = best.spec, best
         reason = (f"added {best.spec}, {best.words}: "
                   f"{_size_words(best.sizes)}; cross-validated RMS {diag.cv_rms_mm:.4g} → "

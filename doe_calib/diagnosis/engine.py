@@ -251,7 +251,8 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
 def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
              grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
              tolerance: float = 0.05, progress=None, registry=None,
-             sigma_mm: float | None = None, practical_um: float = 2.0) -> DiagnosisResult:
+             sigma_mm: float | None = None, practical_um: float = 2.0,
+             candidate_fits: dict | None = None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
 
     Parameters
@@ -290,6 +291,11 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         Practical size, µm per coordinate: a misfit beyond the noise
         √(σ̂² − σ²) below it, with no material candidate, is adequate even when
         the χ² test and ``tolerance`` reject (the size is stated in the verdict).
+    candidate_fits : dict, optional
+        Filled, when the candidates were fitted on every reading (no screening subset),
+        with spec → (``model`` + the effect, its fit to ``measurements`` from this fit's
+        values, the effect's parameters at nominal): what
+        :func:`~doe_calib.diagnosis.effect_selection.refine` takes on, not fitting again.
 
     Returns
     -------
@@ -324,6 +330,8 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         except DoeCalibError:
             scored[t.spec] = t.with_cv(float("nan"))
             continue
+        if candidate_fits is not None and screen is measurements:
+            candidate_fits[t.spec] = (big, big_fit)
         new = [n for n in big_fit.parameters.names if n not in params.names]
         rows, odd = _fitted(big_fit, new, effect)
         scored[t.spec] = t.with_cv(cross_validated_rms(big, screen, big_fit.parameters, split),

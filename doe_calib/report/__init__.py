@@ -11,13 +11,24 @@ they add; :func:`write_report` writes any sections built with :mod:`.html`.
 Reporting code formats and plots; it computes nothing
 the library does not already provide.
 """
-from doe_calib.report.augment import augment_report
-from doe_calib.report.compare import compare_report
-from doe_calib.report.design import design_report, design_sections
-from doe_calib.report.diagnosis import diagnosis_report, refine_report, refine_sections
-from doe_calib.report.html import write_report
-from doe_calib.report.identification import identification_report
+import importlib
 
-__all__ = ["identification_report", "design_report", "diagnosis_report", "refine_report",
-           "compare_report", "augment_report", "design_sections", "refine_sections",
-           "write_report"]
+#: Public name → the module of this package that defines it. Each is imported on first
+#: use, so that ``from doe_calib.report.figures import …`` (the diagnose command's residual
+#: figure) does not load every report and matplotlib's 3-D toolkit first.
+_HOMES = {"identification_report": "identification", "design_report": "design",
+          "design_sections": "design", "diagnosis_report": "diagnosis",
+          "refine_report": "diagnosis", "refine_sections": "diagnosis",
+          "compare_report": "compare", "augment_report": "augment", "write_report": "html"}
+
+__all__ = list(_HOMES)
+
+
+def __getattr__(name: str):
+    if name in _HOMES:
+        return getattr(importlib.import_module(f"doe_calib.report.{_HOMES[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted({*globals(), *_HOMES})

@@ -13,11 +13,33 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 
-def new_figure(width: float, height: float) -> Figure:
-    """A Figure of ``width`` × ``height`` inches on its own Agg canvas (no pyplot state)."""
-    fig = Figure(figsize=(width, height), layout="constrained")
+def new_figure(width: float, height: float, layout: str | None = "constrained") -> Figure:
+    """A Figure of ``width`` × ``height`` inches on its own Agg canvas (no pyplot state).
+
+    ``layout=None`` leaves the axes where the caller puts them (:func:`grid_axes`):
+    the constrained layout measures every label twice when the figure is saved.
+    """
+    fig = Figure(figsize=(width, height), layout=layout)
     FigureCanvasAgg(fig)
     return fig
+
+
+def grid_axes(fig: Figure, nrows: int, ncols: int, margins=(0.65, 0.1, 0.1, 0.5),
+              gaps=(0.3, 0.5), **kwargs):
+    """An ``nrows`` × ``ncols`` grid of axes at fixed distances in inches.
+
+    ``margins`` are (left, right, top, bottom) and ``gaps`` (between columns, between
+    rows), inches: room for the tick labels and an axis label of 7–8 pt; ``kwargs`` go
+    to :meth:`matplotlib.figure.Figure.subplots` (``sharey=True``, …).
+    """
+    width, height = fig.get_size_inches()
+    left, right, top, bottom = margins
+    gap_x, gap_y = gaps
+    axes_w = (width - left - right - (ncols - 1) * gap_x) / ncols
+    axes_h = (height - top - bottom - (nrows - 1) * gap_y) / nrows
+    return fig.subplots(nrows, ncols, squeeze=False, gridspec_kw=dict(
+        left=left / width, right=1.0 - right / width, top=1.0 - top / height,
+        bottom=bottom / height, wspace=gap_x / axes_w, hspace=gap_y / axes_h), **kwargs)
 
 
 def plain_ticks(ax) -> None:
@@ -78,8 +100,8 @@ def residual_scatter(norm_mm, columns, ncols: int = 4) -> Figure:
     norm_mm = np.asarray(norm_mm, float)
     n = len(columns)
     nrows = max(1, -(-n // ncols))
-    fig = new_figure(3.0 * ncols, 2.4 * nrows)
-    axes = fig.subplots(nrows, ncols, squeeze=False, sharey=True)
+    fig = new_figure(3.0 * ncols, 2.4 * nrows, layout=None)  # fixed margins: 0.3 s less
+    axes = grid_axes(fig, nrows, ncols, sharey=True)
     for ax, (label, x) in zip(axes.flat, columns):
         ax.scatter(np.asarray(x, float), norm_mm, s=6, alpha=0.6, color="tab:blue")
         ax.set_xlabel(label, fontsize=8)
