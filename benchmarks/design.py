@@ -33,6 +33,10 @@ TARGET_CANDIDATES, TARGET_S, TARGET_EFFICIENCY = 20000, 60.0, 0.95
 #: --load 250@0,0,200, --seed 1) before the fast paths, on this machine at load 1.0
 #: (2026-12-01 22:31 UTC): wall s, CPU s, log det M, D-efficiency; and its goal (s).
 COMMAND_BEFORE = {"wall": 17.75, "cpu": 17.83, "log_det": 505.106, "efficiency": 0.952}
+#: The same command after the fast paths (main at 27c9e29, before the second round), CPU s
+#: (user + sys, mean of 3 runs side by side with the branch at load 4.2, 2026-12-01 23:55 UTC),
+#: log det M and D-efficiency; the second round keeps the same poses and numbers.
+COMMAND_ROUND_START = {"cpu": 7.60, "log_det": 505.209, "efficiency": 0.954}
 COMMAND_GOAL_S = 5.0
 _SUMMARY = re.compile(r"criterion ([-\d.e+]+), certified bound ([-\d.e+]+), D-efficiency ([\d.]+)")
 
@@ -141,7 +145,9 @@ def _command_row(now: dict) -> Row:
     return Row("doe-calib design, 15 poses, 20 000 candidates (the issue's command)", now["wall"],
                "s", now["wall"] / b["wall"],
                f"before {b['wall']:g} s (CPU {b['cpu']:g} s); now CPU {now['cpu']:.2f} s "
-               f"(ratio {now['cpu'] / b['cpu']:.2f}), load {now['load']:.1f}; goal ≤ "
+               f"(ratio {now['cpu'] / b['cpu']:.2f}; against the round's start "
+               f"{COMMAND_ROUND_START['cpu']:g} s: {now['cpu'] / COMMAND_ROUND_START['cpu']:.2f}, "
+               f"log det M {COMMAND_ROUND_START['log_det']:.3f}), load {now['load']:.1f}; goal ≤ "
                f"{COMMAND_GOAL_S:g} s: {verdict}; log det M {now['log_det']:.3f} (before "
                f"{b['log_det']:.3f}: {same}), D-efficiency {now['efficiency']:.3f} (before "
                f"{b['efficiency']:.3f})")

@@ -16,6 +16,8 @@ from doe_calib.design.criteria import DOptimal
 from doe_calib.design.exchange import exact_design
 from doe_calib.design.relaxation import (
     convex_relaxation,
+    equivalence_ratio,
+    information,
     packed_information,
     packed_weights,
     relax,
@@ -23,6 +25,7 @@ from doe_calib.design.relaxation import (
     unpack,
 )
 from doe_calib.design.updates import added_values, best_added
+from doe_calib.errors import OptionError
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 from doe_calib.model.simulate import random_configurations
 
@@ -133,3 +136,27 @@ def test_buffered_pose_map_equals_direct_calls():
         assert np.abs(b[i] - np.asarray(rb)).max() < 1e-15
     (one,) = map_poses(ca.Function("g", [q], [q * 2]), poses[:1])
     assert np.allclose(one[0, :, 0], 2 * poses[0])
+
+
+def test_packed_information_into_rows_of_a_larger_array():
+    blocks = np.random.default_rng(5).normal(size=(1100, 4, 6))  # two chunks
+    room = np.full((1105, 21), 7.0)
+    filled = packed_information(blocks, out=room[:1100])
+    assert np.shares_memory(filled, room)
+    assert np.array_equal(room[:1100], packed_information(blocks))
+    assert np.all(room[1100:] == 7.0)  # the rows kept for more candidates are untouched
+    with pytest.raises(OptionError, match=r"pack into \(1100, 21\)"):
+        packed_information(blocks, out=room)
+
+
+@pytest.mark.parametrize("screen", [False, True])
+def test_relaxation_from_packed_information_alone_equals_the_blocks_one(screen):
+    blocks = np.random.default_rng(6).normal(size=(900, 3, 5))
+    packed = packed_information(blocks)
+    start = np.r_[np.full(850, 1.0), np.zeros(50)] if screen else None
+    a = relax(blocks, "D", tol=1e-4, working_set=100, start=start, screen=screen)
+    b = relax(None, "D", tol=1e-4, working_set=100, start=start, screen=screen, packed=packed)
+    assert np.array_equal(a.weights, b.weights)
+    assert (a.value, a.ratio, a.iterations) == (b.value, b.ratio, b.iterations)
+    assert equivalence_ratio(None, information(blocks, a.weights), packed=packed) == \
+        pytest.approx(equivalence_ratio(blocks, information(blocks, a.weights)), rel=1e-12)

@@ -112,9 +112,6 @@ def _discovery_goal(args):
     """The :class:`~doe_calib.design.discovery.DiscoveryGoal` of ``--detect-size``, or of
     ``--load-directions`` with plain ``--detect`` (no size: each pose picks its load case for
     the D criterion), or None."""
-    from doe_calib.design.discovery import DiscoveryGoal
-    from doe_calib.design.load_directions import parse_directions
-
     if args.detect_size is None:
         if args.min_power is not None:
             raise OptionError("--min-power is for a design to discover: give --detect EFFECTS "
@@ -127,6 +124,10 @@ def _discovery_goal(args):
                               "each pose then picks its load case for the D criterion)")
     if not args.detect:
         raise OptionError("--detect-size S: give the effects to discover with --detect EFFECTS")
+    # imported only for a discovery design: its statistics (the diagnosis) load slowly
+    from doe_calib.design.discovery import DiscoveryGoal
+    from doe_calib.design.load_directions import parse_directions
+
     return DiscoveryGoal(args.detect, args.detect_size,
                          args.power if args.min_power is None else args.min_power, args.alpha,
                          parse_directions(args.load_directions), effect_registry(args))

@@ -42,6 +42,7 @@ from doe_calib.design.relaxation import (
     equivalence_ratio,
     information,
     packed_information,
+    packed_size,
     relax,
 )
 from doe_calib.design.result import DesignResult
@@ -164,7 +165,10 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     blocks = blocks_for(model, params, cands.q, loads, sigma)
     check_enough_poses(n_poses, blocks, model.tool.n_markers, len(loads), rng)
     stage("relaxation", f"{crit.name} criterion over {len(blocks)} candidates")
-    packed = packed_information(blocks)  # kept: every sweep over the candidates reads it
+    # kept: every sweep over the candidates reads it; room for the refined poses' rows, so the
+    # bound's relaxation over candidates and refined poses copies none of it
+    room = np.empty((len(blocks) + (n_poses if refine else 0), packed_size(blocks.shape[2])))
+    packed = packed_information(blocks, out=room[:len(blocks)])
     relaxed = relax(blocks, crit, progress=stage.iterations("relaxation"), packed=packed)
     stages = {"relaxation": relaxed.to_dict()}
     stage("exchange", f"{n_poses} poses")
@@ -204,7 +208,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
                           f"unreachable: " + ", ".join(f"{n} {why}" for why, n in replaced.items())
                           + "; give more candidates, another --home or fewer constraints")
     stages["exchange"] = exchanged.to_dict()
-    q, refinement, reverted = pool_q[chosen], None, 0
+    q, refinement, reverted, design = pool_q[chosen], None, 0, None
     if refine:
         stage("refinement", f"IPOPT on {q.size} joint angles")
         refinement = refine_poses(model, params, loads, sigma, q, feasibility, crit,
@@ -217,24 +221,24 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
             reverted = int(back.sum())
         if refinement.accepted:
             stage("bound", "relaxation with the refined poses as candidates")
-            refined = blocks_for(model, params, q, loads, sigma)
-            blocks = np.concatenate([blocks, refined])
-            packed = np.concatenate([packed, packed_information(refined)])
-            relaxed = relax(blocks, crit, start=np.r_[relaxed.weights, np.zeros(n_poses)],
+            design = blocks_for(model, params, q, loads, sigma)
+            packed = room
+            packed_information(design, out=packed[len(blocks):])
+            relaxed = relax(None, crit, start=np.r_[relaxed.weights, np.zeros(n_poses)],
                             progress=stage.iterations("bound"), packed=packed, screen=True)
-    design = blocks_for(model, params, q, loads, sigma)
+    design = blocks_for(model, params, q, loads, sigma) if design is None else design
     m = information(design, np.ones(n_poses))
     value, bound = crit.value(m), relaxed.bound(n_poses)
     p = m.shape[0]
     efficiencies = {crit.name: crit.efficiency(value, bound, p)}
     if not isinstance(crit, DOptimal):
         stage("bound", "D relaxation for the D-efficiency")
-        d_bound = relax(blocks, packed=packed, screen=True).bound(n_poses)
+        d_bound = relax(None, packed=packed, screen=True).bound(n_poses)
         efficiencies["D"] = DOptimal().efficiency(log_det(m), d_bound, p)
     stage("report")
     reported = [DOptimal(), AOptimal(), EOptimal()] + ([] if t is None else [TaskOptimal(t)])
     criteria = {c.name: c.value(m) for c in reported}
-    ratio = equivalence_ratio(blocks, m / n_poses, crit, packed=packed)
+    ratio = equivalence_ratio(None, m / n_poses, crit, packed=packed)
     target = crit.target(p)
     equivalence = {"criterion": crit.name, "statistic": crit.statistic, "target": target,
                    "relaxation": target * relaxed.ratio, "design": target * ratio,
@@ -257,7 +261,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     std = np.sqrt(np.diag(np.linalg.inv(m))) * scale
     free = [par for par, f in zip(params.parameters, params.free) if f]
     notes = [versus_random, f"{crit.name} criterion: {crit.words}",
-             f"relaxation over {len(blocks)} candidates: equivalence ratio {relaxed.ratio:.4g} "
+             f"relaxation over {len(packed)} candidates: equivalence ratio {relaxed.ratio:.4g} "
              f"after {relaxed.iterations} iterations; {p} parameters designed for, "
              f"{int((~params.free).sum())} fixed as not identifiable by any candidate"]
     if t is not None:

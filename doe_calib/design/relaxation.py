@@ -23,6 +23,7 @@ import numpy as np
 
 from doe_calib.design.criteria import Criterion
 from doe_calib.design.outcome import DesignOutcome
+from doe_calib.errors import OptionError
 
 _CHUNK = 4096  # candidates per step when sweeping all of them (bounds memory)
 #: With ``screen``: rounds while candidates outside the working set still violate the
@@ -48,14 +49,15 @@ def traces(blocks: np.ndarray, h: np.ndarray) -> np.ndarray:
     return out
 
 
-def equivalence_ratio(blocks: np.ndarray, m: np.ndarray, criterion="D",
+def equivalence_ratio(blocks: np.ndarray | None, m: np.ndarray, criterion="D",
                       task: np.ndarray | None = None, packed: np.ndarray | None = None) -> float:
     """c · max_i ψ_i over every candidate at the normalised information M (≥ 1 at the optimum).
 
     No design over the candidates has an information function Φ above
     ratio · Φ(M) (:func:`.criteria.sensitivity`); for D, ratio = max_i d_i / p.
     ``packed``, the blocks' :func:`packed_information` if already at hand,
-    makes the sweep over the candidates one matrix-vector product.
+    makes the sweep over the candidates one matrix-vector product (``blocks``
+    may then be None).
     """
     h, c = Criterion.from_name(criterion, task).sensitivity(m)
     psi = traces(blocks, h) if packed is None else packed @ packed_weights(h)
@@ -77,12 +79,19 @@ def _upper(p: int) -> tuple:
     return rows, cols
 
 
-def packed_information(blocks: np.ndarray) -> np.ndarray:
+def packed_size(p: int) -> int:
+    """Entries of a packed (p, p) information matrix: p(p+1)/2."""
+    return p * (p + 1) // 2
+
+
+def packed_information(blocks: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """Upper triangles of every M_i = B_iᵀB_i (row-major), shape (K, p(p+1)/2).
 
     M_i is symmetric, so its p(p+1)/2 distinct entries say all of it: the
     relaxation's sums over candidates then read half the memory. Built by
     batched matrix products, in chunks of :data:`_PACK_CHUNK` candidates.
+    ``out``, an array of that shape (e.g. rows of a larger one, so that more
+    candidates can join without a copy), is filled and returned.
 
     Examples
     --------
@@ -91,10 +100,15 @@ def packed_information(blocks: np.ndarray) -> np.ndarray:
     True
     """
     k, _, p = blocks.shape
-    out = np.empty((k, p * (p + 1) // 2))
+    if out is None:
+        out = np.empty((k, packed_size(p)))
+    elif out.shape != (k, packed_size(p)):
+        raise OptionError(f"out has shape {out.shape}; {k} blocks of {p} columns pack into "
+                         f"({k}, {packed_size(p)})")
+    products = np.empty((min(k, _PACK_CHUNK), p, p))  # one buffer for every chunk
     for s in range(0, k, _PACK_CHUNK):
         b = blocks[s:s + _PACK_CHUNK]
-        g = np.matmul(b.transpose(0, 2, 1), b)
+        g = np.matmul(b.transpose(0, 2, 1), b, out=products[:len(b)])
         start = 0
         for row in range(p):  # row by row: contiguous copies, far faster than a gather
             out[s:s + _PACK_CHUNK, start:start + p - row] = g[:, row, row:]
@@ -117,13 +131,18 @@ def packed_weights(h: np.ndarray) -> np.ndarray:
     return np.where(rows == cols, 1.0, 2.0) * ((h + h.T) / 2)[rows, cols]
 
 
+def _packed_order(size: int) -> int:
+    """p of a packed (p, p) matrix of ``size`` = p(p+1)/2 entries."""
+    return int(round((np.sqrt(8 * size + 1) - 1) / 2))
+
+
 def _solve_working_set(mi, w, crit, tol, max_iterations, progress, done):
     """Multiplicative iterations on one candidate set (``mi``: (S, p(p+1)/2) packed information,
     :func:`packed_information`).
 
     Returns (indices kept, their weights, M of those weights, iterations used).
     """
-    p = int(round((np.sqrt(8 * mi.shape[1] + 1) - 1) / 2))
+    p = _packed_order(mi.shape[1])
     active = np.arange(len(mi))
     m = unpack(w @ mi, p)
     it = 0
@@ -152,7 +171,7 @@ def _solve_working_set(mi, w, crit, tol, max_iterations, progress, done):
     return active, w, m, it
 
 
-def relax(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
+def relax(blocks: np.ndarray | None, criterion="D", task: np.ndarray | None = None,
           tol: float = 2e-3, max_iterations: int = 20000, working_set: int = 1500,
           start: np.ndarray | None = None, progress=None,
           packed: np.ndarray | None = None, screen: bool = False) -> DesignOutcome:
@@ -166,8 +185,9 @@ def relax(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
 
     Parameters
     ----------
-    blocks : ndarray, shape (K, r, p)
-        Per-candidate (scaled, σ-weighted) observation blocks.
+    blocks : ndarray, shape (K, r, p), or None
+        Per-candidate (scaled, σ-weighted) observation blocks; None when
+        ``packed`` is given (only it is read then).
     criterion : {"D", "A", "E", "task"} or Criterion
     task : ndarray, shape (rows, p), optional
         Task Jacobians (scaled), for the task criterion named by a string.
@@ -206,8 +226,8 @@ def relax(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
     True
     """
     crit = Criterion.from_name(criterion, task)
-    k, _, p = blocks.shape
     packed = packed_information(blocks) if packed is None else packed
+    k, p = len(packed), _packed_order(packed.shape[1])
     w_all = np.full(k, 1.0 / k) if start is None else np.asarray(start, float) / np.sum(start)
     h, c = crit.sensitivity(unpack(w_all @ packed, p))
     psi_all = packed @ packed_weights(h)

@@ -89,7 +89,8 @@ def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray
         return int(index[j]), float(values[j])
     r = blocks.shape[1]
     base = np.linalg.slogdet(m)[1]
-    bound = base + r * np.log1p(packed[index] @ packed_weights(np.linalg.inv(m)) / r)
+    # every candidate's trace, then the allowed ones: no copy of their packed rows
+    bound = base + r * np.log1p((packed @ packed_weights(np.linalg.inv(m)))[index] / r)
     rank = np.argsort(-bound, kind="stable")
     order, bound = index[rank], bound[rank]
     best, value = -1, -np.inf
