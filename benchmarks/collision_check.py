@@ -32,17 +32,17 @@ from .commands import _ur5_urdf
 RECORDED_EXPORT, GOAL = 28.4, 3.0
 
 
-def _cpu() -> float:
+def cpu_seconds() -> float:
     r = resource.getrusage(resource.RUSAGE_SELF)
     return r.ru_utime + r.ru_stime
 
 
-def _children_cpu() -> float:
+def children_cpu() -> float:
     r = resource.getrusage(resource.RUSAGE_CHILDREN)
     return r.ru_utime + r.ru_stime
 
 
-def _design(tmp: Path, env) -> Path:
+def ur5_design(tmp: Path, env) -> Path:
     (tmp / "tool.yaml").write_text(Path(examples.UR_TOOL_YAML).read_text(encoding="utf-8"))
     (tmp / "cell.yaml").write_text(Path(examples.UR5_CELL_YAML).read_text(encoding="utf-8"))
     subprocess.run([sys.executable, "-m", "doe_calib", "design", "--robot", str(_ur5_urdf()),
@@ -51,6 +51,16 @@ def _design(tmp: Path, env) -> Path:
                     "--no-refine", "--seed", "1", "--out", str(tmp / "ur5.json")],
                    env=env, check=True, capture_output=True)
     return tmp / "ur5.json"
+
+
+def timed_export(design: Path, tmp: Path, env) -> tuple[float, float]:
+    """Wall and CPU time (s) of ``doe-calib export`` of ``design`` as URScript, own process."""
+    before = children_cpu()
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "doe_calib", "export", str(design), "--format",
+                    "urscript", "--out", str(tmp / "timed"), "--allow-collisions"],
+                   env=env, check=True, capture_output=True)
+    return time.perf_counter() - t0, children_cpu() - before
 
 
 def _recorded_moves(design: Path, out: Path) -> list:
@@ -85,11 +95,11 @@ def _check_all(moves, bounded: bool):
     from doe_calib.collision import Workspace, check_segment
 
     spaces = {}
-    t0 = _cpu()
+    t0 = cpu_seconds()
     found = [check_segment(cm, qa, qb, margin,
                            workspace=spaces.setdefault(id(cm), Workspace(cm, bounded)))
              for cm, qa, qb, margin in moves]
-    return _cpu() - t0, [(c.samples, c.first, c.pair) for c in found]
+    return cpu_seconds() - t0, [(c.samples, c.first, c.pair) for c in found]
 
 
 def run(quick: bool = False) -> Section:
@@ -97,13 +107,8 @@ def run(quick: bool = False) -> Section:
     with tempfile.TemporaryDirectory(prefix="doe_calib_collision_") as tmp:
         tmp = Path(tmp)
         env = dict(os.environ, DOE_CALIB_CACHE=str(tmp / "cache"))
-        design = _design(tmp, env)
-        before = _children_cpu()
-        t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "doe_calib", "export", str(design), "--format",
-                        "urscript", "--out", str(tmp / "timed"), "--allow-collisions"],
-                       env=env, check=True, capture_output=True)
-        wall, cpu = time.perf_counter() - t0, _children_cpu() - before
+        design = ur5_design(tmp, env)
+        wall, cpu = timed_export(design, tmp, env)
         moves = _recorded_moves(design, tmp / "recorded")
     dense_s, dense = _check_all(moves, bounded=False)
     fast_s, fast = _check_all(moves, bounded=True)

@@ -15,17 +15,14 @@ import contextlib
 import importlib
 import io
 import os
-import subprocess
-import sys
 import tempfile
-import time
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from ._common import Row, Section
-from .collision_check import RECORDED_EXPORT, _children_cpu, _cpu, _design
+from .collision_check import RECORDED_EXPORT, cpu_seconds, timed_export, ur5_design
 
 #: The reference's check budget: what 1 s of wall time gave a search on this machine, loaded.
 BEFORE_CHECKS = 5000
@@ -61,7 +58,7 @@ def _plan_all(plans, before: bool):
         module._shorten = lambda simplifier, path: simplifier.simplifyMax(path)
     spaces, found, travel = {}, 0, 0.0
     try:
-        t0 = _cpu()
+        t0 = cpu_seconds()
         for cm, qa, qb, settings in plans:
             s = replace(settings, checks=BEFORE_CHECKS) if before else settings
             planned = plan_move(cm, qa, qb, settings=s,
@@ -70,7 +67,7 @@ def _plan_all(plans, before: bool):
                 found += 1
                 path = np.array([qa, *planned.via, qb])
                 travel += float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
-        return _cpu() - t0, found, travel
+        return cpu_seconds() - t0, found, travel
     finally:
         module._shorten = shorten
 
@@ -80,13 +77,8 @@ def run(quick: bool = False) -> Section:
     with tempfile.TemporaryDirectory(prefix="doe_calib_planner_") as tmp:
         tmp = Path(tmp)
         env = dict(os.environ, DOE_CALIB_CACHE=str(tmp / "cache"))
-        design = _design(tmp, env)
-        before = _children_cpu()
-        t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "doe_calib", "export", str(design), "--format",
-                        "urscript", "--out", str(tmp / "timed"), "--allow-collisions"],
-                       env=env, check=True, capture_output=True)
-        wall, cpu = time.perf_counter() - t0, _children_cpu() - before
+        design = ur5_design(tmp, env)
+        wall, cpu = timed_export(design, tmp, env)
         plans = _recorded_plans(design, tmp / "recorded")
     old_s, old_found, old_travel = _plan_all(plans, before=True)
     new_s, new_found, new_travel = _plan_all(plans, before=False)
