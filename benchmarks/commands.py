@@ -2,8 +2,9 @@
 
 The campaign is the issue's: 60 poses of the built-in KR 270, each unloaded and
 with 250 kg, 3 markers (360 readings), written by ``doe-calib simulate`` with the
-full model; ``refine`` starts from ``joint_offset+geometry`` on the same data, so
-it finds one effect (joint compliance). ``export`` writes a 30-pose UR5 design
+full model; ``refine`` starts from ``joint_offset+geometry`` on the same data and
+adds what the cross-validation rewards (today four angle-dependent compliances,
+section (h)). ``export`` writes a 30-pose UR5 design
 (designed first, untimed) as URScript with the collision check of the issue's
 cell (a table, a wall, the floor, a tracker), with ``--allow-collisions`` so that
 a move no route clears is reported and the program still written. Each command
@@ -32,7 +33,7 @@ from ._common import MODEL_6R, Row, Section
 RECORDED = {"help": (1.0, 0.3), "identify": (1.2, 0.5), "diagnose": (6.0, 1.5),
             "refine": (8.6, 2.5), "design": (16.0, 5.0), "export": (6.0, 3.0)}
 CASES = {"help": "doe-calib --help (imports)", "identify": "identify, 60 poses",
-         "diagnose": "diagnose, 60 poses", "refine": "refine, 60 poses (one effect found)",
+         "diagnose": "diagnose, 60 poses", "refine": "refine, 60 poses, from joint_offset+geometry",
          "design": "design 15 poses, 20 000 candidates",
          "export": "export with the collision check, 30 poses (UR5 cell)"}
 UR_TOOL = Path(examples.UR_TOOL_YAML).read_text(encoding="utf-8")
