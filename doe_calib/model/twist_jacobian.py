@@ -17,7 +17,9 @@ It holds when ``R`` is an exact rotation at every parameter value, as the
 built-in effects make it (exact exponential maps and axis-angle matrices); an
 effect whose ``placement`` may return any 3×3 matrix (a user effect's
 ``flange_correction``) says so with ``exact_rotations = False``, and the
-model then takes CasADi's ``jacobian``.
+model then takes CasADi's ``jacobian``; so it does with one or two markers
+(three or six sweeps of its own), and it keeps the shorter of the two for
+small models (:data:`~doe_calib.model.marker_model.TWIST_SURELY_SHORTER`).
 """
 from __future__ import annotations
 
