@@ -14,44 +14,32 @@ to discover effects (:mod:`.discovery`) chooses load cases (:mod:`.load_directio
 and approach sides per pose (:mod:`.discovery_candidates`) by a constrained
 exchange (:mod:`.constrained_exchange`).
 """
-from doe_calib.design.constraint_file import read_constraints
-from doe_calib.design.constraints import Box, Coverage, DesignConstraints, LineOfSight
-from doe_calib.design.criteria import (
-           CRITERIA,
-           AOptimal,
-           Criterion,
-           DOptimal,
-           EOptimal,
-           TaskOptimal,
-           criterion,
-           d_efficiency,
-           efficiency,
-           evaluate_criterion,
-           log_det,
-)
-from doe_calib.design.exchange import exact_d_design, exact_design
-from doe_calib.design.problem import (
-           LoadCase,
-           blocks_for,
-           design_parameters,
-           load_configurations,
-           task_matrix,
-)
-from doe_calib.design.outcome import DesignOutcome
-from doe_calib.design.predicted_std import PredictedStd, StdMapping
-from doe_calib.design.relaxation import (
-           convex_relaxation,
-           equivalence_ratio,
-           information,
-           relax,
-           relax_d,
-           variances,
-)
+import importlib
 
-__all__ = ["read_constraints", "Box", "Coverage", "DesignConstraints", "LineOfSight", "CRITERIA",
-           "AOptimal", "Criterion", "DOptimal", "EOptimal", "TaskOptimal", "criterion",
-           "d_efficiency", "efficiency", "evaluate_criterion", "log_det", "exact_d_design",
-           "exact_design", "LoadCase", "blocks_for", "design_parameters", "load_configurations",
-           "task_matrix", "DesignOutcome", "PredictedStd", "StdMapping", "convex_relaxation",
-           "equivalence_ratio", "information", "relax", "relax_d",
-           "variances"]
+#: Public name → the module of this package that defines it. Each is imported on first
+#: use, so that a diagnosis's detectability (:mod:`.detectability`) does not load the
+#: solvers, the criteria and CasADi's design expressions first.
+_HOMES = {"read_constraints": "constraint_file", "Box": "constraints", "Coverage": "constraints",
+          "DesignConstraints": "constraints", "LineOfSight": "constraints",
+          "CRITERIA": "criteria", "AOptimal": "criteria", "Criterion": "criteria",
+          "DOptimal": "criteria", "EOptimal": "criteria", "TaskOptimal": "criteria",
+          "criterion": "criteria", "d_efficiency": "criteria", "efficiency": "criteria",
+          "evaluate_criterion": "criteria", "log_det": "criteria", "exact_d_design": "exchange",
+          "exact_design": "exchange", "LoadCase": "problem", "blocks_for": "problem",
+          "design_parameters": "problem", "load_configurations": "problem",
+          "task_matrix": "problem", "DesignOutcome": "outcome", "PredictedStd": "predicted_std",
+          "StdMapping": "predicted_std", "convex_relaxation": "relaxation",
+          "equivalence_ratio": "relaxation", "information": "relaxation", "relax": "relaxation",
+          "relax_d": "relaxation", "variances": "relaxation"}
+
+__all__ = list(_HOMES)
+
+
+def __getattr__(name: str):
+    if name in _HOMES:
+        return getattr(importlib.import_module(f"doe_calib.design.{_HOMES[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted({*globals(), *_HOMES})

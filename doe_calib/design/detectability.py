@@ -9,10 +9,11 @@ power ``power`` in the least favourable direction.
 """
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 
 import numpy as np
+
+from doe_calib.estimation.noncentral_chi_square import noncentrality_for_power
 
 #: A direction of the effect whose typical size (its parameters' scales) changes the
 #: weighted readings by less than this (in σ, root of the sum of squares) is invisible.
@@ -82,26 +83,6 @@ class Detectability:
                    float(d["power"]), np.inf if size is None else float(size),
                    bool(d["detectable"]), d.get("why", ""), float(d.get("absorbed", 0.0)),
                    tuple(d.get("direction", ())))
-
-
-@functools.lru_cache(maxsize=256)  # a pure function of three numbers, asked per candidate
-def noncentrality_for_power(dof: int, alpha: float, power: float) -> float:
-    """λ at which the χ² test of ``dof`` degrees of freedom at level ``alpha`` has ``power``.
-
-    >>> round(noncentrality_for_power(1, 0.05, 0.8), 3)   # (1.96 + 0.8416)²
-    7.849
-    """
-    from scipy import optimize  # slow to import; only detectability needs it
-    from scipy.special import chdtri, chndtr  # scipy.stats's own (it loads in 0.3 s)
-
-    critical = chdtri(dof, alpha)  # the χ² upper quantile, scipy.stats.chi2.isf's own
-    if power <= alpha:
-        return 0.0
-    f = lambda lam: 1.0 - chndtr(critical, dof, lam) - power  # noncentral χ² sf  # noqa: E731
-    high = 1.0
-    while f(high) < 0:
-        high *= 2.0
-    return float(optimize.brentq(f, 0.0, high, xtol=1e-10))
 
 
 def assess(spec: str, new, params, z, zp, jacobian, alpha: float = 0.05,

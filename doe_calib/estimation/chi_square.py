@@ -25,21 +25,21 @@ _EPS = 1e-16
 _MAX_TERMS = 100_000
 
 
-def _stirling_error(a: float) -> float:
-    """lgamma(a) − [(a − ½) log a − a + ½ log 2π]."""
+def stirling_error(a: float) -> float:
+    """lgamma(a) − [(a − ½) log a − a + ½ log 2π], without the cancellation for large ``a``."""
     if a < 15.0:
         return math.lgamma(a) - ((a - 0.5) * math.log(a) - a + 0.5 * math.log(2 * math.pi))
     a2 = a * a
     return (1 / 12 - (1 / 360 - (1 / 1260 - (1 / 1680 - 1 / (1188 * a2)) / a2) / a2) / a2) / a
 
 
-def _log_factor(a: float, x: float) -> float:
+def log_factor(a: float, x: float) -> float:
     """log(xᵃ e⁻ˣ / Γ(a)), accurate also for large ``a`` with ``x`` near ``a``."""
     if a < 15.0:
         return a * math.log(x) - x - math.lgamma(a)
     u = (x - a) / a
     return (a * (math.log1p(u) - u) + 0.5 * math.log(a / (2 * math.pi))
-            - _stirling_error(a))
+            - stirling_error(a))
 
 
 def _lower_series(a: float, x: float) -> float:
@@ -52,7 +52,7 @@ def _lower_series(a: float, x: float) -> float:
         total += term
         if abs(term) < abs(total) * _EPS:
             break
-    return total * math.exp(_log_factor(a, x))
+    return total * math.exp(log_factor(a, x))
 
 
 def _upper_fraction(a: float, x: float) -> float:
@@ -74,11 +74,11 @@ def _upper_fraction(a: float, x: float) -> float:
         h *= delta
         if abs(delta - 1.0) < _EPS:
             break
-    return math.exp(_log_factor(a, x)) * h
+    return math.exp(log_factor(a, x)) * h
 
 
-def _regularized(a: float, x: float) -> tuple:
-    """(P(a, x), Q(a, x))."""
+def regularized_gamma(a: float, x: float) -> tuple:
+    """(P(a, x), Q(a, x)): the regularized lower and upper incomplete gamma functions."""
     if x <= 0.0:
         return 0.0, 1.0
     if math.isinf(x):
@@ -102,14 +102,11 @@ def chi2_survival(chi2: float, dof: float) -> float:
     """
     if dof <= 0:
         raise ValueError(f"χ² degrees of freedom must be positive, not {dof}")
-    return _regularized(dof / 2.0, chi2 / 2.0)[1]
+    return regularized_gamma(dof / 2.0, chi2 / 2.0)[1]
 
 
 def chi2_quantile(prob: float, dof: float) -> float:
     """The χ²_dof quantile: x with P(χ²_dof ≤ x) = ``prob`` (SciPy's ``chi2.ppf``).
-
-    Newton's method on whichever of P or Q is the smaller (so both tails keep
-    their digits), started from the Wilson–Hilferty approximation.
 
     Parameters
     ----------
@@ -120,23 +117,45 @@ def chi2_quantile(prob: float, dof: float) -> float:
     """
     if not 0.0 < prob < 1.0:
         raise ValueError(f"a χ² quantile needs 0 < prob < 1, not {prob}")
+    return _quantile(1.0 - prob if prob > 0.5 else prob, prob > 0.5, prob, dof)
+
+
+def chi2_upper_quantile(alpha: float, dof: float) -> float:
+    """x with P(χ²_dof > x) = ``alpha``: a χ² test's critical value (SciPy's ``chdtri``).
+
+    Parameters
+    ----------
+    alpha : float
+        Upper-tail probability, 0 < alpha < 1.
+    dof : float
+        Degrees of freedom (> 0).
+    """
+    if not 0.0 < alpha < 1.0:
+        raise ValueError(f"a χ² quantile needs 0 < alpha < 1, not {alpha}")
+    return _quantile(alpha, True, 1.0 - alpha, dof)
+
+
+def _quantile(target: float, upper: bool, prob: float, dof: float) -> float:
+    """x with Q(x) = ``target`` (``upper``) or P(x) = ``target``; ``prob`` = P(x).
+
+    Newton's method on whichever of P or Q is the smaller (so both tails keep
+    their digits), started from the Wilson–Hilferty approximation.
+    """
     if dof <= 0:
         raise ValueError(f"χ² degrees of freedom must be positive, not {dof}")
     a = dof / 2.0
-    upper = prob > 0.5
-    target = 1.0 - prob if upper else prob
     z = NormalDist().inv_cdf(prob)
     c = 1.0 / (9.0 * a)
     x = a * max(1.0 - c + z * math.sqrt(c), 0.1) ** 3  # Wilson–Hilferty, in x = χ²/2
     lo, hi = 0.0, math.inf
     for _ in range(200):
-        p, q = _regularized(a, x)
+        p, q = regularized_gamma(a, x)
         f = (target - q) if upper else (p - target)  # increasing in x
         if f > 0:
             hi = x
         else:
             lo = x
-        density = math.exp(_log_factor(a, x)) / x
+        density = math.exp(log_factor(a, x)) / x
         step = f / density if density > 0 else math.inf
         new = x - step
         if not lo < new < hi:  # keep inside the bracket: bisect (geometric when unbounded)

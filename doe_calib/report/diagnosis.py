@@ -23,7 +23,8 @@ from doe_calib.report.html import (
     table,
     write_report,
 )
-from doe_calib.report.identification import parameters_section, reading_columns
+from doe_calib.diagnosis.residual_plot_data import reading_columns
+from doe_calib.report.identification import parameters_section
 
 #: Candidates drawn as added-variable plots, strongest evidence first.
 ADDED_VARIABLE_PLOTS = 4

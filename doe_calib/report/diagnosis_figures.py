@@ -21,7 +21,16 @@ def candidate_bars(diagnosis, top: int = 12):
 
 
 def error_falling(steps, noise_floor_mm: float):
-    """Fit, cross-validated and validation RMS (mm) at each refinement step, log scale."""
+    """Fit, cross-validated and validation RMS (mm) at each refinement step, log scale.
+
+    Parameters
+    ----------
+    steps : sequence of RefineStep
+        Or of any objects with its ``added``, ``rms_mm``, ``cv_rms_mm`` and
+        ``validation_rms_mm`` (mm; ``None`` without a validation file).
+    noise_floor_mm : float
+        Drawn as a dashed line, mm.
+    """
     fig = new_figure(8, 4)
     ax = fig.subplots()
     x = np.arange(len(steps))

@@ -1,10 +1,8 @@
 """The identification report: parameters, correlations and residuals of one fit, as HTML."""
 from __future__ import annotations
 
-import numpy as np
 
-from doe_calib.diagnosis.residuals import residuals
-from doe_calib.diagnosis.variables import configuration_variables
+from doe_calib.diagnosis.residual_plot_data import reading_columns, residual_norms_mm
 from doe_calib.report import figures
 from doe_calib.report.html import (
     collapsible,
@@ -54,28 +52,6 @@ def parameters_section(result, heading: str = "Identified parameters"):
                    collapsible(f"the {len(fixed)} fixed parameters and why",
                                table(["parameter", "unit", "value", "why"], fixed))]
     return section(heading, *blocks)
-
-
-def reading_columns(model, measurements) -> list[tuple]:
-    """Variables to plot the residuals against, one value per reading (display units).
-
-    Returns
-    -------
-    list of (str, ndarray of shape (K,))
-        Every joint position (deg/mm), every wrench component that varies
-        (N, N·m), the joint torques of the applied wrench (N·m), the
-        temperature (°C) if measured, and the measurement order
-        (:func:`doe_calib.diagnosis.variables.configuration_variables`).
-    """
-    c = measurements.config
-    variables = configuration_variables(model.robot, measurements.configurations)
-    return [(f"{name} ({unit})" if unit else name, v[c]) for name, (v, unit, _) in
-            variables.items()]
-
-
-def residual_norms_mm(model, measurements, values) -> np.ndarray:
-    """3-D residual norm of each reading, shape (K,), mm (:func:`doe_calib.diagnosis.residuals`)."""
-    return np.linalg.norm(residuals(model, measurements, values).error, axis=1) * 1000.0
 
 
 def _stats_table(stats: dict, what: str):

@@ -1,0 +1,104 @@
+"""Figures drawn in a child process while the command computes.
+
+Importing matplotlib and drawing a grid of scatter plots take 0.5–1 s, as
+long as a whole 60-pose diagnosis. A :class:`FigureWorker` starts a child
+Python at once; the child imports matplotlib while the parent builds its
+model and fits, then draws each figure it is sent
+(:mod:`doe_calib.report.figures` or :mod:`doe_calib.report.diagnosis_figures`
+functions of plain arrays and numbers) and saves it as PNG. On two or more
+cores the figure costs the command no time; on one core it costs what it
+did in-process. :meth:`FigureWorker.close` waits for the child and raises
+:class:`~doe_calib.errors.DoeCalibError` naming the file a figure could not
+be written to.
+
+``python -m doe_calib.report.figure_worker`` is the child: it reads pickled
+jobs from its standard input until end of file.
+"""
+from __future__ import annotations
+
+import pickle
+import subprocess
+import sys
+from pathlib import Path
+
+from doe_calib.errors import DoeCalibError
+
+#: The modules whose figure functions a job may name.
+MODULES = ("doe_calib.report.figures", "doe_calib.report.diagnosis_figures")
+
+
+class FigureWorker:
+    """A child process that draws figures and saves them as PNG files.
+
+    Use it as a context manager: leaving the block without an exception waits
+    for every figure (:meth:`close`); with one, the child is stopped.
+
+    >>> with FigureWorker() as worker:                       # doctest: +SKIP
+    ...     worker.draw("residual_scatter", "residuals.png", norms_mm, columns)
+    """
+
+    def __init__(self):
+        self._paths: list[str] = []
+        self._child = subprocess.Popen([sys.executable, "-m", __name__],
+                                       stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                                       stderr=subprocess.PIPE)
+
+    def draw(self, function: str, path, *args, dpi: int = 90, **kwargs) -> None:
+        """Send one figure: ``function(*args, **kwargs)`` of :data:`MODULES`, saved to ``path``
+        (PNG) at ``dpi`` dots per inch. Returns at once."""
+        self._paths.append(str(path))
+        try:
+            pickle.dump((function, args, kwargs, str(path), dpi), self._child.stdin,
+                        protocol=pickle.HIGHEST_PROTOCOL)
+            self._child.stdin.flush()
+        except BrokenPipeError:  # the child has died: close() says why
+            pass
+
+    def close(self) -> None:
+        """Wait until every figure is written; raise if one could not be."""
+        try:
+            self._child.stdin.close()
+        except BrokenPipeError:
+            pass
+        err = self._child.stderr.read().decode(errors="replace").strip()
+        if self._child.wait() != 0:
+            last = err.splitlines()[-1] if err else f"exit status {self._child.returncode}"
+            raise DoeCalibError(f"could not write the figure(s) {', '.join(self._paths)}: "
+                                f"{last}")
+
+    def __enter__(self) -> "FigureWorker":
+        return self
+
+    def __exit__(self, kind, error, trace) -> None:
+        if kind is None:
+            self.close()
+        else:
+            self._child.kill()
+            self._child.wait()
+
+
+def _serve(stream) -> None:
+    """Draw and save every job read from ``stream`` until its end."""
+    import importlib
+
+    modules = [importlib.import_module(m) for m in MODULES]  # matplotlib, while the parent fits
+    while True:
+        try:
+            function, args, kwargs, path, dpi = pickle.load(stream)
+        except EOFError:
+            return
+        home = next((m for m in modules if hasattr(m, function)), None)
+        if home is None:
+            raise DoeCalibError(f"no figure function {function!r} in {', '.join(MODULES)}")
+        try:
+            getattr(home, function)(*args, **kwargs).savefig(path, dpi=dpi)
+        except OSError as e:
+            raise DoeCalibError(f"cannot write {Path(path)}: {e.strerror or e}") from None
+
+
+if __name__ == "__main__":
+    try:
+        _serve(sys.stdin.buffer)
+    except DoeCalibError as e:
+        print(e, file=sys.stderr)
+        sys.exit(1)
