@@ -228,8 +228,11 @@ def candidate_batch(model, effects) -> CandidateBatch:
 def _seen_from(batch, model, measurements, values, effects):
     """``batch`` (built for a model ``model`` grew from) as ``model`` + ``effects`` when it
     holds them and is inert at ``values`` on ``measurements``, else None."""
-    view = None if batch is None else batch.within(model, effects)
-    return view if view is not None and view.inert(measurements, values) else None
+    try:
+        view = None if batch is None else batch.within(model, effects)
+        return view if view is not None and view.inert(measurements, values) else None
+    except (DoeCalibError, ValueError, np.linalg.LinAlgError):  # then as without it
+        return None
 
 
 def batched_columns(model, measurements, values, effects, batch=None) -> list:
