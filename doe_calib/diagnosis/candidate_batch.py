@@ -20,6 +20,14 @@ The same holds away from nominal: :meth:`CandidateBatch.augmented` is
 ``model + e`` made from the batch's Functions (the other candidates' parameters
 held at nominal fold away: the same instructions as ``model + e`` built alone),
 so that the candidates' fits for cross-validation need no chain built each.
+
+Refine grows the model by one of these candidates at a time, and tests the
+others again: :meth:`CandidateBatch.within` sees the same batch from the grown
+model (the chosen candidates' parameters become the base's, at its fitted
+values; the others still at nominal), so one batch serves every step. The
+chain is then the grown model's up to the order in which the effects' joint
+corrections and deflections are summed (rounding, ~1e-16); a chosen effect that
+corrects a placement (whose composition order matters) is not seen this way.
 """
 from __future__ import annotations
 
@@ -97,12 +105,52 @@ class CandidateBatch:
     effects: tuple
     model: Model
     blocks: tuple
+    base_index: tuple | None = None
+
+    def _base_index(self) -> np.ndarray:
+        """Where ``base``'s parameters sit among ``model``'s (the first ones unless grown)."""
+        return np.arange(self.base.n_parameters) if self.base_index is None else \
+            np.asarray(self.base_index)
 
     def values(self, base_values) -> np.ndarray:
-        """The batch's parameter values (SI): ``base_values``, then each candidate at nominal."""
+        """The batch's parameter values (SI): ``base_values`` in their places, each candidate
+        at nominal."""
         v = self.model.nominal().values.copy()
-        v[:self.base.n_parameters] = base_values
+        v[self._base_index()] = base_values
         return v
+
+    def within(self, model, effects) -> "CandidateBatch | None":
+        """This batch as ``model`` + ``effects``, when ``model`` is ``base`` grown by some of
+        this batch's candidates (none correcting a placement) and ``effects`` are among the
+        others; None otherwise (module notes)."""
+        if self.base_index is not None:  # seen from the model it was built for only
+            return None
+        key = [(type(e), e.spec()) for e in self.effects]
+        root = tuple(self.base.effects)
+        grown = tuple(model.effects)
+        if (model.robot is not self.base.robot or model.tool is not self.base.tool
+                or [(type(e), e.spec()) for e in grown[:len(root)]]
+                != [(type(e), e.spec()) for e in root]):
+            return None
+        inside, chosen = [], [(type(e), e.spec()) for e in effects]
+        for e in grown[len(root):]:
+            k = (type(e), e.spec())
+            if k not in key or type(e).placement is not Effect.placement:
+                return None
+            inside.append(key.index(k))
+        if any(k not in key or key.index(k) in inside for k in chosen):
+            return None
+        index = np.concatenate([np.arange(self.base.n_parameters)]
+                               + [np.arange(self.model.n_parameters)[self.blocks[i]]
+                                  for i in inside])
+        names = self.model.nominal().names
+        untagged = [names[i].split(":", 1)[1] if i >= self.base.n_parameters else names[i]
+                    for i in index]
+        if untagged != list(model.nominal().names):  # the grown model's parameters, in order
+            return None
+        return CandidateBatch(model, tuple(effects), self.model,
+                              tuple(self.blocks[key.index(k)] for k in chosen),
+                              tuple(index.tolist()))
 
     def inert(self, measurements, base_values) -> bool:
         """Whether, every candidate at nominal, the batch puts the markers where ``base`` does
@@ -122,7 +170,7 @@ class CandidateBatch:
         """``base + effects[i]``, its Functions made from the batch's (module notes)."""
         description = describe_model(self.base.robot, self.base.tool,
                                      tuple(self.base.effects) + (self.effects[i],))
-        index = np.r_[np.arange(self.base.n_parameters),
+        index = np.r_[self._base_index(),
                       np.arange(self.model.n_parameters)[self.blocks[i]]].tolist()
         m = self.model
         nominal = m.nominal().values
@@ -177,12 +225,27 @@ def candidate_batch(model, effects) -> CandidateBatch:
     return CandidateBatch(model, tuple(effects), big, tuple(blocks))
 
 
-def batched_columns(model, measurements, values, effects) -> list:
+def _seen_from(batch, model, measurements, values, effects):
+    """``batch`` (built for a model ``model`` grew from) as ``model`` + ``effects`` when it
+    holds them and is inert at ``values`` on ``measurements``, else None."""
+    try:
+        view = None if batch is None else batch.within(model, effects)
+        return view if view is not None and view.inert(measurements, values) else None
+    except (DoeCalibError, ValueError, np.linalg.LinAlgError):  # then as without it
+        return None
+
+
+def batched_columns(model, measurements, values, effects, batch=None) -> list:
     """Each candidate's weighted columns Z (3K, q) at ``values`` (SI, the fit of ``model``), or
     None for a candidate to be built alone: a group whose batch cannot be built or is not
-    inert is split in two, down to single candidates."""
+    inert is split in two, down to single candidates. ``batch``: a :class:`CandidateBatch`
+    of a model ``model`` grew from (refine's first), used when it holds every candidate
+    (:meth:`CandidateBatch.within`)."""
     if not effects:
         return []
+    view = _seen_from(batch, model, measurements, values, effects)
+    if view is not None:
+        return view.columns(measurements, values)
     try:
         batch = candidate_batch(model, effects)
         if batch.inert(measurements, values):
@@ -196,11 +259,15 @@ def batched_columns(model, measurements, values, effects) -> list:
             + batched_columns(model, measurements, values, effects[half:]))
 
 
-def grown_models(model, effects, measurements, values) -> list:
+def grown_models(model, effects, measurements, values, batch=None) -> list:
     """``model + e`` for each of ``effects``: through one batch when it builds and is inert
-    at ``values`` (SI) on ``measurements``' configurations, else built one by one."""
+    at ``values`` (SI) on ``measurements``' configurations, else built one by one.
+    ``batch``: as :func:`batched_columns`'s, its Functions used when it holds them."""
     if not effects:
         return []
+    view = _seen_from(batch, model, measurements, values, effects)
+    if view is not None:
+        return [view.augmented(i) for i in range(len(effects))]
     try:
         batch = candidate_batch(model, effects)
         if batch.inert(measurements, values):

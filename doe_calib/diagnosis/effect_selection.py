@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from doe_calib.diagnosis.cross_validation import validation_rms
 from doe_calib.diagnosis.effect_tests import augmented
-from doe_calib.diagnosis.engine import diagnose
+from doe_calib.diagnosis.engine import candidate_batch_for, diagnose
 from doe_calib.diagnosis.refine_result import RefineResult, RefineStep
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.sigma import resolve_sigma
@@ -31,7 +31,8 @@ def _size_words(sizes) -> str:
 def refine(model, measurements, validation=None, level: float = 0.01, max_steps: int = 5,
            min_gain: float = 0.02, folds: int = 5, grouping: str = "auto", progress=None,
            fit=None, registry=None, sigma_mm: float | None = None,
-           practical_um: float = 2.0, tolerance: float = 0.05) -> RefineResult:
+           practical_um: float = 2.0, tolerance: float = 0.05,
+           one_batch: bool = True) -> RefineResult:
     """Grow ``model`` one effect at a time while an effect predicts materially better.
 
     Parameters
@@ -71,6 +72,11 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
     tolerance : float
         σ̂ within this fraction of σ, with no material candidate, is adequate (as
         :func:`~doe_calib.diagnosis.engine.diagnose`).
+    one_batch : bool
+        Build the starting model's candidates once, in one batch, and take every step's
+        candidate columns and grown models from it
+        (:meth:`~doe_calib.diagnosis.candidate_batch.CandidateBatch.within`); False builds
+        them afresh at each step (the reference: the same choices, numbers equal to ~1e-12).
 
     Returns
     -------
@@ -81,11 +87,12 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         measurements, fit = settled.measurements, None
     fit = identify_quietly(model, measurements) if fit is None else fit
     steps, added, reason, effect = [], None, "starting model", None
+    batch = candidate_batch_for(model, measurements, registry) if one_batch else None
     while True:
         fitted = {}  # the candidates diagnose fitted: the chosen one is not fitted again
         diag = diagnose(model, measurements, fit, level, folds, grouping, min_gain=min_gain,
                         registry=registry, practical_um=practical_um,
-                        tolerance=tolerance, candidate_fits=fitted)
+                        tolerance=tolerance, candidate_fits=fitted, batch=batch)
         val = validation_rms(model, fit.parameters.values, validation) \
             if validation is not None else None
         steps.append(RefineStep(model.spec, added, diag.rms_mm, diag.cv_rms_mm, val,

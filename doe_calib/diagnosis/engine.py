@@ -14,9 +14,10 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.diagnosis.candidate import candidate_records
-from doe_calib.diagnosis.candidate_batch import grown_models
+from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_models
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
-from doe_calib.diagnosis.effect_tests import candidate_tests, grown_parameters
+from doe_calib.diagnosis.effect_tests import (candidate_effects, candidate_tests,
+                                              grown_parameters)
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.sign_lead import sign_lead
@@ -48,6 +49,18 @@ def screening_set(measurements, limit: int = SCREENING_CONFIGURATIONS, seed: int
     return subset, (f"candidate effects were tested and cross-validated on {len(keep)} poses "
                     f"drawn at random ({len(subset.configurations)} of {len(cfg)} "
                     f"configurations); the adequacy test and the fit use every reading")
+
+
+def candidate_batch_for(model, measurements, registry=None):
+    """Every candidate effect of ``model`` (those :func:`diagnose` tests on ``measurements``)
+    in one :class:`~doe_calib.diagnosis.candidate_batch.CandidateBatch`, or None when they
+    cannot be built together: what :func:`diagnose` takes as ``batch`` for ``model`` and the
+    models grown from it."""
+    screen, _ = screening_set(measurements)
+    try:
+        return candidate_batch(model, candidate_effects(model, screen.configurations, registry))
+    except (DoeCalibError, ValueError):
+        return None
 
 
 def describe(candidate, robot, registry=None) -> str:
@@ -252,7 +265,7 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
              grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
              tolerance: float = 0.05, progress=None, registry=None,
              sigma_mm: float | None = None, practical_um: float = 2.0,
-             candidate_fits: dict | None = None) -> DiagnosisResult:
+             candidate_fits: dict | None = None, batch=None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
 
     Parameters
@@ -296,6 +309,10 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         with spec → (``model`` + the effect, its fit to ``measurements`` from this fit's
         values, the effect's parameters at nominal): what
         :func:`~doe_calib.diagnosis.effect_selection.refine` takes on, not fitting again.
+    batch : CandidateBatch, optional
+        The candidates of a model ``model`` grew from, built once (refine's, from
+        :func:`candidate_batch_for`): the candidates' columns and grown models come from it
+        when it holds them all, instead of from a batch built here.
 
     Returns
     -------
@@ -315,12 +332,12 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     screen, screened = screening_set(measurements)
     split = make_folds(screen, folds, grouping)
     cv = cross_validated_rms(model, screen, params, split)
-    tried = candidate_tests(model, screen, params, registry=registry)
+    tried = candidate_tests(model, screen, params, registry=registry, batch=batch)
     tests = list(tried.tests)
     chosen = _groups_to_try(tests, level, cv_top)
     scored = {}
     effects = [parse_effect(t.spec, registry=registry) for t in chosen]
-    grown = grown_models(model, effects, screen, params.values)
+    grown = grown_models(model, effects, screen, params.values, batch)
     for i, (t, effect, big) in enumerate(zip(chosen, effects, grown)):
         if progress:
             progress(i, len(chosen), t.spec)

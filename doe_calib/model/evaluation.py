@@ -35,6 +35,7 @@ class _Batch:
         self.shapes = [function.size_out(i) for i in range(function.n_out())]
         self.nbytes = sum(a.nbytes for a in self.args + self.res)
         self.buffer, self.call = self.mapped.buffer()
+        self.filled = False  # whether the buffers hold a call's inputs and outputs
         for i, a in enumerate(self.args):
             self.buffer.set_arg(i, memoryview(a))
         for i, r in enumerate(self.res):
@@ -42,9 +43,14 @@ class _Batch:
 
     def __call__(self, inputs) -> list:
         # Column-major (k, M) buffers are the same memory as C-order (M, k) arrays.
-        for a, x in zip(self.args, inputs):
-            a[...] = np.asarray(x, float).reshape(a.shape)
-        self.call()
+        new = [np.asarray(x, float).reshape(a.shape) for a, x in zip(self.args, inputs)]
+        # the very inputs of the last call (the same bits): its outputs are still in the buffers
+        # (a fit's last Jacobian asked again by what reads the fit)
+        if not (self.filled and all(a.tobytes() == x.tobytes() for a, x in zip(self.args, new))):
+            for a, x in zip(self.args, new):
+                a[...] = x
+            self.call()
+            self.filled = True
         # Each output buffer holds M column-major (rows, cols) blocks side by side.
         return [r.reshape(self.m, cols, rows).transpose(0, 2, 1).copy()
                 for r, (rows, cols) in zip(self.res, self.shapes)]

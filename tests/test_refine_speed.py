@@ -1,0 +1,215 @@
+"""The refine fast paths against the reference ones (issue 22).
+
+A repeated evaluation returns the buffers of the last call (the same bits as evaluating
+again); the detection power's noncentrality (now estimation/noncentral_chi_square.py) is
+the root of SciPy's power equation; refine builds the starting model's candidates once and sees
+that batch from each grown model (the columns and grown models of a batch built for it, to
+1e-12; the same refine to 1e-9).
+"""
+import warnings
+
+import independent_sim as sim
+import numpy as np
+import pytest
+from scipy import optimize, stats
+
+from doe_calib import Configurations, Robot, Tool, build_model, examples, simulate
+from doe_calib.diagnosis.candidate_batch import candidate_batch
+from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.engine import candidate_batch_for
+from doe_calib.diagnosis.effect_tests import candidate_effects
+from doe_calib.errors import DoeCalibWarning
+from doe_calib.estimation.identify import identify_quietly
+from doe_calib.estimation.noncentral_chi_square import noncentrality_for_power
+from doe_calib.io.csv_files import read_measurements
+from doe_calib.model.evaluation import Workspace, observation_matrix
+from doe_calib.model.loads import hanging_mass_wrench
+from doe_calib.model.simulate import random_configurations, random_truth
+
+MARKERS = {"A": [0.15, 0.0, 0.08], "B": [-0.075, 0.13, 0.08], "C": [-0.075, -0.13, 0.08]}  # m
+
+
+@pytest.mark.parametrize("dof", [1, 2, 3, 5, 8, 13, 40, 120])
+@pytest.mark.parametrize("alpha, power", [(0.05, 0.8), (0.01, 0.9), (0.001, 0.5)])
+def test_noncentrality_is_the_root_of_the_power_equation(dof, alpha, power):
+    critical = stats.chi2.isf(alpha, dof)
+    truth = optimize.brentq(lambda lam: stats.ncx2.sf(critical, dof, lam) - power, 1e-9, 1e4,
+                            xtol=1e-13, rtol=1e-14)
+    assert noncentrality_for_power(dof, alpha, power) == pytest.approx(truth, rel=1e-10)
+
+
+def test_power_at_or_below_the_level_needs_no_signal():
+    assert noncentrality_for_power(3, 0.05, 0.05) == 0.0
+
+
+def _campaign(model, seed, n=7):
+    rng = np.random.default_rng(seed)
+    q = random_configurations(model.robot, n, rng)
+    w = rng.normal(scale=[300, 300, 300, 50, 50, 50], size=(n, 6))
+    return Configurations.from_arrays(q, w), random_truth(model, rng)
+
+
+def test_a_repeated_evaluation_is_the_evaluation(model6):
+    cfg, values = _campaign(model6, 1)
+    other_cfg, other = _campaign(model6, 2)
+    ws = Workspace()
+    first = observation_matrix(model6, values, cfg, workspace=ws)
+    again = observation_matrix(model6, values, cfg, workspace=ws)  # from the buffers
+    for a, b in zip(first, again):
+        assert np.array_equal(a, b)
+        a[...] = 0.0  # the caller owns what it was given: the buffers are not touched
+    # a changed value, in place or not, is evaluated afresh, and equals a fresh workspace's
+    moved = values.copy()
+    moved[7] += 1e-9
+    for vals, c in ((moved, cfg), (other, cfg), (values, other_cfg), (values, cfg)):
+        got = observation_matrix(model6, vals, c, workspace=ws)
+        fresh = observation_matrix(model6, vals, c, workspace=Workspace())
+        for a, b in zip(got, fresh):
+            assert np.array_equal(a, b)
+    assert np.any(observation_matrix(model6, moved, cfg, workspace=ws)[1]
+                  != observation_matrix(model6, values, cfg, workspace=ws)[1])
+
+
+def test_the_first_call_is_evaluated_even_at_zero(model6):
+    """The buffers start at zero: a first call with zero inputs is still evaluated."""
+    cfg = Configurations.from_arrays(np.zeros((3, 6)), np.zeros((3, 6)))
+    zero = np.zeros(model6.n_parameters)
+    got = observation_matrix(model6, zero, cfg, workspace=Workspace())
+    x_single = np.array(model6.observation(np.zeros(6), np.zeros(6),
+                                           np.zeros(model6.observation.size1_in(2)),
+                                           zero)[0]).ravel()
+    assert np.abs(got[0][0].ravel()).max() > 0  # the tool's markers are off the flange
+    assert np.array_equal(got[0][0].ravel(), x_single)
+
+
+def _loaded_campaign(model, n, seed, sigma=2e-5):
+    """n poses of ``model``'s robot, each unloaded and under a 250 kg pull, simulated with the
+    full model (rigid and compliant) at random parameters."""
+    rng = np.random.default_rng(seed)
+    true = build_model(model.robot, model.tool, "joint_offset+geometry+joint_compliance")
+    truth = random_truth(true, rng)
+    q = np.repeat(random_configurations(model.robot, n, rng), 2, axis=0)
+    w = np.zeros((2 * n, 6))
+    w[1::2] = hanging_mass_wrench(true, truth, q[1::2], 250.0, (0.0, 0.0, 0.2))
+    cfg = Configurations.from_arrays(q, w, pose=np.repeat(np.arange(n) + 1, 2))
+    return simulate(true, truth, cfg, sigma, rng)
+
+
+@pytest.fixture(scope="module")
+def rigid6(robot6, tool6):
+    return build_model(robot6, tool6, "joint_offset+geometry")
+
+
+def _pick(effects, specs):
+    out = [e for e in effects if e.spec() in specs]
+    assert [e.spec() for e in out] == [s for s in specs if s in [e.spec() for e in out]]
+    assert len(out) == len(specs)
+    return out
+
+
+def _close(a, b, tol=1e-12):
+    return np.abs(a - b).max() <= tol * max(np.abs(a).max(), np.abs(b).max(), 1e-300)
+
+
+def test_one_batch_seen_from_a_grown_model_is_the_grown_models_batch(rigid6):
+    """Refine's one batch, seen from the model grown by two of its candidates, gives the
+    columns of the batch built for that model and the grown models built alone (1e-12)."""
+    meas = _loaded_campaign(rigid6, 10, 3)
+    cfg = meas.configurations
+    first = candidate_effects(rigid6, cfg)
+    batch = candidate_batch(rigid6, first)
+    chosen = _pick(first, ["compliance_by_angle(j2,bins=3)", "cyclic(j3,harmonics=1)"])
+    grown = build_model(rigid6.robot, rigid6.tool, tuple(rigid6.effects) + tuple(chosen))
+    rest = candidate_effects(grown, cfg)
+    assert len(rest) < len(first) - 2  # the chosen joints' other shapes are not tried again
+    rng = np.random.default_rng(4)
+    values = grown.nominal().values.copy()
+    values[:rigid6.n_parameters] = random_truth(rigid6, rng)
+    new = np.arange(rigid6.n_parameters, grown.n_parameters)
+    values[new] = rng.normal(size=new.size) * [grown.parameters[k].scale for k in new]
+    view = batch.within(grown, rest)
+    assert view is not None and view.inert(meas, values)
+    ours = view.columns(meas, values)
+    theirs = candidate_batch(grown, rest).columns(meas, values)
+    assert len(ours) == len(rest)
+    for a, b, e in zip(ours, theirs, rest):
+        assert _close(a, b), e.spec()
+    for e in rest[:: max(1, len(rest) // 6)]:
+        k = rest.index(e)
+        alone = build_model(grown.robot, grown.tool, tuple(grown.effects) + (e,))
+        mine = view.augmented(k)
+        assert mine.spec == alone.spec and mine.parameters == alone.parameters
+        v = alone.nominal().values.copy()
+        v[:grown.n_parameters] = values
+        extra = np.arange(grown.n_parameters, alone.n_parameters)
+        v[extra] = rng.normal(size=extra.size) * [alone.parameters[j].scale for j in extra]
+        for a, b in zip(observation_matrix(mine, v, cfg), observation_matrix(alone, v, cfg)):
+            assert _close(a, b), e.spec()
+
+
+def test_one_batch_is_not_seen_where_the_order_of_effects_matters(rigid6):
+    meas = _loaded_campaign(rigid6, 6, 5)
+    first = candidate_effects(rigid6, meas.configurations)
+    batch = candidate_batch(rigid6, first)
+    link = _pick(first, ["link_compliance"])
+    bent = build_model(rigid6.robot, rigid6.tool, tuple(rigid6.effects) + tuple(link))
+    # a placement correction inside: its composition with the others' is not the batch's
+    assert batch.within(bent, candidate_effects(bent, meas.configurations)) is None
+    cyc = _pick(first, ["cyclic(j3,harmonics=1)"])
+    grown = build_model(rigid6.robot, rigid6.tool, tuple(rigid6.effects) + tuple(cyc))
+    assert batch.within(grown, cyc) is None  # a candidate already in the model
+    other = build_model(rigid6.robot, rigid6.tool, "joint_offset")
+    assert batch.within(other, first[:3]) is None  # not grown from the batch's model
+    assert batch.within(grown, first[-2:]) is not None
+
+
+@pytest.fixture(scope="module")
+def hidden_campaign(tmp_path_factory):
+    """30 poses of the KR 270, unloaded and under 250 kg, from the independent simulator: two
+    angle-dependent compliances and a cyclic error (refine adds three effects)."""
+    chain = sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0")
+    robot = Robot.from_urdf(examples.ROBOT_URDF, flange="tool0")
+    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()},
+                             flange="tool0")
+    rng = np.random.default_rng(2)
+    hidden = (sim.SmoothAngleCompliance(1, 1e-6, 4e-7, phase=0.7), sim.Cyclic(2, 2e-5, 2),
+              sim.SmoothAngleCompliance(2, 6e-7, 2e-7))
+    truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng, effects=hidden)
+    q, w = sim.unloaded_and_loaded(chain, sim.random_configurations(chain, 30, rng), 250.0,
+                                   [0.0, 0.0, 0.2])
+    path = tmp_path_factory.mktemp("hidden") / "campaign.csv"
+    sim.write_campaign(path, chain, truth, q, w, list(MARKERS), 0.02, rng)
+    return build_model(robot, tool, "joint_offset+geometry"), read_measurements(path, robot, tool)
+
+
+def test_refine_from_one_batch_equals_refine_with_a_batch_per_step(hidden_campaign):
+    """The same steps, stop and candidates; every number to 1e-9 (rounding: the effects'
+    corrections summed in another order)."""
+    start, meas = hidden_campaign
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DoeCalibWarning)
+        fit = identify_quietly(start, meas)
+        fast = refine(start, meas, fit=fit, max_steps=3)
+        slow = refine(start, meas, fit=fit, max_steps=3, one_batch=False)
+    assert len(fast.steps) == 4  # it grows: the comparison covers grown models
+    final = build_model(start.robot, start.tool, fast.fit.model)
+    batch = candidate_batch_for(start, meas)  # what refine saw every step from
+    assert batch.within(final, candidate_effects(final, meas.configurations)) is not None
+    assert [s.added for s in fast.steps] == [s.added for s in slow.steps]
+    assert fast.stopped == slow.stopped
+    for a, b in zip(fast.steps, slow.steps):
+        assert a.cv_rms_mm == pytest.approx(b.cv_rms_mm, rel=1e-9)
+        assert a.rms_mm == pytest.approx(b.rms_mm, rel=1e-9)
+        assert [f.value for f in a.fitted] == pytest.approx([f.value for f in b.fitted],
+                                                           rel=1e-9)
+    assert fast.fit.parameters.names == slow.fit.parameters.names
+    assert np.array_equal(fast.fit.parameters.free, slow.fit.parameters.free)
+    scale = fast.fit.parameters.scales
+    assert np.abs((fast.fit.parameters.values - slow.fit.parameters.values) / scale).max() \
+        <= 1e-9
+    ours, theirs = fast.diagnosis.candidates, slow.diagnosis.candidates
+    assert [c.spec for c in ours] == [c.spec for c in theirs]
+    for a, b in zip(ours, theirs):
+        assert a.log10_p == pytest.approx(b.log10_p, rel=1e-9, abs=1e-9), a.spec
+        if b.cv_rms_mm is not None:
+            assert a.cv_rms_mm == pytest.approx(b.cv_rms_mm, rel=1e-9), a.spec
