@@ -15,9 +15,9 @@ import numpy as np
 
 from doe_calib.diagnosis.candidate import candidate_records
 from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_models
+from doe_calib.diagnosis.candidate_scoring import score_candidates
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
-from doe_calib.diagnosis.effect_tests import (candidate_effects, candidate_tests,
-                                              grown_parameters)
+from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.sign_lead import sign_lead
@@ -25,7 +25,6 @@ from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.design.detectability import SEPARATE
 from doe_calib.errors import DoeCalibError, ModelError
 from doe_calib.estimation.identify import identify_quietly
-from doe_calib.estimation.plausibility import beyond_plausible, out_of_bounds, value_words
 from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.model.effects import parse_effect
 
@@ -71,36 +70,6 @@ def describe(candidate, robot, registry=None) -> str:
         return parse_effect(candidate.spec, registry=registry).describe(robot)
     except ModelError:
         return f"effect {candidate.spec}"
-
-
-def _fitted(fit, names, effect) -> tuple:
-    """The new parameters' values ± a-posteriori std in display units, and a note on those
-    beyond their bounds or plausible range (the parameters' and ``effect``'s words)."""
-    ps = fit.parameters
-    std = fit.std(a_posteriori=True)
-    rows = []
-    for name in names:
-        i = ps.names.index(name)
-        p = ps.parameters[i]
-        f = p.display_factor
-        rows.append({"name": name, "value": float(ps.values[i] * f),
-                     "std": float(std[i] * f) if ps.free[i] else None, "unit": p.display_unit,
-                     "free": bool(ps.free[i])})
-    odd = []
-    wrong = out_of_bounds(ps, std, names)
-    if wrong:
-        words = [value_words(p, ps[p.name], s) for p, _, s in wrong]
-        low = all(v < p.bounds[0] for p, v, _ in wrong)
-        odd.append(("negative " if low and all(p.bounds[0] == 0 for p, *_ in wrong) else
-                    "beyond physical bounds ") + ", ".join(words))
-        signs = list(dict.fromkeys(p.sign for p, *_ in wrong if p.sign))
-        odd[-1] += "".join(f" ({text})" for text in signs)
-    far = beyond_plausible(ps, names)
-    if far:
-        words = [value_words(p, v, std[ps.names.index(p.name)]) for p, v in far]
-        odd.append(f"{', '.join(words)}: {effect.implausible_words}")
-    note = ("physically implausible: " + "; ".join(odd)) if odd else ""
-    return tuple(rows), note
 
 
 def _groups_to_try(tests, level, top):
@@ -265,7 +234,8 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
              grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
              tolerance: float = 0.05, progress=None, registry=None,
              sigma_mm: float | None = None, practical_um: float = 2.0,
-             candidate_fits: dict | None = None, batch=None) -> DiagnosisResult:
+             candidate_fits: dict | None = None, batch=None,
+             workers: int | None = None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
 
     Parameters
@@ -313,6 +283,10 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         The candidates of a model ``model`` grew from, built once (refine's, from
         :func:`candidate_batch_for`): the candidates' columns and grown models come from it
         when it holds them all, instead of from a batch built here.
+    workers : int, optional
+        Threads fitting the chosen candidates at once (default: the machine's cores, at
+        most 4; 1: one after another). The result does not depend on it
+        (:mod:`~doe_calib.diagnosis.candidate_scoring`).
 
     Returns
     -------
@@ -338,21 +312,16 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     scored = {}
     effects = [parse_effect(t.spec, registry=registry) for t in chosen]
     grown = grown_models(model, effects, screen, params.values, batch)
-    for i, (t, effect, big) in enumerate(zip(chosen, effects, grown)):
-        if progress:
-            progress(i, len(chosen), t.spec)
-        bp = grown_parameters(big, params)
-        try:  # folds start from the grown model's own fit: what they hold fixed is then right
-            big_fit = identify_quietly(big, screen, bp, register=False)
-        except DoeCalibError:
+    scores = score_candidates(grown, effects, params, screen, split, workers,
+                              progress=None if progress is None else
+                              (lambda i, n: progress(i, n, chosen[i].spec)))
+    for t, big, score in zip(chosen, grown, scores):
+        if score is None:  # the grown model's fit failed
             scored[t.spec] = t.with_cv(float("nan"))
             continue
         if candidate_fits is not None and screen is measurements:
-            candidate_fits[t.spec] = (big, big_fit)
-        new = [n for n in big_fit.parameters.names if n not in params.names]
-        rows, odd = _fitted(big_fit, new, effect)
-        scored[t.spec] = t.with_cv(cross_validated_rms(big, screen, big_fit.parameters, split),
-                                   rows, odd)
+            candidate_fits[t.spec] = (big, score.fit)
+        scored[t.spec] = t.with_cv(score.cv_rms_mm, score.rows, score.odd)
     ranked = sorted(scored.values(), key=lambda t: (_cv_key(t), t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]
     proposed = _proposal(ranked, cv, level, min_gain)

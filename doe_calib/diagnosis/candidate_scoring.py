@@ -1,0 +1,145 @@
+"""The chosen candidates scored: each grown model fitted, then cross-validated.
+
+Every chosen candidate of a diagnosis is fitted as the model grown by it, from
+the model's own fit, and its cross-validated RMS computed
+(:func:`~doe_calib.diagnosis.cross_validation.cross_validated_rms`). The
+candidates are independent of each other, and CasADi evaluates without
+Python's lock: ``workers`` threads fit them at once, each in its own
+evaluation workspace (:func:`~doe_calib.model.evaluation.thread_workspace`). The
+scores are those of fitting one after another, bit for bit: no fit reads
+another's state. The toolkit's warnings of these fits are held back, as by
+:func:`~doe_calib.estimation.identify.identify_quietly`, once for every thread
+(a ``warnings.catch_warnings`` per thread would race on the global filters).
+"""
+from __future__ import annotations
+
+import os
+import warnings
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+from doe_calib.diagnosis.cross_validation import cross_validated_rms
+from doe_calib.diagnosis.effect_tests import grown_parameters
+from doe_calib.errors import DoeCalibError, DoeCalibWarning
+from doe_calib.estimation.identify import identify
+from doe_calib.estimation.plausibility import beyond_plausible, out_of_bounds, value_words
+
+#: Threads at most by default: beyond, the fits' Python parts wait on each other.
+MAX_WORKERS = 4
+
+
+@dataclass(frozen=True)
+class CandidateScore:
+    """One grown model's fit and cross-validated RMS.
+
+    Attributes
+    ----------
+    fit : IdentificationResult
+        The grown model's fit to the screening readings.
+    cv_rms_mm : float
+        Its cross-validated RMS per coordinate, mm.
+    rows : tuple of dict
+        The effect's parameters: value ± std in display units (:func:`fitted_rows`).
+    odd : str
+        Words on those beyond their bounds or plausible range ("" when none).
+    """
+
+    fit: object
+    cv_rms_mm: float
+    rows: tuple
+    odd: str
+
+
+def default_workers() -> int:
+    """Threads for the candidates' fits: the machine's cores, at most :data:`MAX_WORKERS`."""
+    return max(1, min(MAX_WORKERS, os.cpu_count() or 1))
+
+
+def score_candidates(grown, effects, params, measurements, folds, workers: int | None = None,
+                     progress=None) -> list:
+    """Fit and cross-validate each grown model.
+
+    Parameters
+    ----------
+    grown : sequence of Model
+        The model grown by each candidate effect.
+    effects : sequence of Effect
+        The effects, in the same order.
+    params : ParameterSet
+        The model's own fit: the grown models start from its values.
+    measurements : Measurements
+        The readings the candidates are fitted and cross-validated on.
+    folds : Folds
+        The cross-validation's folds.
+    workers : int, optional
+        Threads at once (default :func:`default_workers`; 1: one after another).
+    progress : callable, optional
+        ``progress(i, n)`` as the i-th of n candidates is scored, in order.
+
+    Returns
+    -------
+    list of CandidateScore or None
+        In the order of ``grown``; None where the grown model's fit failed.
+    """
+    workers = default_workers() if workers is None else max(1, int(workers))
+    jobs = list(zip(grown, effects))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DoeCalibWarning)
+        if workers == 1 or len(jobs) < 2:
+            out = []
+            for i, (big, effect) in enumerate(jobs):
+                if progress:
+                    progress(i, len(jobs))
+                out.append(_score(big, effect, params, measurements, folds))
+            return out
+        with ThreadPoolExecutor(min(workers, len(jobs))) as pool:
+            futures = [pool.submit(_score, big, effect, params, measurements, folds)
+                       for big, effect in jobs]
+            out = []
+            for i, future in enumerate(futures):
+                if progress:
+                    progress(i, len(jobs))
+                out.append(future.result())
+            return out
+
+
+def _score(big, effect, params, measurements, folds):
+    bp = grown_parameters(big, params)
+    try:  # folds start from the grown model's own fit: what they hold fixed is then right
+        fit = identify(big, measurements, bp, register=False)
+    except DoeCalibError:
+        return None
+    new = [n for n in fit.parameters.names if n not in params.names]
+    rows, odd = fitted_rows(fit, new, effect)
+    return CandidateScore(fit, cross_validated_rms(big, measurements, fit.parameters, folds),
+                          rows, odd)
+
+
+def fitted_rows(fit, names, effect) -> tuple:
+    """The new parameters' values ± a-posteriori std in display units, and a note on those
+    beyond their bounds or plausible range (the parameters' and ``effect``'s words)."""
+    ps = fit.parameters
+    std = fit.std(a_posteriori=True)
+    rows = []
+    for name in names:
+        i = ps.names.index(name)
+        p = ps.parameters[i]
+        f = p.display_factor
+        rows.append({"name": name, "value": float(ps.values[i] * f),
+                     "std": float(std[i] * f) if ps.free[i] else None, "unit": p.display_unit,
+                     "free": bool(ps.free[i])})
+    odd = []
+    wrong = out_of_bounds(ps, std, names)
+    if wrong:
+        words = [value_words(p, ps[p.name], s) for p, _, s in wrong]
+        low = all(v < p.bounds[0] for p, v, _ in wrong)
+        odd.append(("negative " if low and all(p.bounds[0] == 0 for p, *_ in wrong) else
+                    "beyond physical bounds ") + ", ".join(words))
+        signs = list(dict.fromkeys(p.sign for p, *_ in wrong if p.sign))
+        odd[-1] += "".join(f" ({text})" for text in signs)
+    far = beyond_plausible(ps, names)
+    if far:
+        words = [value_words(p, v, std[ps.names.index(p.name)]) for p, v in far]
+        odd.append(f"{', '.join(words)}: {effect.implausible_words}")
+    note = ("physically implausible: " + "; ".join(odd)) if odd else ""
+    return tuple(rows), note
