@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.estimation.least_squares import Reduction, reduce_blocks
+from doe_calib.estimation.least_squares import Reduction, reduce_augmented
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 
 #: Configurations evaluated at once by the blockwise functions.
@@ -93,9 +93,25 @@ def reduce_jacobian(model, measurements, values, columns=None, scale=None,
     def blocks():
         for cfg, rows, c in _blocks(measurements, block):
             x, b = observation_matrix(model, values, cfg)
-            j, s = measurements.marker[rows], measurements.sigma[rows, None]
-            r = ((measurements.xyz[rows] - x[c, j]) / s).ravel()
-            jac = -(b[c, j][:, :, columns] * (scale / s[:, :, None])).reshape(r.size, -1)
-            yield jac, r
+            yield augmented_block(measurements, rows, c, x, b, columns, scale)
 
-    return reduce_blocks(blocks(), len(columns))
+    return reduce_augmented(blocks(), len(columns))
+
+
+def augmented_block(measurements, rows, config, x, b, columns, scale) -> np.ndarray:
+    """``[∂r/∂p[:, columns]·diag(scale) | r]`` of the readings ``rows``, shape (3·len(rows), n + 1).
+
+    ``x`` (M, n_markers, 3) and ``b`` (M, n_markers, 3, P) are the block's marker positions
+    and observation matrix; ``config`` indexes them per reading. One gather of B's rows and
+    columns and one product, written into the result (no further copy).
+    """
+    n_markers = x.shape[1]
+    picked = config * n_markers + measurements.marker[rows]
+    s = measurements.sigma[rows, None]
+    out = np.empty((3 * len(rows), len(columns) + 1))
+    view = out.reshape(len(rows), 3, len(columns) + 1)
+    jac = b.reshape(-1, 3, b.shape[-1])[picked[:, None, None], np.arange(3)[:, None],
+                                        columns]
+    np.multiply(jac, -(scale / s)[:, None, :], out=view[:, :, :-1])
+    np.divide(measurements.xyz[rows] - x.reshape(-1, 3)[picked], s, out=view[:, :, -1])
+    return out
