@@ -7,6 +7,7 @@ have a decimal comma. Shared by every reader of our CSV files.
 from __future__ import annotations
 
 import csv
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -14,6 +15,8 @@ from doe_calib.errors import DataError
 
 #: Field separators a header may use.
 DELIMITERS = (",", ";", "\t")
+#: What ``str.strip`` removes (the same characters): a line without any needs no stripping.
+_SPACE = re.compile(r"\s")
 
 
 @dataclass
@@ -22,13 +25,15 @@ class Table:
 
     ``decimal_comma``: the fields are separated by ``;`` or tabs, so a number
     may be written with a decimal comma (``1,5``), as spreadsheets in many
-    European locales write it.
+    European locales write it. ``text``: each row's line as read (the same order as
+    ``rows``), for readers that convert whole columns at once.
     """
 
     path: str
     columns: list
     rows: list  # (line, fields)
     decimal_comma: bool = False
+    text: list | None = None
 
     def col(self, name: str) -> str:
         return f"'{name}' ({self.columns.index(name) + 1})"
@@ -72,18 +77,20 @@ def read_table(path) -> Table:
     if not kept:
         raise DataError("the file is empty: expected a header row", path, 1)
     sep = delimiter(kept[0][1])
-    rows = []
-    # One physical line is one record. Without quotes one reader does every line;
+    # One physical line is one record. Without quotes one reader splits every line;
     # with them each line gets its own, so an open quote cannot swallow the next line.
-    one = csv.reader((line for _, line in kept), delimiter=sep) \
-        if '"' not in text else None
-    for number, line in kept:
+    try:
+        split = list(csv.reader((line for _, line in kept), delimiter=sep)) \
+            if '"' not in text else None
+    except csv.Error:
+        split = None  # the line at fault is found below
+    rows = []
+    for k, (number, line) in enumerate(kept):
         try:
-            fields = next(one) if one is not None else \
-                next(csv.reader([line], delimiter=sep))
+            fields = split[k] if split is not None else next(csv.reader([line], delimiter=sep))
         except csv.Error as exc:
             raise DataError(f"cannot split the line into fields ({exc})", path, number) from None
-        rows.append((number, [f.strip() for f in fields]))
+        rows.append((number, [f.strip() for f in fields] if _SPACE.search(line) else fields))
     header, rows = rows[0], rows[1:]
     line, columns = header
     for i, c in enumerate(columns):
@@ -93,4 +100,4 @@ def read_table(path) -> Table:
             raise DataError(f"column {c!r} appears twice in the header", path, line, i + 1)
     if not rows:
         raise DataError("the file has a header but no data rows", path, line)
-    return Table(path, columns, rows, sep != ",")
+    return Table(path, columns, rows, sep != ",", [line for _, line in kept[1:]])
