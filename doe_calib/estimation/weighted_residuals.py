@@ -42,7 +42,13 @@ def weighted_residual(model, measurements, values, jacobian: bool = True):
 
 
 def _blocks(measurements, size: int):
-    """(configurations of the block, their readings' rows, local config index) per block."""
+    """(configurations of the block, their readings' rows, local config index) per block.
+
+    With more than one block, every block has ``size`` configurations: the last is padded
+    with copies of the final configuration (no reading refers to them), so one Function
+    mapped over ``size`` serves them all (mapping a Function anew for the remainder costs
+    more than evaluating the padding).
+    """
     order = np.argsort(measurements.config, kind="stable")
     sorted_config = measurements.config[order]
     n = len(measurements.configurations)
@@ -50,8 +56,8 @@ def _blocks(measurements, size: int):
         c1 = min(c0 + size, n)
         lo, hi = np.searchsorted(sorted_config, [c0, c1])
         rows = order[lo:hi]
-        yield (measurements.configurations.subset(np.arange(c0, c1)), rows,
-               measurements.config[rows] - c0)
+        index = np.arange(c0, c1) if n <= size else np.minimum(np.arange(c0, c0 + size), n - 1)
+        yield (measurements.configurations.subset(index), rows, measurements.config[rows] - c0)
 
 
 def residual_norm2(model, measurements, values, block: int = BLOCK_CONFIGURATIONS) -> float:
@@ -110,8 +116,13 @@ def augmented_block(measurements, rows, config, x, b, columns, scale) -> np.ndar
     s = measurements.sigma[rows, None]
     out = np.empty((3 * len(rows), len(columns) + 1))
     view = out.reshape(len(rows), 3, len(columns) + 1)
-    jac = b.reshape(-1, 3, b.shape[-1])[picked[:, None, None], np.arange(3)[:, None],
-                                        columns]
+    flat = b.reshape(-1, 3, b.shape[-1])
+    if len(picked) == len(flat) and np.array_equal(picked, np.arange(len(flat))):
+        # every marker of every configuration, in order (a complete campaign): no row gather
+        jac = flat if np.array_equal(columns, np.arange(flat.shape[-1])) else \
+            np.take(flat, columns, axis=2)
+    else:
+        jac = flat[picked[:, None, None], np.arange(3)[:, None], columns]
     np.multiply(jac, -(scale / s)[:, None, :], out=view[:, :, :-1])
     np.divide(measurements.xyz[rows] - x.reshape(-1, 3)[picked], s, out=view[:, :, -1])
     return out
