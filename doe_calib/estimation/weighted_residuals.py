@@ -19,11 +19,19 @@ from doe_calib.model.evaluation import marker_positions, observation_matrix
 BLOCK_CONFIGURATIONS = 2048
 
 
+def marker_points(model, measurements, values, block: int = BLOCK_CONFIGURATIONS) -> np.ndarray:
+    """The model's position of the marker of every reading, shape (K, 3), m (a block of
+    configurations at a time, each the same numbers as all at once)."""
+    out = np.empty((len(measurements), 3))
+    for cfg, rows, c in _blocks(measurements, block):
+        out[rows] = marker_positions(model, values, cfg)[c, measurements.marker[rows]]
+    return out
+
+
 def marker_residuals(model, measurements, values) -> np.ndarray:
     """Reading minus model of every reading, shape (K, 3), m (the one place it is computed
     from marker positions; the weighted residual below divides it by σ)."""
-    x = marker_positions(model, values, measurements.configurations)
-    return measurements.xyz - x[measurements.config, measurements.marker]
+    return measurements.xyz - marker_points(model, measurements, values)
 
 
 def weighted_residual(model, measurements, values, jacobian: bool = True):
