@@ -1,7 +1,10 @@
 """A clean measurement table read a column at a time (the fast path of ``read_measurements``).
 
 Parsing 100 000 rows one cell at a time in Python takes tens of seconds.
-Here each column is converted and checked as one numpy array. This path
+Here each column is converted and checked as one numpy array: from the
+file's text in one ``numpy.loadtxt`` pass when the table is clean (no
+quotes, no white space, no empty number), else from the split fields; the
+configurations are keyed by integer codes (``numpy.unique``). This path
 never reports: on the first thing it does not accept (a bad number, an
 empty cell without a default, a value past a joint limit, an unknown marker,
 a repeated reading, rows of one pose disagreeing on q) it returns None, and
@@ -38,24 +41,35 @@ class Columns:
     line: np.ndarray
 
 
+def _strings(table, names) -> dict:
+    """The columns ``names`` of a clean table (:attr:`~doe_calib.io.table.Table.clean`) as
+    lists of str, in one C pass over its text."""
+    if not names:
+        return {}
+    at = [table.columns.index(n) for n in names]
+    out = np.loadtxt(table.text, delimiter=table.separator, usecols=at, comments=None,
+                     ndmin=2, dtype=str, encoding=None)
+    return {n: out[:, k].tolist() for k, n in enumerate(names)}
+
+
 def _converted(table, names) -> dict | None:
-    """The columns ``names`` of a clean table as floats in one C pass over its text
-    (``numpy.loadtxt``); None when any cell is not a plain number (an empty cell, a
-    decimal comma, a quoted field, ...: then each column is converted alone).
+    """The columns ``names`` of a clean table (:attr:`~doe_calib.io.table.Table.clean`) as
+    floats in one C pass over its text (``numpy.loadtxt``); None when any cell is not a
+    plain number (an empty cell, a decimal comma, ``1_000``, ...: then each column is
+    converted alone, from the split fields).
 
     ``loadtxt`` accepts a subset of what ``float`` accepts (no ``1_000``, no non-ASCII
     digits), with the same correctly rounded values.
     """
-    if table.text is None or table.decimal_comma or not names or \
-            any('"' in line for line in table.text):
+    if table.decimal_comma or not names:
         return None
     at = [table.columns.index(n) for n in names]
     try:
-        out = np.loadtxt(table.text, delimiter=",", usecols=at, comments=None, ndmin=2,
+        out = np.loadtxt(table.text, delimiter=table.separator, usecols=at, comments=None, ndmin=2,
                          dtype=float, encoding=None)
     except ValueError:
         return None
-    if out.shape != (len(table.rows), len(names)):
+    if out.shape != (len(table.text), len(names)):
         return None
     return {n: out[:, k] for k, n in enumerate(names)}
 
@@ -96,20 +110,29 @@ def read_columns(table, robot, tool, sigma_mm, require_xyz: bool, explicit: bool
     parsed CSV, ``explicit``: the file has approach columns.
     """
 
-    fields = [f for _, f in table.rows]
     n_cols = len(table.columns)
-    if any(len(f) != n_cols for f in fields):
-        return None
     col = {c: i for i, c in enumerate(table.columns)}
-    pose = [f[col["pose"]] for f in fields]
-    marker_names = [f[col["marker"]] for f in fields]
-    session = [f[col["session"]] for f in fields] if "session" in col else \
-        [default_session] * len(pose)
+    named = [c for c in ("pose", "marker", "session") if c in col]
+    clean = table.clean  # each field is the text between separators: no split needed
+    if clean:
+        if any(line.count(table.separator) != n_cols - 1 for line in table.text):
+            return None
+        fields = None
+        strings = _strings(table, named)
+    else:
+        fields = [f for _, f in table.rows]
+        if any(len(f) != n_cols for f in fields):
+            return None
+        strings = {c: [f[col[c]] for f in fields] for c in named}
+    pose, marker_names = strings["pose"], strings["marker"]
+    session = strings["session"] if "session" in col else [default_session] * len(pose)
     if not all(pose) or not all(session) or not set(marker_names) <= set(tool.names):
         return None
     numeric = [*joint_columns(robot), *WRENCH, "temperature", "sigma", *XYZ,
                *(approach_columns(robot) if explicit else ())]
-    conv = _converted(table, [c for c in numeric if c in col])
+    conv = _converted(table, [c for c in numeric if c in col]) if clean else None
+    if conv is None and fields is None:
+        fields = [f for _, f in table.rows]
     shown = [_numbers(table, fields, c, None, conv) for c in joint_columns(robot)]
     wrench = [_numbers(table, fields, c, "0", conv) if c in col else np.zeros(len(pose))
               for c in WRENCH]
@@ -168,7 +191,7 @@ def read_columns(table, robot, tool, sigma_mm, require_xyz: bool, explicit: bool
     if len(np.unique(pair)) != len(pair):  # a marker read twice in one configuration
         return None
     return Columns(keys, config, q[first_row], wrench[first_row], temp[first_row], marker,
-                   xyz / 1000.0, sigma / 1000.0, np.array([line for line, _ in table.rows]))
+                   xyz / 1000.0, sigma / 1000.0, np.array(table.numbers))
 
 
 def _codes(values) -> np.ndarray:

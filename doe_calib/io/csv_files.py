@@ -272,7 +272,7 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
     """
     table = read_table(path)
     default_session = session or Path(str(path)).stem
-    header_line = table.rows[0][0] - 1
+    header_line = table.numbers[0] - 1
     qcols = joint_columns(robot)
     required = ["pose", *qcols, "marker", *(XYZ if require_xyz else ())]
     optional = [*WRENCH, "temperature", "sigma", "session", *approach_columns(robot),
