@@ -131,3 +131,14 @@ def test_tied_shares_are_named_in_priority_order(model6):
         b[:, i] = sum(b[:, k[p]] / np.linalg.norm(b[:, k[p]]) for p in perm) * 0.7
         why = dict(analyse(b, params).dependent)["g_flange_tx"]
         assert why.index("marker_A_x") < why.index("marker_B_x") < why.index("marker_C_x"), why
+
+
+def test_the_whole_jacobian_without_a_gather_is_the_gathered_one_to_the_bit(campaign):
+    model, meas = campaign
+    values = model.nominal().values + 1e-5
+    x, b = observation_matrix(model, values, meas.configurations)
+    for sub in (meas, meas.subset(np.random.default_rng(3).permutation(len(meas))[:-7])):
+        r, jac = weighted_residual(model, sub, values)
+        c, j, s = sub.config, sub.marker, sub.sigma[:, None]
+        assert jac.tobytes() == (-(b[c, j] / s[:, :, None])).reshape(3 * len(sub), -1).tobytes()
+        assert r.tobytes() == ((sub.xyz - x[c, j]) / s).ravel().tobytes()

@@ -45,8 +45,16 @@ def weighted_residual(model, measurements, values, jacobian: bool = True):
     r = ((measurements.xyz - x[c, j]) / s).ravel()
     if not jacobian:
         return r, None
-    jac = -(b[c, j] / s[:, :, None]).reshape(3 * len(measurements), -1)
-    return r, jac
+    flat = b.reshape(-1, 3, b.shape[-1])
+    picked = c * b.shape[1] + j
+    rows = flat[:len(picked)] if _in_order(picked) else flat[picked]
+    return r, np.divide(rows, -s[:, :, None]).reshape(3 * len(measurements), -1)
+
+
+def _in_order(picked) -> bool:
+    """Every marker of every configuration, in order (a complete campaign read in order):
+    the rows ``picked`` of B are then its first ones, no gather needed."""
+    return bool(np.array_equal(picked, np.arange(len(picked))))
 
 
 def _blocks(measurements, size: int):
@@ -125,8 +133,8 @@ def augmented_block(measurements, rows, config, x, b, columns, scale) -> np.ndar
     out = np.empty((3 * len(rows), len(columns) + 1))
     view = out.reshape(len(rows), 3, len(columns) + 1)
     flat = b.reshape(-1, 3, b.shape[-1])
-    if len(picked) == len(flat) and np.array_equal(picked, np.arange(len(flat))):
-        # every marker of every configuration, in order (a complete campaign): no row gather
+    if _in_order(picked):
+        flat = flat[:len(picked)]
         jac = flat if np.array_equal(columns, np.arange(flat.shape[-1])) else \
             np.take(flat, columns, axis=2)
     else:
