@@ -124,8 +124,10 @@ def augmented_block(measurements, rows, config, x, b, columns, scale) -> np.ndar
     """``[∂r/∂p[:, columns]·diag(scale) | r]`` of the readings ``rows``, shape (3·len(rows), n + 1).
 
     ``x`` (M, n_markers, 3) and ``b`` (M, n_markers, 3, P) are the block's marker positions
-    and observation matrix; ``config`` indexes them per reading. One gather of B's rows and
-    columns and one product, written into the result (no further copy).
+    and observation matrix; ``config`` indexes them per reading. B's columns (and, unless
+    the readings are every marker of every configuration in order, its rows) are gathered
+    once and multiplied into the result: no further copy. Units: r is unit-free (m / m),
+    the Jacobian column of a parameter is per its SI unit times ``scale``.
     """
     n_markers = x.shape[1]
     picked = config * n_markers + measurements.marker[rows]
