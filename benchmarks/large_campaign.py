@@ -39,7 +39,7 @@ TARGETS = {"identify": (20.0, 1024.0), "diagnose": (120.0, 3072.0)}
 GOALS = {"identify": 4.0, "diagnose": 10.0}
 #: Before this round (main 87363ab, results/benchmarks.md of 2026-12-02T00:35 on a quiet
 #: machine): wall s, and CPU s (user + system) measured side by side with the new code at
-#: load 4–7 (identify 6.6–7.1 s, diagnose 10.5–10.7 s; the smaller taken).
+#: load 4–7 (identify 6.6–7.8 s, diagnose 10.5–11.4 s; the smallest taken).
 BEFORE = {"identify": (6.40, 6.6), "diagnose": (10.56, 10.5)}
 
 _MEASURED = """import resource, subprocess, sys, time
