@@ -20,9 +20,11 @@ def residual_statistics(model, measurements, values) -> dict:
         ss = np.bincount(groups, sq, minlength=len(names))
         worst = np.full(len(names), -np.inf)
         np.maximum.at(worst, groups, d)
-        return {name: {"rms_mm": float(np.sqrt(ss[k] / (3 * n[k]))),
-                       "max_3d_mm": float(worst[k]), "n": int(n[k])}
-                for k, name in enumerate(names) if n[k]}
+        seen = n > 0  # one vectorised pass, then plain floats (same values as one by one)
+        rms = np.sqrt(ss[seen] / (3 * n[seen]))
+        return {name: {"rms_mm": r, "max_3d_mm": w, "n": c} for name, r, w, c in
+                zip(np.asarray(names, object)[seen], rms.tolist(), worst[seen].tolist(),
+                    n[seen].tolist())}
 
     out = stats(np.zeros(len(d), int), ["all"])["all"]
     out["per_marker"] = stats(measurements.marker, list(model.tool.names))

@@ -111,7 +111,10 @@ def _explain(b, dependent, kept, params, norms) -> list[str]:
                        f"these configurations{why}")
             continue
         share = np.abs(alpha[:, k]) / np.abs(alpha[:, k]).sum()
-        top = [kept[j] for j in np.argsort(-share)[:3] if share[j] > 0.05]
+        # shares equal to 9 digits (markers placed alike) are a tie, named in priority
+        # order: not in an order rounding would pick
+        top = [kept[j] for j in np.argsort(-np.round(share, 9), kind="stable")[:3]
+               if share[j] > 0.05]
         names = ", ".join(f"{params[j].description} ({params[j].name})" for j in top)
         out.append(f"{p.description} ({p.name}) is not separable from {names}")
     return out

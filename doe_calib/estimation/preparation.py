@@ -13,8 +13,7 @@ from doe_calib.errors import ConditioningWarning, DataError, IdentifiabilityWarn
 from doe_calib.estimation.identifiability import analyse, blind_motion_words
 from doe_calib.estimation.registration import register
 from doe_calib.estimation.least_squares import Reduction
-from doe_calib.estimation.weighted_residuals import reduce_jacobian
-from doe_calib.model.evaluation import marker_positions
+from doe_calib.estimation.weighted_residuals import marker_points, reduce_jacobian
 from doe_calib.model.rotations import matrix_to_rotation_vector
 
 #: Condition number of the observation matrix above which the fit warns.
@@ -31,8 +30,7 @@ def register_base(model, measurements, params):
     base = params.index("base")
     v = params.values.copy()
     v[base] = 0.0
-    x = marker_positions(model, v, measurements.configurations)
-    robot_pts = x[measurements.config, measurements.marker]
+    robot_pts = marker_points(model, measurements, v)
     rot, t = register(robot_pts, measurements.xyz, 1.0 / measurements.sigma ** 2)
     v[base[:3]] = t
     v[base[3:]] = matrix_to_rotation_vector(rot)

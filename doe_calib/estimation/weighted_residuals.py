@@ -12,18 +12,26 @@ from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.estimation.least_squares import Reduction, reduce_blocks
+from doe_calib.estimation.least_squares import Reduction, reduce_augmented
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 
 #: Configurations evaluated at once by the blockwise functions.
 BLOCK_CONFIGURATIONS = 2048
 
 
+def marker_points(model, measurements, values, block: int = BLOCK_CONFIGURATIONS) -> np.ndarray:
+    """The model's position of the marker of every reading, shape (K, 3), m (a block of
+    configurations at a time, each the same numbers as all at once)."""
+    out = np.empty((len(measurements), 3))
+    for cfg, rows, c in _blocks(measurements, block):
+        out[rows] = marker_positions(model, values, cfg)[c, measurements.marker[rows]]
+    return out
+
+
 def marker_residuals(model, measurements, values) -> np.ndarray:
     """Reading minus model of every reading, shape (K, 3), m (the one place it is computed
     from marker positions; the weighted residual below divides it by σ)."""
-    x = marker_positions(model, values, measurements.configurations)
-    return measurements.xyz - x[measurements.config, measurements.marker]
+    return measurements.xyz - marker_points(model, measurements, values)
 
 
 def weighted_residual(model, measurements, values, jacobian: bool = True):
@@ -37,12 +45,26 @@ def weighted_residual(model, measurements, values, jacobian: bool = True):
     r = ((measurements.xyz - x[c, j]) / s).ravel()
     if not jacobian:
         return r, None
-    jac = -(b[c, j] / s[:, :, None]).reshape(3 * len(measurements), -1)
-    return r, jac
+    flat = b.reshape(-1, 3, b.shape[-1])
+    picked = c * b.shape[1] + j
+    rows = flat[:len(picked)] if _in_order(picked) else flat[picked]
+    return r, np.divide(rows, -s[:, :, None]).reshape(3 * len(measurements), -1)
+
+
+def _in_order(picked) -> bool:
+    """Every marker of every configuration, in order (a complete campaign read in order):
+    the rows ``picked`` of B are then its first ones, no gather needed."""
+    return bool(np.array_equal(picked, np.arange(len(picked))))
 
 
 def _blocks(measurements, size: int):
-    """(configurations of the block, their readings' rows, local config index) per block."""
+    """(configurations of the block, their readings' rows, local config index) per block.
+
+    With more than one block, every block has ``size`` configurations: the last is padded
+    with copies of the final configuration (no reading refers to them), so one Function
+    mapped over ``size`` serves them all (mapping a Function anew for the remainder costs
+    more than evaluating the padding).
+    """
     order = np.argsort(measurements.config, kind="stable")
     sorted_config = measurements.config[order]
     n = len(measurements.configurations)
@@ -50,8 +72,8 @@ def _blocks(measurements, size: int):
         c1 = min(c0 + size, n)
         lo, hi = np.searchsorted(sorted_config, [c0, c1])
         rows = order[lo:hi]
-        yield (measurements.configurations.subset(np.arange(c0, c1)), rows,
-               measurements.config[rows] - c0)
+        index = np.arange(c0, c1) if n <= size else np.minimum(np.arange(c0, c0 + size), n - 1)
+        yield (measurements.configurations.subset(index), rows, measurements.config[rows] - c0)
 
 
 def residual_norm2(model, measurements, values, block: int = BLOCK_CONFIGURATIONS) -> float:
@@ -93,9 +115,32 @@ def reduce_jacobian(model, measurements, values, columns=None, scale=None,
     def blocks():
         for cfg, rows, c in _blocks(measurements, block):
             x, b = observation_matrix(model, values, cfg)
-            j, s = measurements.marker[rows], measurements.sigma[rows, None]
-            r = ((measurements.xyz[rows] - x[c, j]) / s).ravel()
-            jac = -(b[c, j][:, :, columns] * (scale / s[:, :, None])).reshape(r.size, -1)
-            yield jac, r
+            yield augmented_block(measurements, rows, c, x, b, columns, scale)
 
-    return reduce_blocks(blocks(), len(columns))
+    return reduce_augmented(blocks(), len(columns))
+
+
+def augmented_block(measurements, rows, config, x, b, columns, scale) -> np.ndarray:
+    """``[∂r/∂p[:, columns]·diag(scale) | r]`` of the readings ``rows``, shape (3·len(rows), n + 1).
+
+    ``x`` (M, n_markers, 3) and ``b`` (M, n_markers, 3, P) are the block's marker positions
+    and observation matrix; ``config`` indexes them per reading. B's columns (and, unless
+    the readings are every marker of every configuration in order, its rows) are gathered
+    once and multiplied into the result: no further copy. Units: r is unit-free (m / m),
+    the Jacobian column of a parameter is per its SI unit times ``scale``.
+    """
+    n_markers = x.shape[1]
+    picked = config * n_markers + measurements.marker[rows]
+    s = measurements.sigma[rows, None]
+    out = np.empty((3 * len(rows), len(columns) + 1))
+    view = out.reshape(len(rows), 3, len(columns) + 1)
+    flat = b.reshape(-1, 3, b.shape[-1])
+    if _in_order(picked):
+        flat = flat[:len(picked)]
+        jac = flat if np.array_equal(columns, np.arange(flat.shape[-1])) else \
+            np.take(flat, columns, axis=2)
+    else:
+        jac = flat[picked[:, None, None], np.arange(3)[:, None], columns]
+    np.multiply(jac, -(scale / s)[:, None, :], out=view[:, :, :-1])
+    np.divide(measurements.xyz[rows] - x.reshape(-1, 3)[picked], s, out=view[:, :, -1])
+    return out

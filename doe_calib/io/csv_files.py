@@ -42,6 +42,7 @@ import numpy as np
 
 from doe_calib.errors import DataError, DataWarning
 from doe_calib.io.column_reader import Columns, read_columns
+from doe_calib.io.gc_paused import gc_paused
 from doe_calib.io.columns import PLAUSIBLE, Q_TOL, WRENCH, XYZ, approach_columns, joint_columns
 from doe_calib.io.measurements import (
     ESTIMATED,
@@ -235,6 +236,7 @@ def _parse_rows(table, robot, row_parser, skip_bad):
     return parsed, dropped
 
 
+@gc_paused()
 def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad: bool = False,
                       require_xyz: bool = True, session: str | None = None) -> Measurements:
     """Read a measurement CSV (formats.md §3).
@@ -270,7 +272,7 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
     """
     table = read_table(path)
     default_session = session or Path(str(path)).stem
-    header_line = table.rows[0][0] - 1
+    header_line = table.numbers[0] - 1
     qcols = joint_columns(robot)
     required = ["pose", *qcols, "marker", *(XYZ if require_xyz else ())]
     optional = [*WRENCH, "temperature", "sigma", "session", *approach_columns(robot),

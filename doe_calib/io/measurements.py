@@ -144,7 +144,7 @@ class Configurations:
         index = np.asarray(index)
         if index.dtype == bool:
             index = np.flatnonzero(index)
-        return Configurations(tuple(self.pose[i] for i in index), self.q[index],
+        return Configurations(tuple(map(self.pose.__getitem__, index.tolist())), self.q[index],
                               self.wrench[index], self.env[index])
 
 

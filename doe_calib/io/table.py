@@ -7,13 +7,20 @@ have a decimal comma. Shared by every reader of our CSV files.
 from __future__ import annotations
 
 import csv
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from doe_calib.errors import DataError
 
 #: Field separators a header may use.
 DELIMITERS = (",", ";", "\t")
+#: What ``str.strip`` removes (the same characters): a line without any needs no stripping.
+_SPACE = re.compile(r"\s")
+#: A quote, white space or NUL (which numpy's text arrays drop) in rows joined by newlines
+#: (no row holds one): not clean. The same, for ASCII text, as single characters.
+_NOT_CLEAN = re.compile(r'[^\S\n]|["\x00]')
+_ASCII_NOT_CLEAN = ('"', "\x00", " ", "\t", "\r", "\x0b", "\x0c", "\x1c", "\x1d", "\x1e", "\x1f")
 
 
 @dataclass
@@ -22,13 +29,41 @@ class Table:
 
     ``decimal_comma``: the fields are separated by ``;`` or tabs, so a number
     may be written with a decimal comma (``1,5``), as spreadsheets in many
-    European locales write it.
+    European locales write it. ``text`` holds each data row's line as read and
+    ``numbers`` its line number; ``rows`` splits them into fields on first use
+    (a reader that converts whole columns from ``text`` never needs it).
     """
 
     path: str
     columns: list
-    rows: list  # (line, fields)
+    header_line: int
+    numbers: list
+    text: list
     decimal_comma: bool = False
+    separator: str = ","
+    split: list | None = field(default=None, repr=False)
+
+    @property
+    def rows(self) -> list:
+        """``(line, fields)`` of every data row, each field stripped of white space.
+
+        Raises
+        ------
+        DataError
+            A line that cannot be split into fields.
+        """
+        if self.split is None:
+            self.split = split_rows(self.path, self.numbers, self.text, self.separator)
+        return self.split
+
+    @property
+    def clean(self) -> bool:
+        """No quote, white space or NUL in any data row: each field is the text between
+        separators (what a whole-column reader of ``text`` may assume)."""
+        joined = "\n".join(self.text)
+        if joined.isascii():  # a few fast scans for the only characters that can spoil it
+            return not any(c in joined for c in _ASCII_NOT_CLEAN)
+        return not _NOT_CLEAN.search(joined)
 
     def col(self, name: str) -> str:
         return f"'{name}' ({self.columns.index(name) + 1})"
@@ -72,25 +107,39 @@ def read_table(path) -> Table:
     if not kept:
         raise DataError("the file is empty: expected a header row", path, 1)
     sep = delimiter(kept[0][1])
-    rows = []
-    # One physical line is one record. Without quotes one reader does every line;
-    # with them each line gets its own, so an open quote cannot swallow the next line.
-    one = csv.reader((line for _, line in kept), delimiter=sep) \
-        if '"' not in text else None
-    for number, line in kept:
-        try:
-            fields = next(one) if one is not None else \
-                next(csv.reader([line], delimiter=sep))
-        except csv.Error as exc:
-            raise DataError(f"cannot split the line into fields ({exc})", path, number) from None
-        rows.append((number, [f.strip() for f in fields]))
-    header, rows = rows[0], rows[1:]
-    line, columns = header
+    numbers, lines = [n for n, _ in kept[1:]], [t for _, t in kept[1:]]
+    # One physical line is one record. With quotes each line gets its own reader (so an
+    # open quote cannot swallow the next line), split now; without, on first use.
+    (line, columns), = split_rows(path, [kept[0][0]], [kept[0][1]], sep)
+    split = split_rows(path, numbers, lines, sep) if '"' in text else None
     for i, c in enumerate(columns):
         if not c:
             raise DataError("empty column name in the header", path, line, i + 1)
         if columns.index(c) != i:
             raise DataError(f"column {c!r} appears twice in the header", path, line, i + 1)
-    if not rows:
+    if not lines:
         raise DataError("the file has a header but no data rows", path, line)
-    return Table(path, columns, rows, sep != ",")
+    return Table(path, columns, line, numbers, lines, sep != ",", sep, split)
+
+
+def split_rows(path, numbers, lines, sep) -> list:
+    """``(line number, fields)`` of each line split at ``sep``, fields stripped of white space.
+
+    Raises
+    ------
+    DataError
+        A line that cannot be split (naming it).
+    """
+    try:
+        split = list(csv.reader(lines, delimiter=sep)) if not any('"' in t for t in lines) \
+            else None
+    except csv.Error:
+        split = None  # the line at fault is found below
+    rows = []
+    for k, (number, line) in enumerate(zip(numbers, lines)):
+        try:
+            fields = split[k] if split is not None else next(csv.reader([line], delimiter=sep))
+        except csv.Error as exc:
+            raise DataError(f"cannot split the line into fields ({exc})", path, number) from None
+        rows.append((number, [f.strip() for f in fields] if _SPACE.search(line) else fields))
+    return rows
