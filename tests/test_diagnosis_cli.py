@@ -49,13 +49,23 @@ def test_refine_result_is_what_predict_takes(files):
     out = files
     assert main(["refine", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
                  "--data", str(out / "m.csv"), "--sigma", "0.03", "--model", "joint_offset",
-                 "--validation", str(out / "v.csv"), "--out", str(out / "r.json")]) == 0
+                 "--validation", str(out / "v.csv"), "--out", str(out / "r.json"),
+                 "--workers", "2"]) == 0
     steps = json.loads((out / "r_refine.json").read_text())["steps"]
     assert steps[-1]["adequate"] and steps[-1]["validation_rms_mm"] < 0.04
     assert main(["predict", "--result", str(out / "r.json"), "--data", str(out / "v.csv"),
                  "--out", str(out / "p.csv")]) == 0
     rows = [r for r in (out / "p.csv").read_text().splitlines() if r and r[0] != "#"]
     assert len(rows) == 1 + 15 * 2 * 3  # header, then every reading of the validation file
+
+
+def test_workers_must_be_a_whole_number_of_threads(files, capsys):
+    args = ["--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML, "--data",
+            str(files / "m.csv"), "--sigma", "0.03", "--model", "joint_offset"]
+    for bad in ("0", "two"):
+        assert main(["diagnose", *args, "--out", str(files / "w.json"), "--workers", bad]) != 0
+        assert "--workers" in (err := capsys.readouterr().err) and bad in err and "thread" in err
+    assert not (files / "w.json").exists()
 
 
 def test_noise_from_repeated_readings_overrides_a_wrong_sigma(robot6, tool6):

@@ -12,7 +12,7 @@ from doe_calib.cli.common import (
     model_and_measurements,
     robot_arguments,
 )
-from doe_calib.cli.options import positive
+from doe_calib.cli.options import count, positive
 from doe_calib.io.json_file import strict_json
 
 HELP = "test the model against the measurements and rank the effects it is missing"
@@ -46,6 +46,9 @@ def measurement_arguments(c):
     c.add_argument("--practical-um", type=positive("--practical-um", "µm"), default=2.0,
                    help="practical size: a misfit beyond the noise √(σ̂² − σ²) below this "
                         "many µm, with no material candidate, is adequate (default 2)")
+    c.add_argument("--workers", type=count("--workers", 1, "thread"),
+                   help="threads fitting the candidate effects at once (default: the "
+                        "machine's cores, at most 4); the result does not depend on it")
 
 
 def add_arguments(c):
@@ -79,7 +82,7 @@ def run(args):
                      reading_columns(model, meas))
         d = diagnose(model, meas, fit, level=args.level, folds=args.folds, grouping=args.cv_by,
                      min_gain=args.min_gain, tolerance=args.tolerance, registry=registry,
-                     practical_um=args.practical_um,
+                     practical_um=args.practical_um, workers=args.workers,
                      progress=lambda i, n, s: print(f"  cross-validating {s} ({i + 1}/{n})",
                                                     file=sys.stderr))
         d.to_json(args.out)

@@ -62,7 +62,7 @@ def run(args):
                      min_gain=args.min_gain, folds=args.folds, grouping=args.cv_by,
                      progress=lambda i, text: print(f"  step {i}: {text}", file=sys.stderr),
                      registry=registry, practical_um=args.practical_um,
-                     tolerance=args.tolerance)
+                     tolerance=args.tolerance, workers=args.workers)
         out.fit.to_json(args.out)
         out.to_json(history)
         # the steps' plotted numbers only: the child need not load the diagnosis package

@@ -32,7 +32,7 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
            min_gain: float = 0.02, folds: int = 5, grouping: str = "auto", progress=None,
            fit=None, registry=None, sigma_mm: float | None = None,
            practical_um: float = 2.0, tolerance: float = 0.05,
-           one_batch: bool = True) -> RefineResult:
+           one_batch: bool = True, workers: int | None = None) -> RefineResult:
     """Grow ``model`` one effect at a time while an effect predicts materially better.
 
     Parameters
@@ -77,6 +77,9 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         candidate columns and grown models from it
         (:meth:`~doe_calib.diagnosis.candidate_batch.CandidateBatch.within`); False builds
         them afresh at each step (the reference: the same choices, numbers equal to ~1e-12).
+    workers : int, optional
+        Threads fitting each step's candidates at once (:func:`~doe_calib.diagnosis.diagnose`;
+        default the machine's cores, at most 4). The result does not depend on it.
 
     Returns
     -------
@@ -92,7 +95,8 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         fitted = {}  # the candidates diagnose fitted: the chosen one is not fitted again
         diag = diagnose(model, measurements, fit, level, folds, grouping, min_gain=min_gain,
                         registry=registry, practical_um=practical_um,
-                        tolerance=tolerance, candidate_fits=fitted, batch=batch)
+                        tolerance=tolerance, candidate_fits=fitted, batch=batch,
+                        workers=workers)
         val = validation_rms(model, fit.parameters.values, validation) \
             if validation is not None else None
         steps.append(RefineStep(model.spec, added, diag.rms_mm, diag.cv_rms_mm, val,
