@@ -23,12 +23,21 @@ _CACHE_BYTES = 256 * 2 ** 20
 
 
 class _Batch:
-    """A Function mapped over M configurations, with preallocated numpy buffers."""
+    """A Function mapped over M configurations, with preallocated numpy buffers.
 
-    def __init__(self, function: ca.Function, m: int, shared: tuple):
+    With ``pair`` (the Function on two configurations side by side, same layout)
+    the pair is mapped over ⌈M/2⌉ pairs; an odd M leaves a last configuration
+    of zeros whose results are dropped.
+    """
+
+    def __init__(self, function: ca.Function, m: int, shared: tuple, pair=None):
         # inputs q, w, env vary per configuration; p and the `shared` extra inputs do not
-        self.mapped = function.map(f"{function.name()}_map", "serial", m, list(shared), []) \
-            if m > 1 else function
+        if pair is not None and m > 1 and _pairs_with(pair, function, shared):
+            self.unit, calls = pair, (m + 1) // 2
+        else:
+            self.unit, calls = function, m
+        self.mapped = self.unit.map(f"{self.unit.name()}_map", "serial", calls, list(shared),
+                                    []) if calls > 1 else self.unit
         self.m = m
         self.args = [np.zeros(self.mapped.size_in(i)[::-1]) for i in range(self.mapped.n_in())]
         self.res = [np.zeros(self.mapped.size_out(i)[::-1]) for i in range(self.mapped.n_out())]
@@ -43,11 +52,23 @@ class _Batch:
     def __call__(self, inputs) -> list:
         # Column-major (k, M) buffers are the same memory as C-order (M, k) arrays.
         for a, x in zip(self.args, inputs):
-            a[...] = np.asarray(x, float).reshape(a.shape)
+            x = np.asarray(x, float)
+            if x.size == a.size:
+                a[...] = x.reshape(a.shape)
+            else:  # an odd M on pairs: the last row stays zero
+                a[:len(x)] = x.reshape(len(x), -1)
         self.call()
         # Each output buffer holds M column-major (rows, cols) blocks side by side.
-        return [r.reshape(self.m, cols, rows).transpose(0, 2, 1).copy()
+        return [r.reshape(-1, cols, rows)[:self.m].transpose(0, 2, 1).copy()
                 for r, (rows, cols) in zip(self.res, self.shapes)]
+
+
+def _pairs_with(pair: ca.Function, function: ca.Function, shared: tuple) -> bool:
+    """Whether ``pair`` is ``function`` on two configurations with these ``shared`` inputs."""
+    return pair.n_in() == function.n_in() and all(
+        pair.size_in(i) == (function.size_in(i)[0],
+                            function.size_in(i)[1] * (1 if i in shared else 2))
+        for i in range(function.n_in()))
 
 
 class Workspace:
@@ -65,15 +86,16 @@ class Workspace:
         self.max_batches, self.max_bytes = max_batches, max_bytes
         self._batches = OrderedDict()
 
-    def batch(self, function: ca.Function, m: int, shared: tuple) -> _Batch:
-        """The Function mapped over ``m`` configurations, made on first use."""
-        key = (id(function), m, shared)
+    def batch(self, function: ca.Function, m: int, shared: tuple, pair=None) -> _Batch:
+        """The Function mapped over ``m`` configurations, made on first use; on pairs of
+        configurations with ``pair`` (the Function on two side by side)."""
+        key = (id(function), id(pair), m, shared)
         hit = self._batches.get(key)
-        if hit is not None and hit[0] is function:  # the Function itself, not a reused id
+        if hit is not None and hit[0] is function and hit[1] is pair:  # not a reused id
             self._batches.move_to_end(key)
-            return hit[1]
-        batch = _Batch(function, m, shared)
-        self._batches[key] = (function, batch)
+            return hit[2]
+        batch = _Batch(function, m, shared, pair)
+        self._batches[key] = (function, pair, batch)
         while len(self._batches) > 1 and (len(self._batches) > self.max_batches or
                                           self.nbytes > self.max_bytes):
             self._batches.popitem(last=False)
@@ -82,7 +104,7 @@ class Workspace:
     @property
     def nbytes(self) -> int:
         """Bytes held in buffers."""
-        return sum(b.nbytes for _, b in self._batches.values())
+        return sum(b.nbytes for _, _, b in self._batches.values())
 
 
 def thread_workspace() -> Workspace:
@@ -93,7 +115,8 @@ def thread_workspace() -> Workspace:
     return ws
 
 
-def evaluate(function: ca.Function, configurations, values, *extra, workspace=None):
+def evaluate(function: ca.Function, configurations, values, *extra, workspace=None,
+             pair=None):
     """Evaluate a model Function at every configuration.
 
     Parameters
@@ -110,6 +133,9 @@ def evaluate(function: ca.Function, configurations, values, *extra, workspace=No
         point ``t``, m); 2-D arrays of shape (M, k) give one row per configuration.
     workspace : Workspace, optional
         Where to evaluate; default the calling thread's own.
+    pair : casadi.Function, optional
+        ``function`` on two configurations side by side (a model's
+        ``observation_pair``): evaluated on ⌈M/2⌉ pairs instead, same results.
 
     Returns
     -------
@@ -120,7 +146,7 @@ def evaluate(function: ca.Function, configurations, values, *extra, workspace=No
     shared = (3,) + tuple(4 + i for i, e in enumerate(extra) if e.ndim == 1)
     inputs = [configurations.q, configurations.wrench, configurations.env, values, *extra]
     ws = thread_workspace() if workspace is None else workspace
-    return ws.batch(function, len(configurations), shared)(inputs)
+    return ws.batch(function, len(configurations), shared, pair)(inputs)
 
 
 def marker_positions(model, values, configurations, workspace=None) -> np.ndarray:
@@ -131,6 +157,7 @@ def marker_positions(model, values, configurations, workspace=None) -> np.ndarra
 
 def observation_matrix(model, values, configurations, workspace=None):
     """Marker positions (M, n, 3) m and observation matrix B = ∂x/∂p, shape (M, n, 3, P)."""
-    x, b = evaluate(model.observation, configurations, values, workspace=workspace)
+    x, b = evaluate(model.observation, configurations, values, workspace=workspace,
+                    pair=model.observation_pair)
     m, n = len(configurations), model.tool.n_markers
     return x.reshape(m, n, 3), b.reshape(m, n, 3, -1)
