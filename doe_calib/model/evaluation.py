@@ -7,7 +7,9 @@ evaluated through CasADi's zero-copy
 buffers, so numpy arrays go in and out without DM conversion. Mapped
 Functions and their buffers live in a :class:`Workspace`, owned by the
 caller or, by default, one per thread: a Dask worker running several tasks
-at once never shares a buffer.
+at once never shares a buffer. A compiled model's observation runs on pairs
+of configurations (``Model.observation_pair``, :mod:`doe_calib.model.paired_code`):
+⌈M/2⌉ calls, the same numbers.
 """
 from __future__ import annotations
 
