@@ -7,7 +7,7 @@ import tempfile
 
 import casadi as ca
 
-from doe_calib.model import paired_code
+from doe_calib.model import simd_code
 from doe_calib.model.compiled import FLAGS, compile_functions, find_compiler
 
 from ._common import Row, Section, models
@@ -17,7 +17,7 @@ from ._common import Row, Section, models
 BEFORE_SECONDS = 4.84
 
 
-def _compiler_cpu(function, source=None) -> float:
+def _compiler_cpu(function, source=None, lanes=2) -> float:
     """CPU seconds (user + sys) the C compiler takes for ``function``, cold cache."""
     old = os.environ.get("DOE_CALIB_CACHE")
     with tempfile.TemporaryDirectory(prefix="doe_calib_bench_") as cache:
@@ -25,7 +25,7 @@ def _compiler_cpu(function, source=None) -> float:
         try:
             t0 = os.times()
             compile_functions([function], sources=[None if source is None
-                                                   else (source, paired_code.FLAGS)])
+                                                   else (source, simd_code.flags(lanes))])
             t1 = os.times()
         finally:
             if old is None:
@@ -44,14 +44,17 @@ def run(quick: bool = False) -> Section:
             Row("3-DOF model: compile (cold cache)", ms.compile3_seconds, "s")]
     if ms.compiled:
         f = ms.vm6.observation
-        scalar, paired = _compiler_cpu(f), _compiler_cpu(f, paired_code.paired_source(f))
+        lanes = simd_code.simd_lanes()
+        scalar = _compiler_cpu(f)
+        simd = _compiler_cpu(f, simd_code.simd_source(f, lanes=lanes), lanes)
         rows += [Row("6R observation alone, CasADi's scalar code (before)", scalar, "s CPU",
                      note="the compiler's user + sys"),
-                 Row("6R observation alone, paired code (now)", paired, "s CPU",
-                     ratio=paired / scalar, note="ratio ÷ CasADi's scalar code")]
+                 Row(f"6R observation alone, SIMD code, {lanes} lanes (now)", simd, "s CPU",
+                     ratio=simd / scalar, note="ratio ÷ CasADi's scalar code")]
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    notes = (f"compiler {find_compiler()} {' '.join(FLAGS)} (paired code: "
-             f"{' '.join(paired_code.FLAGS)}); CasADi {ca.__version__}; "
+    lanes = simd_code.simd_lanes()
+    notes = (f"compiler {find_compiler()} {' '.join(FLAGS)} (SIMD code, {lanes} lanes: "
+             f"{' '.join(simd_code.flags(lanes))}); CasADi {ca.__version__}; "
              f"{platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
              f"load average {load:.1f} at the start",
              "compiled: " + ("yes" if ms.compiled else "NO (no working C compiler; the "

@@ -2,8 +2,8 @@
 
 The full 6R model (joint_offset+geometry+joint_compliance, 3 markers, 69
 parameters): ``observation_matrix`` gives the 9 marker coordinates and their
-9×69 Jacobian per pose. Compiled, it runs on two SIMD lanes (two poses per
-instruction, :mod:`doe_calib.model.paired_code`); CasADi's own scalar code,
+9×69 Jacobian per pose. Compiled, it runs on SIMD lanes (two or four poses
+per instruction, :mod:`doe_calib.model.simd_code`); CasADi's own scalar code,
 one pose per call (what ran before), is compiled here too and timed beside
 it, at the same load. Pinocchio's ``framesForwardKinematics`` +
 ``computeFrameJacobian`` (a Python loop over poses) is shown for scale only:
@@ -22,6 +22,7 @@ import numpy as np
 
 from doe_calib import Configurations, observation_matrix
 from doe_calib.model.compiled import compile_function
+from doe_calib.model.simd_code import simd_lanes
 from doe_calib.model.simulate import random_configurations, random_truth
 
 from ._common import Row, Section, models
@@ -61,7 +62,7 @@ def _pinocchio_loop(robot_urdf, q):
 
 
 def _casadis_code(model):
-    """The compiled model with CasADi's own scalar observation code, no pairs (as before)."""
+    """The compiled model with CasADi's own scalar observation code, one pose per call."""
     old = os.environ.get("DOE_CALIB_CACHE")
     with tempfile.TemporaryDirectory(prefix="doe_calib_bench_") as cache:
         os.environ["DOE_CALIB_CACHE"] = cache
@@ -72,7 +73,7 @@ def _casadis_code(model):
                 del os.environ["DOE_CALIB_CACHE"]
             else:
                 os.environ["DOE_CALIB_CACHE"] = old
-    return replace(model, observation=scalar, observation_pair=None)
+    return replace(model, observation=scalar, observation_lanes=None)
 
 
 def run(quick: bool = False, n_poses: int = 1000) -> Section:
@@ -103,7 +104,7 @@ def run(quick: bool = False, n_poses: int = 1000) -> Section:
             _cpu_us(_pinocchio_loop(examples.ROBOT_URDF, q), n_poses, repeats))
     figures = {tag: min(v) for tag, v in figures.items()}
     ref = figures["compiled"]
-    notes_row = {"compiled": "two poses per instruction (paired code)",
+    notes_row = {"compiled": f"{simd_lanes()} poses per instruction (SIMD code)",
                  cases[1][0]: f"recorded before: {BEFORE_US:g} µs/pose at load 1.0"}
     out = tuple(Row(case, us, "µs/pose CPU", us / ref, notes_row.get(case, ""))
                 for case, us in figures.items())
@@ -116,7 +117,7 @@ def run(quick: bool = False, n_poses: int = 1000) -> Section:
         f"CPU time of this process (user + sys), best of interleaved medians; load average "
         f"{load:.1f} at the start.",
         f"virtual machine / compiled: {figures['SX virtual machine'] / ref:.1f}×; "
-        f"paired / CasADi's scalar code: {ref / figures[cases[1][0]]:.2f} "
+        f"SIMD / CasADi's scalar code: {ref / figures[cases[1][0]]:.2f} "
         f"(before: {BEFORE_US:g} µs/pose = {BEFORE_US / BEFORE_PINOCCHIO_US:.1f}× Pinocchio).",
         f"goal compiled ≤ {GOAL_RATIO:g}× Pinocchio (Pinocchio computes far less: a 6×6 "
         f"Jacobian in q, no parameters, no compliance): {verdict} ({ref:.2f} µs/pose = "

@@ -144,7 +144,7 @@ def compile_functions(functions, flags=FLAGS, sources=None) -> list:
     sources : sequence of (str, sequence of str) or None, optional
         For each Function, None (CasADi's code generator writes its C) or
         C source and its compiler flags written elsewhere, with the Function's
-        name, inputs and outputs (:func:`doe_calib.model.paired_code.paired_source`).
+        name, inputs and outputs (:func:`doe_calib.model.simd_code.simd_source`).
 
     Returns the list of compiled Functions in the order given; any that
     cannot be compiled is returned unchanged, with a :class:`CompilationWarning`.

@@ -7,9 +7,9 @@ evaluated through CasADi's zero-copy
 buffers, so numpy arrays go in and out without DM conversion. Mapped
 Functions and their buffers live in a :class:`Workspace`, owned by the
 caller or, by default, one per thread: a Dask worker running several tasks
-at once never shares a buffer. A compiled model's observation runs on pairs
-of configurations (``Model.observation_pair``, :mod:`doe_calib.model.paired_code`):
-⌈M/2⌉ calls, the same numbers.
+at once never shares a buffer. A compiled model's observation runs on L
+configurations per call (``Model.observation_lanes``, the SIMD lanes of
+:mod:`doe_calib.model.simd_code`): ⌈M/L⌉ calls, the same numbers.
 """
 from __future__ import annotations
 
@@ -27,15 +27,16 @@ _CACHE_BYTES = 256 * 2 ** 20
 class _Batch:
     """A Function mapped over M configurations, with preallocated numpy buffers.
 
-    With ``pair`` (the Function on two configurations side by side, same layout)
-    the pair is mapped over ⌈M/2⌉ pairs; an odd M leaves a last configuration
-    of zeros whose results are dropped.
+    With ``lanes`` (the Function on L configurations side by side, same layout)
+    that is mapped over ⌈M/L⌉ calls; configurations of zeros fill the last
+    call, their results dropped.
     """
 
-    def __init__(self, function: ca.Function, m: int, shared: tuple, pair=None):
+    def __init__(self, function: ca.Function, m: int, shared: tuple, lanes=None):
         # inputs q, w, env vary per configuration; p and the `shared` extra inputs do not
-        if pair is not None and m > 1 and _pairs_with(pair, function, shared):
-            self.unit, calls = pair, (m + 1) // 2
+        count = _lanes_of(lanes, function, shared) if lanes is not None and m > 1 else 1
+        if count > 1:
+            self.unit, calls = lanes, -(-m // count)
         else:
             self.unit, calls = function, m
         self.mapped = self.unit.map(f"{self.unit.name()}_map", "serial", calls, list(shared),
@@ -57,7 +58,7 @@ class _Batch:
             x = np.asarray(x, float)
             if x.size == a.size:
                 a[...] = x.reshape(a.shape)
-            else:  # an odd M on pairs: the last row stays zero
+            else:  # M not a multiple of the lanes: the last rows stay zero
                 a[:len(x)] = x.reshape(len(x), -1)
         self.call()
         # Each output buffer holds M column-major (rows, cols) blocks side by side.
@@ -65,12 +66,16 @@ class _Batch:
                 for r, (rows, cols) in zip(self.res, self.shapes)]
 
 
-def _pairs_with(pair: ca.Function, function: ca.Function, shared: tuple) -> bool:
-    """Whether ``pair`` is ``function`` on two configurations with these ``shared`` inputs."""
-    return pair.n_in() == function.n_in() and all(
-        pair.size_in(i) == (function.size_in(i)[0],
-                            function.size_in(i)[1] * (1 if i in shared else 2))
-        for i in range(function.n_in()))
+def _lanes_of(lanes: ca.Function, function: ca.Function, shared: tuple) -> int:
+    """L if ``lanes`` is ``function`` on L configurations with these ``shared`` inputs, else 1."""
+    varying = [i for i in range(function.n_in()) if i not in shared]
+    if lanes.n_in() != function.n_in() or not varying:
+        return 1
+    count = lanes.size_in(varying[0])[1] // max(function.size_in(varying[0])[1], 1)
+    same = all(lanes.size_in(i) == (function.size_in(i)[0],
+                                    function.size_in(i)[1] * (1 if i in shared else count))
+               for i in range(function.n_in()))
+    return count if same else 1
 
 
 class Workspace:
@@ -88,16 +93,16 @@ class Workspace:
         self.max_batches, self.max_bytes = max_batches, max_bytes
         self._batches = OrderedDict()
 
-    def batch(self, function: ca.Function, m: int, shared: tuple, pair=None) -> _Batch:
-        """The Function mapped over ``m`` configurations, made on first use; on pairs of
-        configurations with ``pair`` (the Function on two side by side)."""
-        key = (id(function), id(pair), m, shared)
+    def batch(self, function: ca.Function, m: int, shared: tuple, lanes=None) -> _Batch:
+        """The Function mapped over ``m`` configurations, made on first use; L at a time
+        with ``lanes`` (the Function on L configurations side by side)."""
+        key = (id(function), id(lanes), m, shared)
         hit = self._batches.get(key)
-        if hit is not None and hit[0] is function and hit[1] is pair:  # not a reused id
+        if hit is not None and hit[0] is function and hit[1] is lanes:  # not a reused id
             self._batches.move_to_end(key)
             return hit[2]
-        batch = _Batch(function, m, shared, pair)
-        self._batches[key] = (function, pair, batch)
+        batch = _Batch(function, m, shared, lanes)
+        self._batches[key] = (function, lanes, batch)
         while len(self._batches) > 1 and (len(self._batches) > self.max_batches or
                                           self.nbytes > self.max_bytes):
             self._batches.popitem(last=False)
@@ -118,7 +123,7 @@ def thread_workspace() -> Workspace:
 
 
 def evaluate(function: ca.Function, configurations, values, *extra, workspace=None,
-             pair=None):
+             lanes=None):
     """Evaluate a model Function at every configuration.
 
     Parameters
@@ -135,9 +140,9 @@ def evaluate(function: ca.Function, configurations, values, *extra, workspace=No
         point ``t``, m); 2-D arrays of shape (M, k) give one row per configuration.
     workspace : Workspace, optional
         Where to evaluate; default the calling thread's own.
-    pair : casadi.Function, optional
-        ``function`` on two configurations side by side (a model's
-        ``observation_pair``): evaluated on ⌈M/2⌉ pairs instead, same results.
+    lanes : casadi.Function, optional
+        ``function`` on L configurations side by side (a model's
+        ``observation_lanes``): evaluated ⌈M/L⌉ times instead, same results.
 
     Returns
     -------
@@ -148,7 +153,7 @@ def evaluate(function: ca.Function, configurations, values, *extra, workspace=No
     shared = (3,) + tuple(4 + i for i, e in enumerate(extra) if e.ndim == 1)
     inputs = [configurations.q, configurations.wrench, configurations.env, values, *extra]
     ws = thread_workspace() if workspace is None else workspace
-    return ws.batch(function, len(configurations), shared, pair)(inputs)
+    return ws.batch(function, len(configurations), shared, lanes)(inputs)
 
 
 def marker_positions(model, values, configurations, workspace=None) -> np.ndarray:
@@ -160,6 +165,6 @@ def marker_positions(model, values, configurations, workspace=None) -> np.ndarra
 def observation_matrix(model, values, configurations, workspace=None):
     """Marker positions (M, n, 3) m and observation matrix B = ∂x/∂p, shape (M, n, 3, P)."""
     x, b = evaluate(model.observation, configurations, values, workspace=workspace,
-                    pair=model.observation_pair)
+                    lanes=model.observation_lanes)
     m, n = len(configurations), model.tool.n_markers
     return x.reshape(m, n, 3), b.reshape(m, n, 3, -1)

@@ -146,10 +146,10 @@ class Model:
         The same in the robot base frame (base parameters drop out).
     ``flange(q, w, env, p) -> (R, t)``
         Flange pose in the tracker frame.
-    ``observation_pair(q, w, env, p) -> (x, B)``
-        ``observation`` of two configurations side by side (q 6×2 …, x 3n×2,
-        B 3n×2P), native code on two SIMD lanes (:mod:`doe_calib.model.paired_code`);
-        None unless compiled.
+    ``observation_lanes(q, w, env, p) -> (x, B)``
+        ``observation`` of L configurations side by side (q N×L …, x 3n×L,
+        B 3n×LP), native code on L = 2 or 4 SIMD lanes
+        (:mod:`doe_calib.model.simd_code`); None unless compiled.
 
     ``native`` tells whether the first four run as compiled native code
     (:mod:`doe_calib.model.compiled`) or on CasADi's virtual machine.
@@ -162,7 +162,7 @@ class Model:
     point_robot: ca.Function
     flange: ca.Function
     native: bool = False
-    observation_pair: ca.Function | None = None
+    observation_lanes: ca.Function | None = None
 
     def __repr__(self) -> str:
         code = "native code" if self.native else "CasADi VM"
@@ -336,19 +336,20 @@ TWIST_SURELY_SHORTER = 5000
 
 def _build(description, compile: bool) -> Model:
     if compile:
-        from doe_calib.model import paired_code
+        from doe_calib.model import simd_code
         from doe_calib.model.compiled import compile_functions
         vm = build_model(description)
-        source = paired_code.paired_source(vm.observation)
-        paired = None if source is None else (source, paired_code.FLAGS)
+        lanes = simd_code.simd_lanes()
+        source = simd_code.simd_source(vm.observation, lanes=lanes)
+        given = None if source is None else (source, simd_code.flags(lanes))
         markers, observation, point, point_robot = compile_functions(
             [vm.markers, vm.observation, vm.point, vm.point_robot],
-            sources=[None, paired, None, None])
-        pair = None if source is None else paired_code.load_pair(vm.observation, source)
-        if pair is None and source is not None and observation is vm.observation:
+            sources=[None, given, None, None])
+        wide = None if source is None else simd_code.load_lanes(vm.observation, source, lanes)
+        if wide is None and source is not None and observation is vm.observation:
             (observation,) = compile_functions([vm.observation])  # CasADi's own code, then
         return replace(vm, markers=markers, observation=observation, point=point,
-                       point_robot=point_robot, observation_pair=pair,
+                       point_robot=point_robot, observation_lanes=wide,
                        native=observation is not vm.observation)
     robot, tool, effects, params = (description.robot, description.tool, description.effects,
                                     description.parameters)

@@ -1,22 +1,24 @@
-"""Paired code (two configurations per instruction) gives CasADi's numbers to the bit: every
-instruction it writes, both lanes, odd batches, the full 6R observation matrix; it falls back
-to CasADi's own code when it cannot be written or compiled."""
+"""SIMD code (two or four configurations per instruction) gives CasADi's numbers to the bit:
+every instruction it writes, every lane, batches not a multiple of the lanes, the full 6R
+observation matrix; it falls back to CasADi's own code when it cannot be written or compiled."""
 import casadi as ca
 import numpy as np
 import pytest
 
 from doe_calib import Configurations, build_model, observation_matrix
-from doe_calib.model import paired_code
+from doe_calib.model import simd_code
 from doe_calib.model.compiled import CompilationWarning, compile_functions, find_compiler
 from doe_calib.model.evaluation import Workspace, evaluate, marker_positions
-from doe_calib.model.paired_code import load_pair, pair_signature, paired_source
+from doe_calib.model.simd_code import load_lanes, lanes_signature, simd_lanes, simd_source
 from doe_calib.model.simulate import random_configurations, random_truth
 
 pytestmark = pytest.mark.skipif(find_compiler() is None, reason="no C compiler")
+#: Lane counts this machine runs (4 needs AVX).
+LANES = [2] + ([4] if simd_lanes() == 4 else [])
 
 
 def _every_instruction():
-    """An SX Function (q, w, env, p) using every instruction paired_code writes."""
+    """An SX Function (q, w, env, p) using every instruction simd_code writes."""
     q, w, env, p = ca.SX.sym("q", 3), ca.SX.sym("w", 2), ca.SX.sym("env", 2), ca.SX.sym("p", 2)
     a, b, c = q[0], q[1], q[2]
     pos = 1.5 + ca.fabs(a)  # > 1 for log, acosh, sqrt
@@ -35,7 +37,7 @@ def _every_instruction():
                        ["q", "w", "env", "p"], ["x", "J"])
 
 
-#: The instructions paired code writes (all but the ones every Function has: input, output).
+#: The instructions SIMD code writes (all but the ones every Function has: input, output).
 WRITTEN = """ACOS ACOSH ADD AND ASIN ASINH ATAN ATAN2 ATANH CEIL CONST CONSTPOW COPYSIGN COS
 COSH DIV
 EQ ERF EXP EXPM1 FABS FLOOR FMAX FMIN FMOD HYPOT IF_ELSE_ZERO INV LE LOG LOG1P LT MUL NE NEG NOT
@@ -58,64 +60,66 @@ class _Cases:
         return len(self.q)
 
 
-def _compiled_pair(function, tmp_path, monkeypatch):
+def _compiled(function, lanes, tmp_path, monkeypatch):
     monkeypatch.setenv("DOE_CALIB_CACHE", str(tmp_path))
-    source = paired_source(function)
+    source = simd_source(function, lanes=lanes)
     assert source is not None
-    (single,) = compile_functions([function], sources=[(source, paired_code.FLAGS)])
+    (single,) = compile_functions([function], sources=[(source, simd_code.flags(lanes))])
     assert single.is_a("External", True)
-    pair = load_pair(function, source)
-    assert pair is not None and pair.name() == f"{function.name()}_pair"
-    return single, pair
+    wide = load_lanes(function, source, lanes)
+    assert wide is not None and wide.name() == f"{function.name()}_lanes"
+    return single, wide
 
 
-def test_every_instruction_is_casadis_on_both_lanes(tmp_path, monkeypatch, rng):
+@pytest.mark.parametrize("lanes", LANES)
+def test_every_instruction_is_casadis_on_every_lane(tmp_path, monkeypatch, rng, lanes):
     f = _every_instruction()
-    single, pair = _compiled_pair(f, tmp_path, monkeypatch)
-    m = 41  # odd: the last pair holds one configuration
+    single, wide = _compiled(f, lanes, tmp_path, monkeypatch)
+    m = 41  # not a multiple of the lanes: the last call holds one configuration
     q = rng.normal(size=(m, 3)) * 2
     q[::5, 2] = q[::5, 0]  # a == c and ties for the comparisons
     q[::7, 2] = 0.0  # sign(0), not(0)
     cases = _Cases(q, rng.normal(size=(m, 2)), rng.normal(size=(m, 2)))
     p = rng.normal(size=2)
     want = evaluate(f, cases, p)  # CasADi's virtual machine
-    for got in (evaluate(single, cases, p), evaluate(f, cases, p, pair=pair)):
+    for got in (evaluate(single, cases, p), evaluate(f, cases, p, lanes=wide)):
         for a, b in zip(got, want):
             assert a.shape == b.shape
             assert np.array_equal(a, b, equal_nan=True)
 
 
-def test_pair_computes_two_different_configurations(tmp_path, monkeypatch, rng):
+@pytest.mark.parametrize("lanes", LANES)
+def test_lanes_compute_different_configurations(tmp_path, monkeypatch, rng, lanes):
     f = _every_instruction()
-    _, pair = _compiled_pair(f, tmp_path, monkeypatch)
-    q, w, env, p = rng.normal(size=(3, 2)), rng.normal(size=(2, 2)), rng.normal(size=(2, 2)), \
-        rng.normal(size=2)
-    x, jac = (np.array(r) for r in pair(q, w, env, p))
-    for lane in (0, 1):
+    _, wide = _compiled(f, lanes, tmp_path, monkeypatch)
+    q, w, env = (rng.normal(size=(k, lanes)) for k in (3, 2, 2))
+    p = rng.normal(size=2)
+    x, jac = (np.array(r) for r in wide(q, w, env, p))
+    for lane in range(lanes):
         x1, jac1 = (np.array(r) for r in f(q[:, lane], w[:, lane], env[:, lane], p))
         assert np.array_equal(x[:, lane:lane + 1], x1, equal_nan=True)
         assert np.array_equal(jac[:, 3 * lane:3 * lane + 3], jac1)
-    assert pair_signature(f).name_in() == pair.name_in()
+    assert lanes_signature(f, lanes).size_in(0) == wide.size_in(0) == (3, lanes)
 
 
-def test_what_paired_code_cannot_write_is_refused():
+def test_what_simd_code_cannot_write_is_refused():
     x = ca.MX.sym("x", 2)
-    assert paired_source(ca.Function("mx", [x], [2 * x])) is None
+    assert simd_source(ca.Function("mx", [x], [2 * x])) is None
     s = ca.SX.sym("s", 3)
-    assert paired_source(ca.Function("sparse", [s], [ca.jacobian(s * s, s)])) is None
-    assert paired_source(ca.Function("dense", [s], [ca.densify(ca.jacobian(s * s, s))]))
+    assert simd_source(ca.Function("sparse", [s], [ca.jacobian(s * s, s)])) is None
+    assert simd_source(ca.Function("dense", [s], [ca.densify(ca.jacobian(s * s, s))]))
 
 
 @pytest.fixture(scope="module")
 def compiled6(robot6, tool6):
     model = build_model(robot6, tool6, "joint_offset+geometry+joint_compliance", compile=True)
-    if model.observation_pair is None:
-        pytest.skip("the C compiler did not produce a loadable paired library")
+    if model.observation_lanes is None:
+        pytest.skip("the C compiler did not produce a loadable SIMD library")
     return model
 
 
-@pytest.mark.parametrize("m", [1, 2, 15, 64])
-def test_paired_observation_is_the_virtual_machines(compiled6, model6, robot6, rng, m):
+@pytest.mark.parametrize("m", [1, 2, 3, 15, 64])
+def test_simd_observation_is_the_virtual_machines(compiled6, model6, robot6, rng, m):
     cfg = Configurations.from_arrays(random_configurations(robot6, m, rng),
                                      rng.normal(size=(m, 6)) * ([1000.0] * 3 + [100.0] * 3))
     values = random_truth(model6, rng)
@@ -129,7 +133,7 @@ def test_paired_observation_is_the_virtual_machines(compiled6, model6, robot6, r
     assert np.abs(b_one.reshape(b_c.shape) - b_v).max() <= 1e-12 * np.abs(b_v).max()
 
 
-def test_paired_observation_against_central_differences(compiled6, model6, robot6, rng):
+def test_simd_observation_against_central_differences(compiled6, model6, robot6, rng):
     m = 5
     cfg = Configurations.from_arrays(random_configurations(robot6, m, rng),
                                      rng.normal(size=(m, 6)) * ([1000.0] * 3 + [100.0] * 3))
@@ -145,23 +149,23 @@ def test_paired_observation_against_central_differences(compiled6, model6, robot
         assert np.allclose(b[..., k], fd, rtol=1e-6, atol=1e-7 * np.abs(b).max()), k
 
 
-def test_workspace_keeps_paired_and_single_batches_apart(compiled6, robot6, rng):
+def test_workspace_keeps_lanes_and_single_batches_apart(compiled6, robot6, rng):
     cfg = Configurations.from_arrays(random_configurations(robot6, 6, rng))
     values = random_truth(compiled6, rng)
-    ws, f, pair = Workspace(), compiled6.observation, compiled6.observation_pair
+    ws, f, wide = Workspace(), compiled6.observation, compiled6.observation_lanes
     single = evaluate(f, cfg, values, workspace=ws)
-    paired = evaluate(f, cfg, values, workspace=ws, pair=pair)
-    assert ws.batch(f, 6, (3,)) is not ws.batch(f, 6, (3,), pair)
-    assert ws.batch(f, 6, (3,), pair) is ws.batch(f, 6, (3,), pair)
-    for a, b in zip(single, paired):
+    on_lanes = evaluate(f, cfg, values, workspace=ws, lanes=wide)
+    assert ws.batch(f, 6, (3,)) is not ws.batch(f, 6, (3,), wide)
+    assert ws.batch(f, 6, (3,), wide) is ws.batch(f, 6, (3,), wide)
+    for a, b in zip(single, on_lanes):
         assert np.array_equal(a, b)
 
 
-def test_paired_code_failing_to_compile_falls_back_to_casadis(robot6, tool6, tmp_path,
+def test_simd_code_failing_to_compile_falls_back_to_casadis(robot6, tool6, tmp_path,
                                                              monkeypatch):
     monkeypatch.setenv("DOE_CALIB_CACHE", str(tmp_path))
-    monkeypatch.setattr(paired_code, "paired_source", lambda f: "this is not C;\n")
+    monkeypatch.setattr(simd_code, "simd_source", lambda f, lanes: "this is not C;\n")
     with pytest.warns(CompilationWarning, match="observation was not compiled"):
         model = build_model(robot6, tool6, "gear_ratio(j2)+joint_compliance", compile=True)
-    assert model.observation_pair is None
+    assert model.observation_lanes is None
     assert model.observation.is_a("External", True) and model.native
