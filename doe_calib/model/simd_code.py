@@ -37,8 +37,9 @@ from doe_calib.model import compiled
 
 #: Statements per C function (see ``_body``).
 PART = 1000
-#: Most work vectors kept on the stack; a larger Function keeps CasADi's code.
-MAX_WORK = 32768
+#: Most bytes of work vectors on the stack (a thread's stack may be 512 kB); a Function
+#: needing more keeps CasADi's code.
+MAX_WORK_BYTES = 128 * 1024
 
 _BINARY = {ca.OP_ADD: "+", ca.OP_SUB: "-", ca.OP_MUL: "*", ca.OP_DIV: "/"}
 #: Scalar C for the instructions computed lane by lane, as CasADi's code generator writes it.
@@ -195,7 +196,7 @@ def simd_source(function: ca.Function, shared=(3,), lanes: int = 2) -> str | Non
     function = ca.Function(function.name(), ins, ca.cse(function.call(ins)),
                            function.name_in(), function.name_out())
     n_w = max(function.sz_w(), 1)
-    body = _body(function, lanes) if n_w <= MAX_WORK else None
+    body = _body(function, lanes) if n_w * 8 * lanes <= MAX_WORK_BYTES else None
     if body is None:
         return None
     n_in, n_out = function.n_in(), function.n_out()
