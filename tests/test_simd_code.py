@@ -169,3 +169,38 @@ def test_simd_code_failing_to_compile_falls_back_to_casadis(robot6, tool6, tmp_p
         model = build_model(robot6, tool6, "gear_ratio(j2)+joint_compliance", compile=True)
     assert model.observation_lanes is None
     assert model.observation.is_a("External", True) and model.native
+
+
+def test_simd_observation_against_pinocchio(compiled6, rng):
+    """At zero errors: ∂x_j/∂dq_k = v_k + ω_k × (R u_j) from Pinocchio's frame Jacobian
+    (world-aligned), ∂x/∂base position = I, ∂x_j/∂u_j = R (the flange rotation)."""
+    import pinocchio as pin
+
+    from doe_calib import examples
+
+    robot = compiled6.robot
+    pm = pin.buildModelFromUrdf(str(examples.ROBOT_URDF))
+    pd = pm.createData()
+    fid = pm.getFrameId(robot.flange)
+    m = 7  # not a multiple of the lanes
+    q = random_configurations(robot, m, rng)
+    cfg = Configurations.from_arrays(q, rng.normal(size=(m, 6)) * 500)
+    values = compiled6.nominal().values  # zero errors, identity base, compliances 0
+    names = [p.name for p in compiled6.parameters]
+    u = values[6:15].reshape(3, 3)
+    _, b = observation_matrix(compiled6, values, cfg)
+    for i in range(m):
+        qp = pin.neutral(pm)
+        for name, value in zip(robot.joint_names, q[i]):
+            qp[pm.joints[pm.getJointId(name)].idx_q] = value
+        pin.framesForwardKinematics(pm, pd, qp)
+        jac = pin.computeFrameJacobian(pm, pd, qp, fid, pin.LOCAL_WORLD_ALIGNED)
+        rot = pd.oMf[fid].rotation
+        for j in range(3):
+            ru = rot @ u[j]
+            for name in robot.joint_names:
+                col = jac[:, pm.joints[pm.getJointId(name)].idx_v]
+                want = col[:3] + np.cross(col[3:], ru)
+                assert np.abs(b[i, j, :, names.index(f"dq_{name}")] - want).max() < 1e-9
+            assert np.abs(b[i, j, :, 0:3] - np.eye(3)).max() < 1e-12
+            assert np.abs(b[i, j, :, 6 + 3 * j:9 + 3 * j] - rot).max() < 1e-9
