@@ -204,3 +204,13 @@ def test_simd_observation_against_pinocchio(compiled6, rng):
                 assert np.abs(b[i, j, :, names.index(f"dq_{name}")] - want).max() < 1e-9
             assert np.abs(b[i, j, :, 0:3] - np.eye(3)).max() < 1e-12
             assert np.abs(b[i, j, :, 6 + 3 * j:9 + 3 * j] - rot).max() < 1e-9
+
+
+def test_avx_code_cleans_the_upper_registers_before_leaving():
+    """AVX code leaving the upper halves dirty slows every SSE instruction run after it
+    (the C library, Pinocchio, numpy) 2-3 times: each entry point and libm call cleans them."""
+    source = simd_source(_every_instruction(), lanes=4)
+    assert source.count("CLEAN_UPPER();\n  return 0;") == 2  # both entry points
+    calls = [line for line in source.splitlines() if "sin(W[" in line]
+    assert calls and all(line.lstrip().startswith("CLEAN_UPPER();") for line in calls)
+    assert "__builtin_ia32_vzeroupper" in source
