@@ -78,8 +78,21 @@ def _library_path(name: str, source: str, compiler: str, flags) -> Path:
     return cache_dir() / f"{name}-{key[:24]}{_SUFFIX}"
 
 
-def _load(function: ca.Function, path: Path) -> ca.Function:
-    """The library's Function, checked against the original's signature."""
+def library_path(name: str, source: str, flags=FLAGS) -> Path | None:
+    """Where :func:`compile_functions` keeps the library of ``source`` (None: no compiler)."""
+    compiler = find_compiler()
+    return None if compiler is None else _library_path(name, source, compiler, flags)
+
+
+def load_function(function: ca.Function, path: Path) -> ca.Function:
+    """The Function named as ``function`` in the library at ``path``, checked against its
+    signature (names, inputs, outputs and their sparsity).
+
+    Raises
+    ------
+    RuntimeError
+        The library cannot be loaded or holds no such Function.
+    """
     loaded = ca.external(function.name(), str(path))
     same = (loaded.name_in() == function.name_in() and loaded.name_out() == function.name_out()
             and all(loaded.sparsity_in(i) == function.sparsity_in(i)
@@ -120,13 +133,24 @@ def compile_function(function: ca.Function, flags=FLAGS) -> ca.Function:
     return compile_functions([function], flags)[0]
 
 
-def compile_functions(functions, flags=FLAGS) -> list:
+def compile_functions(functions, flags=FLAGS, sources=None) -> list:
     """:func:`compile_function` for several Functions, compiled in parallel.
+
+    Parameters
+    ----------
+    functions : sequence of casadi.Function
+    flags : sequence of str
+        C compiler flags for CasADi's own code.
+    sources : sequence of (str, sequence of str) or None, optional
+        For each Function, None (CasADi's code generator writes its C) or
+        C source and its compiler flags written elsewhere, with the Function's
+        name, inputs and outputs (:func:`doe_calib.model.simd_code.simd_source`).
 
     Returns the list of compiled Functions in the order given; any that
     cannot be compiled is returned unchanged, with a :class:`CompilationWarning`.
     """
     functions = list(functions)
+    sources = [None] * len(functions) if sources is None else list(sources)
     out = list(functions)
     compiler = find_compiler()
     if compiler is None:
@@ -135,37 +159,38 @@ def compile_functions(functions, flags=FLAGS) -> list:
                       "slower", CompilationWarning, stacklevel=3)
         return out
     pending = []
-    for i, f in enumerate(functions):
+    for i, (f, given) in enumerate(zip(functions, sources)):
+        source, own_flags = given if given is not None else (None, tuple(flags))
         try:
-            source = _source(f)
+            source = _source(f) if source is None else source
         except RuntimeError as err:
             _fail(f, f"CasADi cannot generate C code for it ({_first_line(err)})")
             continue
-        path = _library_path(f.name(), source, compiler, flags)
+        path = _library_path(f.name(), source, compiler, own_flags)
         if path.exists():
             try:
-                out[i] = _load(f, path)
+                out[i] = load_function(f, path)
                 log.debug("loaded %s from %s", f.name(), path)
                 continue
             except RuntimeError:
                 log.info("cached library %s could not be loaded; compiling it again", path)
-        pending.append((i, f, source, path))
+        pending.append((i, f, source, path, own_flags))
     start = time.perf_counter()
-    for i, f, path, error in _build_all(pending, compiler, flags):
+    for i, f, path, error in _build_all(pending, compiler):
         if error is not None:
             _fail(f, error)
             continue
         try:
-            out[i] = _load(f, path)
+            out[i] = load_function(f, path)
         except RuntimeError as err:
             _fail(f, f"the compiled library could not be loaded ({_first_line(err)})")
     if pending:
         log.info("compiled %d function(s) in %.1f s (%s)", len(pending),
-                 time.perf_counter() - start, ", ".join(f.name() for _, f, _, _ in pending))
+                 time.perf_counter() - start, ", ".join(job[1].name() for job in pending))
     return out
 
 
-def _build_all(pending, compiler, flags):
+def _build_all(pending, compiler):
     """Compile every pending source, one process per CPU at most; list of (i, f, path, error)."""
     if not pending:
         return []
@@ -176,14 +201,14 @@ def _build_all(pending, compiler, flags):
         work = tempfile.TemporaryDirectory(prefix="build-", dir=cache_dir())
     except OSError as err:
         return [(i, f, path, f"the cache directory {cache_dir()} is not writable ({err})")
-                for i, f, _, path in pending]
+                for i, f, _, path, _ in pending]
     with work as tmp:
         queue = list(pending)
         running = []
         try:
             while queue or running:
                 while queue and len(running) < jobs:
-                    i, f, source, path = queue.pop(0)
+                    i, f, source, path, flags = queue.pop(0)
                     running.append(_start(i, f, source, path, compiler, flags, Path(tmp)))
                 results.append(_finish(*running.pop(0)))
         finally:  # interrupted: stop the compilers still running

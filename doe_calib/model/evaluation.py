@@ -7,7 +7,9 @@ evaluated through CasADi's zero-copy
 buffers, so numpy arrays go in and out without DM conversion. Mapped
 Functions and their buffers live in a :class:`Workspace`, owned by the
 caller or, by default, one per thread: a Dask worker running several tasks
-at once never shares a buffer.
+at once never shares a buffer. A compiled model's observation runs on L
+configurations per call (``Model.observation_lanes``, the SIMD lanes of
+:mod:`doe_calib.model.simd_code`): ⌈M/L⌉ calls, the same numbers.
 """
 from __future__ import annotations
 
@@ -23,14 +25,24 @@ _CACHE_BYTES = 256 * 2 ** 20
 
 
 class _Batch:
-    """A Function mapped over M configurations, with preallocated numpy buffers."""
+    """A Function mapped over M configurations, with preallocated numpy buffers.
 
-    def __init__(self, function: ca.Function, m: int, shared: tuple):
+    With ``lanes`` (the Function on L configurations side by side, same layout)
+    that is mapped over ⌈M/L⌉ calls; configurations of zeros fill the last
+    call, their results dropped.
+    """
+
+    def __init__(self, function: ca.Function, m: int, shared: tuple, lanes=None):
         # inputs q, w, env vary per configuration; p and the `shared` extra inputs do not. The
-        # plain map takes every input per configuration (the shared ones' buffers hold M copies):
+        # plain map takes every input per call (the shared ones' buffers hold a copy per call):
         # a map that repeats them itself is a wrapper built in time and memory ∝ M (1.4 s for
         # 33 000 configurations), the plain one at once
-        self.mapped = function.map(m, "serial") if m > 1 else function
+        count = _lanes_of(lanes, function, shared) if lanes is not None and m > 1 else 1
+        if count > 1:
+            self.unit, calls = lanes, -(-m // count)
+        else:
+            self.unit, calls = function, m
+        self.mapped = self.unit.map(calls, "serial") if calls > 1 else self.unit
         self.m, self.shared = m, frozenset(shared)
         self.args = [np.zeros(self.mapped.size_in(i)[::-1]) for i in range(self.mapped.n_in())]
         self.res = [np.zeros(self.mapped.size_out(i)[::-1]) for i in range(self.mapped.n_out())]
@@ -45,18 +57,33 @@ class _Batch:
 
     def __call__(self, inputs) -> list:
         # Column-major (k, M) buffers are the same memory as C-order (M, k) arrays.
-        new = [np.asarray(x, float).reshape(a.shape[1:] if i in self.shared else a.shape)
+        new = [np.asarray(x, float).reshape(a.shape[1:] if i in self.shared else (-1, a.shape[1]))
                for i, (a, x) in enumerate(zip(self.args, inputs))]
         # the very inputs of the last call (the same bits): its outputs are still in the buffers
         # (a fit's last Jacobian asked again by what reads the fit)
         if self.last is None or not all(np.array_equal(x, y) for x, y in zip(self.last, new)):
-            for a, x in zip(self.args, new):
-                a[...] = x  # a shared input: one copy per configuration
+            for i, (a, x) in enumerate(zip(self.args, new)):
+                if i in self.shared:
+                    a[...] = x  # one copy per call
+                else:  # M not a multiple of the lanes: the last rows stay zero
+                    a[:len(x)] = x
             self.call()
             self.last = [x.copy() for x in new]
         # Each output buffer holds M column-major (rows, cols) blocks side by side.
-        return [r.reshape(self.m, cols, rows).transpose(0, 2, 1).copy()
+        return [r.reshape(-1, cols, rows)[:self.m].transpose(0, 2, 1).copy()
                 for r, (rows, cols) in zip(self.res, self.shapes)]
+
+
+def _lanes_of(lanes: ca.Function, function: ca.Function, shared: tuple) -> int:
+    """L if ``lanes`` is ``function`` on L configurations with these ``shared`` inputs, else 1."""
+    varying = [i for i in range(function.n_in()) if i not in shared]
+    if lanes.n_in() != function.n_in() or not varying:
+        return 1
+    count = lanes.size_in(varying[0])[1] // max(function.size_in(varying[0])[1], 1)
+    same = all(lanes.size_in(i) == (function.size_in(i)[0],
+                                    function.size_in(i)[1] * (1 if i in shared else count))
+               for i in range(function.n_in()))
+    return count if same else 1
 
 
 class Workspace:
@@ -74,15 +101,16 @@ class Workspace:
         self.max_batches, self.max_bytes = max_batches, max_bytes
         self._batches = OrderedDict()
 
-    def batch(self, function: ca.Function, m: int, shared: tuple) -> _Batch:
-        """The Function mapped over ``m`` configurations, made on first use."""
-        key = (id(function), m, shared)
+    def batch(self, function: ca.Function, m: int, shared: tuple, lanes=None) -> _Batch:
+        """The Function mapped over ``m`` configurations, made on first use; L at a time
+        with ``lanes`` (the Function on L configurations side by side)."""
+        key = (id(function), id(lanes), m, shared)
         hit = self._batches.get(key)
-        if hit is not None and hit[0] is function:  # the Function itself, not a reused id
+        if hit is not None and hit[0] is function and hit[1] is lanes:  # not a reused id
             self._batches.move_to_end(key)
-            return hit[1]
-        batch = _Batch(function, m, shared)
-        self._batches[key] = (function, batch)
+            return hit[2]
+        batch = _Batch(function, m, shared, lanes)
+        self._batches[key] = (function, lanes, batch)
         while len(self._batches) > 1 and (len(self._batches) > self.max_batches or
                                           self.nbytes > self.max_bytes):
             self._batches.popitem(last=False)
@@ -91,7 +119,7 @@ class Workspace:
     @property
     def nbytes(self) -> int:
         """Bytes held in buffers."""
-        return sum(b.nbytes for _, b in self._batches.values())
+        return sum(b.nbytes for _, _, b in self._batches.values())
 
 
 def thread_workspace() -> Workspace:
@@ -102,7 +130,8 @@ def thread_workspace() -> Workspace:
     return ws
 
 
-def evaluate(function: ca.Function, configurations, values, *extra, workspace=None):
+def evaluate(function: ca.Function, configurations, values, *extra, workspace=None,
+             lanes=None):
     """Evaluate a model Function at every configuration.
 
     Parameters
@@ -119,6 +148,9 @@ def evaluate(function: ca.Function, configurations, values, *extra, workspace=No
         point ``t``, m); 2-D arrays of shape (M, k) give one row per configuration.
     workspace : Workspace, optional
         Where to evaluate; default the calling thread's own.
+    lanes : casadi.Function, optional
+        ``function`` on L configurations side by side (a model's
+        ``observation_lanes``): evaluated ⌈M/L⌉ times instead, same results.
 
     Returns
     -------
@@ -129,7 +161,7 @@ def evaluate(function: ca.Function, configurations, values, *extra, workspace=No
     shared = (3,) + tuple(4 + i for i, e in enumerate(extra) if e.ndim == 1)
     inputs = [configurations.q, configurations.wrench, configurations.env, values, *extra]
     ws = thread_workspace() if workspace is None else workspace
-    return ws.batch(function, len(configurations), shared)(inputs)
+    return ws.batch(function, len(configurations), shared, lanes)(inputs)
 
 
 def marker_positions(model, values, configurations, workspace=None) -> np.ndarray:
@@ -140,6 +172,7 @@ def marker_positions(model, values, configurations, workspace=None) -> np.ndarra
 
 def observation_matrix(model, values, configurations, workspace=None):
     """Marker positions (M, n, 3) m and observation matrix B = ∂x/∂p, shape (M, n, 3, P)."""
-    x, b = evaluate(model.observation, configurations, values, workspace=workspace)
+    x, b = evaluate(model.observation, configurations, values, workspace=workspace,
+                    lanes=model.observation_lanes)
     m, n = len(configurations), model.tool.n_markers
     return x.reshape(m, n, 3), b.reshape(m, n, 3, -1)

@@ -146,6 +146,10 @@ class Model:
         The same in the robot base frame (base parameters drop out).
     ``flange(q, w, env, p) -> (R, t)``
         Flange pose in the tracker frame.
+    ``observation_lanes(q, w, env, p) -> (x, B)``
+        ``observation`` of L configurations side by side (q N×L …, x 3n×L,
+        B 3n×LP), native code on L = 2 or 4 SIMD lanes
+        (:mod:`doe_calib.model.simd_code`); None unless compiled.
 
     ``native`` tells whether the first four run as compiled native code
     (:mod:`doe_calib.model.compiled`) or on CasADi's virtual machine.
@@ -158,6 +162,7 @@ class Model:
     point_robot: ca.Function
     flange: ca.Function
     native: bool = False
+    observation_lanes: ca.Function | None = None
 
     def __repr__(self) -> str:
         code = "native code" if self.native else "CasADi VM"
@@ -331,12 +336,21 @@ TWIST_SURELY_SHORTER = 5000
 
 def _build(description, compile: bool) -> Model:
     if compile:
+        from doe_calib.model import simd_code
         from doe_calib.model.compiled import compile_functions
         vm = build_model(description)
+        lanes = simd_code.simd_lanes()
+        source = simd_code.simd_source(vm.observation, lanes=lanes)
+        given = None if source is None else (source, simd_code.flags(lanes))
         markers, observation, point, point_robot = compile_functions(
-            [vm.markers, vm.observation, vm.point, vm.point_robot])
+            [vm.markers, vm.observation, vm.point, vm.point_robot],
+            sources=[None, given, None, None])
+        wide = None if source is None else simd_code.load_lanes(vm.observation, source, lanes)
+        if wide is None and source is not None and observation is vm.observation:
+            (observation,) = compile_functions([vm.observation])  # CasADi's own code, then
         return replace(vm, markers=markers, observation=observation, point=point,
-                       point_robot=point_robot, native=observation is not vm.observation)
+                       point_robot=point_robot, observation_lanes=wide,
+                       native=observation is not vm.observation)
     robot, tool, effects, params = (description.robot, description.tool, description.effects,
                                     description.parameters)
     names = [par.name for par in params]
