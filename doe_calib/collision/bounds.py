@@ -1,8 +1,11 @@
 """How fast each checked pair can close: the joint-step bound that lets a move's check skip poses.
 
 A pose where a pair is not too close tells more than "free here": coal's
-collision test also returns a lower bound ``b`` on the pair's distance
-(``CollisionResult.distance_lower_bound``). Along a joint move of Δq, no
+collision test, run with the pair's margin ``m`` as its security margin, also
+returns a lower bound ``b`` on the pair's distance less that margin, its
+distance to a collision (``CollisionResult.distance_lower_bound``: exactly
+``d − m`` for two primitives, at most that for meshes, where it stops at the
+request's ``break_distance`` of 1 mm). Along a joint move of Δq, no
 point of a body moves, relative to the body it is paired with, by more than
 
     Σ_j |Δq_j| · R_j
@@ -15,12 +18,12 @@ the chain from j to the body's joint (fixed lengths for revolute joints) plus
 the radius of a sphere about that joint's origin enclosing the body's
 geometry (its local bounding box, placed). So the pair keeps its margin ``m``
 at every pose of the move until the weighted step Σ_j |Δq_j| R_j reaches
-``b − m``: those poses need no test (conservative advancement). The first
+``b``: those poses need no test (conservative advancement). The first
 pose the dense check finds too close, and its first pair in checking order,
 are found unchanged: a skipped pair is provably clear there, and every pose
 where some pair may be too close is tested with the same coal request.
 
-:data:`SLACK` is kept on top of the margin for coal's tolerances. A robot with
+:data:`SLACK` is kept below ``b`` for coal's tolerances. A robot with
 a joint that is not revolute (prismatic, free-flyer, …) gets no bound
 (:func:`motion_weights` returns None) and is checked at every pose.
 """
@@ -28,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Distance kept on top of a pair's margin before poses are skipped, m (for coal's tolerances).
+#: Distance kept below a pair's bound before poses are skipped, m (for coal's tolerances).
 SLACK = 1e-3
 
 _REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned",
