@@ -15,6 +15,7 @@ checked is the grid's.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -256,29 +257,30 @@ def _first_too_close(cm, qa, qb, t, margin, weights, ws):
 
     ws.set_margins(cm.margins if margin is None
                    else np.broadcast_to(np.asarray(margin, float), len(cm.margins)))
-    configurations = cm.configurations(qa + t[:, None] * (qb - qa))
+    poses = np.ascontiguousarray(cm.configurations(qa + t[:, None] * (qb - qa)).T)
     n = len(t)
     # the largest closing of each pair between neighbouring poses, m (the grid is uniform)
-    per_step = (weights @ np.abs(qb - qa)) / (n - 1)
-    still = per_step <= 0  # pairs the move does not move relative to each other
+    per_step = ((weights @ np.abs(qb - qa)) / (n - 1)).tolist()
+    due = [0] * len(per_step)
     results = ws.results
     model, geometry, data, gdata = cm.model, cm.geometry, ws.data, ws.geometry
-    collide = pin.computeCollision
-    due = np.zeros(len(per_step), int)
+    collide, place, finite = pin.computeCollision, pin.updateGeometryPlacements, math.isfinite
     i = 0
     while i < n:
-        pin.updateGeometryPlacements(model, data, geometry, gdata, configurations[:, i])
-        tested = np.flatnonzero(due <= i)
-        for k in tested.tolist():
-            if collide(geometry, gdata, k):
-                return i, k
-        # coal's lower bound is on the distance less the margin (the distance to a collision):
-        # the pair stays clear while its closing since this pose stays below it
-        spare = np.array([results[k].distance_lower_bound for k in tested.tolist()]) - SLACK
-        spare[~np.isfinite(spare) | (spare < 0)] = 0.0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            skip = np.where(spare > 0, np.where(still[tested], n,
-                                                np.floor(spare / per_step[tested])), 0.0)
-        due[tested] = i + 1 + np.minimum(skip, n).astype(int)
-        i = int(due.min())
+        place(model, data, geometry, gdata, poses[i])
+        following = n
+        for k, when in enumerate(due):
+            if when <= i:
+                if collide(geometry, gdata, k):
+                    return i, k
+                # coal's bound is on the distance less the margin (the distance to a
+                # collision): clear while the closing since this pose stays below it
+                spare = results[k].distance_lower_bound - SLACK
+                skip = 0
+                if spare > 0 and finite(spare):
+                    skip = n if per_step[k] <= 0 else min(n, int(spare / per_step[k]))
+                when = due[k] = i + 1 + skip
+            if when < following:
+                following = when
+        i = following
     return None
