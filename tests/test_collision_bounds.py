@@ -5,6 +5,7 @@ every pair at every pose (what check_segment did before it skipped), and each pa
 (pin.computeDistance) at every pose. The skipping check must find the same first pose and pair
 as the first, and never pass a pose where the second finds a pair inside its margin.
 """
+import importlib
 import math
 from importlib import metadata
 from pathlib import Path
@@ -154,3 +155,92 @@ def test_skipping_check_finds_what_the_dense_one_finds(cell, margin):
                 assert fast.first is not None and fast.first <= t[inside[0]]
             grazing += bool((np.abs(d) < 0.005).any())
     assert found >= 3 and grazing >= 3  # the moves did test near contact
+
+
+@pytest.mark.parametrize("margin", [0.0, 0.0025, 0.01, 0.05])
+def test_coal_bound_is_on_the_distance_less_the_margin(cell, margin):
+    """The skip's premise: with a security margin m, coal's ``distance_lower_bound`` of a pair
+    it finds clear is at most its distance less m (exactly that for a sphere and a box: the
+    margin is taken off once)."""
+    robot, cm = cell
+    rng = np.random.default_rng(5)
+    lo, hi = _limits(robot)
+    q = rng.uniform(lo, hi, (25, robot.n_joints))
+    d = _distances(cm, q)
+    ws = Workspace(cm)
+    ws.set_margins([margin] * len(cm.margins))
+    kind = [type(g.geometry).__name__ for g in cm.geometry.geometryObjects]
+    exact = [{kind[p.first], kind[p.second]} == {"Sphere", "Box"}
+             for p in cm.geometry.collisionPairs]
+    clear = near = exactly = 0
+    for x, row in zip(cm.configurations(q).T, d):
+        pin.updateGeometryPlacements(cm.model, ws.data, cm.geometry, ws.geometry, x)
+        for k in range(len(row)):
+            if pin.computeCollision(cm.geometry, ws.geometry, k):
+                assert row[k] < margin + 1e-6
+                continue
+            bound = ws.results[k].distance_lower_bound
+            assert bound <= row[k] - margin + 1e-9
+            clear += 1
+            if exact[k]:
+                assert bound == pytest.approx(row[k] - margin, abs=1e-9)
+                exactly += 1
+            near += row[k] - margin < 0.05
+    assert clear > 1000 and near > 10 and exactly > 50
+
+
+def test_a_move_that_ends_touching_is_found_as_the_dense_check_finds_it(cell):
+    """Moves ending one step short of, at, and one step past their first pose inside the margin:
+    the dense check's answers, and the distances (every pair, every pose) agree."""
+    robot, cm = cell
+    rng = np.random.default_rng(17)
+    lo, hi = _limits(robot)
+    margins = np.asarray(cm.move_margins, float)
+    ws, built = Workspace(cm), 0
+    while built < 3:
+        qa, qb = rng.uniform(lo, hi, (2, robot.n_joints))
+        qb = qa + 0.3 * (qb - qa)
+        n, at, _ = _dense(cm, qa, qb, margins)
+        t = np.linspace(0.0, 1.0, n)
+        if at is None or at < 3 * t[1]:
+            continue  # free, or flagged at its start
+        first = int(round(at * (n - 1)))
+        ends = [qa + t[end] * (qb - qa) for end in (first - 1, first, first + 1)]
+        if (np.abs(_distances(cm, np.array(ends)) - margins) < 1e-6).any():
+            continue  # too close to call at an end
+        built += 1
+        for b, expect_free in zip(ends, (True, False, False)):
+            fast = check_segment(cm, qa, b, margins, workspace=ws)
+            assert (fast.samples, fast.first, fast.pair) == _dense(cm, qa, b, margins)
+            assert fast.free == expect_free
+        # the move ending at its first pose inside: only its end is inside, by the distances
+        m = check_segment(cm, qa, ends[1], margins, workspace=ws).samples
+        tt = np.linspace(0.0, 1.0, m)
+        inside = (_distances(cm, qa + tt[:, None] * (ends[1] - qa)) < margins).any(axis=1)
+        assert inside[-1] and not inside[:-1].any()
+
+
+def test_a_workspace_answers_a_move_it_checked_from_memory(cell, monkeypatch):
+    """The same ends, margins and step: the check remembered; any of them changed: checked."""
+    robot, cm = cell
+    clearance = importlib.import_module("doe_calib.collision.clearance")
+    rng = np.random.default_rng(23)
+    lo, hi = _limits(robot)
+    qa, qb = rng.uniform(lo, hi, (2, robot.n_joints))
+    ws, dense = Workspace(cm), Workspace(cm, bounded=False)
+    first = check_segment(cm, qa, qb, cm.move_margins, workspace=ws)
+    assert check_segment(cm, qa.copy(), qb.copy(), cm.move_margins, workspace=ws) is first
+    assert first == check_segment(cm, qa, qb, cm.move_margins, workspace=dense)
+    assert dense.checked is None  # the reference remembers nothing
+    for margin, step in ((0.0, SEGMENT_STEP), (0.3, SEGMENT_STEP), (None, 2 * SEGMENT_STEP)):
+        again = check_segment(cm, qa, qb, margin, step, workspace=ws)
+        margins = np.broadcast_to(np.asarray(cm.margins if margin is None else margin, float),
+                                  len(cm.margins))
+        n, at, pair = _dense(cm, qa, qb, margins) if step == SEGMENT_STEP else \
+            (again.samples, again.first, again.pair)
+        assert (again.samples, again.first, again.pair) == (n, at, pair)
+    assert check_segment(cm, qa, qb, 0.3, workspace=ws).pair is not None  # 30 cm: touching
+    monkeypatch.setattr(clearance, "REMEMBERED", 4)
+    for k in range(10):
+        check_segment(cm, qa, qa + (k + 1) * 0.01, workspace=ws)
+        assert len(ws.checked) <= 4

@@ -24,6 +24,8 @@ from doe_calib.collision.bounds import SLACK, motion_weights
 
 #: Largest joint step between the checked samples of a move, rad (m for prismatic joints).
 SEGMENT_STEP = np.radians(1.0)
+#: Moves a workspace remembers the check of (a program tries the same move again and again).
+REMEMBERED = 10_000
 
 
 @dataclass(frozen=True)
@@ -89,15 +91,27 @@ class Workspace:
     cm : CollisionModel
     bounded : bool
         Let :func:`check_segment` skip the poses where a pair is proven clear
-        (default); False: test every pair at every pose (the reference the
-        benchmarks and tests compare with: the same answers, slower).
+        and answer a move it has checked before (the same ends, margins and
+        step) from memory (default); False: test every pair at every pose of
+        every move (the reference the benchmarks and tests compare with: the
+        same answers, slower).
     """
 
     def __init__(self, cm, bounded: bool = True):
         self.data = cm.model.createData()
         self.geometry = cm.geometry.createData()
         self.margins = None
+        # held references into the geometry data's results (indexing it copies each one)
+        self.results = list(self.geometry.collisionResults)
         self._weights = False if bounded else None
+        self.checked = {} if bounded else None
+
+    def remember(self, key, check) -> None:
+        """Keep a move's check (at most :data:`REMEMBERED`; the oldest half forgotten then)."""
+        if len(self.checked) >= REMEMBERED:
+            for old in list(self.checked)[:REMEMBERED // 2]:
+                del self.checked[old]
+        self.checked[key] = check
 
     def weights(self, cm) -> np.ndarray | None:
         """Per pair and joint, how fast the pair can close (:func:`.bounds.motion_weights`)."""
@@ -201,8 +215,22 @@ def check_segment(cm, qa, qb, margin: float | None = None, step: float = SEGMENT
         Largest change of any joint between checked poses, rad (m).
     """
     qa, qb = np.asarray(qa, float), np.asarray(qb, float)
-    t = np.linspace(0.0, 1.0, max(2, int(np.ceil(np.max(np.abs(qb - qa)) / step)) + 1))
     ws = Workspace(cm) if workspace is None else workspace
+    key = None
+    if ws.checked is not None:
+        key = (qa.tobytes(), qb.tobytes(),
+               None if margin is None else np.asarray(margin, float).tobytes(), float(step))
+        known = ws.checked.get(key)
+        if known is not None:
+            return known
+    check = _check(cm, qa, qb, margin, step, ws)
+    if key is not None:
+        ws.remember(key, check)
+    return check
+
+
+def _check(cm, qa, qb, margin, step, ws) -> SegmentCheck:
+    t = np.linspace(0.0, 1.0, max(2, int(np.ceil(np.max(np.abs(qb - qa)) / step)) + 1))
     weights = ws.weights(cm)
     if weights is None or not len(cm.geometry.collisionPairs):
         hit = too_close(cm, qa + t[:, None] * (qb - qa), margin, ws)
@@ -222,30 +250,37 @@ def _first_too_close(cm, qa, qb, t, margin, weights, ws):
 
     Each pair is tested at a pose only when the bound from its last test
     (:mod:`.bounds`) no longer proves it clear there; None when every pose is free.
+    The pairs due at a pose are tested in checking order, so the pair returned is
+    the first one the test of every pair finds.
     """
     import pinocchio as pin
 
     ws.set_margins(cm.margins if margin is None
                    else np.broadcast_to(np.asarray(margin, float), len(cm.margins)))
-    margins = ws.margins
-    configurations = cm.configurations(qa + t[:, None] * (qb - qa))
+    poses = np.ascontiguousarray(cm.configurations(qa + t[:, None] * (qb - qa)).T)
     n = len(t)
     # the largest closing of each pair between neighbouring poses, m (the grid is uniform)
     per_step = ((weights @ np.abs(qb - qa)) / (n - 1)).tolist()
-    due = np.zeros(len(margins), int)
-    results = ws.geometry.collisionResults
+    due = [0] * len(per_step)
+    results = ws.results
+    model, geometry, data, gdata = cm.model, cm.geometry, ws.data, ws.geometry
+    collide, place, finite = pin.computeCollision, pin.updateGeometryPlacements, math.isfinite
     i = 0
     while i < n:
-        pin.updateGeometryPlacements(cm.model, ws.data, cm.geometry, ws.geometry,
-                                     configurations[:, i])
-        for k in np.flatnonzero(due <= i).tolist():
-            if pin.computeCollision(cm.geometry, ws.geometry, k):
-                return i, k
-            # clear while the closing since this pose stays below its lower bound less margin
-            spare = results[k].distance_lower_bound - margins[k] - SLACK
-            skip = 0
-            if spare > 0 and math.isfinite(spare):
-                skip = n if per_step[k] <= 0 else min(n, int(spare / per_step[k]))
-            due[k] = i + 1 + skip
-        i = int(due.min())
+        place(model, data, geometry, gdata, poses[i])
+        following = n
+        for k, when in enumerate(due):
+            if when <= i:
+                if collide(geometry, gdata, k):
+                    return i, k
+                # coal's bound is on the distance less the margin (the distance to a
+                # collision): clear while the closing since this pose stays below it
+                spare = results[k].distance_lower_bound - SLACK
+                skip = 0
+                if spare > 0 and finite(spare):
+                    skip = n if per_step[k] <= 0 else min(n, int(spare / per_step[k]))
+                when = due[k] = i + 1 + skip
+            if when < following:
+                following = when
+        i = following
     return None

@@ -22,9 +22,6 @@ log = logging.getLogger(__name__)
 ALWAYS = 0.95
 #: Spread (max − min) of a pair's distance over the samples below which it never changes, m.
 CONSTANT = 1e-6
-#: Samples on which every pair's distance is first computed; only the pairs constant on these
-#: are followed over all samples.
-_FIRST = 20
 
 
 def _nearest_with_geometry(model, joint: int, has_geometry: set) -> int:
@@ -119,9 +116,10 @@ def never_moving(model, geometry, configurations: np.ndarray) -> np.ndarray:
 
     Such a pair never moves relative to itself in a way that matters — a base
     link turning about the vertical axis above the floor, a link and a box it
-    is bolted to — so a pose's clearance says nothing by naming it. The
-    distance is computed on the first 20 samples for every pair and on all
-    for those constant there; constant means a spread below :data:`CONSTANT`.
+    is bolted to — so a pose's clearance says nothing by naming it. Constant
+    means a spread below :data:`CONSTANT`; a pair is followed only while it
+    is constant over the samples so far (a spread never shrinks), so most are
+    dropped after the second sample.
 
     Returns
     -------
@@ -133,15 +131,14 @@ def never_moving(model, geometry, configurations: np.ndarray) -> np.ndarray:
     n = len(geometry.collisionPairs)
     low, high = np.full(n, np.inf), np.full(n, -np.inf)
     candidates = np.arange(n)
-    for s, q in enumerate(configurations.T):
-        if s == _FIRST:
-            candidates = np.flatnonzero(high - low < CONSTANT)
+    for q in configurations.T:
         if not len(candidates):
             break
         pin.updateGeometryPlacements(model, data, geometry, gdata, q)
         for k in candidates:
             d = pin.computeDistance(geometry, gdata, int(k)).min_distance
             low[k], high[k] = min(low[k], d), max(high[k], d)
+        candidates = candidates[high[candidates] - low[candidates] < CONSTANT]
     out = np.zeros(n, bool)
     out[candidates] = high[candidates] - low[candidates] < CONSTANT
     return out
