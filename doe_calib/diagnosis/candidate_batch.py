@@ -31,6 +31,7 @@ corrects a placement (whose composition order matters) is not seen this way.
 """
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass, replace
 
@@ -263,15 +264,23 @@ def grown_models(model, effects, measurements, values, batch=None) -> list:
     """``model + e`` for each of ``effects``: through one batch when it builds and is inert
     at ``values`` (SI) on ``measurements``' configurations, else built one by one.
     ``batch``: as :func:`batched_columns`'s, its Functions used when it holds them."""
+    return [build() for build in grown_model_builders(model, effects, measurements, values,
+                                                       batch)]
+
+
+def grown_model_builders(model, effects, measurements, values, batch=None) -> list:
+    """What :func:`grown_models` returns, as a builder per effect (no argument → the model),
+    so that a caller can fit one grown model while it builds the next."""
     if not effects:
         return []
     view = _seen_from(batch, model, measurements, values, effects)
     if view is not None:
-        return [view.augmented(i) for i in range(len(effects))]
+        return [functools.partial(view.augmented, i) for i in range(len(effects))]
     try:
         batch = candidate_batch(model, effects)
         if batch.inert(measurements, values):
-            return [batch.augmented(i) for i in range(len(effects))]
+            return [functools.partial(batch.augmented, i) for i in range(len(effects))]
     except (DoeCalibError, ValueError):
         pass
-    return [build_model(model.robot, model.tool, tuple(model.effects) + (e,)) for e in effects]
+    return [functools.partial(build_model, model.robot, model.tool, tuple(model.effects) + (e,))
+            for e in effects]

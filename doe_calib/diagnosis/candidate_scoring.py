@@ -1,13 +1,15 @@
-"""The chosen candidates scored: each grown model fitted, then cross-validated.
+"""The chosen candidates scored: each grown model built, fitted, then cross-validated.
 
 Every chosen candidate of a diagnosis is fitted as the model grown by it, from
 the model's own fit, and its cross-validated RMS computed
 (:func:`~doe_calib.diagnosis.cross_validation.cross_validated_rms`). The
 candidates are independent of each other, and CasADi evaluates without
 Python's lock: ``workers`` threads fit them at once, each in its own
-evaluation workspace (:func:`~doe_calib.model.evaluation.thread_workspace`). The
-scores are those of fitting one after another, bit for bit: no fit reads
-another's state. The toolkit's warnings of these fits are held back, as by
+evaluation workspace (:func:`~doe_calib.model.evaluation.thread_workspace`),
+while the calling thread builds the next grown model (CasADi's symbolic
+construction is not thread-safe: only the calling thread builds; the workers
+only evaluate). The scores are those of fitting one after another, bit for
+bit: no fit reads another's state. The toolkit's warnings of these fits are held back, as by
 :func:`~doe_calib.estimation.identify.identify_quietly`, once for every thread
 (a ``warnings.catch_warnings`` per thread would race on the global filters).
 """
@@ -34,6 +36,8 @@ class CandidateScore:
 
     Attributes
     ----------
+    model : Model
+        The grown model.
     fit : IdentificationResult
         The grown model's fit to the screening readings.
     cv_rms_mm : float
@@ -44,6 +48,7 @@ class CandidateScore:
         Words on those beyond their bounds or plausible range ("" when none).
     """
 
+    model: object
     fit: object
     cv_rms_mm: float
     rows: tuple
@@ -55,14 +60,16 @@ def default_workers() -> int:
     return max(1, min(MAX_WORKERS, os.cpu_count() or 1))
 
 
-def score_candidates(grown, effects, params, measurements, folds, workers: int | None = None,
-                     progress=None) -> list:
-    """Fit and cross-validate each grown model.
+def score_candidates(builders, effects, params, measurements, folds,
+                     workers: int | None = None, progress=None) -> list:
+    """Build, fit and cross-validate each grown model.
 
     Parameters
     ----------
-    grown : sequence of Model
-        The model grown by each candidate effect.
+    builders : sequence of callable
+        ``build()`` → the model grown by each candidate effect
+        (:func:`~doe_calib.diagnosis.candidate_batch.grown_model_builders`), called in
+        order by the calling thread.
     effects : sequence of Effect
         The effects, in the same order.
     params : ParameterSet
@@ -72,29 +79,29 @@ def score_candidates(grown, effects, params, measurements, folds, workers: int |
     folds : Folds
         The cross-validation's folds.
     workers : int, optional
-        Threads at once (default :func:`default_workers`; 1: one after another).
+        Threads fitting at once (default :func:`default_workers`; 1: one after another).
     progress : callable, optional
         ``progress(i, n)`` as the i-th of n candidates is scored, in order.
 
     Returns
     -------
     list of CandidateScore or None
-        In the order of ``grown``; None where the grown model's fit failed.
+        In the order of ``builders``; None where the grown model's fit failed.
     """
     workers = default_workers() if workers is None else max(1, int(workers))
-    jobs = list(zip(grown, effects))
+    jobs = list(zip(builders, effects))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DoeCalibWarning)
         if workers == 1 or len(jobs) < 2:
             out = []
-            for i, (big, effect) in enumerate(jobs):
+            for i, (build, effect) in enumerate(jobs):
                 if progress:
                     progress(i, len(jobs))
-                out.append(_score(big, effect, params, measurements, folds))
+                out.append(_score(build(), effect, params, measurements, folds))
             return out
         with ThreadPoolExecutor(min(workers, len(jobs))) as pool:
-            futures = [pool.submit(_score, big, effect, params, measurements, folds)
-                       for big, effect in jobs]
+            futures = [pool.submit(_score, build(), effect, params, measurements, folds)
+                       for build, effect in jobs]  # each built while the workers fit
             out = []
             for i, future in enumerate(futures):
                 if progress:
@@ -111,8 +118,8 @@ def _score(big, effect, params, measurements, folds):
         return None
     new = [n for n in fit.parameters.names if n not in params.names]
     rows, odd = fitted_rows(fit, new, effect)
-    return CandidateScore(fit, cross_validated_rms(big, measurements, fit.parameters, folds),
-                          rows, odd)
+    return CandidateScore(big, fit, cross_validated_rms(big, measurements, fit.parameters,
+                                                        folds), rows, odd)
 
 
 def fitted_rows(fit, names, effect) -> tuple:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.diagnosis.candidate import candidate_records
-from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_models
+from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_model_builders
 from doe_calib.diagnosis.candidate_scoring import score_candidates
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
 from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
@@ -311,16 +311,16 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     chosen = _groups_to_try(tests, level, cv_top)
     scored = {}
     effects = [parse_effect(t.spec, registry=registry) for t in chosen]
-    grown = grown_models(model, effects, screen, params.values, batch)
-    scores = score_candidates(grown, effects, params, screen, split, workers,
+    builders = grown_model_builders(model, effects, screen, params.values, batch)
+    scores = score_candidates(builders, effects, params, screen, split, workers,
                               progress=None if progress is None else
                               (lambda i, n: progress(i, n, chosen[i].spec)))
-    for t, big, score in zip(chosen, grown, scores):
+    for t, score in zip(chosen, scores):
         if score is None:  # the grown model's fit failed
             scored[t.spec] = t.with_cv(float("nan"))
             continue
         if candidate_fits is not None and screen is measurements:
-            candidate_fits[t.spec] = (big, score.fit)
+            candidate_fits[t.spec] = (score.model, score.fit)
         scored[t.spec] = t.with_cv(score.cv_rms_mm, score.rows, score.odd)
     ranked = sorted(scored.values(), key=lambda t: (_cv_key(t), t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]

@@ -80,7 +80,10 @@ class FigureWorker:
 def _serve(stream) -> None:
     """Draw and save every job read from ``stream`` until its end."""
     import importlib
+    import os
 
+    if hasattr(os, "nice"):  # the command's own threads first: the figure takes idle time
+        os.nice(10)
     modules = [importlib.import_module(m) for m in MODULES]  # matplotlib, while the parent fits
     while True:
         try:
