@@ -14,7 +14,7 @@ to discover effects (:mod:`.discovery`) chooses load cases (:mod:`.load_directio
 and approach sides per pose (:mod:`.discovery_candidates`) by a constrained
 exchange (:mod:`.constrained_exchange`).
 """
-import importlib
+from doe_calib.runtime.lazy_exports import lazy_exports
 
 #: Public name → the module of this package that defines it. Each is imported on first
 #: use, so that a diagnosis's detectability (:mod:`.detectability`) does not load the
@@ -35,11 +35,4 @@ _HOMES = {"read_constraints": "constraint_file", "Box": "constraints", "Coverage
 __all__ = list(_HOMES)
 
 
-def __getattr__(name: str):
-    if name in _HOMES:
-        return getattr(importlib.import_module(f"doe_calib.design.{_HOMES[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted({*globals(), *_HOMES})
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES, globals())

@@ -11,7 +11,7 @@ they add; :func:`write_report` writes any sections built with :mod:`.html`.
 Reporting code formats and plots; it computes nothing
 the library does not already provide.
 """
-import importlib
+from doe_calib.runtime.lazy_exports import lazy_exports
 
 #: Public name → the module of this package that defines it. Each is imported on first
 #: use, so that ``from doe_calib.report.figures import …`` (the diagnose command's residual
@@ -24,11 +24,4 @@ _HOMES = {"identification_report": "identification", "design_report": "design",
 __all__ = list(_HOMES)
 
 
-def __getattr__(name: str):
-    if name in _HOMES:
-        return getattr(importlib.import_module(f"doe_calib.report.{_HOMES[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted({*globals(), *_HOMES})
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES, globals())
