@@ -27,9 +27,10 @@ from doe_calib.errors import OptionError
 
 _CHUNK = 4096  # candidates per step when sweeping all of them (bounds memory)
 #: With ``screen``: rounds while candidates outside the working set still violate the
-#: theorem stop at this many times ``tol`` (the last round goes to ``tol``) ...
+#: theorem stop at this many times ``tol`` (the last round goes to ``tol``).
 _LOOSE = 10.0
-#: ... and weights below this fraction of the largest leave the working set.
+#: Weights below this fraction of the largest leave the working set after a round (they
+#: come back if they violate the theorem); they are 0 in the result.
 _NEGLIGIBLE = 1e-8
 _PACK_CHUNK = 1024  # candidates per batched product of packed_information (stays in cache)
 
@@ -181,7 +182,10 @@ def relax(blocks: np.ndarray | None, criterion="D", task: np.ndarray | None = No
     start weights are solved to tolerance, then every candidate that
     violates the equivalence theorem is added and the solve repeated. The
     ratio — and so the certified bound — is always computed over every
-    candidate.
+    candidate. After each round, candidates whose weight fell below 1e-8 of
+    the largest leave the working set (weight 0; they come back if they
+    violate the theorem): later rounds sweep fewer, and the exchange is not
+    led by the order of weights that are the iterations' noise.
 
     Parameters
     ----------
@@ -206,11 +210,9 @@ def relax(blocks: np.ndarray | None, criterion="D", task: np.ndarray | None = No
     screen : bool
         Fewer iterations for the same certificate: rounds are solved to
         10 · ``tol`` while candidates outside the working set still violate
-        it (the last round to ``tol``), and candidates whose weight falls
-        below 1e-8 of the largest leave the working set (they come back if
-        they violate). The weights then differ from the plain path's within
-        the tolerance (the weights of an optimum are not unique), so it
-        serves where only the bound is wanted.
+        it (the last round to ``tol``). The weights then differ from the plain
+        path's within the tolerance (the weights of an optimum are not
+        unique), so it serves where only the bound is wanted.
 
     Returns
     -------
@@ -242,7 +244,7 @@ def relax(blocks: np.ndarray | None, criterion="D", task: np.ndarray | None = No
                                               max_iterations - iterations, progress, iterations)
         iterations += used
         work = work[kept]
-        heavy = w > (_NEGLIGIBLE if screen else 0.0) * w.max()
+        heavy = w > _NEGLIGIBLE * w.max()
         if not heavy.all():  # dropped ones come back below if they violate the theorem
             work, w = work[heavy], w[heavy] / w[heavy].sum()
             m = unpack(w @ packed[work], p)
