@@ -119,13 +119,15 @@ def _command_rows(robot, tool, campaigns: dict) -> list:
             load = os.getloadavg()[0]
             wall, cpu, rc = _command(robot, tool, meas, Path(tmp), name)
             (wall0, cpu0), goal = COMMAND_BEFORE[name], COMMAND_GOALS[name]
-            # judged on CPU time: a quiet machine's wall time (a loaded one inflates it)
-            verdict = "met" if cpu <= goal else ("met within the 20 % noise"
-                                                 if cpu <= 1.2 * goal else "NOT met")
-            rows.append(Row(f"doe-calib {CASES[name]}, own process", cpu, "s CPU",
-                            cpu / cpu0, f"before {cpu0:g} s CPU"
+            # judged on wall time, as the issue measures: the command's threads and its
+            # figure process make its CPU time exceed its wall time on two cores
+            verdict = "met" if wall <= goal else ("met within the 20 % noise"
+                                                  if wall <= 1.2 * goal else "NOT met")
+            busy = "" if load < (os.cpu_count() or 1) else " (a loaded machine: inflated)"
+            rows.append(Row(f"doe-calib {CASES[name]}, own process", wall, "s",
+                            cpu / cpu0, f"CPU {cpu:.2f} s, before {cpu0:g} s CPU"
                             + (f" ({wall0:g} s wall, quiet)" if wall0 else "") + "; "
-                            f"wall {wall:.2f} s at load {load:.1f}; goal ≤ {goal:g} s: "
+                            f"load {load:.1f}{busy}; goal ≤ {goal:g} s: "
                             f"{verdict}" + (f"; exit status {rc}" if rc else "")))
     return rows
 
@@ -156,13 +158,16 @@ def run(quick: bool = False) -> Section:
     commands = {"refine60": meas60} if quick else {"refine60": meas60, "refine2800": meas2800}
     rows += _command_rows(robot, tool, commands)
     notes = ("one run per case after the starting fit; CPU time of this process "
-             "(BLAS on one thread); ratio = after ÷ before; the command rows' goal is judged "
-             "on CPU time, what their wall time is on a quiet machine.",
+             "(BLAS on one thread); ratio = after ÷ before (CPU); the command rows are the "
+             "command's wall time, judged against the issue's goal as the issue measures.",
              "before/after give the same verdicts, proposals and added effects; their "
              "numbers agree to rounding (~1e-13 relative).",
              "this round: refine builds the starting model's candidates once and sees that "
              "batch from each grown model; a repeated evaluation reads the last call's "
-             "buffers; no scipy.optimize import.")
+             "buffers; no scipy.special/optimize import; the chosen candidates fitted in "
+             "threads (diagnosis/candidate_scoring.py), each grown model built while the "
+             "others fit; the figure drawn in a child process; a known robot read without "
+             "Pinocchio (model/urdf_cache.py).")
     return Section("(h) diagnose and refine, in-process and the refine command", tuple(rows),
                    "this round's start, same calls", notes,
                    tables=(("what each call found", ("case", "effects"), tuple(found)),))
