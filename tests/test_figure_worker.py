@@ -51,3 +51,22 @@ def test_an_error_in_the_command_stops_the_child(tmp_path):
             raise RuntimeError("the fit failed")
     assert child.poll() is not None  # stopped, not left drawing
     assert not (tmp_path / "r.png").exists()
+
+
+def test_without_an_interpreter_to_start_the_figure_is_drawn_in_process(tmp_path, monkeypatch):
+    import subprocess
+
+    def no_child(*args, **kwargs):
+        raise FileNotFoundError("no python here")
+
+    monkeypatch.setattr(subprocess, "Popen", no_child)
+    norms, columns = _columns()
+    with FigureWorker() as worker:
+        worker.draw("residual_scatter", tmp_path / "a.png", norms, columns)
+        assert (tmp_path / "a.png").exists()  # drawn at once
+    residual_scatter(norms, columns).savefig(tmp_path / "ref.png", dpi=90)
+    assert (tmp_path / "a.png").read_bytes() == (tmp_path / "ref.png").read_bytes()
+    with pytest.raises(DoeCalibError, match="no such folder"):
+        with FigureWorker() as worker:
+            worker.draw("residual_scatter", tmp_path / "no such folder" / "r.png", norms,
+                        columns)

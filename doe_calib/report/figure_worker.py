@@ -39,14 +39,20 @@ class FigureWorker:
 
     def __init__(self):
         self._paths: list[str] = []
-        self._child = subprocess.Popen([sys.executable, "-m", __name__],
-                                       stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
-                                       stderr=subprocess.PIPE)
+        try:
+            self._child = subprocess.Popen([sys.executable, "-m", __name__],
+                                           stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                                           stderr=subprocess.PIPE)
+        except OSError:  # no interpreter to start (an embedded Python): draw in-process
+            self._child = None
 
     def draw(self, function: str, path, *args, dpi: int = 90, **kwargs) -> None:
         """Send one figure: ``function(*args, **kwargs)`` of :data:`MODULES`, saved to ``path``
-        (PNG) at ``dpi`` dots per inch. Returns at once."""
+        (PNG) at ``dpi`` dots per inch. Returns at once (without a child: when drawn)."""
         self._paths.append(str(path))
+        if self._child is None:
+            _draw(_figure_modules(), function, args, kwargs, path, dpi)
+            return
         try:
             pickle.dump((function, args, kwargs, str(path), dpi), self._child.stdin,
                         protocol=pickle.HIGHEST_PROTOCOL)
@@ -56,6 +62,8 @@ class FigureWorker:
 
     def close(self) -> None:
         """Wait until every figure is written; raise if one could not be."""
+        if self._child is None:
+            return
         try:
             self._child.stdin.close()
         except BrokenPipeError:
@@ -72,31 +80,40 @@ class FigureWorker:
     def __exit__(self, kind, error, trace) -> None:
         if kind is None:
             self.close()
-        else:
+        elif self._child is not None:
             self._child.kill()
             self._child.wait()
 
 
+def _figure_modules() -> list:
+    import importlib
+
+    return [importlib.import_module(m) for m in MODULES]
+
+
+def _draw(modules, function, args, kwargs, path, dpi) -> None:
+    home = next((m for m in modules if hasattr(m, function)), None)
+    if home is None:
+        raise DoeCalibError(f"no figure function {function!r} in {', '.join(MODULES)}")
+    try:
+        getattr(home, function)(*args, **kwargs).savefig(path, dpi=dpi)
+    except OSError as e:
+        raise DoeCalibError(f"cannot write {Path(path)}: {e.strerror or e}") from None
+
+
 def _serve(stream) -> None:
     """Draw and save every job read from ``stream`` until its end."""
-    import importlib
     import os
 
     if hasattr(os, "nice"):  # the command's own threads first: the figure takes idle time
         os.nice(10)
-    modules = [importlib.import_module(m) for m in MODULES]  # matplotlib, while the parent fits
+    modules = _figure_modules()  # matplotlib, while the parent fits
     while True:
         try:
             function, args, kwargs, path, dpi = pickle.load(stream)
         except EOFError:
             return
-        home = next((m for m in modules if hasattr(m, function)), None)
-        if home is None:
-            raise DoeCalibError(f"no figure function {function!r} in {', '.join(MODULES)}")
-        try:
-            getattr(home, function)(*args, **kwargs).savefig(path, dpi=dpi)
-        except OSError as e:
-            raise DoeCalibError(f"cannot write {Path(path)}: {e.strerror or e}") from None
+        _draw(modules, function, args, kwargs, path, dpi)
 
 
 if __name__ == "__main__":
