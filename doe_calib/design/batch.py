@@ -1,8 +1,8 @@
 """Evaluation over tens of thousands of poses in fixed-size chunks.
 
-``Function.map`` costs about 25 µs per mapped copy to build, so mapping once
-over 40 000 configurations takes seconds; chunks of one fixed size build the
-map once and reuse it (the last chunk is padded). Each map is evaluated
+Buffers for every one of 40 000 configurations would hold gigabytes; chunks
+of one fixed size build one map and its buffers and reuse them (the last
+chunk is padded). Each map is evaluated
 through CasADi's buffers straight into numpy arrays (no DM conversion). The
 maps are kept per thread, a few at a time.
 """
@@ -39,8 +39,8 @@ class _Mapped:
 
     def __init__(self, function: ca.Function, m: int):
         self.function = function
-        self.mapped = function.map(f"{function.name()}_map", "serial", m, [], []) \
-            if m > 1 else function
+        # the plain map: the named one with reduce lists is an MX wrapper built in time ∝ m
+        self.mapped = function.map(m, "serial") if m > 1 else function
         self.arg = np.zeros(self.mapped.size_in(0)[::-1])
         self.res = [np.zeros(self.mapped.size_out(i)[::-1]) for i in range(function.n_out())]
         self.buffer, self.call = self.mapped.buffer()
