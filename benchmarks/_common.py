@@ -64,6 +64,21 @@ class Models:
 
 
 @lru_cache(maxsize=1)
+@contextmanager
+def cold_cache():
+    """An empty native-code cache (``DOE_CALIB_CACHE``) for the block, the old one after."""
+    old = os.environ.get("DOE_CALIB_CACHE")
+    with tempfile.TemporaryDirectory(prefix="doe_calib_bench_") as cache:
+        os.environ["DOE_CALIB_CACHE"] = cache
+        try:
+            yield cache
+        finally:
+            if old is None:
+                del os.environ["DOE_CALIB_CACHE"]
+            else:
+                os.environ["DOE_CALIB_CACHE"] = old
+
+
 def models() -> Models:
     """Build every model once; the compiled ones into a fresh cache, so the cost is measured.
 
@@ -73,22 +88,14 @@ def models() -> Models:
     robot6, tool6 = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
     robot3 = Robot.from_urdf(examples.THREE_DOF_URDF)
     tool3 = Tool.from_yaml(examples.THREE_DOF_TOOL_YAML)
-    old = os.environ.get("DOE_CALIB_CACHE")
-    with tempfile.TemporaryDirectory(prefix="doe_calib_bench_") as cache:
-        os.environ["DOE_CALIB_CACHE"] = cache
-        try:
-            t0 = time.perf_counter()
-            compiled6 = build_model(robot6, tool6, MODEL_6R, compile=True)
-            t1 = time.perf_counter()
-            compiled6 = build_model(robot6, tool6, MODEL_6R, compile=True)
-            t2 = time.perf_counter()
-            compiled3 = build_model(robot3, tool3, "joint_offset+geometry", compile=True)
-            t3 = time.perf_counter()
-        finally:
-            if old is None:
-                del os.environ["DOE_CALIB_CACHE"]
-            else:
-                os.environ["DOE_CALIB_CACHE"] = old
+    with cold_cache():
+        t0 = time.perf_counter()
+        compiled6 = build_model(robot6, tool6, MODEL_6R, compile=True)
+        t1 = time.perf_counter()
+        compiled6 = build_model(robot6, tool6, MODEL_6R, compile=True)
+        t2 = time.perf_counter()
+        compiled3 = build_model(robot3, tool3, "joint_offset+geometry", compile=True)
+        t3 = time.perf_counter()
     # the loaded libraries stay mapped in this process after the directory is gone
     return Models(robot6, build_model(robot6, tool6, MODEL_6R), compiled6, robot3,
                   build_model(robot3, tool3, "joint_offset+geometry"), compiled3,

@@ -3,14 +3,13 @@ from __future__ import annotations
 
 import os
 import platform
-import tempfile
 
 import casadi as ca
 
 from doe_calib.model import simd_code
 from doe_calib.model.compiled import FLAGS, compile_functions, find_compiler
 
-from ._common import Row, Section, models
+from ._common import Row, Section, cold_cache, models
 
 #: Recorded before this round (results/benchmarks.md, 2026-12-02T00:34:47, load 1.2): the
 #: 6R full model's four Functions compiled from a cold cache, wall time.
@@ -19,19 +18,11 @@ BEFORE_SECONDS = 4.84
 
 def _compiler_cpu(function, source=None, lanes=2) -> float:
     """CPU seconds (user + sys) the C compiler takes for ``function``, cold cache."""
-    old = os.environ.get("DOE_CALIB_CACHE")
-    with tempfile.TemporaryDirectory(prefix="doe_calib_bench_") as cache:
-        os.environ["DOE_CALIB_CACHE"] = cache
-        try:
-            t0 = os.times()
-            compile_functions([function], sources=[None if source is None
-                                                   else (source, simd_code.flags(lanes))])
-            t1 = os.times()
-        finally:
-            if old is None:
-                del os.environ["DOE_CALIB_CACHE"]
-            else:
-                os.environ["DOE_CALIB_CACHE"] = old
+    with cold_cache():
+        t0 = os.times()
+        compile_functions([function], sources=[None if source is None
+                                               else (source, simd_code.flags(lanes))])
+        t1 = os.times()
     return t1.children_user + t1.children_system - t0.children_user - t0.children_system
 
 

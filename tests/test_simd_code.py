@@ -2,13 +2,14 @@
 every instruction it writes, every lane, batches not a multiple of the lanes, the full 6R
 observation matrix; it falls back to CasADi's own code when it cannot be written or compiled."""
 import casadi as ca
+from central_differences import assert_is_central_differences
 import numpy as np
 import pytest
 
 from doe_calib import Configurations, build_model, observation_matrix
 from doe_calib.model import simd_code
 from doe_calib.model.compiled import CompilationWarning, compile_functions, find_compiler
-from doe_calib.model.evaluation import Workspace, evaluate, marker_positions
+from doe_calib.model.evaluation import Workspace, evaluate
 from doe_calib.model.simd_code import load_lanes, lanes_signature, simd_lanes, simd_source
 from doe_calib.model.simulate import random_configurations, random_truth
 
@@ -139,14 +140,7 @@ def test_simd_observation_against_central_differences(compiled6, model6, robot6,
                                      rng.normal(size=(m, 6)) * ([1000.0] * 3 + [100.0] * 3))
     values = random_truth(model6, rng)
     _, b = observation_matrix(compiled6, values, cfg)
-    scales = model6.nominal().scales
-    for k in range(len(values)):
-        h = 1e-4 * scales[k]
-        up, down = values.copy(), values.copy()
-        up[k] += h
-        down[k] -= h
-        fd = (marker_positions(model6, up, cfg) - marker_positions(model6, down, cfg)) / (2 * h)
-        assert np.allclose(b[..., k], fd, rtol=1e-6, atol=1e-7 * np.abs(b).max()), k
+    assert_is_central_differences(b, model6, values, cfg)
 
 
 def test_workspace_keeps_lanes_and_single_batches_apart(compiled6, robot6, rng):

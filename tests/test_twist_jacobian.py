@@ -1,12 +1,13 @@
 """The observation matrix formed from the flange's twist equals CasADi's own Jacobian of the
 marker positions, and central differences of them; user effects keep CasADi's Jacobian."""
 import casadi as ca
+from central_differences import assert_is_central_differences
 import numpy as np
 import pytest
 
 from doe_calib import Configurations, build_model, examples
 from doe_calib.model.effects import DEFAULT_REGISTRY
-from doe_calib.model.evaluation import evaluate, marker_positions, observation_matrix
+from doe_calib.model.evaluation import evaluate, observation_matrix
 from doe_calib.model.simulate import random_configurations, random_truth
 
 MODELS = ["", "joint_offset+geometry", "joint_offset+geometry+joint_compliance",
@@ -39,14 +40,7 @@ def test_twist_jacobian_is_casadi_s(spec, robot6, tool6, rng):
 def test_twist_jacobian_against_central_differences(model6, rng):
     cfg, values = _cases(model6, rng, 4)
     _, b = observation_matrix(model6, values, cfg)
-    scales = model6.nominal().scales
-    for k in range(len(values)):
-        h = 1e-4 * scales[k]
-        up, down = values.copy(), values.copy()
-        up[k] += h
-        down[k] -= h
-        fd = (marker_positions(model6, up, cfg) - marker_positions(model6, down, cfg)) / (2 * h)
-        assert np.allclose(b[..., k], fd, rtol=1e-6, atol=1e-7 * np.abs(b).max()), k
+    assert_is_central_differences(b, model6, values, cfg)
 
 
 def test_user_effects_keep_casadis_jacobian(robot6, tool6, rng):
