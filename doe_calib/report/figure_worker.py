@@ -16,6 +16,7 @@ jobs from its standard input until end of file.
 """
 from __future__ import annotations
 
+import os
 import pickle
 import subprocess
 import sys
@@ -39,8 +40,12 @@ class FigureWorker:
 
     def __init__(self):
         self._paths: list[str] = []
+        # the child imports this very doe_calib, wherever the parent found it
+        root = str(Path(__file__).resolve().parents[2])
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+            [root] + ([os.environ["PYTHONPATH"]] if os.environ.get("PYTHONPATH") else [])))
         try:
-            self._child = subprocess.Popen([sys.executable, "-m", __name__],
+            self._child = subprocess.Popen([sys.executable, "-m", __name__], env=env,
                                            stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
                                            stderr=subprocess.PIPE)
         except OSError:  # no interpreter to start (an embedded Python): draw in-process
@@ -103,8 +108,6 @@ def _draw(modules, function, args, kwargs, path, dpi) -> None:
 
 def _serve(stream) -> None:
     """Draw and save every job read from ``stream`` until its end."""
-    import os
-
     if hasattr(os, "nice"):  # the command's own threads first: the figure takes idle time
         os.nice(10)
     modules = _figure_modules()  # matplotlib, while the parent fits
