@@ -41,3 +41,19 @@ def test_fast_program_check_is_the_reference_one(tmp_path, monkeypatch, poses, p
     dense = _checked(design, cm, planner, monkeypatch, False)
     assert len(fast.routed) == routed and len(fast.collisions) == colliding
     _same(fast, dense)
+
+
+@pytest.mark.parametrize("poses, planner", [
+    ([FLOOR_A, FLOOR_B, HOME, FLOOR_A, FLOOR_B], False),  # routed and colliding moves
+    ([FLOOR_A, FLOOR_B, FLOOR_A], True),                   # planned, in worker processes
+])
+def test_moves_checked_in_processes_are_the_moves_checked_here(tmp_path, poses, planner):
+    design, _ = _constructed(tmp_path, poses, "program")
+    cm = build_collision_model(design.robot, design.tool)
+    visits = moves(design, Plan(order="design"))
+    here = check_program(visits, program_models([], lambda loads: cm), design.robot,
+                         planner=planner, workers=1)
+    there = check_program(visits, program_models([], lambda loads: cm), design.robot,
+                          planner=planner, workers=2)
+    assert here.routed or here.collisions  # the case has moves to route or refuse
+    _same(there, here)

@@ -34,6 +34,7 @@ reported with the pose, marker and body, and refused as a collision is.
 """
 from __future__ import annotations
 
+import multiprocessing
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -43,6 +44,7 @@ from doe_calib.errors import CollisionError
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.program import Waypoint, ascii_text, load_words
 from doe_calib.export.sequence import NO_LOAD
+from doe_calib.runtime.parallel import default_workers
 
 #: Candidate routes tried for one colliding move, shortest first.
 MAX_ROUTES = 40
@@ -237,8 +239,8 @@ def _clearance_words(cm) -> str:
 
 
 def check_program(visits, models, robot, axis_map: AxisMap | None = None,
-                  route: bool = True,
-                  planner: PlannerSettings | bool = True) -> ProgramCheck:
+                  route: bool = True, planner: PlannerSettings | bool = True,
+                  workers: int | None = None) -> ProgramCheck:
     """Check every move of a program for collisions; route the colliding ones when possible.
 
     Parameters
@@ -260,6 +262,10 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
         True (default) as each collision model says
         (:attr:`~doe_calib.collision.CollisionModel.planner`), False: simple
         routes only, or these settings.
+    workers : int, optional
+        Processes checking and routing the moves at once (default: the CPUs; 1: in this
+        process). Each move's check and route are its own (the planner is seeded per
+        search): the result does not depend on it.
 
     Returns
     -------
@@ -276,16 +282,20 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
     names = tuple(robot.joint_names)
     workspaces = {id(cm): Workspace(cm) for cm in models.values()}
     safe = list({m.pose: m.urdf_q for m in visits}.items())
+    jobs, previous = [], None
+    for m in visits:  # every move's check (and route) is known before any is made
+        cm = models.get(m.load, models[NO_LOAD])
+        first = m.urdf_q if m.urdf_pre is None else m.urdf_pre
+        start = first if previous is None else previous
+        settings = cm.planner if planner is True else (planner or None)
+        jobs.append((cm, start, first, route and previous is not None, settings))
+        if m.urdf_pre is not None:
+            jobs.append((cm, m.urdf_pre, m.urdf_q, False, None))
+        previous = m.urdf_q
+    done = iter(_checked_moves(jobs, safe, workspaces, workers))
     out, routed, collisions, blocked = [], [], [], []
     n_moves = n_samples = 0
     previous, where = None, None
-
-    def checked(cm, qa, qb):
-        nonlocal n_moves, n_samples
-        n_moves += 1
-        result = check_segment(cm, qa, qb, _margins(cm), workspace=workspaces[id(cm)])
-        n_samples += result.samples
-        return result
 
     def collision(result, qa, qb, words):
         q = (qa + result.first * (qb - qa)) * factors
@@ -299,27 +309,27 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
         start = first if previous is None else previous
         words = (f"first position, {to}" if previous is None else f"from {where} to {to}") \
             + f", {m.load}"
-        result = checked(cm, start, first)
-        if not result.free and route and previous is not None:
-            settings = cm.planner if planner is True else (planner or None)
-            how, via, samples = _route(cm, start, first, safe, workspaces[id(cm)], settings)
-            n_samples += samples
-            if via is not None:
-                why = ascii_text(f"on the way from {where} to {to}, {how} (straight: "
-                                 f"{result.pair})")
-                points = []
-                for k, u in enumerate(via, start=1):
-                    ctrl = axis_map.to_controller(u * factors)
-                    points.append(Waypoint(ctrl, ctrl / factors, u,
-                                           f"intermediate {k} of {len(via)} {why}"))
-                m = replace(m, via=tuple(points))
-                routed.append(f"move {n_moves}, {words}: {how} (straight: {result.pair})")
-                result = None
+        result, (how, via, samples) = next(done)
+        n_moves += 1
+        n_samples += result.samples + samples
+        if via is not None:
+            why = ascii_text(f"on the way from {where} to {to}, {how} (straight: "
+                             f"{result.pair})")
+            points = []
+            for k, u in enumerate(via, start=1):
+                ctrl = axis_map.to_controller(u * factors)
+                points.append(Waypoint(ctrl, ctrl / factors, u,
+                                       f"intermediate {k} of {len(via)} {why}"))
+            m = replace(m, via=tuple(points))
+            routed.append(f"move {n_moves}, {words}: {how} (straight: {result.pair})")
+            result = None
         if result is not None and not result.free:
             collisions.append(collision(result, start, first, words))
         if m.urdf_pre is not None:
             words = f"from {to} into {_label(m)}, {m.load}"
-            result = checked(cm, m.urdf_pre, m.urdf_q)
+            result, _ = next(done)
+            n_moves += 1
+            n_samples += result.samples
             if not result.free:
                 collisions.append(collision(result, m.urdf_pre, m.urdf_q, words))
         for b in (blocked_beams(cm, m.urdf_q, workspaces[id(cm)]) if m.measures else ()):
@@ -329,3 +339,37 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
     first = models[NO_LOAD]
     return ProgramCheck(tuple(out), n_moves, n_samples, tuple(routed), tuple(collisions),
                         tuple(dict.fromkeys(blocked)), _clearance_words(first))
+
+
+#: The moves of the program being checked, for the worker processes (forked: they see it).
+_JOBS: tuple = ()
+
+
+def _checked_moves(jobs, safe, workspaces, workers) -> list:
+    """Each job's (straight check, (route words, intermediate positions, route samples)), in
+    order; in ``workers`` forked processes where the platform forks and there is work for
+    them (the collision models are not picklable: the children see them by the fork)."""
+    global _JOBS
+    workers = default_workers() if workers is None else max(1, int(workers))
+    if workers == 1 or len(jobs) < 2 or "fork" not in multiprocessing.get_all_start_methods():
+        return [_checked_move(job, safe, workspaces) for job in jobs]
+    _JOBS = (jobs, safe, workspaces)
+    try:
+        with multiprocessing.get_context("fork").Pool(min(workers, len(jobs))) as pool:
+            return pool.map(_job, range(len(jobs)), chunksize=1)
+    finally:
+        _JOBS = ()
+
+
+def _job(i: int):
+    jobs, safe, workspaces = _JOBS
+    return _checked_move(jobs[i], safe, workspaces)
+
+
+def _checked_move(job, safe, workspaces):
+    cm, qa, qb, routable, settings = job
+    ws = workspaces[id(cm)]
+    result = check_segment(cm, qa, qb, _margins(cm), workspace=ws)
+    if result.free or not routable:
+        return result, (None, None, 0)
+    return result, _route(cm, qa, qb, safe, ws, settings)
