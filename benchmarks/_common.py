@@ -63,7 +63,6 @@ class Models:
         return self.compiled6.observation.is_a("External", True)
 
 
-@lru_cache(maxsize=1)
 @contextmanager
 def cold_cache():
     """An empty native-code cache (``DOE_CALIB_CACHE``) for the block, the old one after."""
@@ -79,6 +78,7 @@ def cold_cache():
                 os.environ["DOE_CALIB_CACHE"] = old
 
 
+@lru_cache(maxsize=1)
 def models() -> Models:
     """Build every model once; the compiled ones into a fresh cache, so the cost is measured.
 
