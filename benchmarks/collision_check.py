@@ -27,7 +27,7 @@ from pathlib import Path
 from doe_calib import examples
 
 from ._common import Row, Section
-from .commands import _ur5_urdf
+from .commands import ur5_urdf
 
 #: The `export` row as recorded on this machine before this work, CPU s (wall 28.8 s), and goal.
 RECORDED_EXPORT, GOAL = 28.4, 3.0
@@ -48,7 +48,7 @@ def children_cpu() -> float:
 def ur5_design(tmp: Path, env) -> Path:
     (tmp / "tool.yaml").write_text(Path(examples.UR_TOOL_YAML).read_text(encoding="utf-8"))
     (tmp / "cell.yaml").write_text(Path(examples.UR5_CELL_YAML).read_text(encoding="utf-8"))
-    subprocess.run([sys.executable, "-m", "doe_calib", "design", "--robot", str(_ur5_urdf()),
+    subprocess.run([sys.executable, "-m", "doe_calib", "design", "--robot", str(ur5_urdf()),
                     "--tool", str(tmp / "tool.yaml"), "--poses", "30", "--load", "3@0,0,80:40",
                     "--candidates", "500", "--constraints", str(tmp / "cell.yaml"),
                     "--no-refine", "--seed", "1", "--out", str(tmp / "ur5.json")],
@@ -64,6 +64,17 @@ def timed_export(design: Path, tmp: Path, env) -> tuple[float, float]:
                     "urscript", "--out", str(tmp / "timed"), "--allow-collisions"],
                    env=env, check=True, capture_output=True)
     return time.perf_counter() - t0, children_cpu() - before
+
+
+@contextlib.contextmanager
+def exported_ur5(prefix: str):
+    """A temporary folder with the 30-pose UR5 design (:func:`ur5_design`) and its export
+    timed (:func:`timed_export`): yields (folder, design file, wall s, CPU s)."""
+    with tempfile.TemporaryDirectory(prefix=prefix) as tmp:
+        tmp = Path(tmp)
+        env = dict(os.environ, DOE_CALIB_CACHE=str(tmp / "cache"))
+        design = ur5_design(tmp, env)
+        yield (tmp, design, *timed_export(design, tmp, env))
 
 
 def _recorded_moves(design: Path, out: Path) -> list:
@@ -107,11 +118,7 @@ def _check_all(moves, bounded: bool):
 
 def run(quick: bool = False) -> Section:
     load = os.getloadavg()[0]
-    with tempfile.TemporaryDirectory(prefix="doe_calib_collision_") as tmp:
-        tmp = Path(tmp)
-        env = dict(os.environ, DOE_CALIB_CACHE=str(tmp / "cache"))
-        design = ur5_design(tmp, env)
-        wall, cpu = timed_export(design, tmp, env)
+    with exported_ur5("doe_calib_collision_") as (tmp, design, wall, cpu):
         moves = _recorded_moves(design, tmp / "recorded")
     dense_s, dense = _check_all(moves, bounded=False)
     fast_s, fast = _check_all(moves, bounded=True)

@@ -42,7 +42,7 @@ UR5_CELL = Path(examples.UR5_CELL_YAML).read_text(encoding="utf-8")
 TOP = 8
 
 
-def _ur5_urdf() -> Path | None:
+def ur5_urdf() -> Path | None:
     for f in metadata.distribution("example-robot-data").files or []:
         if str(f).endswith("robots/ur_description/urdf/ur5_robot.urdf"):
             return Path(f.locate()).resolve()
@@ -109,7 +109,7 @@ def _commands(tmp: Path, quick: bool) -> dict:
         cmds["design"] = _doe_calib("design", *robot, "--poses", 15, "--candidates", 20000,
                                     "--load", "250@0,0,200", "--seed", 1,
                                     "--out", tmp / "kr.json")
-    urdf = _ur5_urdf()
+    urdf = ur5_urdf()
     if urdf is not None:
         (tmp / "tool.yaml").write_text(UR_TOOL)
         (tmp / "cell.yaml").write_text(UR5_CELL)

@@ -15,14 +15,13 @@ import contextlib
 import importlib
 import io
 import os
-import tempfile
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from ._common import Row, Section
-from .collision_check import RECORDED_EXPORT, cpu_seconds, timed_export, ur5_design
+from .collision_check import RECORDED_EXPORT, cpu_seconds, exported_ur5
 
 #: The reference's check budget: what 1 s of wall time gave a search on this machine, loaded.
 BEFORE_CHECKS = 5000
@@ -74,11 +73,7 @@ def _plan_all(plans, before: bool):
 
 def run(quick: bool = False) -> Section:
     load = os.getloadavg()[0]
-    with tempfile.TemporaryDirectory(prefix="doe_calib_planner_") as tmp:
-        tmp = Path(tmp)
-        env = dict(os.environ, DOE_CALIB_CACHE=str(tmp / "cache"))
-        design = ur5_design(tmp, env)
-        wall, cpu = timed_export(design, tmp, env)
+    with exported_ur5("doe_calib_planner_") as (tmp, design, wall, cpu):
         plans = _recorded_plans(design, tmp / "recorded")
     old_s, old_found, old_travel = _plan_all(plans, before=True)
     new_s, new_found, new_travel = _plan_all(plans, before=False)

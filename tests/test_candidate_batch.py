@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from doe_calib import Configurations, build_model, simulate
-from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_models
+from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_model_builders
 from doe_calib.errors import DoeCalibError
 from doe_calib.diagnosis.effect_tests import (augmented, candidate_columns, candidate_effects,
                                               fitted_basis, projected_columns)
@@ -170,7 +170,7 @@ def test_grown_models_from_the_batch_equal_the_models_built_alone(model6):
                if e.spec() in ("cyclic(j4,harmonics=2)", "compliance_by_angle(j2,bins=3)",
                                "link_compliance", "backlash(j3,mode=approach)")]
     assert len(effects) == 4
-    grown = grown_models(model6, effects, meas, params.values)
+    grown = [build() for build in grown_model_builders(model6, effects, meas, params.values)]
     cfg = meas.configurations
     t = np.array([0.01, -0.02, 0.15])
     for e, g in zip(effects, grown):

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from doe_calib import Configurations, Robot, Tool, build_model, examples, simulate
-from doe_calib.diagnosis.candidate_batch import grown_models
+from doe_calib.diagnosis.candidate_batch import grown_model_builders
 from doe_calib.diagnosis.effect_selection import refine
 from doe_calib.diagnosis.effect_tests import augmented, candidate_effects
 from doe_calib.diagnosis.engine import diagnose
@@ -58,7 +58,8 @@ def test_grown_observation_is_the_one_built_alone(model6):
                if e.spec() in ("cyclic(j4,harmonics=2)", "compliance_by_angle(j2,bins=3)",
                                "link_compliance")]
     assert len(effects) == 3
-    grown = grown_models(model6, effects, meas, model6.nominal().values)
+    grown = [build() for build in grown_model_builders(model6, effects, meas,
+                                                      model6.nominal().values)]
     for e, g in zip(effects, grown):
         alone = build_model(model6.robot, model6.tool, tuple(model6.effects) + (e,))
         assert g.observation.n_instructions() == alone.observation.n_instructions(), e.spec()

@@ -260,17 +260,11 @@ def batched_columns(model, measurements, values, effects, batch=None) -> list:
             + batched_columns(model, measurements, values, effects[half:]))
 
 
-def grown_models(model, effects, measurements, values, batch=None) -> list:
-    """``model + e`` for each of ``effects``: through one batch when it builds and is inert
-    at ``values`` (SI) on ``measurements``' configurations, else built one by one.
-    ``batch``: as :func:`batched_columns`'s, its Functions used when it holds them."""
-    return [build() for build in grown_model_builders(model, effects, measurements, values,
-                                                       batch)]
-
-
 def grown_model_builders(model, effects, measurements, values, batch=None) -> list:
-    """What :func:`grown_models` returns, as a builder per effect (no argument → the model),
-    so that a caller can fit one grown model while it builds the next."""
+    """A builder (no argument → ``model + e``) for each of ``effects``: through one batch
+    when it builds and is inert at ``values`` (SI) on ``measurements``' configurations, else
+    built one by one; ``batch``: as :func:`batched_columns`'s, its Functions used when it
+    holds them. Builders, so that a caller can fit one grown model while it builds the next."""
     if not effects:
         return []
     view = _seen_from(batch, model, measurements, values, effects)
