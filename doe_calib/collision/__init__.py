@@ -8,7 +8,8 @@ screens many poses and checks a joint-space move at ≤ 1° steps;
 :mod:`.bounds` bounds how fast a joint step can close each pair, so that a
 move's check skips the poses where a pair is proven clear;
 :mod:`.planner` finds a free path (OMPL RRT-Connect) where the straight move
-collides; :mod:`.beams` checks the tracker's beams to the markers.
+collides; :mod:`.passage` proves, where it can, that no path exists;
+:mod:`.beams` checks the tracker's beams to the markers.
 """
 from doe_calib.collision.beams import BEAM_RADIUS, BlockedBeam, blocked_beams, screen_beams
 from doe_calib.collision.clearance import (
@@ -30,10 +31,11 @@ from doe_calib.collision.model import (
                         build_collision_model,
 )
 
+from doe_calib.collision.passage import Blockage, blocked_passage
 from doe_calib.collision.planner import PlannedMove, PlannerSettings, plan_move
 
 __all__ = ["BEAM_RADIUS", "BlockedBeam", "blocked_beams", "screen_beams", "MOVE_SHARE",
-           "DEFAULT_PLANNER",
+           "DEFAULT_PLANNER", "Blockage", "blocked_passage",
            "PlannedMove", "PlannerSettings", "plan_move", "SEGMENT_STEP", "Clearance",
            "SegmentCheck", "Workspace", "check_segment",
            "clearance", "contacts", "too_close", "DEFAULT_CLEARANCE", "DEFAULT_SELF_CLEARANCE",

@@ -103,7 +103,8 @@ class Workspace:
         self.margins = None
         # held references into the geometry data's results (indexing it copies each one)
         self.results = list(self.geometry.collisionResults)
-        self._weights = False if bounded else None
+        self.bounded = bounded
+        self._motion = False  # not computed yet
         self.checked = {} if bounded else None
 
     def remember(self, key, check) -> None:
@@ -114,10 +115,16 @@ class Workspace:
         self.checked[key] = check
 
     def weights(self, cm) -> np.ndarray | None:
-        """Per pair and joint, how fast the pair can close (:func:`.bounds.motion_weights`)."""
-        if self._weights is False:
-            self._weights = motion_weights(cm.model, cm.geometry, cm.joint_names)
-        return self._weights
+        """Per pair and joint, how fast the pair can close (:meth:`motion`), when moves'
+        checks may skip poses by it (``bounded``); else None."""
+        return self.motion(cm) if self.bounded else None
+
+    def motion(self, cm) -> np.ndarray | None:
+        """Per pair and joint, how fast the pair can close (:func:`.bounds.motion_weights`,
+        computed once)."""
+        if self._motion is False:
+            self._motion = motion_weights(cm.model, cm.geometry, cm.joint_names)
+        return self._motion
 
     def set_margins(self, margins) -> None:
         """Make the collision tests report each pair closer than its margin (m)."""
@@ -203,7 +210,7 @@ def contacts(cm, q, workspace: Workspace | None = None) -> tuple:
 
 
 def check_segment(cm, qa, qb, margin: float | None = None, step: float = SEGMENT_STEP,
-                  workspace: Workspace | None = None) -> SegmentCheck:
+                  workspace: Workspace | None = None, pairs=None) -> SegmentCheck:
     """Check the straight joint-space move qa → qb (N,) at joint steps of at most ``step``.
 
     Parameters
@@ -213,25 +220,35 @@ def check_segment(cm, qa, qb, margin: float | None = None, step: float = SEGMENT
         each pair's pose clearance (:attr:`CollisionModel.margins`).
     step : float
         Largest change of any joint between checked poses, rad (m).
+    pairs : sequence of int, optional
+        Check only these pairs (indices, :meth:`CollisionModel.pair_name`), in
+        this order: a quick look for a collision already suspected (a move
+        that collides on them collides); default every checked pair.
     """
     qa, qb = np.asarray(qa, float), np.asarray(qb, float)
     ws = Workspace(cm) if workspace is None else workspace
+    pairs = None if pairs is None else tuple(int(k) for k in pairs)
     key = None
     if ws.checked is not None:
         key = (qa.tobytes(), qb.tobytes(),
-               None if margin is None else np.asarray(margin, float).tobytes(), float(step))
+               None if margin is None else np.asarray(margin, float).tobytes(), float(step),
+               pairs)
         known = ws.checked.get(key)
         if known is not None:
             return known
-    check = _check(cm, qa, qb, margin, step, ws)
+    check = _check(cm, qa, qb, margin, step, ws, pairs)
     if key is not None:
         ws.remember(key, check)
     return check
 
 
-def _check(cm, qa, qb, margin, step, ws) -> SegmentCheck:
+def _check(cm, qa, qb, margin, step, ws, pairs=None) -> SegmentCheck:
     t = np.linspace(0.0, 1.0, max(2, int(np.ceil(np.max(np.abs(qb - qa)) / step)) + 1))
     weights = ws.weights(cm)
+    if pairs is not None:
+        found = _first_too_close(cm, qa, qb, t, margin, weights, ws, pairs)
+        return SegmentCheck(len(t), None, None) if found is None else \
+            SegmentCheck(len(t), float(t[found[0]]), cm.pair_name(found[1]))
     if weights is None or not len(cm.geometry.collisionPairs):
         hit = too_close(cm, qa + t[:, None] * (qb - qa), margin, ws)
         bad = np.flatnonzero(hit >= 0)
@@ -245,13 +262,14 @@ def _check(cm, qa, qb, margin, step, ws) -> SegmentCheck:
     return SegmentCheck(len(t), float(t[i]), cm.pair_name(k))
 
 
-def _first_too_close(cm, qa, qb, t, margin, weights, ws):
+def _first_too_close(cm, qa, qb, t, margin, weights, ws, pairs=None):
     """(pose index, pair index) of the first pose of qa + t (qb − qa) a pair is too close at.
 
     Each pair is tested at a pose only when the bound from its last test
     (:mod:`.bounds`) no longer proves it clear there; None when every pose is free.
     The pairs due at a pose are tested in checking order, so the pair returned is
-    the first one the test of every pair finds.
+    the first one the test of every pair finds. ``pairs``: only these (indices, in
+    this order; weights None: each at every pose).
     """
     import pinocchio as pin
 
@@ -259,8 +277,11 @@ def _first_too_close(cm, qa, qb, t, margin, weights, ws):
                    else np.broadcast_to(np.asarray(margin, float), len(cm.margins)))
     poses = np.ascontiguousarray(cm.configurations(qa + t[:, None] * (qb - qa)).T)
     n = len(t)
+    order = range(len(cm.geometry.collisionPairs)) if pairs is None else pairs
     # the largest closing of each pair between neighbouring poses, m (the grid is uniform)
-    per_step = ((weights @ np.abs(qb - qa)) / (n - 1)).tolist()
+    rates = None if weights is None else weights if pairs is None else weights[list(pairs)]
+    per_step = [math.inf] * len(order) if rates is None else \
+        ((rates @ np.abs(qb - qa)) / (n - 1)).tolist()
     due = [0] * len(per_step)
     results = ws.results
     model, geometry, data, gdata = cm.model, cm.geometry, ws.data, ws.geometry
@@ -269,8 +290,9 @@ def _first_too_close(cm, qa, qb, t, margin, weights, ws):
     while i < n:
         place(model, data, geometry, gdata, poses[i])
         following = n
-        for k, when in enumerate(due):
+        for slot, when in enumerate(due):
             if when <= i:
+                k = order[slot]
                 if collide(geometry, gdata, k):
                     return i, k
                 # coal's bound is on the distance less the margin (the distance to a
@@ -278,8 +300,9 @@ def _first_too_close(cm, qa, qb, t, margin, weights, ws):
                 spare = results[k].distance_lower_bound - SLACK
                 skip = 0
                 if spare > 0 and finite(spare):
-                    skip = n if per_step[k] <= 0 else min(n, int(spare / per_step[k]))
-                when = due[k] = i + 1 + skip
+                    rate = per_step[slot]
+                    skip = n if rate <= 0 else min(n, int(spare / rate))
+                when = due[slot] = i + 1 + skip
             if when < following:
                 following = when
         i = following

@@ -267,7 +267,7 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
     hi = np.where(np.isfinite(robot.upper), robot.upper, np.pi)
     sample = _configurations(model, robot.joint_names,
                              rng.uniform(lo, hi, (samples, robot.n_joints)))
-    rates = pair_rules.contact_rates(model, geometry, sample, margins)
+    rates = pair_rules.contact_rates(model, geometry, sample, margins, set(reasons))
     for k in np.flatnonzero(rates >= pair_rules.ALWAYS):
         robot_pair = pairs[k].first in robot_objects and pairs[k].second in robot_objects
         if k not in reasons and (srdf is None or not robot_pair):

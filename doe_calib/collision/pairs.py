@@ -85,7 +85,8 @@ def srdf_pairs(geometry, links, path) -> set:
             if frozenset((links[pair.first], links[pair.second])) in disabled}
 
 
-def contact_rates(model, geometry, configurations: np.ndarray, margins) -> np.ndarray:
+def contact_rates(model, geometry, configurations: np.ndarray, margins,
+                  skipped=()) -> np.ndarray:
     """Share of the configurations in which each pair is closer than its margin.
 
     Parameters
@@ -94,6 +95,8 @@ def contact_rates(model, geometry, configurations: np.ndarray, margins) -> np.nd
         Pinocchio configurations sampled inside the joint bounds.
     margins : array_like, shape (n_pairs,)
         Distance each pair must keep, m.
+    skipped : collection of int
+        Pairs not tested (already ruled out: adjacent links, an SRDF's); their rate is 0.
 
     Returns
     -------
@@ -104,10 +107,16 @@ def contact_rates(model, geometry, configurations: np.ndarray, margins) -> np.nd
     data, gdata = model.createData(), geometry.createData()
     for request, m in zip(gdata.collisionRequests, margins):
         request.security_margin = float(m)
+    for k in skipped:
+        gdata.deactivateCollisionPair(int(k))
+    tested = np.array([k for k in range(len(geometry.collisionPairs)) if k not in skipped], int)
+    results = list(gdata.collisionResults)
     counts = np.zeros(len(geometry.collisionPairs))
+    hits = np.zeros(len(tested))
     for q in configurations.T:
         pin.computeCollisions(model, data, geometry, gdata, q, False)
-        counts += [r.isCollision() for r in gdata.collisionResults]
+        hits += [results[k].isCollision() for k in tested]
+    counts[tested] = hits
     return counts / configurations.shape[1]
 
 

@@ -39,7 +39,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.collision import PlannerSettings, Workspace, blocked_beams, check_segment, plan_move
+from doe_calib.collision import (
+                        PlannerSettings,
+                        Workspace,
+                        blocked_beams,
+                        blocked_passage,
+                        check_segment,
+                        plan_move,
+)
 from doe_calib.errors import CollisionError
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.program import Waypoint, ascii_text, load_words
@@ -72,6 +79,9 @@ class Collision:
     pair : str
         The pair found too close, ``"upper_arm_link vs floor"``.
     joint_names : tuple of str
+    proof : str
+        Why no route can exist, in words, when that is proven
+        (:func:`~doe_calib.collision.blocked_passage`; no route was tried then); else "".
     """
 
     move: int
@@ -80,11 +90,13 @@ class Collision:
     q: tuple
     pair: str
     joint_names: tuple
+    proof: str = ""
 
     def __str__(self) -> str:
         at = ", ".join(f"{n} {v:.1f}" for n, v in zip(self.joint_names, self.q))
+        proof = f"; {self.proof}" if self.proof else ""
         return (f"move {self.move}, {self.words}: {self.pair} at {self.fraction:.0%} of the "
-                f"move ({at})")
+                f"move ({at}){proof}")
 
 
 @dataclass(frozen=True)
@@ -210,27 +222,52 @@ def _margins(cm):
     return cm.move_margins or cm.margins
 
 
-def _route(cm, a, b, safe, ws, planner):
+def _route(cm, a, b, pair, safe, ws, planner):
     """The first candidate route whose every move passes, else a planned path; the poses checked.
 
-    ``(words, intermediate positions, samples)``; words and positions None when none passes.
+    ``pair``: the pair the straight move a → b is too close on, in words.
+    ``(words, intermediate positions, samples, proof)``; words and positions None when none
+    passes; proof the :class:`~doe_calib.collision.passage.Blockage` when none can (then no
+    route is tried), else None.
     """
-    samples = 0
+    poses = np.array([a, b, *(p for _, p in safe)])
+    lower = np.minimum(np.asarray(cm.lower, float), poses.min(axis=0))
+    upper = np.maximum(np.asarray(cm.upper, float), poses.max(axis=0))
+    blocked = blocked_passage(cm, a, b, _margins(cm), lower, upper, ws)
+    if blocked is not None:
+        return None, None, 0, blocked
+    samples, margins = 0, _margins(cm)
+    index = {cm.pair_name(k): k for k in range(len(cm.geometry.collisionPairs))}
+    suspects = [index[pair]]  # pairs found too close on this move: looked at first
     for words, via in _routes(a, b, safe):
         path = [a, *via, b]
-        for qa, qb in zip(path[:-1], path[1:]):
-            check = check_segment(cm, qa, qb, _margins(cm), workspace=ws)
-            samples += check.samples
-            if not check.free:
-                break
-        else:
-            return words, via, samples
+        # a candidate too close on a suspect pair collides: looked for first, on those only
+        hit, checked = _first_hit(cm, path, margins, ws, suspects)
+        if hit is None:
+            hit, checked = _first_hit(cm, path, margins, ws)
+            if hit is not None:
+                suspects.append(index[hit.pair])
+        samples += checked
+        if hit is None:
+            return words, via, samples, None
     if planner is not None:
         planned = plan_move(cm, a, b, settings=planner, workspace=ws)
         if planned is not None:
             return (f"planned (RRT-Connect, {len(planned.via)} intermediate positions)",
-                    list(planned.via), samples + planned.samples)
-    return None, None, samples
+                    list(planned.via), samples + planned.samples, None)
+    return None, None, samples, None
+
+
+def _first_hit(cm, path, margins, ws, pairs=None):
+    """The check of the first move of ``path`` (positions) that collides, or None; the poses
+    checked up to it. ``pairs``: only these (:func:`~doe_calib.collision.check_segment`)."""
+    samples = 0
+    for qa, qb in zip(path[:-1], path[1:]):
+        check = check_segment(cm, qa, qb, margins, workspace=ws, pairs=pairs)
+        samples += check.samples
+        if not check.free:
+            return check, samples
+    return None, samples
 
 
 def _clearance_words(cm) -> str:
@@ -297,10 +334,10 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
     n_moves = n_samples = 0
     previous, where = None, None
 
-    def collision(result, qa, qb, words):
+    def collision(result, qa, qb, words, proof=None):
         q = (qa + result.first * (qb - qa)) * factors
         return Collision(n_moves, words, result.first, tuple(float(v) for v in q),
-                         result.pair, names)
+                         result.pair, names, "" if proof is None else proof.words(names, factors))
 
     for m in visits:
         cm = models.get(m.load, models[NO_LOAD])
@@ -309,7 +346,7 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
         start = first if previous is None else previous
         words = (f"first position, {to}" if previous is None else f"from {where} to {to}") \
             + f", {m.load}"
-        result, (how, via, samples) = next(done)
+        result, (how, via, samples, proof) = next(done)
         n_moves += 1
         n_samples += result.samples + samples
         if via is not None:
@@ -324,7 +361,7 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
             routed.append(f"move {n_moves}, {words}: {how} (straight: {result.pair})")
             result = None
         if result is not None and not result.free:
-            collisions.append(collision(result, start, first, words))
+            collisions.append(collision(result, start, first, words, proof))
         if m.urdf_pre is not None:
             words = f"from {to} into {_label(m)}, {m.load}"
             result, _ = next(done)
@@ -371,5 +408,5 @@ def _checked_move(job, safe, workspaces):
     ws = workspaces[id(cm)]
     result = check_segment(cm, qa, qb, _margins(cm), workspace=ws)
     if result.free or not routable:
-        return result, (None, None, 0)
-    return result, _route(cm, qa, qb, safe, ws, settings)
+        return result, (None, None, 0, None)
+    return result, _route(cm, qa, qb, result.pair, safe, ws, settings)
