@@ -108,8 +108,12 @@ def _slots(cm) -> list:
     return out
 
 
-def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, ws):
-    """One seeded RRT-Connect search, simplified; the path's positions (K, N) or None."""
+def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, ws, memo):
+    """One seeded RRT-Connect search, simplified; the path's positions (K, N) or None.
+
+    ``memo``: state (tuple of joint values) → whether it is free at ``margins``, kept
+    between the searches of one move (a third of the states OMPL checks it has checked
+    before: motions re-checked by the simplifier, the trees' connections)."""
     import pinocchio as pin
     from ompl import base as ob
     from ompl import geometric as og
@@ -134,14 +138,19 @@ def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, ws):
         done = [0]  # validity checks so far: the search's work
 
         def valid(state) -> bool:
-            done[0] += 1
-            for k, (i, turns) in enumerate(slots):
-                v = state[k]
+            done[0] += 1  # a state checked before counts as work too: the same budget
+            values = tuple(state[k] for k in range(n))
+            known = memo.get(values)
+            if known is not None:
+                return known
+            for (i, turns), v in zip(slots, values):
                 if turns:
                     x[i], x[i + 1] = math.cos(v), math.sin(v)
                 else:
                     x[i] = v
-            return not pin.computeCollisions(cm.model, ws.data, cm.geometry, ws.geometry, x, True)
+            free = not pin.computeCollisions(cm.model, ws.data, cm.geometry, ws.geometry, x, True)
+            memo[values] = free
+            return free
 
         setup.setStateValidityChecker(valid)
         info = setup.getSpaceInformation()
@@ -215,8 +224,9 @@ def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | No
     near = (np.maximum(lo, np.minimum(qa, qb) - WIDEN), np.minimum(hi, np.maximum(qa, qb) + WIDEN))
     searches = [(near, SEARCH_STEP, settings.seed + a) for a in range(settings.attempts)]
     searches += [((lo, hi), SEGMENT_STEP, settings.seed + a) for a in range(settings.attempts)]
+    memo = {}
     for (low, high), step, seed in searches:
-        path = _search(cm, qa, qb, low, high, margins, settings, seed, step, ws)
+        path = _search(cm, qa, qb, low, high, margins, settings, seed, step, ws, memo)
         if path is None:
             continue
         path[0], path[-1] = qa, qb
