@@ -63,12 +63,13 @@ def run(args):
                      progress=lambda i, text: print(f"  step {i}: {text}", file=sys.stderr),
                      registry=registry, practical_um=args.practical_um,
                      tolerance=args.tolerance, workers=args.workers)
-        out.fit.to_json(args.out)
-        out.to_json(history)
-        # the steps' plotted numbers only: the child need not load the diagnosis package
+        # the steps' plotted numbers only: the child need not load the diagnosis package;
+        # it draws while the files are written
         figures.draw("error_falling", plot, [SimpleNamespace(
             added=s.added, rms_mm=s.rms_mm, cv_rms_mm=s.cv_rms_mm,
             validation_rms_mm=s.validation_rms_mm) for s in out.steps], out.noise_floor_mm)
+        out.fit.to_json(args.out)
+        out.to_json(history)
     if args.report:
         from doe_calib.report import refine_report
         final = build_model(model.robot, model.tool, out.fit.model, registry=registry)
