@@ -5,7 +5,7 @@ thread gains little, and on a machine whose other core is busy (a parallel
 test run, a Monte-Carlo worker, a shared CI runner) OpenBLAS's spinning
 threads make an SVD a hundred times slower. Commands therefore run BLAS on
 one thread unless the user has chosen (``OMP_NUM_THREADS``,
-``OPENBLAS_NUM_THREADS`` or ``MKL_NUM_THREADS`` set); parallelism comes from
+``OPENBLAS_NUM_THREADS`` or ``MKL_NUM_THREADS`` set to a value); parallelism comes from
 processes (:mod:`doe_calib.runtime.parallel`).
 """
 from __future__ import annotations
@@ -25,7 +25,7 @@ def single_threaded_blas():
 
     Returns the threadpoolctl limiter (keep it alive), or None when the user chose.
     """
-    if any(v in os.environ for v in _CHOSEN):
+    if any(os.environ.get(v, "").strip() for v in _CHOSEN):  # an empty value chooses nothing
         return None
     os.environ.update({v: "1" for v in _CHOSEN})
     from threadpoolctl import threadpool_limits
