@@ -13,6 +13,7 @@ from doe_calib import Robot, Tool, examples
 from doe_calib.collision import (
     PlannerSettings,
     blocked_passage,
+    blocked_values,
     build_collision_model,
     check_segment,
     contacts,
@@ -21,6 +22,7 @@ from doe_calib.collision import (
 from doe_calib.design import read_constraints
 from doe_calib.design.result import DesignResult
 from doe_calib.export import Plan, check_program, moves, program_models
+from doe_calib.export.turns import blocked_turns
 from doe_calib.io.measurements import Configurations
 
 # a turret at 0.3 m on a base joint (pan, about z) with an arm 0.5 m long on a pitch joint
@@ -96,6 +98,35 @@ def test_a_program_with_the_long_turn_reports_the_proof_and_the_short_one_is_fre
     assert found.pair == "arm vs floor" and "no path exists: every path passes lift" in str(found)
     turned = check_program(moves(design, Plan(order="design", turns=True)), models, robot)
     assert turned.free  # lift turned to −190°: over the top
+
+
+def test_blocked_lift_values_are_those_plain_geometry_puts_in_the_floor(turret):
+    _, cm = turret
+    values = blocked_values(cm, 1)
+    assert len(values) and all(_lowest(v) < cm.move_clearance for v in values)
+    down = [v for v in np.arange(-2 * np.pi + 0.01, 2 * np.pi, 0.01)
+            if _lowest(v) < cm.move_clearance - 0.05]  # well inside the floor
+    assert all(np.min(np.abs(values - v)) < 2 * np.radians(10.0) for v in down)
+    assert not len(blocked_values(cm, 0))  # the pan alone never puts the arm in the floor
+
+
+def test_the_program_turns_the_long_way_round_where_the_short_way_is_blocked(turret):
+    robot, cm = turret
+    q = np.radians([[0.0, 10.0], [40.0, 170.0]])  # the short way: 160° through the floor
+    cfg = Configurations.from_arrays(q, np.zeros((2, 6)), pose=["1", "2"])
+    tool = Tool.from_yaml(examples.THREE_DOF_TOOL_YAML)
+    design = DesignResult(robot=robot, tool=tool, model="joint_offset", configurations=cfg,
+                          criterion="D", value=math.nan, bound=math.nan, efficiency=math.nan,
+                          predicted_std={}, constraints={"loads": []})
+    models = program_models([], lambda loads: cm)
+    short = check_program(moves(design, Plan(order="design", turns=True)), models, robot)
+    assert len(short.collisions) == 1 and "no path exists" in short.collisions[0].proof
+    blocked = blocked_turns(cm, robot)
+    assert [j for j, _ in blocked] == [1]
+    plan = Plan(order="design", turns=True, blocked=blocked)
+    visits = moves(design, plan)
+    assert np.degrees(visits[1].urdf_q[1]) == pytest.approx(-190.0)  # over the top
+    assert check_program(visits, models, robot).free
 
 
 @pytest.fixture(scope="module")

@@ -115,6 +115,8 @@ def _is_free(models):
 def run(args):
     from doe_calib.design.result import DesignResult
     from doe_calib.export import AxisMap, Plan, check_program, cycle_time, export_design, moves
+    from doe_calib.export.sequence import NO_LOAD
+    from doe_calib.export.turns import blocked_turns
 
     try:
         design = DesignResult.from_json(args.design)
@@ -125,8 +127,11 @@ def run(args):
         where, home = stations(args, design, _is_free(models), limits)
         if home is not None:
             print(home, file=sys.stderr)
+        turns = args.turns == "shortest"
+        # turns that would take a joint through a value no path can pass are not chosen
+        blocked = blocked_turns(models[NO_LOAD], design.robot) if turns and models else ()
         plan = Plan(args.group_by, args.order, args.approach_step, args.alternate != "none",
-                    axis_map, turns=args.turns == "shortest", **where)
+                    axis_map, turns=turns, blocked=blocked, **where)
         out = args.out if args.out is not None else Path(args.design).parent
         visits = moves(design, plan)
         # the design CSV lists the measurements in the program's order but moves nothing

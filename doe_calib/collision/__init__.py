@@ -31,11 +31,11 @@ from doe_calib.collision.model import (
                         build_collision_model,
 )
 
-from doe_calib.collision.passage import Blockage, blocked_passage
+from doe_calib.collision.passage import Blockage, blocked_passage, blocked_values
 from doe_calib.collision.planner import PlannedMove, PlannerSettings, plan_move
 
 __all__ = ["BEAM_RADIUS", "BlockedBeam", "blocked_beams", "screen_beams", "MOVE_SHARE",
-           "DEFAULT_PLANNER", "Blockage", "blocked_passage",
+           "DEFAULT_PLANNER", "Blockage", "blocked_passage", "blocked_values",
            "PlannedMove", "PlannerSettings", "plan_move", "SEGMENT_STEP", "Clearance",
            "SegmentCheck", "Workspace", "check_segment",
            "clearance", "contacts", "too_close", "DEFAULT_CLEARANCE", "DEFAULT_SELF_CLEARANCE",

@@ -112,10 +112,8 @@ def blocked_passage(cm, qa, qb, margins=None, lower=None, upper=None,
     qa, qb = np.asarray(qa, float), np.asarray(qb, float)
     margins = np.broadcast_to(np.asarray(cm.move_margins or cm.margins if margins is None
                                          else margins, float), n_pairs)
-    lo = np.asarray(cm.lower if lower is None else lower, float)
-    hi = np.asarray(cm.upper if upper is None else upper, float)
-    lo = np.minimum(np.where(np.isfinite(lo), lo, -2 * np.pi), np.minimum(qa, qb))
-    hi = np.maximum(np.where(np.isfinite(hi), hi, 2 * np.pi), np.maximum(qa, qb))
+    lo, hi = _box(cm, lower, upper)
+    lo, hi = np.minimum(lo, np.minimum(qa, qb)), np.maximum(hi, np.maximum(qa, qb))
     depends = weights > 0
     narrow = depends.sum(axis=1) <= 2
     for j in np.flatnonzero(np.abs(qb - qa) > 0):
@@ -135,6 +133,67 @@ def blocked_passage(cm, qa, qb, margins=None, lower=None, upper=None,
                                 0.0 if t is None else float(lo[t]),
                                 0.0 if t is None else float(hi[t]))
     return None
+
+
+def blocked_values(cm, joint: int, margins=None, lower=None, upper=None, workspace=None,
+                   step: float = 2 * VALUE_STEP) -> np.ndarray:
+    """Values of one joint no path may pass: one pair too close there at every position.
+
+    The values of a grid over the joint's range (``step`` apart) where a pair whose distance
+    depends on ``joint`` and at most one other joint is proven closer than its margin
+    at every value of that other joint (module notes). A move of the joint across one
+    of them can be made by no path; across none, nothing is said.
+
+    Parameters
+    ----------
+    cm : CollisionModel
+    joint : int
+        0-based, chain order.
+    margins, lower, upper, workspace
+        As :func:`blocked_passage`.
+    step : float
+        Spacing of the values tried, rad.
+
+    Returns
+    -------
+    ndarray
+        The proven values, rad, ascending; empty for a robot without a motion bound.
+    """
+    from doe_calib.collision.clearance import Workspace
+
+    ws = Workspace(cm) if workspace is None else workspace
+    weights = ws.motion(cm)
+    n_pairs = len(cm.geometry.collisionPairs)
+    if weights is None or not n_pairs:
+        return np.zeros(0)
+    margins = np.broadcast_to(np.asarray(cm.move_margins or cm.margins if margins is None
+                                         else margins, float), n_pairs)
+    lo, hi = _box(cm, lower, upper)
+    values = np.arange(lo[joint] + step / 2, hi[joint], step)
+    depends = weights > 0
+    base = np.zeros(len(lo))
+    found = set()
+    for k in np.flatnonzero(depends[:, joint] & (depends.sum(axis=1) <= 2)):
+        m = float(margins[k])
+        if m - SLACK <= 0:
+            continue
+        others = [t for t in np.flatnonzero(depends[k]) if t != joint]
+        t = None if not others else int(others[0])
+        left = np.array([v for v in values if v not in found])
+        while len(left):
+            c = _blocked_value(cm, ws, int(k), base, joint, left, m, t, lo, hi, weights[k])
+            if c is None:
+                break
+            found.add(c)
+            left = left[left > c]
+    return np.array(sorted(found))
+
+
+def _box(cm, lower, upper):
+    """The joint box paths stay in, rad (m): the model's limits, ±2π where infinite."""
+    lo = np.asarray(cm.lower if lower is None else lower, float)
+    hi = np.asarray(cm.upper if upper is None else upper, float)
+    return np.where(np.isfinite(lo), lo, -2 * np.pi), np.where(np.isfinite(hi), hi, 2 * np.pi)
 
 
 def _blocked_value(cm, ws, k, base, j, values, m, t, lo, hi, w_k):

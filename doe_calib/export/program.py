@@ -288,7 +288,8 @@ def _turned(design, q, loads, plan: Plan, home, load_pose) -> np.ndarray:
     margin = plan.approach_step / robot.display_factors
     lower, upper = (robot.lower, robot.upper) if plan.limits is None else plan.limits
     out = shortest_turns(np.array(path), joints, np.asarray(lower, float),
-                         np.asarray(upper, float), margin, start=home, end=home, fixed=fixed)
+                         np.asarray(upper, float), margin, start=home, end=home, fixed=fixed,
+                         blocked=dict(plan.blocked))
     return out[~np.array(fixed)]
 
 

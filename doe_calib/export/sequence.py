@@ -65,6 +65,9 @@ class Plan:
         the equivalent angle (q ± 2π) that keeps the moves short
         (:mod:`.turns`; ``doe-calib export`` does by default); False: the
         design's angles.
+    blocked : tuple of (int, tuple of float)
+        Joint (0-based) and the values (rad) no move of it may pass, where the
+        turns are chosen (:func:`.turns.blocked_turns`); () when none are known.
     """
 
     group_by: str = GROUPINGS[0]
@@ -76,6 +79,7 @@ class Plan:
     load_pose: tuple | None = None
     limits: tuple | None = None
     turns: bool = False
+    blocked: tuple = ()
 
     def __post_init__(self):
         if self.group_by not in GROUPINGS:

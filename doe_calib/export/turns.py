@@ -7,6 +7,9 @@ equivalents inside the limits, for each joint separately and exactly, by
 dynamic programming over the visits (a shortest path through the layers of
 equivalents), for a lexicographic cost:
 
+0. fewest moves across a value no path can pass (``blocked``: a UR's
+   shoulder pointing into its table at every base angle), when the
+   collision model says so;
 1. least total **excess** Σ_i (|Δq_i| − d_i), with d_i the shortest move of
    the joint that any equivalent of visit i allows from where the joint
    is: every move is as short as its equivalents allow, unless the limits
@@ -83,6 +86,23 @@ def periodic_joints(model, joints, rng=None) -> tuple:
     return tuple(out)
 
 
+def blocked_turns(cm, robot) -> tuple:
+    """Each multi-turn joint's values no path can pass in collision model ``cm``.
+
+    Returns
+    -------
+    tuple of (int, tuple of float)
+        Joint (0-based) and its values, rad (:func:`~doe_calib.collision.blocked_values`,
+        at the move clearance), for the :attr:`.sequence.Plan.blocked` of a program; joints
+        with none are left out.
+    """
+    from doe_calib.collision import Workspace, blocked_values
+
+    ws = Workspace(cm)
+    found = ((j, blocked_values(cm, j, workspace=ws)) for j in turn_joints(robot))
+    return tuple((j, tuple(float(v) for v in values)) for j, values in found if len(values))
+
+
 def _equivalents(value: float, lower: float, upper: float, margin: float) -> np.ndarray:
     """``value`` and each ``value + 2πk`` at least ``margin`` inside [lower, upper]."""
     k = np.arange(-3, 4)
@@ -92,7 +112,7 @@ def _equivalents(value: float, lower: float, upper: float, margin: float) -> np.
 
 
 def shortest_turns(q, joints, lower, upper, margin, start=None, end=None,
-                   fixed=None) -> np.ndarray:
+                   fixed=None, blocked=None) -> np.ndarray:
     """``q`` with each joint of ``joints`` turned by whole turns for short moves (module notes).
 
     Parameters
@@ -110,6 +130,10 @@ def shortest_turns(q, joints, lower, upper, margin, start=None, end=None,
         pose); None: the path starts (ends) at its first (last) visit.
     fixed : array_like of bool, shape (V,), optional
         Rows of ``q`` passed through as they are (a load-change pose).
+    blocked : dict, optional
+        Joint → values (rad) no move of that joint may pass
+        (:func:`~doe_calib.collision.blocked_values`: no path crosses them):
+        the fewest moves across one come first, before excess and travel.
 
     Returns
     -------
@@ -130,36 +154,43 @@ def shortest_turns(q, joints, lower, upper, margin, start=None, end=None,
         if not layers:
             continue
         path = _best_path(layers, None if start is None else start[j],
-                          None if end is None else end[j])
+                          None if end is None else end[j],
+                          np.zeros(0) if not blocked else np.asarray(blocked.get(j, ()), float))
         q[:, j] = [layer[k] for layer, k in zip(layers, path)]
     return q
 
 
-def _step(prev, layer):
-    """Travel and excess of each move prev[p] → layer[c], shape (C, P)."""
+def _step(prev, layer, blocked):
+    """Travel, excess and crossings of a blocked value of each move prev[p] → layer[c],
+    shape (C, P)."""
     travel = np.abs(layer[:, None] - prev[None, :])
-    return travel, np.round(travel - travel.min(axis=0, keepdims=True), 9)
+    low, high = np.minimum(layer[:, None], prev[None, :]), np.maximum(layer[:, None], prev[None, :])
+    crossed = ((blocked[None, None, :] > low[..., None]) &
+               (blocked[None, None, :] < high[..., None])).any(axis=-1).astype(float)
+    return travel, np.round(travel - travel.min(axis=0, keepdims=True), 9), crossed
 
 
-def _best_path(layers, start, end) -> list:
-    """Index into each layer of the path of least (excess, travel), lexicographically."""
+def _best_path(layers, start, end, blocked) -> list:
+    """Index into each layer of the path of least (crossings, excess, travel),
+    lexicographically."""
     excess = np.zeros(len(layers[0]))
     travel = np.zeros(len(layers[0]))
+    crossings = np.zeros(len(layers[0]))
     if start is not None:
-        travel, excess = _step(np.array([start]), layers[0])
-        travel, excess = travel[:, 0], excess[:, 0]
+        travel, excess, crossings = (a[:, 0] for a in _step(np.array([start]), layers[0],
+                                                             blocked))
     back = []
     for prev, layer in zip(layers[:-1], layers[1:]):
-        t, e = _step(prev, layer)
-        t, e = t + travel[None, :], e + excess[None, :]
-        best = np.array([np.lexsort((t[c], e[c]))[0] for c in range(len(layer))])
+        t, e, x = _step(prev, layer, blocked)
+        t, e, x = t + travel[None, :], e + excess[None, :], x + crossings[None, :]
+        best = np.array([np.lexsort((t[c], e[c], x[c]))[0] for c in range(len(layer))])
         back.append(best)
         rows = np.arange(len(layer))
-        travel, excess = t[rows, best], e[rows, best]
-    if end is not None:
-        t = np.abs(end - layers[-1])  # the last move, home: its excess over the nearest
-        travel, excess = travel + t, excess + np.round(t - t.min(), 9)
-    pick = [int(np.lexsort((travel, np.round(excess, 9)))[0])]
+        travel, excess, crossings = t[rows, best], e[rows, best], x[rows, best]
+    if end is not None:  # the last move, home: its excess over the nearest
+        t, e, x = (a[0] for a in _step(layers[-1], np.array([end]), blocked))
+        travel, excess, crossings = travel + t, excess + np.round(t - t.min(), 9), crossings + x
+    pick = [int(np.lexsort((travel, np.round(excess, 9), crossings))[0])]
     for best in reversed(back):
         pick.append(int(best[pick[-1]]))
     return pick[::-1]
