@@ -75,6 +75,23 @@ def test_a_lift_through_the_floor_is_proven_blocked_where_geometry_says(turret):
     assert plan_move(cm, qa, qb, settings=PlannerSettings(checks=3000, attempts=2)) is None
 
 
+def test_the_planner_gives_up_on_a_proven_move_without_searching(turret, monkeypatch):
+    _, cm = turret
+    qa, qb = np.radians([0.0, -30.0]), np.radians([200.0, 170.0])
+    calls, original = [0], pin.computeCollisions
+
+    def counted(*args):
+        calls[0] += 1
+        return original(*args)
+    monkeypatch.setattr(pin, "computeCollisions", counted)
+    settings = PlannerSettings(checks=300)
+    assert plan_move(cm, qa, qb, settings=settings) is None
+    proven = calls[0]
+    calls[0] = 0
+    assert plan_move(cm, qa, qb, settings=settings, prove=False) is None
+    assert proven <= 2 < 2 * 300 <= calls[0]  # the ends' check only, against two searches
+
+
 def test_the_same_place_one_turn_away_is_not_blocked(turret):
     _, cm = turret
     qa, qb = np.radians([0.0, -30.0]), np.radians([200.0, -190.0])  # over the top, arm up

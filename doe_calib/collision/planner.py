@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.collision.clearance import SEGMENT_STEP, Workspace, check_segment, too_close
+from doe_calib.collision.passage import blocked_passage
 
 #: Joint step at which the search checks its motions, rad (the final check is at 1°).
 SEARCH_STEP = np.radians(3.0)
@@ -189,7 +190,7 @@ def _shorten(simplifier, path) -> None:
 
 
 def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | None = None,
-              workspace: Workspace | None = None) -> PlannedMove | None:
+              workspace: Workspace | None = None, prove: bool = True) -> PlannedMove | None:
     """A collision-free joint-space path qa → qb (N,) at the move clearance, or None.
 
     Parameters
@@ -201,12 +202,16 @@ def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | No
         Joint limits the path stays inside, rad (m); ±inf: ±2π. Default the
         collision model's (:attr:`CollisionModel.lower`, ``upper``).
     settings : PlannerSettings, optional
+    prove : bool
+        First look for a proof that no path exists (:func:`.passage.blocked_passage`,
+        milliseconds where a search that finds nothing spends its whole budget); False
+        when the caller has looked already.
 
     Returns
     -------
     PlannedMove or None
         None when no path was found in ``settings.attempts`` searches (or a
-        start or goal is not free).
+        start or goal is not free, or no path exists).
 
     Examples
     --------
@@ -220,6 +225,8 @@ def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | No
     lo, hi = _bounds(np.asarray(cm.lower if lower is None else lower, float),
                      np.asarray(cm.upper if upper is None else upper, float))
     if (too_close(cm, np.array([qa, qb]), margins, ws) >= 0).any():
+        return None
+    if prove and blocked_passage(cm, qa, qb, margins, lo, hi, ws) is not None:
         return None
     near = (np.maximum(lo, np.minimum(qa, qb) - WIDEN), np.minimum(hi, np.maximum(qa, qb) + WIDEN))
     searches = [(near, SEARCH_STEP, settings.seed + a) for a in range(settings.attempts)]
