@@ -101,17 +101,17 @@ def exported_here(design: Path, out: Path) -> None:
     """``doe-calib export`` of ``design`` run in this process, its moves checked here too (the
     command's worker processes would hide them from the recorders), quietly."""
     import doe_calib.cli.export  # noqa: F401  (imported now, so that its names are patched)
-    import doe_calib.export.safety as safety
+    import doe_calib.runtime.forked as forked
     from doe_calib.cli import main
 
-    workers = safety.default_workers
-    safety.default_workers = lambda: 1
+    workers = forked.default_workers
+    forked.default_workers = lambda: 1
     try:
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             main(["export", str(design), "--format", "urscript", "--out", str(out),
                   "--allow-collisions"])
     finally:
-        safety.default_workers = workers
+        forked.default_workers = workers
 
 
 def _recorded_moves(design: Path, out: Path) -> list:

@@ -20,6 +20,7 @@ import numpy as np
 
 from doe_calib.collision import Workspace, blocked_beams, check_segment, plan_move, too_close
 from doe_calib.errors import OptionError, SolverError
+from doe_calib.runtime.forked import forked_map
 
 #: Reason of a pose no free path joins to the home pose.
 NO_PATH = "no free path from the home pose"
@@ -97,13 +98,17 @@ def _joined(collision, home, pose, ws) -> bool:
 
 
 def unreachable(collision, q, home, robot, lower, upper,
-                workspace: Workspace | None = None) -> list:
+                workspace: Workspace | None = None, workers: int | None = None) -> list:
     """For each pose of q (M, N), why a program cannot use it, or the angles it is reached at.
 
     Parameters
     ----------
     lower, upper : array_like, shape (N,)
         Joint bounds an equivalent angle must stay in, rad (m).
+    workers : int, optional
+        Processes joining the poses at once when the collision model plans
+        (:func:`~doe_calib.runtime.forked.forked_map`; default the CPUs; 1: in
+        this process). Each pose's answer is its own: the result does not depend on it.
 
     Returns
     -------
@@ -116,18 +121,24 @@ def unreachable(collision, q, home, robot, lower, upper,
         home —, or None; and the angles to use (the equivalent when only it
         is joined).
     """
+    q = np.atleast_2d(q)
     ws = Workspace(collision) if workspace is None else workspace
-    out = []
-    for pose in np.atleast_2d(q):
-        blocked = blocked_beams(collision, pose, ws)
-        if blocked:
-            out.append((f"line of sight: blocked by {blocked[0].body}", pose))
-            continue
-        near = nearest_equivalent(pose, home, robot, lower, upper)
-        tries = [pose] + ([near] if not np.allclose(near, pose) else [])
-        used = next((t for t in tries if _joined(collision, home, t, ws)), None)
-        out.append((NO_PATH, pose) if used is None else (None, used))
-    return out
+    shared = (collision, q, home, robot, lower, upper, ws)  # each worker has its copy of ws
+    # without a planner every pose is a straight check: not worth the processes
+    return forked_map(_reached, shared, len(q), 1 if collision.planner is None else workers)
+
+
+def _reached(shared, i: int):
+    """(reason or None, the angles used) for pose i of :func:`unreachable`."""
+    collision, q, home, robot, lower, upper, ws = shared
+    pose = q[i]
+    blocked = blocked_beams(collision, pose, ws)
+    if blocked:
+        return f"line of sight: blocked by {blocked[0].body}", pose
+    near = nearest_equivalent(pose, home, robot, lower, upper)
+    tries = [pose] + ([near] if not np.allclose(near, pose) else [])
+    used = next((t for t in tries if _joined(collision, home, t, ws)), None)
+    return (NO_PATH, pose) if used is None else (None, used)
 
 
 def reachability_note(home, robot, replaced: dict, reverted: int, moved: str = "") -> str:

@@ -34,7 +34,6 @@ reported with the pose, marker and body, and refused as a collision is.
 """
 from __future__ import annotations
 
-import multiprocessing
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -51,7 +50,7 @@ from doe_calib.errors import CollisionError
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.program import Waypoint, ascii_text, load_words
 from doe_calib.export.sequence import NO_LOAD
-from doe_calib.runtime.parallel import default_workers
+from doe_calib.runtime.forked import forked_map
 
 #: Candidate routes tried for one colliding move, shortest first.
 MAX_ROUTES = 40
@@ -378,28 +377,15 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
                         tuple(dict.fromkeys(blocked)), _clearance_words(first))
 
 
-#: The moves of the program being checked, for the worker processes (forked: they see it).
-_JOBS: tuple = ()
-
-
 def _checked_moves(jobs, safe, workspaces, workers) -> list:
-    """Each job's (straight check, (route words, intermediate positions, route samples)), in
-    order; in ``workers`` forked processes where the platform forks and there is work for
-    them (the collision models are not picklable: the children see them by the fork)."""
-    global _JOBS
-    workers = default_workers() if workers is None else max(1, int(workers))
-    if workers == 1 or len(jobs) < 2 or "fork" not in multiprocessing.get_all_start_methods():
-        return [_checked_move(job, safe, workspaces) for job in jobs]
-    _JOBS = (jobs, safe, workspaces)
-    try:
-        with multiprocessing.get_context("fork").Pool(min(workers, len(jobs))) as pool:
-            return pool.map(_job, range(len(jobs)), chunksize=1)
-    finally:
-        _JOBS = ()
+    """Each job's (straight check, (route words, intermediate positions, route samples,
+    proof)), in order; in ``workers`` forked processes (:func:`~doe_calib.runtime.forked.
+    forked_map`: the collision models are not picklable, the children see them)."""
+    return forked_map(_job, (jobs, safe, workspaces), len(jobs), workers)
 
 
-def _job(i: int):
-    jobs, safe, workspaces = _JOBS
+def _job(shared, i: int):
+    jobs, safe, workspaces = shared
     return _checked_move(jobs[i], safe, workspaces)
 
 

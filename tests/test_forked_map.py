@@ -1,0 +1,39 @@
+"""Tasks over collision models in forked processes (runtime/forked.py) give what one process
+gives: a plain function, and the design's reachability of UR5 poses in its cell (planned)."""
+import numpy as np
+from test_collision_bounds import _ur5
+
+from doe_calib import Robot, Tool, examples
+from doe_calib.collision import PlannerSettings, build_collision_model, too_close
+from doe_calib.design import read_constraints
+from doe_calib.design.reachability import unreachable
+from doe_calib.runtime.forked import forked_map
+
+
+def _square_plus(shared, i):
+    offset, values = shared
+    return (i, values[i] ** 2 + offset)
+
+
+def test_forked_results_are_in_task_order_whatever_the_order_given():
+    shared = (0.5, np.arange(7.0))
+    here = forked_map(_square_plus, shared, 7, workers=1)
+    assert here == [(i, i * i + 0.5) for i in range(7)]
+    assert forked_map(_square_plus, shared, 7, workers=2) == here
+    assert forked_map(_square_plus, shared, 7, workers=3, order=[6, 0, 5, 1, 4, 2, 3]) == here
+
+
+def test_reachability_in_processes_is_reachability_in_one():
+    robot, tool = Robot.from_urdf(_ur5()), Tool.from_yaml(examples.UR_TOOL_YAML)
+    cell = read_constraints(examples.UR5_CELL_YAML, robot, tool)
+    cm = build_collision_model(robot, tool, (), cell, planner=PlannerSettings(checks=400))
+    rng = np.random.default_rng(5)
+    lower, upper = cell.bounds(robot)
+    q = rng.uniform(np.maximum(lower, -np.pi), np.minimum(upper, np.pi), (60, robot.n_joints))
+    q = q[too_close(cm, q) < 0][:10]  # free poses
+    assert len(q) >= 6
+    one = unreachable(cm, q[1:], q[0], robot, lower, upper, workers=1)
+    two = unreachable(cm, q[1:], q[0], robot, lower, upper, workers=2)
+    assert [w for w, _ in one] == [w for w, _ in two]
+    assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(one, two))
+    assert any(w is None for w, _ in one)
