@@ -31,11 +31,15 @@ from ._common import MODEL_6R, Row, Section
 
 #: The issue's "now" figures (s) and goals (s) per command, measured on this machine.
 RECORDED = {"help": (1.0, 0.3), "identify": (1.2, 0.5), "diagnose": (6.0, 1.5),
-            "refine": (8.6, 2.5), "design": (16.0, 5.0), "export": (6.0, 3.0)}
+            "refine": (8.6, 2.5), "design": (16.0, 5.0), "export": (6.0, 3.0),
+            # not a row of the issue: measured at the start of the session that sped it up
+            "design_cell": (28.8, None)}
 CASES = {"help": "doe-calib --help (imports)", "identify": "identify, 60 poses",
          "diagnose": "diagnose, 60 poses", "refine": "refine, 60 poses, from joint_offset+geometry",
          "design": "design 15 poses, 20 000 candidates",
-         "export": "export with the collision check, 30 poses (UR5 cell)"}
+         "export": "export with the collision check, 30 poses (UR5 cell)",
+         "design_cell": "design in the UR5 cell, 30 poses from 500 candidates, each joined "
+                        "to home (planned)"}
 UR_TOOL = Path(examples.UR_TOOL_YAML).read_text(encoding="utf-8")
 # a table under the UR5 (its top 100 mm below the base), a wall at x = 900 mm, the room floor
 UR5_CELL = Path(examples.UR5_CELL_YAML).read_text(encoding="utf-8")
@@ -113,11 +117,13 @@ def _commands(tmp: Path, quick: bool) -> dict:
     if urdf is not None:
         (tmp / "tool.yaml").write_text(UR_TOOL)
         (tmp / "cell.yaml").write_text(UR5_CELL)
-        subprocess.run(_doe_calib("design", "--robot", urdf, "--tool", tmp / "tool.yaml",
-                                  "--poses", 30, "--load", "3@0,0,80:40", "--candidates", 500,
-                                  "--constraints", tmp / "cell.yaml", "--no-refine", "--seed", 1,
-                                  "--out", tmp / "ur5.json"), env=env, check=True,
-                       capture_output=True)
+        cell_design = _doe_calib("design", "--robot", urdf, "--tool", tmp / "tool.yaml",
+                                 "--poses", 30, "--load", "3@0,0,80:40", "--candidates", 500,
+                                 "--constraints", tmp / "cell.yaml", "--no-refine", "--seed", 1,
+                                 "--out", tmp / "ur5.json")
+        subprocess.run(cell_design, env=env, check=True, capture_output=True)
+        if not quick:
+            cmds["design_cell"] = cell_design
         cmds["export"] = _doe_calib("export", tmp / "ur5.json", "--format", "urscript",
                                     "--out", tmp / "ur", "--allow-collisions")
     return cmds
@@ -134,10 +140,11 @@ def run(quick: bool = False) -> Section:
             seconds, cpu, rc = _timed(argv, env)
             loads.append(load)
             before, goal = RECORDED[name]
-            verdict = "met" if seconds <= goal else ("met within the 20 % noise"
-                                                     if seconds <= 1.2 * goal else "NOT met")
+            verdict = "no goal in issue 22" if goal is None else (
+                f"goal ≤ {goal:g} s: " + ("met" if seconds <= goal else (
+                    "met within the 20 % noise" if seconds <= 1.2 * goal else "NOT met")))
             rows.append(Row(CASES[name], seconds, "s", seconds / before,
-                            f"before {before:g} s; goal ≤ {goal:g} s: {verdict}; "
+                            f"before {before:g} s; {verdict}; "
                             f"CPU {cpu:.2f} s; load {load:.1f}"
                             + (f"; exit status {rc}" if rc else "")))
             top = _profile(argv, env, tmp / f"{name}.prof")
