@@ -208,67 +208,46 @@ def test_cli_program_options(plain, tmp_path, capsys):
 
 # ---- multi-turn joints -------------------------------------------------------------------
 
-def _brute(q, lower, upper, margin, start, end):
-    """Least (excess, travel) of one joint over every choice of equivalents (exhaustive)."""
-    options = [[v + 2 * np.pi * k for k in range(-3, 4)
-                if k == 0 or lower + margin <= v + 2 * np.pi * k <= upper - margin] for v in q]
-    best = (np.inf, np.inf)
-    for path in itertools.product(*options):
-        full = [start, *path, end]
-        excess = sum(abs(b - a) - min(abs(o - a) for o in opts) for a, b, opts in
-                     zip(full[:-2], full[1:-1], options))
-        excess += abs(end - full[-2]) - min(abs(end - o) for o in options[-1])
-        travel = sum(abs(b - a) for a, b in zip(full[:-1], full[1:]))
-        best = min(best, (round(excess, 9), travel))
-    return best
-
-
-def test_shortest_turns_is_the_exhaustive_optimum():
-    rng = np.random.default_rng(1)
-    lower, upper = -2 * np.pi, 2 * np.pi
-    for trial in range(30):
-        q = rng.uniform(lower, upper, size=(6, 1))
-        start = end = rng.uniform(-1, 1)
-        out = shortest_turns(q, [0], [lower], [upper], [0.05], [start], [end])[:, 0]
-        assert np.allclose(np.mod(out - q[:, 0] + 0.1, 2 * np.pi), 0.1)  # same angles mod 2π
-        full = [start, *out, end]
-        travel = sum(abs(b - a) for a, b in zip(full[:-1], full[1:]))
-        excess, best = _brute(q[:, 0], lower, upper, 0.05, start, end)
-        assert travel == pytest.approx(best), trial
-
-
 def _crossings(path, blocked) -> int:
     """Moves of ``path`` whose interval holds one of the ``blocked`` values."""
     return sum(any(min(a, b) < v < max(a, b) for v in blocked) for a, b in zip(path[:-1],
                                                                                path[1:]))
 
 
-def test_shortest_turns_with_blocked_values_is_the_exhaustive_optimum():
-    rng = np.random.default_rng(2)
+def _brute(q, lower, upper, margin, start, end, blocked=()):
+    """Least (crossings of ``blocked``, excess, travel) of one joint over every choice of
+    equivalents (exhaustive)."""
+    options = [[v + 2 * np.pi * k for k in range(-3, 4)
+                if k == 0 or lower + margin <= v + 2 * np.pi * k <= upper - margin] for v in q]
+    best = (np.inf, np.inf, np.inf)
+    for path in itertools.product(*options):
+        full = [start, *path, end]
+        excess = sum(abs(b - a) - min(abs(o - a) for o in opts) for a, b, opts in
+                     zip(full[:-2], full[1:-1], options))
+        excess += abs(end - full[-2]) - min(abs(end - o) for o in options[-1])
+        travel = sum(abs(b - a) for a, b in zip(full[:-1], full[1:]))
+        best = min(best, (_crossings(full, blocked), round(excess, 9), travel))
+    return best
+
+
+@pytest.mark.parametrize("blocking", [False, True])
+def test_shortest_turns_is_the_exhaustive_optimum(blocking):
+    rng = np.random.default_rng(2 if blocking else 1)
     lower, upper = -2 * np.pi, 2 * np.pi
     for trial in range(30):
-        q = rng.uniform(lower, upper, size=(5, 1))
+        q = rng.uniform(lower, upper, size=(5 if blocking else 6, 1))
         start = end = rng.uniform(-1, 1)
-        band = rng.uniform(0.3, 2.5)  # a blocked stretch, and the same one turn away
-        blocked = [band, band + 0.4, band - 2 * np.pi, band + 0.4 - 2 * np.pi]
+        blocked = []
+        if blocking:  # a blocked stretch, and the same one turn away
+            band = rng.uniform(0.3, 2.5)
+            blocked = [band, band + 0.4, band - 2 * np.pi, band + 0.4 - 2 * np.pi]
         out = shortest_turns(q, [0], [lower], [upper], [0.05], [start], [end],
                              blocked={0: blocked})[:, 0]
-        assert np.allclose(np.mod(out - q[:, 0] + 0.1, 2 * np.pi), 0.1)
-        options = [[v + 2 * np.pi * k for k in range(-3, 4)
-                    if k == 0 or lower + 0.05 <= v + 2 * np.pi * k <= upper - 0.05]
-                   for v in q[:, 0]]
-        best = None
-        for path in itertools.product(*options):  # exhaustive: fewest crossings, then excess
-            full = [start, *path, end]
-            excess = sum(abs(b - a) - min(abs(o - a) for o in opts) for a, b, opts in
-                         zip(full[:-2], full[1:-1], options))
-            excess += abs(end - full[-2]) - min(abs(end - o) for o in options[-1])
-            travel = sum(abs(b - a) for a, b in zip(full[:-1], full[1:]))
-            key = (_crossings(full, blocked), round(excess, 9), travel)
-            best = key if best is None or key < best else best
+        assert np.allclose(np.mod(out - q[:, 0] + 0.1, 2 * np.pi), 0.1)  # same angles mod 2π
+        crossings, _, best = _brute(q[:, 0], lower, upper, 0.05, start, end, blocked)
         full = [start, *out, end]
-        assert _crossings(full, blocked) == best[0], trial
-        assert sum(abs(b - a) for a, b in zip(full[:-1], full[1:])) == pytest.approx(best[2])
+        assert _crossings(full, blocked) == crossings, trial
+        assert sum(abs(b - a) for a, b in zip(full[:-1], full[1:])) == pytest.approx(best), trial
 
 
 @pytest.fixture(scope="module")
