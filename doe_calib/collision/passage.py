@@ -102,34 +102,19 @@ def blocked_passage(cm, qa, qb, margins=None, lower=None, upper=None,
     Blockage or None
         None also for a robot without a motion bound (a joint not revolute).
     """
-    from doe_calib.collision.clearance import Workspace
-
-    ws = Workspace(cm) if workspace is None else workspace
-    weights = ws.motion(cm)
-    n_pairs = len(cm.geometry.collisionPairs)
-    if weights is None or not n_pairs:
+    ws, weights, margins = _bounded(cm, margins, workspace)
+    if weights is None:
         return None
     qa, qb = np.asarray(qa, float), np.asarray(qb, float)
-    margins = np.broadcast_to(np.asarray(cm.move_margins or cm.margins if margins is None
-                                         else margins, float), n_pairs)
     lo, hi = _box(cm, lower, upper)
     lo, hi = np.minimum(lo, np.minimum(qa, qb)), np.maximum(hi, np.maximum(qa, qb))
-    depends = weights > 0
-    narrow = depends.sum(axis=1) <= 2
     for j in np.flatnonzero(np.abs(qb - qa) > 0):
         n = int(np.ceil(abs(qb[j] - qa[j]) / VALUE_STEP))
         values = qa[j] + (qb[j] - qa[j]) * np.arange(1, n + 1) / (n + 1)
-        for k in np.flatnonzero(depends[:, j] & narrow):
-            m = float(margins[k])
-            if m - SLACK <= 0:
-                continue
-            others = [t for t in np.flatnonzero(depends[k]) if t != j]
-            found = _blocked_value(cm, ws, int(k), qa, int(j), values, m,
-                                   None if not others else int(others[0]), lo, hi,
-                                   weights[k])
+        for k, m, t in _narrow_pairs(weights, margins, int(j)):
+            found = _blocked_value(cm, ws, k, qa, int(j), values, m, t, lo, hi, weights[k])
             if found is not None:
-                t = None if not others else int(others[0])
-                return Blockage(int(j), float(found), cm.pair_name(int(k)), m, t,
+                return Blockage(int(j), float(found), cm.pair_name(k), m, t,
                                 0.0 if t is None else float(lo[t]),
                                 0.0 if t is None else float(hi[t]))
     return None
@@ -159,34 +144,45 @@ def blocked_values(cm, joint: int, margins=None, lower=None, upper=None, workspa
     ndarray
         The proven values, rad, ascending; empty for a robot without a motion bound.
     """
-    from doe_calib.collision.clearance import Workspace
-
-    ws = Workspace(cm) if workspace is None else workspace
-    weights = ws.motion(cm)
-    n_pairs = len(cm.geometry.collisionPairs)
-    if weights is None or not n_pairs:
+    ws, weights, margins = _bounded(cm, margins, workspace)
+    if weights is None:
         return np.zeros(0)
-    margins = np.broadcast_to(np.asarray(cm.move_margins or cm.margins if margins is None
-                                         else margins, float), n_pairs)
     lo, hi = _box(cm, lower, upper)
     values = np.arange(lo[joint] + step / 2, hi[joint], step)
-    depends = weights > 0
     base = np.zeros(len(lo))
     found = set()
-    for k in np.flatnonzero(depends[:, joint] & (depends.sum(axis=1) <= 2)):
-        m = float(margins[k])
-        if m - SLACK <= 0:
-            continue
-        others = [t for t in np.flatnonzero(depends[k]) if t != joint]
-        t = None if not others else int(others[0])
+    for k, m, t in _narrow_pairs(weights, margins, joint):
         left = np.array([v for v in values if v not in found])
         while len(left):
-            c = _blocked_value(cm, ws, int(k), base, joint, left, m, t, lo, hi, weights[k])
+            c = _blocked_value(cm, ws, k, base, joint, left, m, t, lo, hi, weights[k])
             if c is None:
                 break
             found.add(c)
             left = left[left > c]
     return np.array(sorted(found))
+
+
+def _bounded(cm, margins, workspace):
+    """(workspace, closing rates per pair and joint or None, each pair's margin, m)."""
+    from doe_calib.collision.clearance import Workspace
+
+    ws = Workspace(cm) if workspace is None else workspace
+    n_pairs = len(cm.geometry.collisionPairs)
+    weights = ws.motion(cm) if n_pairs else None
+    margins = np.broadcast_to(np.asarray(cm.move_margins or cm.margins if margins is None
+                                         else margins, float), n_pairs)
+    return ws, weights, margins
+
+
+def _narrow_pairs(weights, margins, joint: int):
+    """(pair, its margin m, the one other joint t it depends on or None) of each pair whose
+    distance depends on ``joint`` and at most one other, with room below m for coal's
+    tolerance."""
+    depends = weights > 0
+    for k in np.flatnonzero(depends[:, joint] & (depends.sum(axis=1) <= 2)):
+        if margins[k] - SLACK > 0:
+            others = [int(t) for t in np.flatnonzero(depends[k]) if t != joint]
+            yield int(k), float(margins[k]), (others[0] if others else None)
 
 
 def _box(cm, lower, upper):
