@@ -17,8 +17,12 @@ turned first or last; one of the program's own poses (each free at the
 design's clearance); a retract–swing–extend, the previous position and the
 next with the arm joints (2 and 3) of such a pose; or the wrist turned as at
 such a pose for the move.
-The candidates are tried in order of their joint travel, at most
-:data:`MAX_ROUTES`; when none passes, the joint-space planner
+Before any is tried, a move that no path can make is looked for a proof of it
+(:func:`doe_calib.collision.blocked_passage`: a joint value every path passes
+where one pair is always too close); a proven move is neither routed nor
+searched, and its :class:`Collision` says why. The candidates (the pairs
+already found too close on the move looked at first) are tried in order of
+their joint travel, at most :data:`MAX_ROUTES`; when none passes, the joint-space planner
 (:func:`doe_calib.collision.plan_move`: OMPL RRT-Connect, shortened, every
 segment re-checked at ≤ 1°) looks for a path, written as its intermediate
 positions like a route. A move from a pre-pose into its pose is never routed
