@@ -17,9 +17,9 @@ turned first or last; one of the program's own poses (each free at the
 design's clearance); a retract–swing–extend, the previous position and the
 next with the arm joints (2 and 3) of such a pose; or the wrist turned as at
 such a pose for the move.
-Before any is tried, a move that no path can make is looked for a proof of it
+Before any is tried, a proof that no path can make the move is looked for
 (:func:`doe_calib.collision.blocked_passage`: a joint value every path passes
-where one pair is always too close); a proven move is neither routed nor
+where one pair is always too close); a move so proven is neither routed nor
 searched, and its :class:`Collision` says why. The candidates (the pairs
 already found too close on the move looked at first) are tried in order of
 their joint travel, at most :data:`MAX_ROUTES`; when none passes, the joint-space planner
