@@ -2,7 +2,9 @@
 
 Buffers for every one of 40 000 configurations would hold gigabytes; chunks
 of one fixed size build one map and its buffers and reuse them (the last
-chunk is padded). Each map is evaluated
+chunk is padded). The chunks are small: building a map takes time in
+proportion to its poses (70 ms for 2048 poses of the KR 270's blocks), while
+evaluating 256 poses at a time costs no more per pose. Each map is evaluated
 through CasADi's buffers straight into numpy arrays (no DM conversion). The
 maps are kept per thread, a few at a time. With more than one chunk, the
 chunks are shared out to threads (:func:`doe_calib.runtime.split.split_workers`),
@@ -18,7 +20,7 @@ import numpy as np
 
 from doe_calib.runtime.split import run_parts, split_workers
 
-CHUNK = 2048
+CHUNK = 256
 _MAPS_KEPT = 16
 _LOCAL = threading.local()
 

@@ -8,9 +8,7 @@ each required bin inside its bin. Each refined pose is re-checked
 numerically, exactly (constraints and, with a collision model, the
 clearance); one that fails steps back toward its start (halfway, a quarter
 of the way …, else the start itself). The refined design is kept only if it
-improves the criterion. The poses' information (and its derivatives) are
-evaluated by several threads (:func:`doe_calib.runtime.split.split_workers`):
-each pose's as alone, so IPOPT sees the same numbers.
+improves the criterion.
 """
 from __future__ import annotations
 
@@ -24,7 +22,6 @@ from doe_calib.collision import too_close
 from doe_calib.design.criteria import Criterion
 from doe_calib.design.outcome import DesignOutcome
 from doe_calib.design.symbolic import log_criterion, pose_information
-from doe_calib.runtime.split import split_workers
 
 log = logging.getLogger(__name__)
 
@@ -82,11 +79,6 @@ def _groups(model, params, loads, sigma, n, variants):
             for (cases, approach), idx in keys.items()]
 
 
-def _mapped(info: ca.Function, n: int, workers: int) -> ca.Function:
-    """``info`` mapped over n poses, evaluated by ``workers`` threads when there are several."""
-    return info.map(n, "thread", min(workers, n)) if workers > 1 and n > 1 else info.map(n)
-
-
 def _information(groups, q: np.ndarray, p: int) -> np.ndarray:
     """Σ_i M(q_i) (p, p) of the poses q (n, N), numerically."""
     return sum(np.array(info.map(len(idx))(q[idx].T)).reshape(-1, len(idx), p).sum(axis=1)
@@ -135,8 +127,7 @@ def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
     start_value = crit.value(m0)
     objective = log_criterion(crit, p, reference=crit.reference(m0))
     q = ca.MX.sym("q", dof, n)
-    workers = split_workers()  # the poses' information evaluated in threads: the same numbers
-    m = sum(_mapped(info, len(idx), workers)(q[:, idx]) @ ca.repmat(ca.DM.eye(p), len(idx), 1)
+    m = sum(info.map(len(idx))(q[:, idx]) @ ca.repmat(ca.DM.eye(p), len(idx), 1)
             for info, idx in groups)
     g = ca.vertcat(*[feasibility.expressions(q[:, i], q0[i]) for i in range(n)])
     lbx, ubx = _bounds(q0, feasibility.constraints, model.robot)
