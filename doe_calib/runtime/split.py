@@ -12,10 +12,9 @@ runs its own threads already uses the cores.
 """
 from __future__ import annotations
 
-import multiprocessing
 import os
+import sys
 import threading
-from concurrent.futures import ThreadPoolExecutor
 
 from doe_calib.runtime.parallel import default_workers
 
@@ -41,7 +40,8 @@ def split_workers() -> int:
         return 1
     if threading.current_thread() is not threading.main_thread():
         return 1
-    if multiprocessing.parent_process() is not None:
+    pools = sys.modules.get("multiprocessing")  # a pool's worker has it imported
+    if pools is not None and pools.parent_process() is not None:
         return 1
     return default_workers()
 
@@ -67,6 +67,8 @@ def run_parts(func, parts) -> list:
     parts = list(parts)
     if len(parts) <= 1:
         return [func(p) for p in parts]
+    from concurrent.futures import ThreadPoolExecutor  # imported when threads are used
+
     with ThreadPoolExecutor(len(parts) - 1) as pool:
         futures = [pool.submit(func, p) for p in parts[1:]]
         first = func(parts[0])
