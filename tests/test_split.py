@@ -3,8 +3,8 @@
 The policy (:func:`split_workers`: one thread off the main thread, with BLAS
 free to run its own threads, or in a pool's worker), :func:`run_parts`, and
 each threaded path against its serial run: the pose maps (several chunks),
-the packed information (several chunks), the relaxation built on it, the
-exchange's two runs, and the matrix-vector products split by rows.
+the packed information (several chunks), the relaxation built on it, and the
+matrix-vector products split by rows.
 """
 import threading
 
@@ -13,9 +13,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from doe_calib.design import exchange
 from doe_calib.design.batch import CHUNK, map_poses
-from doe_calib.design.exchange import exact_design
 from doe_calib.design.relaxation import packed_information, relax
 from doe_calib.runtime.parallel import default_workers
 from doe_calib.runtime import split
@@ -94,19 +92,3 @@ def test_packed_information_and_relaxation_in_threads_are_the_serial_ones():
     b = relax(None, packed=packed_information(blocks, workers=2))
     assert_array_equal(a.weights, b.weights)
     assert a.value == b.value and a.ratio == b.ratio and a.iterations == b.iterations
-
-
-@pytest.mark.parametrize("criterion", ["D", "A"])
-def test_exchange_runs_in_threads_give_the_serial_design(monkeypatch, criterion):
-    rng = np.random.default_rng(9)
-    blocks = rng.normal(size=(400, 3, 6))
-    weights = rng.random(400) * 1e-9  # 20 heavy weights and a pool of 60: two runs, whose
-    weights[:20] = 1.0 + rng.random(20)  # pools differ in the 40 ranked by the light weights
-    packed = packed_information(blocks, workers=1)
-    designs = []
-    for workers in (1, 2):
-        monkeypatch.setattr(exchange, "split_workers", lambda w=workers: w)
-        designs.append(exact_design(blocks, 8, criterion, weights, pool=60, packed=packed))
-    serial, threaded = designs
-    assert_array_equal(threaded.indices, serial.indices)
-    assert threaded.value == serial.value and threaded.iterations == serial.iterations

@@ -17,7 +17,7 @@ from doe_calib.design.relaxation import (
 )
 from doe_calib.design.updates import added_values, best_added, regularised
 from doe_calib.errors import SolverError
-from doe_calib.runtime.split import matvec, run_parts, split_workers
+from doe_calib.runtime.split import matvec
 
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
 _NOISE = 1e-6  # relaxation weights below this fraction of the largest rank as zero
@@ -133,8 +133,7 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
         sensitivities. It runs twice, the second time with the weights
         below 1e-6 of the largest ranked as zero (by sensitivity: their order
         is the relaxation's noise), unless both give the same start and pool,
-        and keeps the better design; the two runs go at once in threads when
-        :func:`doe_calib.runtime.split.split_workers` allows.
+        and keeps the better design.
     task : ndarray, shape (rows, p), optional
         For the task criterion named by a string.
     bins : ndarray of int, shape (K,), optional
@@ -160,21 +159,17 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
     k = blocks.shape[0]
     weights = np.full(k, 1.0 / k) if weights is None else weights
     psi = _sensitivities(blocks, weights, crit, packed)
-    tried = []
+    best, tried = None, []
     for noise in (0.0, _NOISE):  # the pool as ranked by every weight, then by the heavy ones
         order, candidates = _pool(weights, psi, min(pool, k), bins, noise)
         start = order[:n].tolist()
-        if not any(np.array_equal(candidates, c) and start == s for c, s in tried):
-            tried.append((candidates, start))
-
-    def run(pair):
-        candidates, start = pair
-        return _exchange(blocks, n, crit, start, candidates, bins, min_bins, max_sweeps,
-                         None if packed is None else packed[candidates])
-
-    # the runs are independent: at once in threads, each as alone
-    runs = run_parts(run, tried) if split_workers() > 1 else [run(pair) for pair in tried]
-    best = max(runs, key=lambda r: r[1])  # the first of the best, as one after the other
+        if any(np.array_equal(candidates, c) and start == s for c, s in tried):
+            continue
+        tried.append((candidates, start))
+        run = _exchange(blocks, n, crit, start, candidates, bins, min_bins, max_sweeps,
+                        None if packed is None else packed[candidates])
+        if best is None or run[1] > best[1]:
+            best = run
     chosen, current, sweeps, status = best
     indices = np.array(chosen)
     selected = np.zeros(k)
