@@ -58,7 +58,7 @@ def test_parts_run_at_once_in_order():
 
 @pytest.mark.parametrize("rows", [64, 1000, 1003, 4097])
 def test_products_split_by_rows_are_the_plain_ones(pinned, monkeypatch, rows):
-    monkeypatch.setattr(split, "SPLIT_ELEMENTS", 1000)  # every one of these is split
+    monkeypatch.setattr(split, "MIN_PART", 500)  # each split, up to three ways
     monkeypatch.setattr(split, "split_workers", lambda: 3)
     rng = np.random.default_rng(rows)
     a = rng.normal(size=(rows, 703)) * rng.lognormal(0, 3, size=(rows, 1))

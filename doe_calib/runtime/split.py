@@ -22,9 +22,9 @@ from doe_calib.runtime.parallel import default_workers
 
 #: The variables through which BLAS is told its threads.
 BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-#: Entries of a matrix from which :func:`matvec` splits its rows over threads: a smaller
-#: product takes under a millisecond, about what handing work to a thread and back costs.
-SPLIT_ELEMENTS = 4_000_000
+#: Entries of the matrix each thread of :func:`matvec` takes at least: a smaller share takes
+#: under half a millisecond, about what handing work to a thread and back costs.
+MIN_PART = 2_000_000
 #: Rows of each part a multiple of this: BLAS kernels take rows in groups (4 or 8), and a
 #: row computed in another group would be rounded otherwise.
 ALIGN = 64
@@ -86,9 +86,10 @@ def run_parts(func, parts) -> list:
 def matvec(a: np.ndarray, x: np.ndarray) -> np.ndarray:
     """``a @ x``, bit for bit, its rows shared out to threads when ``a`` is large.
 
-    Each output element is the same dot product whichever thread computes it:
-    parts of :data:`ALIGN` rows each, from :data:`SPLIT_ELEMENTS` entries on
-    and when :func:`split_workers` allows; otherwise the plain product.
+    Each output element is the same dot product whichever thread computes it.
+    The parts are a multiple of :data:`ALIGN` rows, each of at least
+    :data:`MIN_PART` entries, as many as :func:`split_workers` allows; with
+    fewer than two such parts, or ``a`` not C-ordered, the plain product.
 
     Parameters
     ----------
@@ -105,7 +106,7 @@ def matvec(a: np.ndarray, x: np.ndarray) -> np.ndarray:
     >>> matvec(a, np.array([1.0, -1.0])).tolist()
     [-1.0, -1.0, -1.0]
     """
-    workers = split_workers() if a.size >= SPLIT_ELEMENTS else 1
+    workers = min(split_workers(), a.size // MIN_PART) if a.size >= 2 * MIN_PART else 1
     if workers <= 1 or a.ndim != 2 or x.ndim != 1 or not a.flags.c_contiguous:
         return a @ x
     step = -(-len(a) // (workers * ALIGN)) * ALIGN
