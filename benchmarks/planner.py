@@ -31,9 +31,10 @@ def _recorded_plans(design: Path, out: Path) -> list:
 
     plans, plan = [], safety.plan_move
 
-    def recording(cm, qa, qb, lower=None, upper=None, settings=None, workspace=None):
+    def recording(cm, qa, qb, lower=None, upper=None, settings=None, workspace=None,
+                  prove=True):
         plans.append((cm, np.array(qa), np.array(qb), settings))
-        return plan(cm, qa, qb, lower, upper, settings, workspace)
+        return plan(cm, qa, qb, lower, upper, settings, workspace, prove)
 
     safety.plan_move = recording
     try:
