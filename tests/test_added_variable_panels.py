@@ -1,9 +1,10 @@
 """The report's added-variable panels: one per (effect, joint), the group's strongest shape —
 not the same cyclic error with 1, 2 and 3 harmonics (independently simulated readings)."""
 import independent_sim as sim
+from markered_robot import markered_robot
 import numpy as np
 
-from doe_calib import Robot, Tool, build_model, examples
+from doe_calib import build_model, examples
 from doe_calib.diagnosis import diagnose
 from doe_calib.diagnosis.added_variable import strongest_added_variables
 from doe_calib.estimation.identify import identify_quietly
@@ -14,10 +15,7 @@ START = "joint_offset+geometry"
 
 
 def test_a_hidden_cyclic_error_gets_one_panel_per_effect_and_joint(tmp_path):
-    chain = sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0")
-    robot = Robot.from_urdf(examples.ROBOT_URDF, flange="tool0")
-    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()},
-                             flange="tool0")
+    chain, robot, tool = markered_robot(examples.ROBOT_URDF, "tool0", MARKERS)
     rng = np.random.default_rng(81)
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng,
                              effects=(sim.Cyclic(3, np.radians(0.03), 2, 0.4),))

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import independent_sim as sim
+from markered_robot import markered_robot
 from doe_calib import Robot, Tool, build_model, examples
 from doe_calib.design.augment import (
     augment_design,
@@ -115,9 +116,7 @@ def _one_branch_campaign(tmp_path, n=150):
     path = sim.ur10_urdf()
     if path is None:
         pytest.skip("example-robot-data (UR10 URDF) is not installed")
-    chain, robot = sim.Chain.from_urdf(path, "tool0"), Robot.from_urdf(path, flange="tool0")
-    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()},
-                             flange="tool0")
+    chain, robot, tool = markered_robot(path, "tool0", MARKERS)
     rng = np.random.default_rng(5)
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng,
                              effects=(sim.SelfWeightCompliance(1, 4e-7),))

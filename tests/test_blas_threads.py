@@ -2,10 +2,9 @@
 a fresh interpreter: its environment and threadpoolctl's report of the loaded BLAS."""
 import json
 import os
-import subprocess
-import sys
 
 import pytest
+from fresh_interpreter import run_python
 
 PROBE = """
 import json, os
@@ -22,8 +21,7 @@ print(json.dumps({"env": os.environ.get("OPENBLAS_NUM_THREADS"), "blas": blas,
 def _probe(**env) -> dict:
     clean = {k: v for k, v in os.environ.items()
              if k not in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
-    out = subprocess.run([sys.executable, "-c", PROBE], env={**clean, **env}, check=True,
-                         capture_output=True, text=True).stdout
+    out = run_python(PROBE, env={**clean, **env})
     return json.loads(out.strip().splitlines()[-1])
 
 

@@ -3,6 +3,7 @@ import math
 
 import numpy as np
 import pytest
+from fresh_interpreter import run_python
 from scipy.special import chdtrc
 from scipy.stats import chi2 as chi2_dist
 
@@ -46,14 +47,10 @@ def test_quantile_refuses_what_has_none(bad):
 
 def test_identify_loads_no_scipy(tmp_path):
     """The χ² figures of every fit no longer pull in scipy.special (0.15–0.2 s to import)."""
-    import subprocess
-    import sys
     code = ("import sys, numpy as np\n"
             "from doe_calib.estimation.fit_statistics import ratio_interval\n"
             "print(ratio_interval(350.0, 309))\n"
             "assert not any(m.startswith('scipy') for m in sys.modules), "
             "sorted(m for m in sys.modules if m.startswith('scipy'))[:5]\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
-    lo, hi = eval(out.stdout.strip().replace("(", "[").replace(")", "]"))
+    lo, hi = eval(run_python(code).strip().replace("(", "[").replace(")", "]"))
     assert lo < np.sqrt(350 / 309) < hi

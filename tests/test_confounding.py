@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import independent_sim as sim
-from doe_calib import Robot, Tool, build_model, diagnose, read_measurements
+from markered_robot import markered_robot
+from doe_calib import build_model, diagnose, read_measurements
 
 MARKERS = {"A": [0.1, 0.0, 0.05], "B": [-0.05, 0.087, 0.05], "C": [-0.05, -0.087, 0.05]}
 ONE_BRANCH = np.array([[-np.pi, np.pi], [-2.8, -0.3], [0.3, 2.5], [-np.pi, np.pi], [0.3, 2.8],
@@ -17,9 +18,7 @@ def test_one_ik_branch_cannot_tell_own_weight_from_look_alikes(tmp_path):
     path = sim.ur10_urdf()
     if path is None:
         pytest.skip("example-robot-data (UR10 URDF) is not installed")
-    chain, robot = sim.Chain.from_urdf(path, "tool0"), Robot.from_urdf(path, flange="tool0")
-    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()},
-                             flange="tool0")
+    chain, robot, tool = markered_robot(path, "tool0", MARKERS)
     rng = np.random.default_rng(5)
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng,
                              effects=(sim.SelfWeightCompliance(1, 4e-7),))

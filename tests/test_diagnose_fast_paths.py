@@ -13,10 +13,11 @@ import subprocess
 import sys
 
 import independent_sim as sim
+from markered_robot import markered_robot
 import numpy as np
 import pytest
 
-from doe_calib import Configurations, Robot, Tool, build_model, examples, simulate
+from doe_calib import Configurations, build_model, examples, simulate
 from doe_calib.diagnosis.candidate_batch import grown_model_builders
 from doe_calib.diagnosis.effect_selection import refine
 from doe_calib.diagnosis.effect_tests import augmented, candidate_effects
@@ -35,10 +36,7 @@ START = "joint_offset+geometry+joint_compliance"
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory):
     """KR 270, 30 poses unloaded and with 250 kg; joint 2's compliance varies with its angle."""
-    chain = sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0")
-    robot = Robot.from_urdf(examples.ROBOT_URDF, flange="tool0")
-    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()},
-                             flange="tool0")
+    chain, robot, tool = markered_robot(examples.ROBOT_URDF, "tool0", MARKERS)
     rng = np.random.default_rng(31)
     hidden = sim.SmoothAngleCompliance(1, 2e-7, 1e-6, phase=0.4)
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng, effects=(hidden,))

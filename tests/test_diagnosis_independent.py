@@ -7,10 +7,11 @@ knows the true form of the effect (a catalogue shape that can express it, or
 a user effect file); refine, starting without it, must come within 1.25× of it.
 """
 import independent_sim as sim
+from markered_robot import markered_robot
 import numpy as np
 import pytest
 
-from doe_calib import Robot, Tool, build_model, examples
+from doe_calib import build_model, examples
 from doe_calib.diagnosis import diagnose, validation_rms
 from doe_calib.diagnosis.effect_selection import refine
 from doe_calib.estimation.identify import identify_quietly
@@ -22,16 +23,11 @@ MARKERS = {"A": [0.15, 0.0, 0.08], "B": [-0.075, 0.13, 0.08], "C": [-0.075, -0.1
 START = "joint_offset+geometry+joint_compliance"
 
 
-def _robot(urdf, flange):
-    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()}, flange=flange)
-    return sim.Chain.from_urdf(urdf, flange), Robot.from_urdf(urdf, flange=flange), tool
-
-
 def _ur10():
     path = sim.ur10_urdf()
     if path is None:
         pytest.skip("example-robot-data (UR10 URDF) is not installed")
-    return _robot(path, "tool0")
+    return markered_robot(path, "tool0", MARKERS)
 
 
 def _campaigns(tmp_path, chain, robot, tool, truth, rng, n=40, mass=10.0, shuffle=False,
@@ -75,7 +71,7 @@ def test_smooth_angle_compliance_on_a_robot_with_360_degree_joints(tmp_path):
 
 
 def test_backlash_set_by_the_load_torque_with_meaningless_row_order(tmp_path):
-    chain, robot, tool = _robot(examples.ROBOT_URDF, "tool0")
+    chain, robot, tool = markered_robot(examples.ROBOT_URDF, "tool0", MARKERS)
     rng = np.random.default_rng(22)
     hidden = sim.TorqueSignBacklash(2, np.radians(0.02))
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng, effects=(hidden,))
@@ -115,7 +111,7 @@ def joint_correction(q, env, p, joint=None):
 
 
 def test_effect_outside_the_catalogue_then_fixed_with_a_user_effect(tmp_path):
-    chain, robot, tool = _robot(examples.ROBOT_URDF, "tool0")
+    chain, robot, tool = markered_robot(examples.ROBOT_URDF, "tool0", MARKERS)
     rng = np.random.default_rng(24)
     hidden = sim.CrossCoupling(2, 1, np.radians(0.05))
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng, effects=(hidden,))
@@ -133,7 +129,7 @@ def test_effect_outside_the_catalogue_then_fixed_with_a_user_effect(tmp_path):
 
 
 def test_gross_outliers_are_named_as_such(tmp_path):
-    chain, robot, tool = _robot(examples.ROBOT_URDF, "tool0")
+    chain, robot, tool = markered_robot(examples.ROBOT_URDF, "tool0", MARKERS)
     rng = np.random.default_rng(25)
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng)
     bad = ((17, [2.0, 0.0, 0.0]), (95, [0.0, -2.0, 0.0]), (160, [0.0, 0.0, 2.0]))

@@ -4,9 +4,10 @@ import csv
 import warnings
 
 import independent_sim as sim
+from markered_robot import markered_robot
 import numpy as np
 
-from doe_calib import Robot, Tool, build_model, examples
+from doe_calib import build_model, examples
 from doe_calib.estimation.identify import identify
 from doe_calib.io.csv_files import read_measurements
 
@@ -15,9 +16,7 @@ WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
 
 
 def test_a_flipped_payload_sign_is_named_in_the_warnings(tmp_path):
-    chain = sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0")
-    robot = Robot.from_urdf(examples.ROBOT_URDF, flange="tool0")
-    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()}, flange="tool0")
+    chain, robot, tool = markered_robot(examples.ROBOT_URDF, "tool0", MARKERS)
     rng = np.random.default_rng(41)
     stiff = (sim.SmoothAngleCompliance(1, 3e-7, 0.0), sim.SmoothAngleCompliance(2, 3e-7, 0.0))
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng, effects=stiff)

@@ -5,10 +5,11 @@ tiles equals the fit without (data from ``independent_sim``, numpy and Pinocchio
 import warnings
 
 import independent_sim as sim
+from markered_robot import markered_robot
 import numpy as np
 import pytest
 
-from doe_calib import Robot, Tool, build_model, examples
+from doe_calib import build_model, examples
 from doe_calib.estimation import least_squares
 from doe_calib.estimation.identifiability import analyse
 from doe_calib.estimation.identify import identify
@@ -29,10 +30,7 @@ SPEC = "joint_offset+geometry+joint_compliance"
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory):
     """300 poses unloaded and with 250 kg, 3 markers: 1 800 readings, 5 400 rows (10 tiles)."""
-    chain = sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0")
-    robot = Robot.from_urdf(examples.ROBOT_URDF, flange="tool0")
-    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()},
-                             flange="tool0")
+    chain, robot, tool = markered_robot(examples.ROBOT_URDF, "tool0", MARKERS)
     rng = np.random.default_rng(31)
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng)
     q, w = sim.unloaded_and_loaded(chain, sim.random_configurations(chain, 300, rng), 250.0,

@@ -1,5 +1,6 @@
 """The noncentral χ² survival function and power noncentrality equal SciPy's."""
 import pytest
+from fresh_interpreter import run_python
 from scipy import optimize
 from scipy.special import chdtri, chndtr
 from scipy.stats import ncx2
@@ -52,8 +53,6 @@ def test_one_dof_power_is_the_normal_shift():
 def test_diagnosis_loads_no_scipy():
     """A diagnosis's tests and detectabilities no longer pull in scipy.special/optimize
     (0.4–0.5 s to import, a quarter of a whole ``diagnose``)."""
-    import subprocess
-    import sys
     code = ("import sys\n"
             "import doe_calib.diagnosis, doe_calib.design.detectability\n"
             "from doe_calib.estimation.noncentral_chi_square import noncentrality_for_power\n"
@@ -61,6 +60,4 @@ def test_diagnosis_loads_no_scipy():
             "bad = sorted(m for m in sys.modules if m.startswith(('scipy.special', "
             "'scipy.optimize', 'scipy.stats')))\n"
             "assert not bad, bad[:5]\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
-    assert float(out.stdout) == pytest.approx(9.6347, abs=1e-4)
+    assert float(run_python(code)) == pytest.approx(9.6347, abs=1e-4)

@@ -5,10 +5,11 @@ at the default practical size of 2 µm and "adequate" at 4 µm; no effect is add
 import json
 
 import independent_sim as sim
+from markered_robot import markered_robot
 import numpy as np
 import pytest
 
-from doe_calib import Robot, Tool, build_model, examples
+from doe_calib import build_model, examples
 from doe_calib.diagnosis.effect_selection import refine
 from doe_calib.io.csv_files import read_measurements
 
@@ -22,10 +23,7 @@ START = "joint_offset+geometry"
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("refine_practical")
-    chain = sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0")
-    robot = Robot.from_urdf(examples.ROBOT_URDF, flange="tool0")
-    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()},
-                             flange="tool0")
+    chain, robot, tool = markered_robot(examples.ROBOT_URDF, "tool0", MARKERS)
     rng = np.random.default_rng(81)
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng)
     q = sim.random_configurations(chain, 300, rng)  # 5 400 coordinates

@@ -9,11 +9,12 @@ that batch from each grown model (the columns and grown models of a batch built 
 import warnings
 
 import independent_sim as sim
+from markered_robot import markered_robot
 import numpy as np
 import pytest
 from scipy import optimize, stats
 
-from doe_calib import Configurations, Robot, Tool, build_model, examples, simulate
+from doe_calib import Configurations, build_model, examples, simulate
 from doe_calib.diagnosis.candidate_batch import candidate_batch
 from doe_calib.diagnosis.effect_selection import refine
 from doe_calib.diagnosis.engine import candidate_batch_for
@@ -167,10 +168,7 @@ def test_one_batch_is_not_seen_where_the_order_of_effects_matters(rigid6):
 def hidden_campaign(tmp_path_factory):
     """30 poses of the KR 270, unloaded and under 250 kg, from the independent simulator: two
     angle-dependent compliances and a cyclic error (refine adds three effects)."""
-    chain = sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0")
-    robot = Robot.from_urdf(examples.ROBOT_URDF, flange="tool0")
-    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()},
-                             flange="tool0")
+    chain, robot, tool = markered_robot(examples.ROBOT_URDF, "tool0", MARKERS)
     rng = np.random.default_rng(2)
     hidden = (sim.SmoothAngleCompliance(1, 1e-6, 4e-7, phase=0.7), sim.Cyclic(2, 2e-5, 2),
               sim.SmoothAngleCompliance(2, 6e-7, 2e-7))

@@ -7,10 +7,11 @@ import json
 from dataclasses import replace
 
 import independent_sim as sim
+from markered_robot import markered_robot
 import numpy as np
 import pytest
 
-from doe_calib import Robot, Tool, build_model, examples
+from doe_calib import build_model, examples
 from doe_calib.cli import main
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.session import reregister
@@ -26,9 +27,7 @@ MODEL = "joint_offset+geometry+joint_compliance"
 def session(tmp_path_factory):
     """(result, model, validation Measurements, validation CSV path, the moved truth)."""
     tmp = tmp_path_factory.mktemp("session")
-    chain = sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0")
-    robot = Robot.from_urdf(examples.ROBOT_URDF, flange="tool0")
-    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()}, flange="tool0")
+    chain, robot, tool = markered_robot(examples.ROBOT_URDF, "tool0", MARKERS)
     rng = np.random.default_rng(31)
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng)
     q, w = sim.unloaded_and_loaded(chain, sim.random_configurations(chain, 40, rng), 50.0,

@@ -17,7 +17,8 @@ from doe_calib.design.batch import CHUNK, map_poses
 from doe_calib.design.relaxation import packed_information, relax
 from doe_calib.runtime.parallel import default_workers
 from doe_calib.runtime import split
-from doe_calib.runtime.split import BLAS_THREADS, matvec, run_parts, split_workers
+from doe_calib.runtime.split import matvec, run_parts, split_workers
+from doe_calib.runtime.threads import BLAS_THREADS
 
 
 @pytest.fixture

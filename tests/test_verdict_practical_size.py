@@ -2,10 +2,11 @@
 states the misfit beyond the noise in µm and judges it by a practical size; a real missing
 effect of 10 µm is not excused (independently simulated readings)."""
 import independent_sim as sim
+from markered_robot import markered_robot
 import numpy as np
 import pytest
 
-from doe_calib import Robot, Tool, build_model, examples
+from doe_calib import build_model, examples
 from doe_calib.diagnosis import diagnose
 from doe_calib.io.csv_files import read_measurements
 
@@ -17,10 +18,7 @@ START = "joint_offset+geometry"
 
 
 def _diagnosis(tmp_path, effects, seed, poses, **options):
-    chain = sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0")
-    robot = Robot.from_urdf(examples.ROBOT_URDF, flange="tool0")
-    tool = Tool.from_markers({k: np.multiply(v, 1e3) for k, v in MARKERS.items()},
-                             flange="tool0")
+    chain, robot, tool = markered_robot(examples.ROBOT_URDF, "tool0", MARKERS)
     rng = np.random.default_rng(seed)
     truth = sim.Truth.random(chain, np.array(list(MARKERS.values())), rng, effects=effects)
     q = sim.random_configurations(chain, poses, rng)

@@ -17,6 +17,7 @@ from doe_calib.collision.clearance import (
                         Clearance,
                         SegmentCheck,
                         Workspace,
+                        check_path,
                         check_segment,
                         clearance,
                         contacts,
@@ -37,7 +38,7 @@ from doe_calib.collision.planner import PlannedMove, PlannerSettings, plan_move
 __all__ = ["BEAM_RADIUS", "BlockedBeam", "blocked_beams", "screen_beams", "MOVE_SHARE",
            "DEFAULT_PLANNER", "Blockage", "blocked_passage", "blocked_values",
            "PlannedMove", "PlannerSettings", "plan_move", "SEGMENT_STEP", "Clearance",
-           "SegmentCheck", "Workspace", "check_segment",
+           "SegmentCheck", "Workspace", "check_path", "check_segment",
            "clearance", "contacts", "too_close", "DEFAULT_CLEARANCE", "DEFAULT_SELF_CLEARANCE",
            "CollisionModel",
            "build_collision_model"]

@@ -242,6 +242,27 @@ def check_segment(cm, qa, qb, margin: float | None = None, step: float = SEGMENT
     return check
 
 
+def check_path(cm, path, margin=None, workspace: Workspace | None = None,
+               pairs=None) -> tuple:
+    """The first move of ``path`` (positions, rad/m) that collides, checked move by move.
+
+    Parameters are those of :func:`check_segment` (at its step).
+
+    Returns
+    -------
+    (SegmentCheck or None, int)
+        The first colliding move's check (None: every move is free) and the poses
+        checked up to it.
+    """
+    samples = 0
+    for qa, qb in zip(path[:-1], path[1:]):
+        check = check_segment(cm, qa, qb, margin, workspace=workspace, pairs=pairs)
+        samples += check.samples
+        if not check.free:
+            return check, samples
+    return None, samples
+
+
 def _check(cm, qa, qb, margin, step, ws, pairs=None) -> SegmentCheck:
     t = np.linspace(0.0, 1.0, max(2, int(np.ceil(np.max(np.abs(qb - qa)) / step)) + 1))
     weights = ws.weights(cm)

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from doe_calib.collision.clearance import SEGMENT_STEP, Workspace, check_segment, too_close
+from doe_calib.collision.clearance import SEGMENT_STEP, Workspace, check_path, too_close
 from doe_calib.collision.passage import blocked_passage
 
 #: Joint step at which the search checks its motions, rad (the final check is at 1°).
@@ -237,13 +237,7 @@ def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | No
         if path is None:
             continue
         path[0], path[-1] = qa, qb
-        samples, free = 0, True
-        for a, b in zip(path[:-1], path[1:]):
-            check = check_segment(cm, a, b, margins, workspace=ws)
-            samples += check.samples
-            if not check.free:
-                free = False
-                break
-        if free:
+        hit, samples = check_path(cm, path, margins, ws)
+        if hit is None:
             return PlannedMove(tuple(path[1:-1]), samples)
     return None

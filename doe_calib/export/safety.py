@@ -47,6 +47,7 @@ from doe_calib.collision import (
                         Workspace,
                         blocked_beams,
                         blocked_passage,
+                        check_path,
                         check_segment,
                         plan_move,
 )
@@ -240,16 +241,15 @@ def _route(cm, a, b, pair, safe, ws, planner):
     if blocked is not None:
         return None, None, 0, blocked
     samples, margins = 0, _margins(cm)
-    index = {cm.pair_name(k): k for k in range(len(cm.geometry.collisionPairs))}
-    suspects = [index[pair]]  # pairs found too close on this move: looked at first
+    suspects = [cm.pairs.index(pair)]  # pairs found too close on this move: looked at first
     for words, via in _routes(a, b, safe):
         path = [a, *via, b]
         # a candidate too close on a suspect pair collides: looked for first, on those only
-        hit, checked = _first_hit(cm, path, margins, ws, suspects)
+        hit, checked = check_path(cm, path, margins, ws, suspects)
         if hit is None:
-            hit, checked = _first_hit(cm, path, margins, ws)
+            hit, checked = check_path(cm, path, margins, ws)
             if hit is not None:
-                suspects.append(index[hit.pair])
+                suspects.append(cm.pairs.index(hit.pair))
         samples += checked
         if hit is None:
             return words, via, samples, None
@@ -259,18 +259,6 @@ def _route(cm, a, b, pair, safe, ws, planner):
             return (f"planned (RRT-Connect, {len(planned.via)} intermediate positions)",
                     list(planned.via), samples + planned.samples, None)
     return None, None, samples, None
-
-
-def _first_hit(cm, path, margins, ws, pairs=None):
-    """The check of the first move of ``path`` (positions) that collides, or None; the poses
-    checked up to it. ``pairs``: only these (:func:`~doe_calib.collision.check_segment`)."""
-    samples = 0
-    for qa, qb in zip(path[:-1], path[1:]):
-        check = check_segment(cm, qa, qb, margins, workspace=ws, pairs=pairs)
-        samples += check.samples
-        if not check.free:
-            return check, samples
-    return None, samples
 
 
 def _clearance_words(cm) -> str:

@@ -12,16 +12,14 @@ runs its own threads already uses the cores.
 """
 from __future__ import annotations
 
-import os
 import sys
 import threading
 
 import numpy as np
 
 from doe_calib.runtime.parallel import default_workers
+from doe_calib.runtime.threads import blas_on_one_thread
 
-#: The variables through which BLAS is told its threads.
-BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 #: Entries of the matrix each thread of :func:`matvec` takes at least: a smaller share takes
 #: under half a millisecond, about what handing work to a thread and back costs.
 MIN_PART = 2_000_000
@@ -43,8 +41,7 @@ def split_workers() -> int:
     >>> split_workers() >= 1
     True
     """
-    chosen = [os.environ[v].strip() for v in BLAS_THREADS if v in os.environ]
-    if not chosen or any(v != "1" for v in chosen):
+    if not blas_on_one_thread():
         return 1
     if threading.current_thread() is not threading.main_thread():
         return 1

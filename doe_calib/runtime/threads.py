@@ -12,7 +12,15 @@ from __future__ import annotations
 
 import os
 
-_CHOSEN = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+#: The variables through which BLAS is told its threads.
+BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def blas_on_one_thread() -> bool:
+    """Whether BLAS runs on one thread here: one of :data:`BLAS_THREADS` is set and every
+    one set says 1 (as :func:`single_threaded_blas` leaves them)."""
+    chosen = [os.environ[v].strip() for v in BLAS_THREADS if v in os.environ]
+    return bool(chosen) and all(v == "1" for v in chosen)
 
 
 def single_threaded_blas():
@@ -25,8 +33,8 @@ def single_threaded_blas():
 
     Returns the threadpoolctl limiter (keep it alive), or None when the user chose.
     """
-    if any(os.environ.get(v, "").strip() for v in _CHOSEN):  # an empty value chooses nothing
+    if any(os.environ.get(v, "").strip() for v in BLAS_THREADS):  # an empty value chooses nothing
         return None
-    os.environ.update({v: "1" for v in _CHOSEN})
+    os.environ.update({v: "1" for v in BLAS_THREADS})
     from threadpoolctl import threadpool_limits
     return threadpool_limits(limits=1, user_api="blas")
