@@ -163,3 +163,22 @@ def test_simulated_data_without_sigma_and_a_sigma_given_disagree_by_the_ratio(
     meas = read_measurements(no_sigma_file, model3.robot, model3.tool, sigma_mm=0.04)
     res = identify_quietly(model3, meas)
     assert res.sigma_ratio == pytest.approx(0.5, rel=0.10)
+
+
+def test_refine_without_sigma_names_its_line_the_starting_models_estimate(no_sigma_file,
+                                                                           tmp_path, capsys):
+    out = tmp_path / "r.json"
+    assert main(["refine", "--robot", str(URDF), "--tool", str(TOOL), "--data",
+                 str(no_sigma_file), "--model", "joint_offset", "--max-steps", "1",
+                 "--out", str(out)]) == 0
+    said = capsys.readouterr()
+    line = next(ln for ln in said.out.splitlines() if ln.startswith("(mm per coordinate"))
+    sigma_hat = float(next(ln for ln in said.err.splitlines() if ln.startswith("σ not given"))
+                      .split(", ")[-1].split(" mm")[0])
+    assert "σ̂ of the starting model's fit (no σ given)" in line and "noise floor" not in line
+    assert float(line.split()[-2]) == pytest.approx(sigma_hat, rel=1e-2)
+    given = tmp_path / "g.json"
+    assert main(["refine", "--robot", str(URDF), "--tool", str(TOOL), "--data",
+                 str(no_sigma_file), "--sigma", str(SIGMA * 1000), "--model", "joint_offset",
+                 "--max-steps", "1", "--out", str(given)]) == 0
+    assert f"noise floor {SIGMA * 1000:.4f} mm" in capsys.readouterr().out

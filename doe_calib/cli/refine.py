@@ -67,7 +67,8 @@ def run(args):
         # it draws while the files are written
         figures.draw("error_falling", plot, [SimpleNamespace(
             added=s.added, rms_mm=s.rms_mm, cv_rms_mm=s.cv_rms_mm,
-            validation_rms_mm=s.validation_rms_mm) for s in out.steps], out.noise_floor_mm)
+            validation_rms_mm=s.validation_rms_mm) for s in out.steps], out.noise_floor_mm,
+            out.noise_words)
         out.fit.to_json(args.out)
         out.to_json(history)
     if args.report:

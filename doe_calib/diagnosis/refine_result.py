@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from doe_calib.diagnosis.candidate import Candidate, FittedSize
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.io.json_file import read_json, write_json
+from doe_calib.io.measurements import ESTIMATED
 
 FORMAT = "doe_calib.refine"
 
@@ -113,6 +114,14 @@ class RefineResult:
         return self.steps[-1]
 
     @property
+    def noise_words(self) -> str:
+        """What :attr:`noise_floor_mm` is, in words: the readings' σ, or, when none was
+        given, σ̂ of the starting model's fit, which holds that model's misfit too."""
+        if self.diagnosis.chi2.get("sigma_source") == ESTIMATED:
+            return "σ̂ of the starting model's fit (no σ given)"
+        return "noise floor"
+
+    @property
     def added(self) -> tuple:
         """The added effects (:class:`Candidate`), in the order they were added."""
         return tuple(s.effect for s in self.steps[1:] if s.effect is not None)
@@ -139,7 +148,7 @@ class RefineResult:
             v = f"{s.validation_rms_mm:9.4f}" if s.validation_rms_mm is not None else f"{'–':>9}"
             lines.append(f"{i:<5}{s.model[:57]:<58}{s.rms_mm:9.4f}{s.cv_rms_mm:9.4f}{v}  "
                          f"{'yes' if s.adequate else 'no'}")
-        lines += [f"(mm per coordinate; noise floor {self.noise_floor_mm:.4f} mm)", "",
+        lines += [f"(mm per coordinate; {self.noise_words} {self.noise_floor_mm:.4f} mm)", "",
                   *[f"step {i}: {s.reason}" for i, s in enumerate(self.steps)], "",
                   f"stopped: {self.stopped}"]
         return "\n".join(lines)

@@ -189,9 +189,10 @@ def steps_section(result, dpi: int = 90):
                      "–" if s.validation_rms_mm is None else s.validation_rms_mm,
                      "yes" if s.adequate else "no", s.reason])
     return section("Each added effect and the error it removed", figure(
-        _png(error_falling(steps, result.noise_floor_mm), dpi),
+        _png(error_falling(steps, result.noise_floor_mm, result.noise_words), dpi),
         "fit, cross-validated and validation RMS at each step",
-        "RMS per coordinate (mm) after each added effect; dashed: the noise floor."), table(
+        f"RMS per coordinate (mm) after each added effect; dashed: {result.noise_words}."
+    ), table(
         ["step", "effect", "fitted size ± std", "CV RMS (mm)", "validation RMS (mm)",
          "adequate", "why"], rows, 4), paragraph(f"Stopped: {result.stopped}"))
 

@@ -20,7 +20,7 @@ def candidate_bars(diagnosis, top: int = 12):
     return fig
 
 
-def error_falling(steps, noise_floor_mm: float):
+def error_falling(steps, noise_floor_mm: float, noise_words: str = "noise floor"):
     """Fit, cross-validated and validation RMS (mm) at each refinement step, log scale.
 
     Parameters
@@ -30,6 +30,8 @@ def error_falling(steps, noise_floor_mm: float):
         ``validation_rms_mm`` (mm; ``None`` without a validation file).
     noise_floor_mm : float
         Drawn as a dashed line, mm.
+    noise_words : str
+        Its legend (:attr:`RefineResult.noise_words`).
     """
     fig = new_figure(8, 4)
     ax = fig.subplots()
@@ -39,7 +41,7 @@ def error_falling(steps, noise_floor_mm: float):
     if any(s.validation_rms_mm is not None for s in steps):
         ax.plot(x, [np.nan if s.validation_rms_mm is None else s.validation_rms_mm
                     for s in steps], "^-", label="validation file")
-    ax.axhline(noise_floor_mm, color="k", ls="--", lw=1, label="noise floor")
+    ax.axhline(noise_floor_mm, color="k", ls="--", lw=1, label=noise_words)
     ax.set_yscale("log")
     ax.set_xticks(x, ["start" if s.added is None else f"+ {s.added}" for s in steps],
                   rotation=20, ha="right", fontsize=8)
