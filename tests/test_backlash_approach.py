@@ -206,7 +206,7 @@ def test_exact_recovery_from_static_poses_reached_from_both_sides(robot6, tool6,
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         sim = simulate(model, truth, cfg, 0.0, rng)
-        start, _ = fix_unidentifiable(model, sim, register_base(model, sim, truth))
+        start, *_ = fix_unidentifiable(model, sim, register_base(model, sim, truth))
         v = truth.values.copy()
         v[~start.free] = truth.nominal_values[~start.free]  # what the data cannot tell
         truth = start.with_values(v)

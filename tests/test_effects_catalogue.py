@@ -63,7 +63,7 @@ def test_binned_compliance_recovered_exactly_from_noise_free_data(robot6, tool6)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         sim = simulate(model, truth, cfg, 0.0, rng)
-        start, _ = fix_unidentifiable(model, sim, register_base(model, sim, truth.with_values(
+        start, *_ = fix_unidentifiable(model, sim, register_base(model, sim, truth.with_values(
             truth.nominal_values)))
         v = truth.values.copy()
         v[~start.free] = truth.nominal_values[~start.free]

@@ -209,7 +209,7 @@ def test_recovered_exactly_from_noise_free_data(robot6, tool6, spec):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         sim = simulate(model, truth, cfg, 0.0, rng)
-        start, _ = fix_unidentifiable(model, sim, register_base(model, sim, start))
+        start, *_ = fix_unidentifiable(model, sim, register_base(model, sim, start))
         v = truth.values.copy()
         v[~start.free] = truth.nominal_values[~start.free]
         truth = start.with_values(v)

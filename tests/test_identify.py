@@ -42,7 +42,7 @@ def _identifiable_truth(model, cfg, rng):
     sim = simulate(model, truth, cfg, 0.0, rng)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        analysed, _ = fix_unidentifiable(model, sim, register_base(model, sim, model.nominal()))
+        analysed, *_ = fix_unidentifiable(model, sim, register_base(model, sim, model.nominal()))
     v = truth.values.copy()
     v[~analysed.free] = truth.nominal_values[~analysed.free]
     return analysed.with_values(v)

@@ -35,7 +35,7 @@ def test_restricted_reduction_is_the_data_s(model6, rng):
     meas = _campaign(model6, rng)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        params, _, full = prepare(model6, meas)
+        params, _, full, _ = prepare(model6, meas)
     free, scale = params.free, params.scales[params.free]
     got = restrict(full, np.flatnonzero(free), scale)
     want = weighted_residuals.reduce_jacobian(model6, meas, params.values, free, scale)
@@ -51,7 +51,7 @@ def test_fit_from_the_rank_analysis_saves_a_pass(model6, rng, monkeypatch):
     meas = _campaign(model6, rng)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        params, _, full = prepare(model6, meas)
+        params, _, full, _ = prepare(model6, meas)
     calls = _counted(monkeypatch)
     plain = point_fit(model6, meas, params)
     n_plain = len(calls)

@@ -39,11 +39,13 @@ def residual_statistics(model, measurements, values) -> dict:
 
 
 def finish(model, measurements, params, estimator, convergence, notes, covariance=None,
-           norm2=None):
+           norm2=None, absorbed=None):
     """Assemble the result: covariance σ²(BᵀWB)⁻¹, σ̂, residual statistics.
 
     ``covariance`` (of the free parameters, SI) and ``norm2`` (‖r‖² at
     ``params``) are computed here, a block of readings at a time, unless given.
+    ``absorbed``: what each free parameter absorbs of those fixed as not separable
+    (:attr:`~doe_calib.estimation.identifiability.Identifiability.absorbed`).
     """
     n_free = int(params.free.sum())
     if covariance is None or norm2 is None:
@@ -63,7 +65,7 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
         residual_statistics(model, measurements, params.values), convergence, n_obs,
         sigma_mm, tuple(notes), estimated,
         "estimated" if estimated else measurements.sigma_source,
-        effect_files(model.effects))
+        effect_files(model.effects), dict(absorbed or {}))
 
 
 def effect_files(effects) -> dict:

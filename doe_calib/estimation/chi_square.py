@@ -34,8 +34,12 @@ def stirling_error(a: float) -> float:
 
 
 def log_factor(a: float, x: float) -> float:
-    """log(xᵃ e⁻ˣ / Γ(a)), accurate also for large ``a`` with ``x`` near ``a``."""
-    if a < 15.0:
+    """log(xᵃ e⁻ˣ / Γ(a)), accurate also for large ``a`` with ``x`` near ``a``.
+
+    Far below ``a`` (an exact fit's χ²) the plain form holds and the scaled one would
+    take the log of 0.
+    """
+    if a < 15.0 or x < 1e-3 * a:
         return a * math.log(x) - x - math.lgamma(a)
     u = (x - a) / a
     return (a * (math.log1p(u) - u) + 0.5 * math.log(a / (2 * math.pi))

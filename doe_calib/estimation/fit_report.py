@@ -11,12 +11,15 @@ import textwrap
 
 import numpy as np
 
-#: The suffix :func:`~doe_calib.estimation.preparation.fix_unidentifiable` gives its reasons.
-_NOT_SEPARABLE = "; fixed at its current value"
+from doe_calib.estimation.preparation import NOT_SEPARABLE
+from doe_calib.estimation.reduced_set import combinations
+
 #: Its warning, which the grouped note replaces.
 _FIXED_WARNING = re.compile(r"^\d+ parameters fixed as not identifiable \(see the fixed list\)$")
 #: Correlations listed at most.
 MAX_CORRELATIONS = 30
+#: Combinations of the reduced set named in the notes at most.
+MAX_COMBINATIONS = 8
 
 
 def fixed_groups(parameters) -> list[tuple[str, dict]]:
@@ -32,7 +35,7 @@ def fixed_groups(parameters) -> list[tuple[str, dict]]:
     for par, free, why in zip(parameters.parameters, parameters.free, parameters.fixed_reason):
         if free:
             continue
-        key = "not separable by these data" if why.endswith(_NOT_SEPARABLE) else (
+        key = "not separable by these data" if why.endswith(NOT_SEPARABLE) else (
             why or "fixed by request")
         groups.setdefault(key, {}).setdefault(par.block, []).append(par.name)
     return list(groups.items())
@@ -46,9 +49,25 @@ def _fixed_note(reason: str, by_block: dict) -> str:
     return f"{n} fixed as {reason}{extra}: {blocks}"
 
 
+def _reduced_note(result) -> list[str]:
+    """One note naming the values of the reduced set and the combinations they estimate."""
+    found = combinations(result)
+    if not found:
+        return []
+    shown = "; ".join(str(c) for c in found[:MAX_COMBINATIONS])
+    more = (f"; … and {len(found) - MAX_COMBINATIONS} more" if len(found) > MAX_COMBINATIONS
+            else "")
+    return [f"{len(found)} values, marked [reduced set], are not physical: each absorbs "
+            f"parameters fixed as not separable, and the data identify only its combination "
+            f"with them (to first order, those at the values they were fixed at): {shown}{more} "
+            f"(all: result.combinations(), the result JSON's \"combinations\")"]
+
+
 def notes(result) -> list[str]:
-    """The numbered notes: one per group of fixed parameters, then one per warning."""
+    """The numbered notes: one per group of fixed parameters, the reduced set's values,
+    then one per warning."""
     out = [_fixed_note(r, g) for r, g in fixed_groups(result.parameters)]
+    out += _reduced_note(result)
     return out + [w for w in result.warnings if not _FIXED_WARNING.match(w)]
 
 
@@ -61,6 +80,8 @@ def _variable_line(est, sigma_given: bool) -> str:
             f"{pct:<12} {u:<11} (nominal {est.nominal * k:.6g})")
     if sigma_given:
         line += f"  a priori ± {est.std * k:.4g}"
+    if est.role == "reduced set":
+        line += "  [reduced set]"
     return line
 
 

@@ -11,12 +11,15 @@ reproduce its effect.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 _BLOCK_ORDER = ("base", "markers")
 _NO_EFFECT = 1e-9
+#: A dependent parameter whose typical size moves a kept one by less than this fraction of
+#: the kept one's typical size is not counted as absorbed by it.
+_ABSORBED = 1e-3
 
 
 @dataclass(frozen=True)
@@ -33,12 +36,20 @@ class Identifiability:
         Of the kept, column-normalised observation matrix.
     weakest : tuple of str
         The parameters that dominate the smallest singular vector.
+    absorbed : dict
+        Kept parameter name → ``((dependent name, coefficient), …)``: to first
+        order the data see the kept parameter ``k`` only through the combination
+        ``p_k + Σ coefficient · p_d`` over the dependent parameters listed (SI
+        coefficients, unit of k per unit of d), so its estimate is the value of a
+        reduced set, not the physical one, unless those are known. Kept
+        parameters that absorb none are not listed.
     """
 
     rank: int
     dependent: tuple
     condition_number: float
     weakest: tuple
+    absorbed: dict = field(default_factory=dict)
 
 
 def priority_order(parameter_set, candidates) -> list[int]:
@@ -80,10 +91,11 @@ def analyse(b, parameter_set, candidates=None, tol: float = 1e-7) -> Identifiabi
             kept.append(i)
         else:
             dependent.append(i)
-    dependent = list(zip([params[i].name for i in dependent],
-                         _explain(b, dependent, kept, params, norms)))
+    alpha = _coefficients(b, dependent, kept, norms)
+    words = _explain(alpha, dependent, kept, params, norms)
     cond, weakest = _conditioning(b, kept, norms, params)
-    return Identifiability(len(kept), tuple(dependent), cond, weakest)
+    return Identifiability(len(kept), tuple(zip([params[i].name for i in dependent], words)),
+                           cond, weakest, _absorbed(alpha, dependent, kept, params, norms))
 
 
 def _residual(col, basis):
@@ -93,15 +105,42 @@ def _residual(col, basis):
     return r - basis @ (basis.T @ r)  # second pass for accuracy
 
 
-def _explain(b, dependent, kept, params, norms) -> list[str]:
-    """Words for each dependent column: which kept parameters reproduce its effect."""
-    if not dependent:
-        return []
+def _coefficients(b, dependent, kept, norms) -> np.ndarray:
+    """α (kept × dependent): each dependent column, normalised, as a sum of the kept ones,
+    normalised (least squares; 0 where nothing is kept or the column has no effect)."""
     alpha = np.zeros((len(kept), len(dependent)))
-    if kept:
+    if kept and dependent:
         cols = b[:, kept] / norms[kept]
         rhs = b[:, dependent] / np.where(norms[dependent] > 0, norms[dependent], 1.0)
         alpha, *_ = np.linalg.lstsq(cols, rhs, rcond=None)
+    return alpha
+
+
+def _absorbed(alpha, dependent, kept, params, norms) -> dict:
+    """Kept name → ((dependent name, SI coefficient), …), largest share first.
+
+    Column ``d`` equals ``Σ_k α_kd·(‖b_d‖/‖b_k‖)·b_k``, so a change ``δ`` of ``p_d`` is
+    reproduced by ``p_k`` changing by ``c_kd·δ`` with ``c_kd = α_kd ‖b_d‖ / ‖b_k‖``: the data
+    see ``p_k + Σ_d c_kd p_d``.
+    """
+    out = {}
+    scales = np.array([p.scale for p in params])
+    for a, k in enumerate(kept):
+        terms = []
+        for c, d in enumerate(dependent):
+            if norms[d] == 0:
+                continue
+            coef = alpha[a, c] * norms[d] / norms[k]
+            if abs(coef) * scales[d] > _ABSORBED * scales[k]:
+                terms.append((params[d].name, float(coef), abs(coef) * scales[d]))
+        if terms:
+            terms.sort(key=lambda t: -t[2])
+            out[params[k].name] = tuple((n, c) for n, c, _ in terms)
+    return out
+
+
+def _explain(alpha, dependent, kept, params, norms) -> list[str]:
+    """Words for each dependent column: which kept parameters reproduce its effect."""
     out = []
     for k, i in enumerate(dependent):
         p = params[i]

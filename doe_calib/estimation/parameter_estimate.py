@@ -5,6 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from doe_calib.estimation.reduced_set import combinations, role
+
 
 @dataclass(frozen=True)
 class ParameterEstimate:
@@ -30,6 +32,13 @@ class ParameterEstimate:
     correlations : tuple of (str, float)
         The (at most 3) free parameters it is most correlated with, largest
         |ρ| first.
+    role : str
+        What the value is (:data:`~doe_calib.estimation.reduced_set.ROLES`):
+        ``physical``, ``reduced set`` (it absorbs parameters the data cannot
+        separate), ``not separable`` or ``fixed``.
+    combination : str
+        For a value of the reduced set, the combination the data identify
+        (display units), e.g. ``g_a2_tz + 1·g_a3_tz``; "" otherwise.
     """
 
     name: str
@@ -45,6 +54,8 @@ class ParameterEstimate:
     fixed_reason: str
     correlations: tuple
     description: str
+    role: str = "physical"
+    combination: str = ""
 
     @property
     def value_display(self) -> float:
@@ -76,6 +87,9 @@ class ParameterEstimate:
         if self.correlations:
             lines.append("  correlated with " + ", ".join(f"{n} ({r:+.3f})"
                                                          for n, r in self.correlations))
+        if self.role == "reduced set":
+            lines.append(f"  value of the reduced set, not physical: the data identify "
+                         f"{self.combination}")
         return "\n".join(lines)
 
     def __repr__(self) -> str:
@@ -110,4 +124,6 @@ def parameter_estimate(result, name: str) -> ParameterEstimate:
         std_a_posteriori=post, nominal=par.nominal, unit=par.unit,
         display_unit=par.display_unit, display_factor=par.display_factor,
         free=bool(p.free[i]), fixed_reason=p.fixed_reason[i], correlations=correlations,
-        description=par.description)
+        description=par.description, role=role(result, name),
+        combination=next((c.expression for c in combinations(result) if c.parameter == name),
+                         ""))

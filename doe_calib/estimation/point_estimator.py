@@ -43,7 +43,7 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
     progress : callable(stage, note), optional
         Told of each iteration (weighted RMS of the residuals).
     """
-    params, notes, start = prepare(model, measurements, params, register)
+    params, notes, start, absorbed = prepare(model, measurements, params, register)
     sol = point_fit(model, measurements, params, max_iterations, progress, start)
     scale = params.scales[params.free]
     if not sol.converged:
@@ -56,4 +56,5 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
                    "evaluations": sol.evaluations, "status": sol.status,
                    "message": f"Levenberg–Marquardt: {sol.message}", "residual_norm2": sol.norm2}
     return finish(model, measurements, params.with_free_values(sol.x), "point", convergence,
-                  notes, covariance_from_r_factor(sol.reduction.r_factor, scale), sol.norm2)
+                  notes, covariance_from_r_factor(sol.reduction.r_factor, scale), sol.norm2,
+                  absorbed)

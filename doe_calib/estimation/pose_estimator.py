@@ -84,7 +84,7 @@ def identify_pose(model, measurements, params=None, normalisation: float | None 
     check_tool_fixes_the_pose(model.tool.position_array, model.tool.source)
     params = model.nominal() if params is None else params
     params = params.fixed(["markers"], "the pose estimator takes the marker positions as known")
-    params, notes, _ = prepare(model, measurements, params, register)
+    params, notes, _, absorbed = prepare(model, measurements, params, register)
     markers = params.values[params.index("markers")].reshape(-1, 3)
     lam = default_normalisation(markers) if normalisation is None else float(normalisation)
     rot, trans = reconstruct_poses(measurements, markers)
@@ -115,7 +115,8 @@ def identify_pose(model, measurements, params=None, normalisation: float | None 
                    "message": f"pose estimator (λ = {lam:.4g} m/rad), Levenberg–Marquardt: "
                               f"{sol.message}", "residual_norm2": float(2.0 * sol.cost),
                    "normalisation_m_per_rad": lam}
-    return finish(model, measurements, params, "pose", convergence, notes, covariance=cov)
+    return finish(model, measurements, params, "pose", convergence, notes, covariance=cov,
+                  absorbed=absorbed)
 
 
 def predict_pose_covariance(model, params, configurations, sigma: float,

@@ -18,6 +18,8 @@ from doe_calib.model.rotations import matrix_to_rotation_vector
 
 #: Condition number of the observation matrix above which the fit warns.
 COND_WARN = 1e6
+#: How the reason of every parameter the rank analysis fixed ends.
+NOT_SEPARABLE = "; fixed at its current value"
 
 
 def register_base(model, measurements, params):
@@ -50,7 +52,8 @@ def fix_unidentifiable(model, measurements, params, tol: float = 1e-7, reduction
     """Fix (at their current values) the free parameters the data cannot separate.
 
     ``reduction``: of ``[J | r]`` for all parameters at ``params.values``, when at hand.
-    Returns the new parameter set and the warnings issued, in words.
+    Returns the new parameter set, the warnings issued, in words, and what each kept
+    parameter absorbs of the fixed ones (:attr:`Identifiability.absorbed`).
     """
     red = reduce_jacobian(model, measurements, params.values) if reduction is None \
         else reduction
@@ -64,7 +67,7 @@ def fix_unidentifiable(model, measurements, params, tol: float = 1e-7, reduction
             if blind and any(f"({m})" in why for m in marker_names):
                 why += f" ({blind.split(':')[0]})"
                 unseen = True
-            params = params.fixed([name], why + "; fixed at its current value")
+            params = params.fixed([name], why + NOT_SEPARABLE)
         warnings.warn(_fixed_sentence(params, names), IdentifiabilityWarning, stacklevel=3)
         notes.append(f"{len(names)} parameters fixed as not identifiable (see the fixed list)")
     if unseen:
@@ -75,7 +78,7 @@ def fix_unidentifiable(model, measurements, params, tol: float = 1e-7, reduction
                f"{', '.join(ident.weakest)}: these will have large standard deviations")
         warnings.warn(msg, ConditioningWarning, stacklevel=3)
         notes.append(msg)
-    return params, notes
+    return params, notes, ident.absorbed
 
 
 def check_counts(measurements, params):
@@ -99,11 +102,15 @@ class Prepared(NamedTuple):
     reduction : Reduction
         Of ``[J | r]`` for all parameters at the start values (the rank analysis' own;
         the point estimator's first Jacobian pass).
+    absorbed : dict
+        Kept parameter → the fixed ones it absorbs, with coefficients
+        (:attr:`~doe_calib.estimation.identifiability.Identifiability.absorbed`).
     """
 
     params: object
     notes: list
     reduction: Reduction
+    absorbed: dict
 
 
 def prepare(model, measurements, params=None, register: bool = True) -> Prepared:
@@ -115,4 +122,5 @@ def prepare(model, measurements, params=None, register: bool = True) -> Prepared
         params = register_base(model, measurements, params)
     check_counts(measurements, params)
     red = reduce_jacobian(model, measurements, params.values)
-    return Prepared(*fix_unidentifiable(model, measurements, params, reduction=red), red)
+    params, notes, absorbed = fix_unidentifiable(model, measurements, params, reduction=red)
+    return Prepared(params, notes, red, absorbed)

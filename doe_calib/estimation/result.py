@@ -10,6 +10,7 @@ from doe_calib.estimation.fit_report import fit_report
 from doe_calib.estimation.fit_statistics import FitStatistics, fit_statistics
 from doe_calib.estimation.parameter_estimate import ParameterEstimate, parameter_estimate
 from doe_calib.estimation.predict import Prediction, predict
+from doe_calib.estimation.reduced_set import combinations, role
 from doe_calib.estimation.covariance import parameter_std, std_from_covariance
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import SIGMA_SOURCES
@@ -56,6 +57,11 @@ class IdentificationResult:
         (default: from ``sigma_estimated``).
     effect_files : dict
         File of each user effect of the model (what :meth:`predict` needs).
+    absorbed : dict
+        Free parameter → ``((fixed parameter, coefficient SI), …)``: the parameters
+        fixed as not separable whose effect it carries; its value is then that of
+        the reduced set, and the data identify the combination
+        (:meth:`combinations`).
 
     Examples
     --------
@@ -80,6 +86,7 @@ class IdentificationResult:
     sigma_estimated: bool = False
     sigma_source: str = ""
     effect_files: dict = field(default_factory=dict)
+    absorbed: dict = field(default_factory=dict)
 
     def __post_init__(self):
         if not self.sigma_source:
@@ -141,6 +148,11 @@ class IdentificationResult:
         s = self.std(a_posteriori=a_posteriori)
         return np.column_stack([self.parameters.values - z * s, self.parameters.values + z * s])
 
+    def combinations(self) -> tuple:
+        """The identifiable combinations of the reduced set's values, with their std
+        (:class:`~doe_calib.estimation.reduced_set.Combination`)."""
+        return combinations(self)
+
     @property
     def fit_statistics(self) -> FitStatistics:
         """χ², dof, p-value, σ̂/σ with its interval, evaluations (:class:`FitStatistics`)."""
@@ -195,7 +207,8 @@ class IdentificationResult:
             rows.append({"name": name, "block": e.block, "value": e.value * k,
                          "std": e.std_a_posteriori * k, "std_a_priori": e.std * k,
                          "nominal": e.nominal * k, "unit": e.display_unit, "free": e.free,
-                         "fixed_reason": e.fixed_reason, "description": e.description})
+                         "fixed_reason": e.fixed_reason, "role": e.role,
+                         "description": e.description})
         return pd.DataFrame(rows).set_index("name")
 
     def summary(self) -> str:
@@ -209,6 +222,7 @@ class IdentificationResult:
         for r, par, s, sp in zip(rows, self.parameters.parameters, std, std_post):
             r["std"] = s * par.display_factor
             r["std_a_posteriori"] = sp * par.display_factor
+            r["role"] = role(self, par.name)
         return {"format": "doe_calib.identification", "version": FORMAT_VERSION,
                 "model": self.model, "estimator": self.estimator,
                 "parameters": rows,
@@ -222,6 +236,8 @@ class IdentificationResult:
                 "sigma_estimated": self.sigma_estimated, "sigma_source": self.sigma_source,
                 "fit_statistics": _stats_dict(self.fit_statistics),
                 "effect_files": dict(self.effect_files),
+                "absorbed_si": {k: [[d, c] for d, c in v] for k, v in self.absorbed.items()},
+                "combinations": [c.to_dict() for c in self.combinations()],
                 "n_observations": self.n_observations,
                 "residuals": self.residuals, "convergence": self.convergence,
                 "warnings": list(self.warnings),
@@ -245,7 +261,9 @@ class IdentificationResult:
                    float(d["sigma_ratio"]), d["residuals"], d["convergence"],
                    int(d["n_observations"]), float(d["sigma_mm"]), tuple(d.get("warnings", ())),
                    estimated, d.get("sigma_source") or ("estimated" if estimated else "given"),
-                   dict(d.get("effect_files") or {}))
+                   dict(d.get("effect_files") or {}),
+                   {k: tuple((str(n), float(c)) for n, c in v)
+                    for k, v in (d.get("absorbed_si") or {}).items()})
 
     @classmethod
     def from_json(cls, path) -> "IdentificationResult":

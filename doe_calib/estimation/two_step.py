@@ -32,7 +32,7 @@ def identify_two_step(model, measurements, params=None, max_iterations: int = 50
     tol : float
         Stop when every free parameter moves by less than ``tol`` × its scale.
     """
-    params, notes, _ = prepare(model, measurements, params, register)
+    params, notes, _, absorbed = prepare(model, measurements, params, register)
     blocks = np.array([p.block in _STEP1_BLOCKS for p in params.parameters])
     steps = [params.free & blocks, params.free & ~blocks]
     scale = params.scales
@@ -65,4 +65,4 @@ def identify_two_step(model, measurements, params=None, max_iterations: int = 50
                    "message": f"two-step: {len(history)} alternations, last relative step "
                               f"{moved:.2g}", "residual_norm2": float(r @ r)}
     return finish(model, measurements, params.with_values(values), "two-step", convergence,
-                  notes)
+                  notes, absorbed=absorbed)
