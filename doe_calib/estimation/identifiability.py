@@ -17,8 +17,8 @@ import numpy as np
 
 _BLOCK_ORDER = ("base", "markers")
 _NO_EFFECT = 1e-9
-#: A dependent parameter whose typical size moves a kept one by less than this fraction of
-#: the kept one's typical size is not counted as absorbed by it.
+#: A kept column whose share of a dependent column's expansion (unit-free, in normalised
+#: columns) is below this is not counted as absorbing that dependent parameter.
 _ABSORBED = 1e-3
 
 
@@ -124,15 +124,13 @@ def _absorbed(alpha, dependent, kept, params, norms) -> dict:
     see ``p_k + Σ_d c_kd p_d``.
     """
     out = {}
-    scales = np.array([p.scale for p in params])
+    total = np.abs(alpha).sum(axis=0)
     for a, k in enumerate(kept):
         terms = []
         for c, d in enumerate(dependent):
-            if norms[d] == 0:
-                continue
-            coef = alpha[a, c] * norms[d] / norms[k]
-            if abs(coef) * scales[d] > _ABSORBED * scales[k]:
-                terms.append((params[d].name, float(coef), abs(coef) * scales[d]))
+            share = abs(alpha[a, c]) / total[c] if norms[d] > 0 and total[c] > 0 else 0.0
+            if share > _ABSORBED:
+                terms.append((params[d].name, float(alpha[a, c] * norms[d] / norms[k]), share))
         if terms:
             terms.sort(key=lambda t: -t[2])
             out[params[k].name] = tuple((n, c) for n, c, _ in terms)
