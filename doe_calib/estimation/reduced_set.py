@@ -84,11 +84,13 @@ def _not_separable(result) -> set:
 
 
 def combinations(result) -> tuple:
-    """The :class:`Combination` of every kept parameter that absorbs fixed ones."""
+    """The :class:`Combination` of every free parameter that absorbs fixed ones."""
     p = result.parameters
     out = []
     for name, terms in result.absorbed.items():
         i = p.position(name)
+        if not p.free[i]:
+            continue
         par = p.parameters[i]
         value = float(p.values[i]) + sum(c * p[d] for d, c in terms)
         out.append(Combination(name, tuple(terms), value,
