@@ -18,7 +18,7 @@ from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_model_bui
 from doe_calib.diagnosis.candidate_scoring import score_candidates
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
 from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
-from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
+from doe_calib.diagnosis.residuals import adequacy, flagged_poses, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.sign_lead import sign_lead
 from doe_calib.diagnosis.variables import configuration_variables, follows
@@ -26,6 +26,8 @@ from doe_calib.design.detectability import SEPARATE
 from doe_calib.errors import DoeCalibError, ModelError
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.sigma import resolve_sigma
+from doe_calib.io.measurements import REPEATED
+from doe_calib.io.repeated_readings import copies_words
 from doe_calib.model.effects import parse_effect
 
 #: A residual "follows" a variable when its adjusted R² reaches this.
@@ -116,8 +118,9 @@ def _gross_errors(test, flagged, follow, n_poses):
 
 def _adequacy_words(test):
     lo, hi = test.ratio_interval()
+    source = "of repeated readings" if test.sigma_source == REPEATED else test.sigma_source
     return (f"σ̂/σ = {test.ratio:.3f} (95 % interval {lo:.3f}–{hi:.3f}; χ² p = "
-            f"{test.p_value:.2g}, σ {test.sigma_source} {test.sigma_mm:.3g} mm); misfit beyond "
+            f"{test.p_value:.2g}, σ {source} {test.sigma_mm:.3g} mm); misfit beyond "
             f"the noise √(σ̂² − σ²) = {test.misfit_um:.3g} µm")
 
 
@@ -300,9 +303,8 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     params = fit.parameters
     res = residuals(model, measurements, params.values)
     rank = int(params.free.sum())
-    rep = repeatability_sigma(measurements)
     sigma_mm = float(np.median(measurements.sigma) * 1e3)
-    test = adequacy(res, rank, sigma_mm, level, rep, measurements.sigma_source)
+    test = adequacy(res, rank, sigma_mm, level, measurements.sigma_source)
     screen, screened = screening_set(measurements)
     split = make_folds(screen, folds, grouping)
     cv = cross_validated_rms(model, screen, params, split)
@@ -354,7 +356,8 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
             "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,
             "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
             "tolerance": tolerance, "chi2_adequate": test.adequate,
-            "misfit_um": test.misfit_um, "practical_um": practical_um}
+            "misfit_um": test.misfit_um, "practical_um": practical_um,
+            "repeated": None if settled.repeated is None else settled.repeated.to_dict()}
     spec = None if proposed is None else proposed.spec
     candidates = candidate_records(ranked, model.robot,
                                    [describe(t, model.robot, registry) for t in ranked],
@@ -364,4 +367,6 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                            spec, int(res.weighted.size),
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
-                           notes=tuple(n for n in (screened, tried.note()) if n))
+                           notes=tuple(n for n in (screened, tried.note(),
+                                                   copies_words(measurements, model.tool.names))
+                                       if n))
