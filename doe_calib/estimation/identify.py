@@ -9,10 +9,12 @@ from __future__ import annotations
 import warnings
 from dataclasses import replace
 
-from doe_calib.errors import DoeCalibWarning, PlausibilityWarning
+from doe_calib.errors import DataWarning, DoeCalibWarning, MisfitWarning, PlausibilityWarning
 from doe_calib.estimation import plausibility
+from doe_calib.estimation.fit_statistics import misfit_finding
 from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
 from doe_calib.estimation.sigma import resolve_sigma
+from doe_calib.io.repeated_readings import copies_words
 from doe_calib.model.marker_model import for_workload
 
 ESTIMATORS = ("point", "two-step", "pose")
@@ -71,11 +73,22 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
 
 def with_plausibility(model, measurements, result):
     """``result`` with the :mod:`~doe_calib.estimation.plausibility` findings added to its warnings,
-    each also issued as a :class:`~doe_calib.errors.PlausibilityWarning`."""
+    each also issued as a :class:`~doe_calib.errors.PlausibilityWarning`; a clear rejection by
+    the χ² test (:func:`~doe_calib.estimation.fit_statistics.misfit_finding`, in place of
+    plausibility's σ̂/σ) as a :class:`~doe_calib.errors.MisfitWarning`; readings present
+    twice as a :class:`~doe_calib.errors.DataWarning`."""
     findings = plausibility.check(model, measurements, result)
-    for f in findings:
-        warnings.warn(f, PlausibilityWarning, stacklevel=3)
-    return replace(result, warnings=result.warnings + findings) if findings else result
+    misfit = misfit_finding(result.fit_statistics, result.sigma_mm)
+    if misfit:
+        said = plausibility.sigma_ratio_finding(result.sigma_ratio, result.sigma_mm)
+        findings = tuple(f for f in findings if f != said)
+    copies = copies_words(measurements, model.tool.names)
+    issued = [(f, PlausibilityWarning) for f in findings] + \
+        [(f, kind) for f, kind in ((misfit, MisfitWarning), (copies, DataWarning)) if f]
+    for f, kind in issued:
+        warnings.warn(f, kind, stacklevel=3)
+    return replace(result, warnings=result.warnings + tuple(f for f, _ in issued)) \
+        if issued else result
 
 
 def identify_quietly(model, measurements, params=None, **options):
