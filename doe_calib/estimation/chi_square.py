@@ -38,7 +38,8 @@ def log_factor(a: float, x: float) -> float:
     if a < 15.0:
         return a * math.log(x) - x - math.lgamma(a)
     u = (x - a) / a
-    return (a * (math.log1p(u) - u) + 0.5 * math.log(a / (2 * math.pi))
+    log_ratio = math.log(x / a) if x < 0.5 * a else math.log1p(u)  # log1p(−1 + 1e-17) fails
+    return (a * (log_ratio - u) + 0.5 * math.log(a / (2 * math.pi))
             - stirling_error(a))
 
 
