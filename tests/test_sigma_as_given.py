@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 from markered_robot import markered_robot
 
-from doe_calib import build_model, examples
+from doe_calib import IdentificationResult, build_model, examples
 from doe_calib.cli import main
 from doe_calib.diagnosis import diagnose
-from doe_calib.errors import MisfitWarning
+from doe_calib.errors import DoeCalibWarning, MisfitWarning
 from doe_calib.estimation.fit_statistics import FitStatistics, misfit_finding
 from doe_calib.estimation.identify import identify
 from doe_calib.estimation.repeatability import repeatability
@@ -113,6 +113,13 @@ def test_repeated_readings_are_reported_beside_a_sigma_given_and_used_when_none_
     rep = repeatability(both)  # 90 pose–marker pairs read twice: 270 dof
     assert (rep.readings, rep.groups, rep.dof) == (180, 90, 270)
     assert rep.sigma_mm == pytest.approx(SIGMA_MM, rel=0.15)
+    # identify: the σ given is used, the repeats beside it, in the report and the file
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DoeCalibWarning)
+        fit = identify(build_model(robot, tool, EXACT), both, sigma_mm=0.05)
+    assert fit.sigma_mm == 0.05 and fit.sigma_source == "given" and fit.sigma_repeated == rep
+    assert rep.summary() in fit.summary()
+    assert IdentificationResult.from_dict(fit.to_dict()).sigma_repeated == rep
     # a σ given (2.5× too large) is the σ used; the repeats are beside it
     out = _cli(capsys, "diagnose", cell, "--data", a, b, "--sigma", 0.05, "--out", d / "g.json")
     got = json.loads((d / "g.json").read_text())

@@ -52,8 +52,11 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
         units, placement errors as large as a link, collinear markers). When
         ``measurements.sigma_estimated``, σ is estimated from the residuals:
         ``sigma_mm`` is σ̂, the covariance is scaled to it, and the result says so.
+        The σ of repeated readings, when poses were read more than once, is reported
+        beside (``sigma_repeated``), never used in place of σ.
     """
-    measurements = resolve_sigma(model, measurements, sigma_mm, in_fit=True).measurements
+    settled = resolve_sigma(model, measurements, sigma_mm, in_fit=True)
+    measurements = settled.measurements
     model = for_workload(model, FIT_PASSES * len(measurements.configurations), progress)
     if estimator == "point":
         result = identify_point(model, measurements, params, progress=progress, **options)
@@ -68,7 +71,7 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
     else:
         raise ValueError(f"unknown estimator {estimator!r}; choose one of "
                          f"{', '.join(ESTIMATORS)}")
-    return with_plausibility(model, measurements, result)
+    return with_plausibility(model, measurements, replace(result, sigma_repeated=settled.repeated))
 
 
 def with_plausibility(model, measurements, result):

@@ -8,6 +8,7 @@ import numpy as np
 from doe_calib.errors import DataError
 from doe_calib.estimation.fit_report import fit_report
 from doe_calib.estimation.fit_statistics import FitStatistics, fit_statistics
+from doe_calib.estimation.repeatability import Repeatability
 from doe_calib.estimation.parameter_estimate import ParameterEstimate, parameter_estimate
 from doe_calib.estimation.predict import Prediction, predict
 from doe_calib.estimation.covariance import parameter_std, std_from_covariance
@@ -56,6 +57,9 @@ class IdentificationResult:
         (default: from ``sigma_estimated``).
     effect_files : dict
         File of each user effect of the model (what :meth:`predict` needs).
+    sigma_repeated : Repeatability or None
+        σ of the readings repeated in one pose, reported beside ``sigma_mm`` (never
+        used in its place by ``identify``); None when too few are.
 
     Examples
     --------
@@ -80,6 +84,7 @@ class IdentificationResult:
     sigma_estimated: bool = False
     sigma_source: str = ""
     effect_files: dict = field(default_factory=dict)
+    sigma_repeated: Repeatability | None = None
 
     def __post_init__(self):
         if not self.sigma_source:
@@ -222,6 +227,8 @@ class IdentificationResult:
                 "sigma_estimated": self.sigma_estimated, "sigma_source": self.sigma_source,
                 "fit_statistics": _stats_dict(self.fit_statistics),
                 "effect_files": dict(self.effect_files),
+                "sigma_repeated": None if self.sigma_repeated is None else
+                self.sigma_repeated.to_dict(),
                 "n_observations": self.n_observations,
                 "residuals": self.residuals, "convergence": self.convergence,
                 "warnings": list(self.warnings),
@@ -245,7 +252,9 @@ class IdentificationResult:
                    float(d["sigma_ratio"]), d["residuals"], d["convergence"],
                    int(d["n_observations"]), float(d["sigma_mm"]), tuple(d.get("warnings", ())),
                    estimated, d.get("sigma_source") or ("estimated" if estimated else "given"),
-                   dict(d.get("effect_files") or {}))
+                   dict(d.get("effect_files") or {}),
+                   Repeatability.from_dict(d["sigma_repeated"]) if d.get("sigma_repeated")
+                   else None)
 
     @classmethod
     def from_json(cls, path) -> "IdentificationResult":
