@@ -23,6 +23,7 @@ from doe_calib.estimation.repeatability import repeatability
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.io.measurements import concatenate
 from doe_calib.io.repeated_readings import copies_words, identical_copies
+from studies import tiago_mocap as tm
 
 SIGMA_MM = 0.02
 MARKERS = {"A": [0.15, 0.0, 0.08], "B": [-0.075, 0.13, 0.08], "C": [-0.075, -0.13, 0.08]}
@@ -167,3 +168,26 @@ def test_the_misfit_finding_needs_both_a_small_p_and_a_ratio_above_1_2():
     assert misfit_finding(_stats(1e-5, 1.15), 0.02) is None  # σ a few % optimistic
     assert misfit_finding(_stats(2e-3, 1.3), 0.02) is None  # not beyond doubt
     assert misfit_finding(_stats(float("nan"), 1.0, "estimated"), 0.02) is None
+
+
+def test_a_real_session_given_twice_keeps_the_sigma_given_and_names_every_copy(tmp_path, capsys):
+    """TIAGo motion capture (real readings, 62 postures × 4 points): skipped without the data."""
+    folder = tm.DEFAULT_DATA / "csv"
+    session = folder / "mocap_2021-11-26_1105.csv"
+    urdf = tm.tiago_urdf()
+    if not session.is_file() or urdf is None:
+        pytest.skip("TIAGo mocap data or URDF (example-robot-data) not present")
+    capsys.readouterr()
+    assert main(["identify", "--robot", str(urdf), "--tool", str(folder / "tool.yaml"),
+                 "--data", str(session), str(session), "--sigma", "0.3", "--model",
+                 "joint_offset", "--out", str(tmp_path / "t.json")]) == 0
+    err = capsys.readouterr().err
+    fit = json.loads((tmp_path / "t.json").read_text())
+    assert fit["sigma_mm"] == 0.3 and fit["sigma_source"] == "given"
+    assert fit["n_observations"] == 2 * 3 * 248 and fit["sigma_repeated"] is None
+    copies = next(w for w in fit["warnings"] if "present twice" in w)
+    assert copies.startswith(f"{session}: 248 readings are present twice")
+    assert "pose 1105_P01 marker BL (line 6 and line 6)" in copies
+    assert "(lines 6–253 repeat lines 6–253)" in copies and copies in err
+    # the arm's own misfit (σ̂ several times the 0.3 mm jitter) is told, naming diagnose
+    assert any("χ² test rejects" in w and "doe-calib diagnose" in w for w in fit["warnings"])

@@ -5,6 +5,7 @@ an effect file (the final fit is written by the CLI to its own file).
 """
 from __future__ import annotations
 
+import textwrap
 from dataclasses import dataclass, field
 
 from doe_calib.diagnosis.candidate import Candidate, FittedSize
@@ -156,7 +157,9 @@ class RefineResult:
                   *[f"step {i}: {s.reason}" for i, s in enumerate(self.steps)], "",
                   f"stopped: {self.stopped}"]
         if self.notes:
-            lines += ["", "Notes", *(f"  {i}. {n}" for i, n in enumerate(self.notes, 1))]
+            lines += ["", "Notes"]
+            for i, n in enumerate(self.notes, 1):
+                lines += textwrap.wrap(n, 96, initial_indent=f"  {i}. ", subsequent_indent="     ")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
