@@ -128,6 +128,11 @@ def test_repeated_readings_are_reported_beside_a_sigma_given_and_used_when_none_
     assert got["chi2"]["sigma_ratio"] == pytest.approx(0.4, rel=0.15)
     assert got["chi2"]["repeated"]["sigma_mm"] == pytest.approx(rep.sigma_mm, rel=1e-12)
     assert f"σ of repeated readings {rep.sigma_mm:.4g} mm" in out.out
+    doubt = rep.disagreement(0.05)  # 270 dof: (0.02/0.05)² far outside χ²'s spread
+    assert doubt.startswith(f"the σ of repeated readings, {rep.sigma_mm:.4g} mm, is 0.41 × the σ "
+                            f"given, 0.05 mm") and "looks too large" in doubt
+    assert doubt in got["notes"] and doubt in fit.warnings
+    assert rep.disagreement(SIGMA_MM) is None and rep.disagreement(rep.sigma_mm * 1.1) is None
     # none given: the repeats are σ, and the exact model is adequate against them
     out = _cli(capsys, "diagnose", cell, "--data", a, b, "--out", d / "r.json")
     got = json.loads((d / "r.json").read_text())

@@ -305,6 +305,8 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     rank = int(params.free.sum())
     sigma_mm = float(np.median(measurements.sigma) * 1e3)
     test = adequacy(res, rank, sigma_mm, level, measurements.sigma_source)
+    doubt = None if settled.repeated is None or test.sigma_source == REPEATED else \
+        settled.repeated.disagreement(sigma_mm)
     screen, screened = screening_set(measurements)
     split = make_folds(screen, folds, grouping)
     cv = cross_validated_rms(model, screen, params, split)
@@ -367,6 +369,6 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                            spec, int(res.weighted.size),
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
-                           notes=tuple(n for n in (screened, tried.note(),
+                           notes=tuple(n for n in (screened, tried.note(), doubt,
                                                    copies_words(measurements, model.tool.names))
                                        if n))

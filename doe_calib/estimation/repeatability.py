@@ -17,10 +17,13 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from doe_calib.estimation.chi_square import regularized_gamma
 from doe_calib.io.repeated_readings import identical_copies, repeat_groups
 
 #: Fewest repeated readings (distinct, in groups of two or more) that give a σ.
 MIN_REPEATED = 6
+#: The repeats contradict a σ given when their χ² test rejects it at this level (two-sided).
+DISAGREEMENT_LEVEL = 1e-3
 
 
 @dataclass(frozen=True)
@@ -49,6 +52,34 @@ class Repeatability:
         than once, 60 dof)``."""
         return (f"σ of repeated readings {self.sigma_mm:.4g} mm ({self.readings} readings: "
                 f"{self.groups} pose–marker pairs read more than once, {self.dof} dof)")
+
+    def disagreement(self, sigma_mm: float) -> str | None:
+        """Words when the repeats contradict the σ given, ``sigma_mm`` (mm), else None.
+
+        Under that σ, ``dof·(σ_rep/σ)²`` is χ²(dof): a two-sided p below
+        :data:`DISAGREEMENT_LEVEL` contradicts it. The σ given stays the σ used.
+
+        Examples
+        --------
+        >>> rep = Repeatability(0.05, 150, 100, 50)
+        >>> rep.disagreement(0.048) is None
+        True
+        >>> rep.disagreement(0.01)[:52]
+        'the σ of repeated readings, 0.05 mm, is 5 × the σ gi'
+        """
+        lower, upper = regularized_gamma(self.dof / 2.0, self.dof * (self.sigma_mm / sigma_mm) ** 2
+                                         / 2.0)
+        p = 2.0 * min(lower, upper)
+        if p >= DISAGREEMENT_LEVEL:
+            return None
+        side = ("small (or the repeats hold more than noise: a pose approached from another "
+                "side)" if upper < lower else
+                "large (or the repeats miss part of the noise: read back to back)")
+        return (f"the σ of repeated readings, {self.sigma_mm:.4g} mm, is "
+                f"{self.sigma_mm / sigma_mm:.2g} × the σ given, {sigma_mm:.4g} mm (χ² test of "
+                f"the repeats, {self.dof} dof: p = {p:.2g}): the σ given looks too {side}. "
+                f"The σ given is the σ used; without it (no --sigma, no sigma column) σ is "
+                f"the repeats' spread")
 
     def to_dict(self) -> dict:
         return asdict(self)
