@@ -122,7 +122,9 @@ def test_repeated_readings_are_reported_beside_a_sigma_given_and_used_when_none_
     assert rep.summary() in fit.summary()
     assert IdentificationResult.from_dict(fit.to_dict()).sigma_repeated == rep
     # a σ given (2.5× too large) is the σ used; the repeats are beside it
-    out = _cli(capsys, "diagnose", cell, "--data", a, b, "--sigma", 0.05, "--out", d / "g.json")
+    out = _cli(capsys, "diagnose", cell, "--data", a, b, "--sigma", 0.05, "--out", d / "g.json",
+               "--report", d / "g.html")
+    assert f"reported only: {rep.summary()}" in (d / "g.html").read_text()
     got = json.loads((d / "g.json").read_text())
     assert got["chi2"]["sigma_source"] == "given" and got["noise_floor_mm"] == 0.05
     assert got["chi2"]["sigma_ratio"] == pytest.approx(0.4, rel=0.15)

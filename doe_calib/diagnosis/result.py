@@ -119,7 +119,7 @@ class DiagnosisResult:
         out = [f"residual RMS {self.rms_mm:.4f} mm per coordinate, cross-validated "
                f"{self.cv_rms_mm:.4f} mm ({self.cv_grouping or 'by pose'})",
                f"noise σ {self.noise_floor_mm:.4f} mm ({c['sigma_source']})"
-               + self._repeated_words(),
+               + (f"; {self.repeated_words}, reported only" if self.repeated_words else ""),
                f"χ² = {c['statistic']:.1f} on {c['dof']} dof, p = {c['p_value']:.3g}"
                + ("" if "chi2_adequate" not in c else
                   f" (the χ² test alone: {'passes' if c['chi2_adequate'] else 'rejects'})")]
@@ -133,12 +133,14 @@ class DiagnosisResult:
                        f"(practical size {c['practical_um']:g} µm)")
         return out
 
-    def _repeated_words(self) -> str:
-        """The σ of repeated readings beside a σ given (it is not used then), or ''."""
+    @property
+    def repeated_words(self) -> str:
+        """The σ of repeated readings when it is not the σ tested against (a σ was given),
+        in words; '' when it is, or when too few readings were repeated."""
         rep = self.chi2.get("repeated")
         if not rep or self.chi2["sigma_source"] == REPEATED:
             return ""
-        return f"; {Repeatability.from_dict(rep).summary()}, reported only"
+        return Repeatability.from_dict(rep).summary()
 
     def candidate_table(self, top: int = 8) -> list[str]:
         """The ranked candidates, one line each (F with its dofs, p, share, CV RMS, decision)."""
