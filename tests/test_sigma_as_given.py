@@ -198,3 +198,17 @@ def test_a_real_session_given_twice_keeps_the_sigma_given_and_names_every_copy(t
     assert "(lines 6–253 repeat lines 6–253)" in copies and copies in err
     # the arm's own misfit (σ̂ several times the 0.3 mm jitter) is told, naming diagnose
     assert any("χ² test rejects" in w and "doe-calib diagnose" in w for w in fit["warnings"])
+
+
+def test_with_no_sigma_and_no_repeats_adequate_only_means_no_candidate_helps(cell):
+    """σ̂ of the starting model holds its misfit (χ² = dof by construction): a missing effect
+    makes the model NOT adequate, and an adequate verdict says the noise was not tested."""
+    robot, tool, d = cell
+    model = build_model(robot, tool, EXACT)
+    hidden = diagnose(model, read_measurements(d / "cyclic.csv", robot, tool))
+    assert hidden.chi2["sigma_source"] == "estimated"
+    assert hidden.chi2["sigma_ratio"] == pytest.approx(1.0, abs=0.01)  # its own σ̂
+    assert hidden.proposed.startswith("cyclic(j2") and not hidden.adequate
+    exact = diagnose(model, read_measurements(d / "a.csv", robot, tool))
+    assert exact.adequate and exact.proposed is None
+    assert "σ was not given, so the residual is not tested against the noise" in exact.verdict

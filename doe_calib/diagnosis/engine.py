@@ -26,7 +26,7 @@ from doe_calib.design.detectability import SEPARATE
 from doe_calib.errors import DoeCalibError, ModelError
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.sigma import resolve_sigma
-from doe_calib.io.measurements import REPEATED
+from doe_calib.io.measurements import ESTIMATED, REPEATED
 from doe_calib.io.repeated_readings import copies_words
 from doe_calib.model.effects import parse_effect
 
@@ -117,6 +117,9 @@ def _gross_errors(test, flagged, follow, n_poses):
 
 
 def _adequacy_words(test):
+    if test.sigma_source == ESTIMATED:
+        return (f"σ̂/σ = {test.ratio:.3f} against σ̂ of the starting model's fit, "
+                f"{test.sigma_mm:.3g} mm, as no σ was given")
     lo, hi = test.ratio_interval()
     source = "of repeated readings" if test.sigma_source == REPEATED else test.sigma_source
     return (f"σ̂/σ = {test.ratio:.3f} (95 % interval {lo:.3f}–{hi:.3f}; χ² p = "
@@ -137,6 +140,11 @@ def _adequate_why(test, tolerance, practical_um) -> str:
 
 
 def _is_adequate(test, proposed, tolerance, practical_um) -> bool:
+    """Adequate: χ² passes, or no material candidate and the misfit within the tolerance or
+    the practical size. With no σ given (σ̂ of the starting model's fit, which holds its
+    misfit) the χ² test cannot judge: adequate is then only that no candidate helps."""
+    if test.sigma_source == ESTIMATED:
+        return proposed is None
     return test.adequate or (proposed is None and (test.ratio <= 1 + tolerance
                                                    or test.practically_adequate(practical_um)))
 
@@ -202,6 +210,13 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
             text += (f". The model is not adequate yet ({ratio}): refine adds effects one at a "
                      f"time while they help")
         return text + "."
+    if adequate and test.sigma_source == ESTIMATED:
+        return (f"No candidate effect lowers the {cv_words} by {min_gain:.0%}: the model is "
+                f"adequate as far as the candidates tell. σ was not given, so the residual is "
+                f"not tested against the noise: σ̂ of the starting model's fit, "
+                f"{test.sigma_mm:.3g} mm (σ̂/σ = {test.ratio:.3f} here), holds that model's "
+                f"misfit; give σ (--sigma, a sigma column) or read some poses twice for that "
+                f"test.")
     if adequate:
         why = _adequate_why(test, tolerance, practical_um)
         return (f"The model is adequate: the residual is {why} ({ratio}); no candidate effect "
