@@ -75,13 +75,16 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
 
 
 def with_plausibility(model, measurements, result):
-    """``result`` with the :mod:`~doe_calib.estimation.plausibility` findings added to its warnings,
-    each also issued as a :class:`~doe_calib.errors.PlausibilityWarning` (and a σ given that
-    repeated readings contradict, :meth:`~doe_calib.estimation.repeatability.Repeatability.
-    disagreement`); a clear rejection by
-    the χ² test (:func:`~doe_calib.estimation.fit_statistics.misfit_finding`, in place of
-    plausibility's σ̂/σ) as a :class:`~doe_calib.errors.MisfitWarning`; readings present
-    twice as a :class:`~doe_calib.errors.DataWarning`."""
+    """``result`` with what looks wrong added to its warnings, each also issued.
+
+    The :mod:`~doe_calib.estimation.plausibility` findings and a σ given that repeated
+    readings contradict (:meth:`~doe_calib.estimation.repeatability.Repeatability.disagreement`)
+    as :class:`~doe_calib.errors.PlausibilityWarning`; a clear rejection by the χ² test
+    (:func:`~doe_calib.estimation.fit_statistics.misfit_finding`, in place of plausibility's
+    σ̂/σ finding) as :class:`~doe_calib.errors.MisfitWarning`; readings present twice
+    (:func:`~doe_calib.io.repeated_readings.copies_words`) as
+    :class:`~doe_calib.errors.DataWarning`.
+    """
     findings = plausibility.check(model, measurements, result)
     if result.sigma_repeated is not None and not result.sigma_estimated:
         findings += tuple(f for f in [result.sigma_repeated.disagreement(result.sigma_mm)] if f)
