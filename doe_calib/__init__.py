@@ -91,6 +91,7 @@ _PUBLIC = {
     "ConvergenceWarning": "doe_calib.errors",
     "DataWarning": "doe_calib.errors",
     "PlausibilityWarning": "doe_calib.errors",
+    "MisfitWarning": "doe_calib.errors",
 }
 
 __all__ = sorted(_PUBLIC) + ["examples"]

@@ -77,6 +77,11 @@ class PlausibilityWarning(DataWarning):
     """A fit that ran but looks implausible (σ̂/σ far from 1, units, huge placement errors)."""
 
 
+class MisfitWarning(PlausibilityWarning):
+    """The χ² test rejects a fit clearly: the residual is larger than the σ given explains
+    (an effect the model lacks, or σ too small); ``doe-calib diagnose`` finds which."""
+
+
 class ConvergenceWarning(DoeCalibWarning):
     """An iterative solver stopped before it converged."""
 

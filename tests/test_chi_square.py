@@ -39,6 +39,13 @@ def test_far_tails_and_limits():
     assert chi2_survival(q, 7) == pytest.approx(0.025, rel=1e-13)
 
 
+def test_a_statistic_near_zero_on_many_dof():
+    """A noise-free fit (χ² ≈ 1e-16 on hundreds of dof): p is 1, and its log factor finite."""
+    for dof, x in ((682, 3.9e-16), (400, 1e-3), (2e5, 1.0)):
+        assert chi2_survival(x, dof) == chdtrc(dof, x) == 1.0
+    assert chi2_survival(50.0, 200) == pytest.approx(chdtrc(200, 50.0), rel=1e-9)
+
+
 @pytest.mark.parametrize("bad", [(0.0, 3), (1.0, 3), (0.5, 0), (0.5, -2)])
 def test_quantile_refuses_what_has_none(bad):
     with pytest.raises(ValueError):

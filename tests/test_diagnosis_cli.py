@@ -8,7 +8,7 @@ import pytest
 from doe_calib import Configurations, build_model, examples, simulate
 from doe_calib.cli import main
 from doe_calib.diagnosis import diagnose
-from doe_calib.diagnosis.residuals import repeatability_sigma
+from doe_calib.estimation.repeatability import repeatability
 from doe_calib.io.csv_files import write_measurements
 from doe_calib.io.measurements import concatenate
 from doe_calib.model.loads import unloaded_and_loaded
@@ -68,8 +68,9 @@ def test_workers_must_be_a_whole_number_of_threads(files, capsys):
     assert not (files / "w.json").exists()
 
 
-def test_noise_from_repeated_readings_overrides_a_wrong_sigma(robot6, tool6):
-    """Each configuration read three times: the pooled spread is σ, whatever σ was claimed."""
+def test_repeated_readings_give_sigma_only_when_none_is_given(robot6, tool6):
+    """Each configuration read three times: the pooled spread is the true σ. A σ claimed is
+    the σ used, the spread reported beside it; without a σ, the spread is σ."""
     rng = np.random.default_rng(9)
     model = build_model(robot6, tool6, "joint_offset")
     truth = random_truth(model, rng)
@@ -77,12 +78,18 @@ def test_noise_from_repeated_readings_overrides_a_wrong_sigma(robot6, tool6):
     reads = [simulate(model, truth, cfg, 5e-5, rng) for _ in range(3)]
     claimed = [replace(r, sigma=r.sigma * 0.2) for r in reads]  # σ = 0.01 mm claimed
     same = concatenate(claimed)
-    assert repeatability_sigma(claimed[0]) is None
-    sigma = repeatability_sigma(same)
-    assert sigma == pytest.approx(5e-5, rel=0.1)
+    assert repeatability(claimed[0]) is None
+    rep = repeatability(same)
+    assert rep.sigma_mm == pytest.approx(0.05, rel=0.1) and rep.dof == 3 * 2 * len(reads[0])
     d = diagnose(model, same)
+    assert d.chi2["sigma_source"] == "given" and d.noise_floor_mm == pytest.approx(0.01)
+    assert not d.adequate and d.chi2["sigma_ratio"] == pytest.approx(5.0, rel=0.1)
+    assert d.chi2["repeated"]["sigma_mm"] == pytest.approx(rep.sigma_mm)
+    assert f"σ of repeated readings {rep.sigma_mm:.4g} mm" in d.summary()
+    unknown = replace(same, sigma_estimated=True)
+    d = diagnose(model, unknown)
     assert d.chi2["sigma_source"] == "repeated readings" and d.adequate
-    assert d.noise_floor_mm == pytest.approx(0.05, rel=0.1)
+    assert d.noise_floor_mm == pytest.approx(rep.sigma_mm)
 
 
 def test_exclude_poses_is_reported_and_cv_by_region(files, capsys):

@@ -17,6 +17,7 @@ from doe_calib.diagnosis.engine import candidate_batch_for, diagnose
 from doe_calib.diagnosis.refine_result import RefineResult, RefineStep
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.sigma import resolve_sigma
+from doe_calib.io.repeated_readings import copies_words
 from doe_calib.model.effects import parse_effect
 
 __all__ = ["refine", "RefineResult", "RefineStep"]
@@ -125,5 +126,6 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
                   f"{_size_words(best.sizes)}; cross-validated RMS {diag.cv_rms_mm:.4g} → "
                   f"{best.cv_rms_mm:.4g} mm (p = {best.p_value:.2g})"
                   + (f"; {best.implausible}" if best.implausible else ""))
+    copies = copies_words(measurements, model.tool.names)
     return RefineResult(tuple(steps), fit, diag, diag.noise_floor_mm, stopped,
-                        (f"cross-validation: {diag.cv_grouping}",))
+                        (f"cross-validation: {diag.cv_grouping}",) + ((copies,) if copies else ()))

@@ -18,7 +18,7 @@ from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_model_bui
 from doe_calib.diagnosis.candidate_scoring import score_candidates
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
 from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
-from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
+from doe_calib.diagnosis.residuals import adequacy, flagged_poses, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.sign_lead import sign_lead
 from doe_calib.diagnosis.variables import configuration_variables, follows
@@ -26,6 +26,8 @@ from doe_calib.design.detectability import SEPARATE
 from doe_calib.errors import DoeCalibError, ModelError
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.sigma import resolve_sigma
+from doe_calib.io.measurements import ESTIMATED, REPEATED
+from doe_calib.io.repeated_readings import copies_words
 from doe_calib.model.effects import parse_effect
 
 #: A residual "follows" a variable when its adjusted R² reaches this.
@@ -115,9 +117,13 @@ def _gross_errors(test, flagged, follow, n_poses):
 
 
 def _adequacy_words(test):
+    if test.sigma_source == ESTIMATED:
+        return (f"σ̂/σ = {test.ratio:.3f} against σ̂ of the starting model's fit, "
+                f"{test.sigma_mm:.3g} mm, as no σ was given")
     lo, hi = test.ratio_interval()
+    source = "of repeated readings" if test.sigma_source == REPEATED else test.sigma_source
     return (f"σ̂/σ = {test.ratio:.3f} (95 % interval {lo:.3f}–{hi:.3f}; χ² p = "
-            f"{test.p_value:.2g}, σ {test.sigma_source} {test.sigma_mm:.3g} mm); misfit beyond "
+            f"{test.p_value:.2g}, σ {source} {test.sigma_mm:.3g} mm); misfit beyond "
             f"the noise √(σ̂² − σ²) = {test.misfit_um:.3g} µm")
 
 
@@ -134,6 +140,11 @@ def _adequate_why(test, tolerance, practical_um) -> str:
 
 
 def _is_adequate(test, proposed, tolerance, practical_um) -> bool:
+    """Adequate: χ² passes, or no material candidate and the misfit within the tolerance or
+    the practical size. With no σ given (σ̂ of the starting model's fit, which holds its
+    misfit) the χ² test cannot judge: adequate is then only that no candidate helps."""
+    if test.sigma_source == ESTIMATED:
+        return proposed is None
     return test.adequate or (proposed is None and (test.ratio <= 1 + tolerance
                                                    or test.practically_adequate(practical_um)))
 
@@ -199,6 +210,13 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
             text += (f". The model is not adequate yet ({ratio}): refine adds effects one at a "
                      f"time while they help")
         return text + "."
+    if adequate and test.sigma_source == ESTIMATED:
+        return (f"No candidate effect lowers the {cv_words} by {min_gain:.0%}: the model is "
+                f"adequate as far as the candidates tell. σ was not given, so the residual is "
+                f"not tested against the noise: σ̂ of the starting model's fit, "
+                f"{test.sigma_mm:.3g} mm (σ̂/σ = {test.ratio:.3f} here), holds that model's "
+                f"misfit; give σ (--sigma, a sigma column) or read some poses twice for that "
+                f"test.")
     if adequate:
         why = _adequate_why(test, tolerance, practical_um)
         return (f"The model is adequate: the residual is {why} ({ratio}); no candidate effect "
@@ -300,9 +318,10 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     params = fit.parameters
     res = residuals(model, measurements, params.values)
     rank = int(params.free.sum())
-    rep = repeatability_sigma(measurements)
     sigma_mm = float(np.median(measurements.sigma) * 1e3)
-    test = adequacy(res, rank, sigma_mm, level, rep, measurements.sigma_source)
+    test = adequacy(res, rank, sigma_mm, level, measurements.sigma_source)
+    doubt = None if settled.repeated is None or test.sigma_source == REPEATED else \
+        settled.repeated.disagreement(sigma_mm)
     screen, screened = screening_set(measurements)
     split = make_folds(screen, folds, grouping)
     cv = cross_validated_rms(model, screen, params, split)
@@ -354,7 +373,8 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
             "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,
             "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
             "tolerance": tolerance, "chi2_adequate": test.adequate,
-            "misfit_um": test.misfit_um, "practical_um": practical_um}
+            "misfit_um": test.misfit_um, "practical_um": practical_um,
+            "repeated": None if settled.repeated is None else settled.repeated.to_dict()}
     spec = None if proposed is None else proposed.spec
     candidates = candidate_records(ranked, model.robot,
                                    [describe(t, model.robot, registry) for t in ranked],
@@ -364,4 +384,6 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                            spec, int(res.weighted.size),
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
-                           notes=tuple(n for n in (screened, tried.note()) if n))
+                           notes=tuple(n for n in (screened, tried.note(), doubt,
+                                                   copies_words(measurements, model.tool.names))
+                                       if n))

@@ -5,12 +5,13 @@ an effect file (the final fit is written by the CLI to its own file).
 """
 from __future__ import annotations
 
+import textwrap
 from dataclasses import dataclass, field
 
 from doe_calib.diagnosis.candidate import Candidate, FittedSize
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.io.json_file import read_json, write_json
-from doe_calib.io.measurements import ESTIMATED
+from doe_calib.io.measurements import ESTIMATED, REPEATED
 
 FORMAT = "doe_calib.refine"
 
@@ -116,9 +117,13 @@ class RefineResult:
     @property
     def noise_words(self) -> str:
         """What :attr:`noise_floor_mm` is, in words: the readings' σ, or, when none was
-        given, σ̂ of the starting model's fit, which holds that model's misfit too."""
-        if self.diagnosis.chi2.get("sigma_source") == ESTIMATED:
+        given, the σ of repeated readings, else σ̂ of the starting model's fit (which holds
+        that model's misfit too)."""
+        source = self.diagnosis.chi2.get("sigma_source")
+        if source == ESTIMATED:
             return "σ̂ of the starting model's fit (no σ given)"
+        if source == REPEATED:
+            return "σ of repeated readings (no σ given)"
         return "noise floor"
 
     @property
@@ -151,6 +156,10 @@ class RefineResult:
         lines += [f"(mm per coordinate; {self.noise_words} {self.noise_floor_mm:.4f} mm)", "",
                   *[f"step {i}: {s.reason}" for i, s in enumerate(self.steps)], "",
                   f"stopped: {self.stopped}"]
+        if self.notes:
+            lines += ["", "Notes"]
+            for i, n in enumerate(self.notes, 1):
+                lines += textwrap.wrap(n, 96, initial_indent=f"  {i}. ", subsequent_indent="     ")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:

@@ -63,10 +63,10 @@ class Adequacy:
     p_value : float
         Probability of a statistic this large under an adequate model.
     sigma_mm : float
-        The noise σ the test assumes, mm (given, or from repeated readings).
+        The noise σ the test assumes, mm (the readings' σ: given, per reading, from
+        repeated readings when none is given, or estimated).
     sigma_source : str
-        ``"given"``, ``"per reading"``, ``"estimated"`` (the readings' σ) or
-        ``"repeated readings"``.
+        One of :data:`~doe_calib.io.measurements.SIGMA_SOURCES`.
     adequate : bool
         ``p_value ≥ level``.
     level : float
@@ -108,49 +108,18 @@ class Adequacy:
         return ratio_interval(self.statistic, self.dof, confidence)
 
 
-def repeatability_sigma(measurements):
-    """σ (m) pooled from readings repeated at the same configuration and marker, or None.
-
-    A configuration measured several times (same pose id, joint positions,
-    load and marker, whether in one configuration or repeated ones) shows
-    the noise directly; the pooled within-group standard deviation of
-    the coordinates estimates σ free of any model error.
-    """
-    cfg = measurements.configurations
-    same = {}
-    group = np.array([same.setdefault((cfg.pose[c], cfg.q[c].tobytes(), cfg.wrench[c].tobytes()),
-                                      len(same)) for c in range(len(cfg))])
-    key = group[measurements.config] * (measurements.marker.max() + 1) + measurements.marker
-    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
-    repeated = counts[inverse] > 1
-    if repeated.sum() < 6:
-        return None
-    xyz, groups = measurements.xyz[repeated], inverse[repeated]
-    ss, dof = 0.0, 0
-    for g in np.unique(groups):
-        block = xyz[groups == g]
-        ss += float(((block - block.mean(axis=0)) ** 2).sum())
-        dof += 3 * (len(block) - 1)
-    return float(np.sqrt(ss / dof))
-
-
 def adequacy(res: Residuals, rank: int, sigma_mm: float, level: float = 0.01,
-             repeat_sigma_m=None, sigma_source: str = "given") -> Adequacy:
-    """χ² test of the weighted residuals with ``rank`` fitted parameters.
+             sigma_source: str = "given") -> Adequacy:
+    """χ² test of the weighted residuals (at the readings' σ) with ``rank`` fitted parameters.
 
-    When ``repeat_sigma_m`` (σ from repeated readings, m) is given, the
-    residuals are re-weighted with it instead of the a-priori σ, whose
-    ``sigma_source`` (:data:`~doe_calib.io.measurements.SIGMA_SOURCES`) is said otherwise.
+    ``sigma_mm`` (the readings' median σ, mm) and ``sigma_source``
+    (:data:`~doe_calib.io.measurements.SIGMA_SOURCES`) say which σ was tested against.
     """
     w = res.weighted
-    source = sigma_source
-    if repeat_sigma_m is not None:
-        w = res.error / repeat_sigma_m
-        sigma_mm, source = repeat_sigma_m * 1e3, "repeated readings"
     t = float((w ** 2).sum())
     dof = int(w.size - rank)
     p = chi2_survival(t, dof) if dof > 0 else float("nan")
-    return Adequacy(t, dof, p, float(sigma_mm), source, bool(p >= level), level)
+    return Adequacy(t, dof, p, float(sigma_mm), sigma_source, bool(p >= level), level)
 
 
 def flagged_poses(res: Residuals, dof_fraction: float, level: float = 1e-3,

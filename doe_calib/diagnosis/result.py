@@ -8,7 +8,9 @@ import numpy as np
 
 from doe_calib.diagnosis.candidate import Candidate
 from doe_calib.diagnosis.variables import Follows
+from doe_calib.estimation.repeatability import Repeatability
 from doe_calib.io.json_file import read_json, write_json
+from doe_calib.io.measurements import REPEATED
 
 FORMAT = "doe_calib.diagnosis"
 
@@ -26,7 +28,8 @@ class DiagnosisResult:
     cv_rms_mm : float
         Cross-validated RMS, mm (held out as ``cv_grouping`` says).
     noise_floor_mm : float
-        The measurement σ per coordinate, mm (given, or from repeated readings).
+        The σ per coordinate the model is tested against, mm: the readings' σ (given,
+        per reading, from repeated readings when none is given, or estimated).
     adequate : bool
         Residuals consistent with the noise: the χ² test at ``level`` passes,
         or no candidate makes a material gain and either σ̂/σ ≤ 1 + ``chi2["tolerance"]``
@@ -35,7 +38,9 @@ class DiagnosisResult:
         ``statistic``, ``dof``, ``p_value``, ``sigma_source``, ``sigma_hat_mm``,
         ``sigma_ratio`` (σ̂/σ) and its 95 % ``sigma_ratio_interval``,
         ``tolerance``, ``chi2_adequate`` (the χ² test alone), ``misfit_um``
-        (√(σ̂² − σ²), µm) and ``practical_um`` (the practical size it is judged by).
+        (√(σ̂² − σ²), µm), ``practical_um`` (the practical size it is judged by) and
+        ``repeated``: the σ of repeated readings (:class:`~doe_calib.estimation.
+        repeatability.Repeatability` as a dict; None when too few), beside a σ given.
     candidates : tuple of Candidate
         Best first: significant ones by cross-validated RMS, then by statistic.
     follows : tuple of Follows
@@ -113,7 +118,8 @@ class DiagnosisResult:
         ratio, interval = c.get("sigma_ratio"), c.get("sigma_ratio_interval")
         out = [f"residual RMS {self.rms_mm:.4f} mm per coordinate, cross-validated "
                f"{self.cv_rms_mm:.4f} mm ({self.cv_grouping or 'by pose'})",
-               f"noise σ {self.noise_floor_mm:.4f} mm ({c['sigma_source']})",
+               f"noise σ {self.noise_floor_mm:.4f} mm ({c['sigma_source']})"
+               + (f"; {self.repeated_words}, reported only" if self.repeated_words else ""),
                f"χ² = {c['statistic']:.1f} on {c['dof']} dof, p = {c['p_value']:.3g}"
                + ("" if "chi2_adequate" not in c else
                   f" (the χ² test alone: {'passes' if c['chi2_adequate'] else 'rejects'})")]
@@ -126,6 +132,15 @@ class DiagnosisResult:
             out.append(f"misfit beyond the noise √(σ̂² − σ²) = {c['misfit_um']:.3g} µm "
                        f"(practical size {c['practical_um']:g} µm)")
         return out
+
+    @property
+    def repeated_words(self) -> str:
+        """The σ of repeated readings when it is not the σ tested against (a σ was given),
+        in words; '' when it is, or when too few readings were repeated."""
+        rep = self.chi2.get("repeated")
+        if not rep or self.chi2["sigma_source"] == REPEATED:
+            return ""
+        return Repeatability.from_dict(rep).summary()
 
     def candidate_table(self, top: int = 8) -> list[str]:
         """The ranked candidates, one line each (F with its dofs, p, share, CV RMS, decision)."""

@@ -102,6 +102,8 @@ def fit_report(result, min_correl: float = 0.3) -> str:
              if result.sigma_estimated else
              f"σ = {result.sigma_mm:g} mm a priori ({result.sigma_source}), "
              f"σ̂ = {result.sigma_ratio * result.sigma_mm:.4g} mm a posteriori")
+    if result.sigma_repeated is not None:
+        sigma += f"; {result.sigma_repeated.summary()}"
     lines = [f"Identification ({result.estimator} estimator), model: {model}",
              f"robot {result.robot.name} ({result.robot.n_joints} joints), "
              f"{result.tool.n_markers} markers", "", "[[Fit statistics]]",

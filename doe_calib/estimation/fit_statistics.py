@@ -9,6 +9,9 @@ from doe_calib.estimation.chi_square import chi2_quantile, chi2_survival
 
 #: Level of the σ̂/σ interval.
 RATIO_LEVEL = 0.95
+#: The χ² test rejects a fit clearly below this p-value with σ̂/σ above this ratio
+#: (:func:`misfit_finding`): a misfit beyond doubt and beyond a σ a few % optimistic.
+CLEAR_REJECTION_P, CLEAR_REJECTION_RATIO = 1e-3, 1.2
 
 
 @dataclass(frozen=True)
@@ -102,6 +105,36 @@ class FitStatistics:
 
     def __str__(self) -> str:
         return "\n".join(self.lines())
+
+
+def misfit_finding(stats: FitStatistics, sigma_mm: float) -> str | None:
+    """A finding when the χ² test rejects the fit clearly, else None.
+
+    Clearly: p < :data:`CLEAR_REJECTION_P` and σ̂/σ > :data:`CLEAR_REJECTION_RATIO`.
+    Never when σ was estimated from the fit's own residuals (the test is then not
+    informative, ``p_value`` NaN).
+
+    Parameters
+    ----------
+    stats : FitStatistics
+    sigma_mm : float
+        The a-priori σ per coordinate, mm.
+
+    Examples
+    --------
+    >>> stats = FitStatistics(120, 360, 33, 30, 1336.5, 327, 5.8e-122, 2.02, (1.88, 2.19),
+    ...                       "given", 5, 5, 5, True, "")
+    >>> misfit_finding(stats, 0.02)[:60]
+    'the χ² test rejects this fit (p = 5.8e-122, σ̂/σ = 2.02: σ̂ ='
+    """
+    if not (stats.p_value < CLEAR_REJECTION_P and stats.sigma_ratio > CLEAR_REJECTION_RATIO):
+        return None
+    r = stats.sigma_ratio
+    return (f"the χ² test rejects this fit (p = {stats.p_value:.2g}, σ̂/σ = {r:.3g}: σ̂ = "
+            f"{r * sigma_mm:.3g} mm for σ = {sigma_mm:.3g} mm, {stats.sigma_source}): the "
+            f"residual is larger than the noise explains: an effect the model lacks (a cyclic "
+            f"error, a compliance, backlash), a σ too small, or a unit mistake; run "
+            f"doe-calib diagnose to find which")
 
 
 def ratio_interval(chi2: float, dof: int, level: float = RATIO_LEVEL) -> tuple:

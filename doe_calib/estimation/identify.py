@@ -9,10 +9,12 @@ from __future__ import annotations
 import warnings
 from dataclasses import replace
 
-from doe_calib.errors import DoeCalibWarning, PlausibilityWarning
+from doe_calib.errors import DataWarning, DoeCalibWarning, MisfitWarning, PlausibilityWarning
 from doe_calib.estimation import plausibility
+from doe_calib.estimation.fit_statistics import misfit_finding
 from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
 from doe_calib.estimation.sigma import resolve_sigma
+from doe_calib.io.repeated_readings import copies_words
 from doe_calib.model.marker_model import for_workload
 
 ESTIMATORS = ("point", "two-step", "pose")
@@ -50,8 +52,11 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
         units, placement errors as large as a link, collinear markers). When
         ``measurements.sigma_estimated``, σ is estimated from the residuals:
         ``sigma_mm`` is σ̂, the covariance is scaled to it, and the result says so.
+        The σ of repeated readings, when poses were read more than once, is reported
+        beside (``sigma_repeated``), never used in place of σ.
     """
-    measurements = resolve_sigma(model, measurements, sigma_mm, in_fit=True).measurements
+    settled = resolve_sigma(model, measurements, sigma_mm, in_fit=True)
+    measurements = settled.measurements
     model = for_workload(model, FIT_PASSES * len(measurements.configurations), progress)
     if estimator == "point":
         result = identify_point(model, measurements, params, progress=progress, **options)
@@ -66,16 +71,34 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
     else:
         raise ValueError(f"unknown estimator {estimator!r}; choose one of "
                          f"{', '.join(ESTIMATORS)}")
-    return with_plausibility(model, measurements, result)
+    return with_plausibility(model, measurements, replace(result, sigma_repeated=settled.repeated))
 
 
 def with_plausibility(model, measurements, result):
-    """``result`` with the :mod:`~doe_calib.estimation.plausibility` findings added to its warnings,
-    each also issued as a :class:`~doe_calib.errors.PlausibilityWarning`."""
+    """``result`` with what looks wrong added to its warnings, each also issued.
+
+    The :mod:`~doe_calib.estimation.plausibility` findings and a σ given that repeated
+    readings contradict (:meth:`~doe_calib.estimation.repeatability.Repeatability.disagreement`)
+    as :class:`~doe_calib.errors.PlausibilityWarning`; a clear rejection by the χ² test
+    (:func:`~doe_calib.estimation.fit_statistics.misfit_finding`, in place of plausibility's
+    σ̂/σ finding) as :class:`~doe_calib.errors.MisfitWarning`; readings present twice
+    (:func:`~doe_calib.io.repeated_readings.copies_words`) as
+    :class:`~doe_calib.errors.DataWarning`.
+    """
     findings = plausibility.check(model, measurements, result)
-    for f in findings:
-        warnings.warn(f, PlausibilityWarning, stacklevel=3)
-    return replace(result, warnings=result.warnings + findings) if findings else result
+    if result.sigma_repeated is not None and not result.sigma_estimated:
+        findings += tuple(f for f in [result.sigma_repeated.disagreement(result.sigma_mm)] if f)
+    misfit = misfit_finding(result.fit_statistics, result.sigma_mm)
+    if misfit:
+        said = plausibility.sigma_ratio_finding(result.sigma_ratio, result.sigma_mm)
+        findings = tuple(f for f in findings if f != said)
+    copies = copies_words(measurements, model.tool.names)
+    issued = [(f, PlausibilityWarning) for f in findings] + \
+        [(f, kind) for f, kind in ((misfit, MisfitWarning), (copies, DataWarning)) if f]
+    for f, kind in issued:
+        warnings.warn(f, kind, stacklevel=3)
+    return replace(result, warnings=result.warnings + tuple(f for f, _ in issued)) \
+        if issued else result
 
 
 def identify_quietly(model, measurements, params=None, **options):

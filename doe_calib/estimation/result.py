@@ -8,6 +8,7 @@ import numpy as np
 from doe_calib.errors import DataError
 from doe_calib.estimation.fit_report import fit_report
 from doe_calib.estimation.fit_statistics import FitStatistics, fit_statistics
+from doe_calib.estimation.repeatability import Repeatability
 from doe_calib.estimation.parameter_estimate import ParameterEstimate, parameter_estimate
 from doe_calib.estimation.predict import Prediction, predict
 from doe_calib.estimation.reduced_set import combinations, role
@@ -62,6 +63,9 @@ class IdentificationResult:
         fixed as not separable whose effect it carries; its value is then that of
         the reduced set, and the data identify the combination
         (:meth:`combinations`).
+    sigma_repeated : Repeatability or None
+        σ of the readings repeated in one pose, reported beside ``sigma_mm`` (never
+        used in its place by ``identify``); None when too few are.
 
     Examples
     --------
@@ -87,6 +91,7 @@ class IdentificationResult:
     sigma_source: str = ""
     effect_files: dict = field(default_factory=dict)
     absorbed: dict = field(default_factory=dict)
+    sigma_repeated: Repeatability | None = None
 
     def __post_init__(self):
         if not self.sigma_source:
@@ -238,6 +243,8 @@ class IdentificationResult:
                 "effect_files": dict(self.effect_files),
                 "absorbed_si": {k: [[d, c] for d, c in v] for k, v in self.absorbed.items()},
                 "combinations": [c.to_dict() for c in self.combinations()],
+                "sigma_repeated": None if self.sigma_repeated is None else
+                self.sigma_repeated.to_dict(),
                 "n_observations": self.n_observations,
                 "residuals": self.residuals, "convergence": self.convergence,
                 "warnings": list(self.warnings),
@@ -263,7 +270,9 @@ class IdentificationResult:
                    estimated, d.get("sigma_source") or ("estimated" if estimated else "given"),
                    dict(d.get("effect_files") or {}),
                    {k: tuple((str(n), float(c)) for n, c in v)
-                    for k, v in (d.get("absorbed_si") or {}).items()})
+                    for k, v in (d.get("absorbed_si") or {}).items()},
+                   Repeatability.from_dict(d["sigma_repeated"]) if d.get("sigma_repeated")
+                   else None)
 
     @classmethod
     def from_json(cls, path) -> "IdentificationResult":

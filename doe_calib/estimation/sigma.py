@@ -1,14 +1,20 @@
 """Where σ comes from: the one policy for the tracker's σ per coordinate.
 
-A reading's σ has one of three sources (:data:`SIGMA_SOURCES`):
+A reading's σ has one of four sources (:data:`SIGMA_SOURCES`):
 
 ``"given"``
     an option or keyword (``--sigma``, ``sigma_mm=``) for every reading
     without a σ of its own;
 ``"per reading"``
     the measurement file's ``sigma`` column;
+``"repeated readings"``
+    neither, and poses read more than once: σ is their pooled spread
+    (:mod:`~doe_calib.estimation.repeatability`), which holds no model error;
 ``"estimated"``
-    neither: σ is the σ̂ of the starting model's fit to the readings.
+    none of these: σ is the σ̂ of the starting model's fit to the readings.
+
+A σ given is the σ used: repeated readings never replace it, they are
+reported beside it (:attr:`SettledSigma.repeated`).
 
 The readers mark readings without σ ``sigma_estimated`` (σ still to be
 estimated, a provisional 1 mm in the meantime). :func:`resolve_sigma` settles
@@ -26,11 +32,19 @@ import numpy as np
 
 from doe_calib.errors import DataError, DoeCalibWarning, OptionError
 from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
-from doe_calib.io.measurements import ESTIMATED, GIVEN, PER_READING, SIGMA_SOURCES, Measurements
+from doe_calib.estimation.repeatability import Repeatability, repeatability
+from doe_calib.io.measurements import (
+    ESTIMATED,
+    GIVEN,
+    PER_READING,
+    REPEATED,
+    SIGMA_SOURCES,
+    Measurements,
+)
 from doe_calib.model.marker_model import for_workload
 
-__all__ = ["GIVEN", "PER_READING", "ESTIMATED", "SIGMA_SOURCES", "SettledSigma", "resolve_sigma",
-           "with_sigma"]
+__all__ = ["GIVEN", "PER_READING", "ESTIMATED", "REPEATED", "SIGMA_SOURCES", "SettledSigma",
+           "resolve_sigma", "with_sigma"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,12 +62,16 @@ class SettledSigma:
         The median σ of the readings, mm (NaN while the caller's fit estimates it).
     words : str
         How σ was decided, for a message (``σ given: 0.02 mm``).
+    repeated : Repeatability or None
+        σ of the readings repeated in one pose, whatever the source (None when too
+        few are): the σ used when none is given, else reported beside it.
     """
 
     measurements: Measurements
     source: str
     sigma_mm: float
     words: str
+    repeated: Repeatability | None = None
 
 
 def with_sigma(measurements, sigma_mm: float, source: str = GIVEN) -> Measurements:
@@ -74,7 +92,7 @@ def with_sigma(measurements, sigma_mm: float, source: str = GIVEN) -> Measuremen
 
 def resolve_sigma(model, measurements, sigma_mm: float | None = None, params=None, fit=None,
                   in_fit: bool = False) -> SettledSigma:
-    """Settle the σ of ``measurements``: given, per reading, or estimated.
+    """Settle the σ of ``measurements``: given, per reading, from repeated readings, or estimated.
 
     Parameters
     ----------
@@ -92,7 +110,7 @@ def resolve_sigma(model, measurements, sigma_mm: float | None = None, params=Non
         estimate (no second fit).
     in_fit : bool
         The caller's own fit estimates σ (``identify``): readings without σ
-        are returned as they are, still ``sigma_estimated``.
+        are returned as they are, still ``sigma_estimated`` (repeated readings or not).
 
     Returns
     -------
@@ -116,21 +134,26 @@ def resolve_sigma(model, measurements, sigma_mm: float | None = None, params=Non
     >>> resolve_sigma(model, meas, sigma_mm=0.03).words
     'σ given: 0.03 mm'
     """
+    rep = repeatability(measurements)
     if sigma_mm is not None:
         settled = with_sigma(measurements, sigma_mm)
-        return SettledSigma(settled, GIVEN, float(sigma_mm), f"σ given: {sigma_mm:.3g} mm")
+        return SettledSigma(settled, GIVEN, float(sigma_mm), f"σ given: {sigma_mm:.3g} mm", rep)
     median = float(np.median(measurements.sigma) * 1000.0) if len(measurements) else np.nan
     if not measurements.sigma_estimated:
         words = {GIVEN: f"σ given: {median:.3g} mm",
                  PER_READING: f"σ per reading (the file's sigma column): median "
                               f"{median:.3g} mm",
                  ESTIMATED: f"σ estimated from the residuals of the starting model, "
-                            f"{median:.3g} mm"}
+                            f"{median:.3g} mm",
+                 REPEATED: f"σ not given: from repeated readings, {median:.3g} mm"}
         return SettledSigma(measurements, measurements.sigma_source, median,
-                            words[measurements.sigma_source])
+                            words[measurements.sigma_source], rep)
     if in_fit:
         return SettledSigma(measurements, ESTIMATED, float("nan"),
-                            "σ not given: estimated from the residuals of this fit")
+                            "σ not given: estimated from the residuals of this fit", rep)
+    if rep is not None:
+        return SettledSigma(with_sigma(measurements, rep.sigma_mm, REPEATED), REPEATED,
+                            rep.sigma_mm, f"σ not given: {rep.summary()}", rep)
     if fit is None or not fit.sigma_estimated:
         fit = _starting_fit(model, measurements, params)
     if not (fit.sigma_estimated and np.isfinite(fit.sigma_mm) and fit.sigma_mm > 0):

@@ -15,9 +15,11 @@ import numpy as np
 ENV_FIELDS = ("temperature",)
 
 #: Where the readings' σ comes from (the policy is :mod:`doe_calib.estimation.sigma`): an
-#: option or keyword, the file's ``sigma`` column, or the σ̂ of the starting model's fit.
+#: option or keyword, the file's ``sigma`` column, the σ̂ of the starting model's fit, or
+#: (none given) the spread of repeated readings.
 GIVEN, PER_READING, ESTIMATED = "given", "per reading", "estimated"
-SIGMA_SOURCES = (GIVEN, PER_READING, ESTIMATED)
+REPEATED = "repeated readings"
+SIGMA_SOURCES = (GIVEN, PER_READING, ESTIMATED, REPEATED)
 
 
 def env_fields(n_joints: int) -> tuple:
@@ -187,8 +189,9 @@ class Measurements:
     sigma_source : str
         Where ``sigma`` comes from (:data:`SIGMA_SOURCES`): ``"given"`` (an
         option or keyword; the default for readings built in code),
-        ``"per reading"`` (the file's ``sigma`` column) or ``"estimated"``
-        (σ̂ of the starting model; still to come while ``sigma_estimated``).
+        ``"per reading"`` (the file's ``sigma`` column), ``"estimated"``
+        (σ̂ of the starting model; still to come while ``sigma_estimated``) or
+        ``"repeated readings"`` (none given: the spread of poses read more than once).
     observed_per_configuration : int
         Independent scalar observations behind each configuration's readings
         when they are derived from fewer numbers than 3 per reading (6 for the

@@ -148,6 +148,9 @@ def verdict_section(diagnosis, title: str = ""):
           c.get("sigma_ratio", float("nan")), c["statistic"], c["dof"], c["p_value"],
           "yes" if diagnosis.adequate else "no"]], 4),
         paragraph(f"Cross-validation: {diagnosis.cv_grouping or 'folds of whole poses'}."),
+        *([paragraph(f"Beside the σ tested against ({diagnosis.noise_floor_mm:.4g} mm, "
+                     f"{c['sigma_source']}), reported only: {diagnosis.repeated_words}.")]
+          if diagnosis.repeated_words else []),
         *([_notes(diagnosis.notes)] if diagnosis.notes else []))
 
 

@@ -69,6 +69,9 @@ def fit_table(result):
             ["residual RMS per coordinate (mm)", res["rms_mm"]],
             ["max 3-D residual (mm)", res["max_3d_mm"]], ["σ a priori (mm)", result.sigma_mm],
             ["σ source", st.sigma_source],
+            *([["σ of repeated readings (mm, reported only)",
+                f"{result.sigma_repeated.sigma_mm:.4g} ({result.sigma_repeated.dof} dof)"]]
+              if result.sigma_repeated is not None else []),
             ["σ̂ a posteriori (mm)", result.sigma_ratio * result.sigma_mm],
             ["degrees of freedom", st.dof]]
     if st.chi2_informative:
