@@ -146,8 +146,10 @@ def nominal_torques(robot, q, wrench) -> ca.SX:
     (:func:`gravity_torques`) are: they do not depend on the geometry parameters, so
     a placement error that the data cannot tell from its neighbours' folds into them
     exactly, loaded or not. The torque the real, slightly different chain carries
-    differs from these by the placement error times the torque (a second-order
-    change of the deflection: about a micrometre on a 250 kg, 2.7 m arm).
+    differs from these by the placement error times the torque, a second-order
+    change of the deflection: 2 µm RMS at the markers of a KR 270 carrying 250 kg
+    whose placements are off by 2 mm / 0.3° (measured against a simulation with
+    the true chain's torques), far below a tracker's noise.
     """
     placements = [_constant(j.placement_matrix) for j in robot.joints]
     flange = _constant(np.array(robot.flange_placement, float).reshape(4, 4))
