@@ -18,6 +18,7 @@ from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_model_bui
 from doe_calib.diagnosis.candidate_scoring import score_candidates
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
 from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
+from doe_calib.diagnosis.outliers import gross_outliers, outlier_verdict
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, repeatability_sigma, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.sign_lead import sign_lead
@@ -230,6 +231,28 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
     return text
 
 
+def _chi2_record(test, tolerance, practical_um) -> dict:
+    lo, hi = test.ratio_interval()
+    return {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
+            "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,
+            "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
+            "tolerance": tolerance, "chi2_adequate": test.adequate,
+            "misfit_um": test.misfit_um, "practical_um": practical_um}
+
+
+def _outlier_result(model, measurements, res, test, cv, split, outliers, level, tolerance,
+                    practical_um, min_gain, screened) -> DiagnosisResult:
+    """The diagnosis of data with gross outliers: they are named, no effect is proposed."""
+    flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
+    verdict = outlier_verdict(outliers, _adequacy_words(test))
+    return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, False,
+                           _chi2_record(test, tolerance, practical_um), (), (), tuple(flagged),
+                           level, verdict, None, int(res.weighted.size),
+                           cv_grouping=split.description, min_gain=min_gain,
+                           gross_errors=tuple(dict.fromkeys(o.pose for o in outliers)),
+                           notes=tuple(n for n in (screened,) if n), outliers=outliers)
+
+
 def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
              grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
              tolerance: float = 0.05, progress=None, registry=None,
@@ -303,9 +326,13 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     rep = repeatability_sigma(measurements)
     sigma_mm = float(np.median(measurements.sigma) * 1e3)
     test = adequacy(res, rank, sigma_mm, level, rep, measurements.sigma_source)
+    outliers = gross_outliers(model, measurements, fit, level, tolerance, practical_um)
     screen, screened = screening_set(measurements)
     split = make_folds(screen, folds, grouping)
     cv = cross_validated_rms(model, screen, params, split)
+    if outliers:  # no effect is tested on data an outlier pulls
+        return _outlier_result(model, measurements, res, test, cv, split, outliers, level,
+                               tolerance, practical_um, min_gain, screened)
     tried = candidate_tests(model, screen, params, registry=registry, batch=batch)
     tests = list(tried.tests)
     chosen = _groups_to_try(tests, level, cv_top)
@@ -349,12 +376,7 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     elif odd is not None and (proposed is None or odd.cv_rms_mm < proposed.cv_rms_mm):
         verdict += (f" Not proposed although it predicts better (cross-validated RMS "
                     f"{odd.cv_rms_mm:.3g} mm): {odd.spec}, {odd.implausible}.")
-    lo, hi = test.ratio_interval()
-    chi2 = {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
-            "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,
-            "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
-            "tolerance": tolerance, "chi2_adequate": test.adequate,
-            "misfit_um": test.misfit_um, "practical_um": practical_um}
+    chi2 = _chi2_record(test, tolerance, practical_um)
     spec = None if proposed is None else proposed.spec
     candidates = candidate_records(ranked, model.robot,
                                    [describe(t, model.robot, registry) for t in ranked],
