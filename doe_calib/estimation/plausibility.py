@@ -1,7 +1,7 @@
 """Plausibility checks after a fit: findings in words, never a failure.
 
 Each check looks for a typical mistake that a fit hides rather than reveals:
-a wrong σ, coordinates in metres or joint angles in radians, a placement
+a wrong σ, coordinates in metres or joint angles in radians, a wrench in kgf, a placement
 error as large as a link, a marker layout that cannot fix the orientation, a
 fitted value beyond its parameter's physical bounds or plausible range (as the
 parameter declares them: :class:`~doe_calib.model.parameters.Parameter`).
@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from doe_calib.estimation.load_units import kgf_finding
 from doe_calib.io.reading_units import metres_finding
 
 #: σ̂/σ outside [low, high] is reported.
@@ -233,5 +234,7 @@ def check(model, measurements, result) -> tuple:
         found.append(angles_in_radians(measurements.configurations, robot))
     found += placement_findings(result.parameters, robot)
     found += parameter_findings(result.parameters, result.std(a_posteriori=True))
+    found.append(kgf_finding(result.parameters, result.std(a_posteriori=True), robot,
+                             measurements.configurations))
     found.append(marker_layout_finding(model.tool))
     return tuple(f for f in found if f)
