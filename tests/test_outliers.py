@@ -14,7 +14,7 @@ from doe_calib import build_model, examples
 from doe_calib.cli import main
 from doe_calib.diagnosis import diagnose
 from doe_calib.diagnosis.effect_selection import refine
-from doe_calib.diagnosis.outliers import gross_outliers
+from doe_calib.diagnosis.outliers import gross_outliers, within_pose
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.sigma import resolve_sigma
@@ -121,3 +121,23 @@ def test_the_cli_names_the_outlier(kr270, tmp_path, capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert code == 0 and f"pose {pose}, marker {marker} (line {line} of" in text, text
     assert json.loads(out.read_text())["outliers"][0]["line"] == line
+
+
+def test_within_pose_noise_ignores_any_rigid_motion_of_a_pose():
+    # 400 poses of 1-4 markers: each moved rigidly by ~5 (as an effect moves the flange), plus
+    # unit noise; what a rigid motion cannot make has 0, 1, 3, 6 dof and mean square 1
+    rng = np.random.default_rng(0)
+    pred, err, cfg = [], [], []
+    for c in range(400):
+        n = c % 4 + 1
+        x = rng.normal(size=(n, 3)) * 0.1 + rng.normal(size=3)
+        t, w = rng.normal(size=(2, 3)) * 5
+        pred.append(x)
+        err.append(t + np.cross(w, x - x.mean(axis=0)) + rng.normal(size=(n, 3)))
+        cfg += [c] * n
+    pred, err, cfg = np.vstack(pred), np.vstack(err), np.array(cfg)
+    ss, dof = within_pose(err, pred, cfg, np.ones(len(cfg), bool))
+    assert dof == 100 * (0 + 1 + 3 + 6)
+    assert ss / dof == pytest.approx(1.0, abs=4 * np.sqrt(2 / dof))
+    keep = cfg != 3  # a pose with a reading left out does not count
+    assert within_pose(err, pred, cfg, keep)[1] == dof - 6

@@ -114,20 +114,24 @@ def within_pose(error, predicted, config, rows) -> tuple:
         Sum of squares (m²) and its degrees of freedom (3n − rank per configuration).
     """
     ss, dof = 0.0, 0
-    complete = np.bincount(config, rows) == np.bincount(config)
+    count = np.bincount(config)
+    complete = np.bincount(config, rows) == count
     order = np.argsort(config, kind="stable")
-    starts = np.r_[0, np.cumsum(np.bincount(config))]
-    for c in np.flatnonzero(complete):
-        mine = order[starts[c]:starts[c + 1]]
-        x = predicted[mine] - predicted[mine].mean(axis=0)
-        motion = np.zeros((3 * len(mine), 6))
-        for j, (a, b, z) in enumerate(x):  # e_j = t + ω × x_j
-            motion[3 * j:3 * j + 3] = [[1, 0, 0, 0, z, -b], [0, 1, 0, -z, 0, a],
-                                       [0, 0, 1, b, -a, 0]]
-        e = error[mine].ravel()
-        coef, _, rank, _ = np.linalg.lstsq(motion, e, rcond=1e-9)
-        ss += float(np.sum((e - motion @ coef) ** 2))
-        dof += 3 * len(mine) - int(rank)
+    starts = np.r_[0, np.cumsum(count)]
+    for n in np.unique(count[complete]):  # configurations of n readings, stacked
+        group = np.flatnonzero(complete & (count == n))
+        mine = order[starts[group][:, None] + np.arange(n)]           # (G, n)
+        x = predicted[mine] - predicted[mine].mean(axis=1, keepdims=True)
+        a, b, z = np.moveaxis(x, -1, 0)
+        one, nil = np.ones_like(a), np.zeros_like(a)
+        motion = np.stack([np.stack([one, nil, nil, nil, z, -b], -1),   # e_j = t + ω × x_j
+                           np.stack([nil, one, nil, -z, nil, a], -1),
+                           np.stack([nil, nil, one, b, -a, nil], -1)], 2)  # (G, n, 3, 6)
+        motion = motion.reshape(len(group), 3 * n, 6)
+        e = error[mine].reshape(len(group), 3 * n, 1)
+        left = e - motion @ (np.linalg.pinv(motion, rcond=1e-9) @ e)
+        ss += float(np.sum(left ** 2))
+        dof += int(np.sum(3 * n - np.linalg.matrix_rank(motion, tol=None)))
     return ss, dof
 
 
