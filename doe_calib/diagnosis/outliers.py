@@ -32,9 +32,9 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy.special import chdtrc, fdtrc
 
-from doe_calib.estimation.chi_square import chi2_survival
+from doe_calib.estimation.chi_square import chi2_survival, chi2_upper_quantile
+from doe_calib.estimation.f_distribution import f_survival
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.weighted_residuals import marker_residuals
 from doe_calib.io.measurements import ESTIMATED
@@ -158,7 +158,7 @@ def _rest_fits_the_noise(error, sigma, keep, rank, level, tolerance, practical_u
         return True
     s2 = ss_in / dof_in
     t = (float((error[keep] ** 2).sum()) - ss_in) / s2
-    return _fits(t, dof, np.sqrt(s2), level, tolerance, practical_um, fdtrc(dof, dof_in, t / dof))
+    return _fits(t, dof, np.sqrt(s2), level, tolerance, practical_um, f_survival(t / dof, dof, dof_in))
 
 
 def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: float = 0.05,
@@ -196,6 +196,7 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
     rank = int(fit.parameters.free.sum())
     error = marker_residuals(model, measurements, fit.parameters.values)
     out, within = np.zeros(k, bool), None
+    critical = chi2_upper_quantile(min(level / k, 0.5), 3)  # Bonferroni over the K readings
     for _ in range(MAX_ROUNDS):
         if estimated:  # the noise within poses, of the poses without suspects
             within = within_pose(error, measurements.xyz - error, measurements.config, ~out)
@@ -205,7 +206,7 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
         else:
             scale = sigma
         t = ((error / scale[:, None]) ** 2).sum(axis=1)
-        beyond = chdtrc(3, t) * k < level
+        beyond = t > critical
         if np.array_equal(beyond, out):
             break
         if not 0 < beyond.sum() <= MAX_OUTLIERS:
@@ -223,7 +224,7 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
                      int(measurements.line[i]), str(measurements.source),
                      float(np.linalg.norm(error[i]) * 1e3),
                      float(np.linalg.norm(error[i]) / scale[i]),
-                     float(min(chdtrc(3, t[i]) * k, 1.0)), k)
+                     float(min(chi2_survival(t[i], 3) * k, 1.0)), k)
              for i in np.flatnonzero(out)]
     return tuple(sorted(found, key=lambda o: -o.size_sigma))
 
