@@ -13,6 +13,7 @@ import pytest
 
 from doe_calib import build_model, examples
 from doe_calib.cli import main
+from doe_calib.diagnosis import diagnose
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.io.csv_files import read_measurements
 
@@ -91,3 +92,12 @@ def test_the_cli_warns_of_kgf_and_not_of_newtons(tmp_path, capsys):
         text = " ".join(capsys.readouterr().err.split())
         assert code == 0 and ("the wrench columns (fx, fy, fz, mx, my, mz) look like kgf"
                               in text) == named, text
+
+
+def test_diagnose_notes_a_wrench_in_kgf(tmp_path):
+    robot, tool, newton, kgf = _campaign(tmp_path, examples.ROBOT_URDF, 250.0,
+                                         {1: 3e-7, 2: 5e-7}, seed=33)
+    model = build_model(robot, tool, MODEL)
+    for data, named in ((newton, False), (kgf, True)):
+        d = diagnose(model, read_measurements(data, robot, tool))
+        assert any("look like kgf" in n for n in d.notes) == named, d.summary()

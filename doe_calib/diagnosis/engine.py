@@ -26,6 +26,7 @@ from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.design.detectability import SEPARATE
 from doe_calib.errors import DoeCalibError, ModelError
 from doe_calib.estimation.identify import identify_quietly
+from doe_calib.estimation.load_units import kgf_finding
 from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.model.effects import parse_effect
 
@@ -241,7 +242,7 @@ def _chi2_record(test, tolerance, practical_um) -> dict:
 
 
 def _outlier_result(model, measurements, res, test, cv, split, outliers, level, tolerance,
-                    practical_um, min_gain, screened) -> DiagnosisResult:
+                    practical_um, min_gain, notes) -> DiagnosisResult:
     """The diagnosis of data with gross outliers: they are named, no effect is proposed."""
     flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
     verdict = outlier_verdict(outliers, _adequacy_words(test))
@@ -250,7 +251,7 @@ def _outlier_result(model, measurements, res, test, cv, split, outliers, level, 
                            level, verdict, None, int(res.weighted.size),
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(dict.fromkeys(o.pose for o in outliers)),
-                           notes=tuple(n for n in (screened,) if n), outliers=outliers)
+                           notes=tuple(n for n in notes if n), outliers=outliers)
 
 
 def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
@@ -327,12 +328,14 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     sigma_mm = float(np.median(measurements.sigma) * 1e3)
     test = adequacy(res, rank, sigma_mm, level, rep, measurements.sigma_source)
     outliers = gross_outliers(model, measurements, fit, level, tolerance, practical_um)
+    units = kgf_finding(params, fit.std(a_posteriori=True), model.robot,
+                        measurements.configurations)
     screen, screened = screening_set(measurements)
     split = make_folds(screen, folds, grouping)
     cv = cross_validated_rms(model, screen, params, split)
     if outliers:  # no effect is tested on data an outlier pulls
         return _outlier_result(model, measurements, res, test, cv, split, outliers, level,
-                               tolerance, practical_um, min_gain, screened)
+                               tolerance, practical_um, min_gain, (units, screened))
     tried = candidate_tests(model, screen, params, registry=registry, batch=batch)
     tests = list(tried.tests)
     chosen = _groups_to_try(tests, level, cv_top)
@@ -386,4 +389,4 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                            spec, int(res.weighted.size),
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
-                           notes=tuple(n for n in (screened, tried.note()) if n))
+                           notes=tuple(n for n in (units, screened, tried.note()) if n))
