@@ -18,9 +18,10 @@ poses without suspects (externally studentised); a single marker
 (a lone SMR) has none, and with σ estimated its outliers cannot be told from
 an effect (give σ).
 
-The suspects are found by rounds: the readings beyond the threshold are left
-out, the model refitted, the threshold applied again to every reading, until
-the set settles. They are called outliers only when they are few
+The suspects are found by rounds: the readings beyond the threshold (the
+:data:`MAX_OUTLIERS` worst when more are: an outlier pulls the fit and takes
+other readings past the threshold with it) are left out, the model refitted,
+the threshold applied again to every reading, until the set settles. They are called outliers only when they are few
 (:data:`MAX_OUTLIERS`) and the other readings then fit within the noise (the
 adequacy rules of :func:`~doe_calib.diagnosis.engine.diagnose`; with σ
 estimated, the F test of the rigid part of the residuals against the
@@ -43,6 +44,10 @@ from doe_calib.io.measurements import ESTIMATED
 MAX_OUTLIERS = 3
 #: Rounds of leave-out-and-refit before the suspects must have settled.
 MAX_ROUNDS = 4
+#: Readings beyond the threshold in the fit to all: up to this many times
+#: :data:`MAX_OUTLIERS` may be the outliers' pull on the fit (they are then left out worst
+#: first); more are a model or σ problem.
+SWAMPED = 10
 
 
 @dataclass(frozen=True)
@@ -209,8 +214,14 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
         beyond = t > critical
         if np.array_equal(beyond, out):
             break
-        if not 0 < beyond.sum() <= MAX_OUTLIERS:
+        if not 0 < beyond.sum() <= SWAMPED * MAX_OUTLIERS:
             return ()
+        if beyond.sum() > MAX_OUTLIERS:  # a few outliers pull the fit: leave out the worst
+            worst = np.zeros(k, bool)
+            worst[np.argsort(t)[-MAX_OUTLIERS:]] = True
+            if np.array_equal(worst, out):  # leaving them out does not clean the rest
+                return ()
+            beyond = worst
         out = beyond
         refit = identify_quietly(model, measurements.subset(~out), fit.parameters)
         error = marker_residuals(model, measurements, refit.parameters.values)
