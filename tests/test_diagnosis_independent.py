@@ -142,5 +142,8 @@ def test_gross_outliers_are_named_as_such(tmp_path):
     poses = {train.configurations.pose[train.config[np.flatnonzero(train.line == ln)[0]]]
              for ln in lines}
     assert set(d.gross_errors) == poses, d.summary()
+    # each named as one reading on its line, 2 mm off give or take the noise of one reading
+    assert {o.line for o in d.outliers} == lines
+    assert all(abs(o.size_mm - 2.0) < 5 * SIGMA_MM * np.sqrt(3) for o in d.outliers)
     assert "gross errors" in d.verdict and "--exclude-poses" in d.verdict
     assert "effect-file" not in d.verdict

@@ -8,7 +8,7 @@ import pytest
 import doe_calib
 from doe_calib import Configurations, Robot, Tool, build_model, simulate
 from doe_calib.cli import main
-from doe_calib.errors import ModelError
+from doe_calib.errors import DataError, ModelError
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.plausibility import marker_condition, marker_layout_finding
 from doe_calib.io.csv_files import read_measurements, write_measurements
@@ -43,22 +43,21 @@ def test_sigma_ratio_far_from_one_is_reported_with_its_value(model3):
     assert f"{small.sigma_ratio:.3g}" in found[0]
 
 
-def test_xyz_in_metres_found_at_read_time_and_after_the_fit(model3, tmp_path, capsys):
+def test_xyz_in_metres_are_refused_at_read_time(model3, tmp_path, capsys):
     meas = _campaign(model3)
     good, metres = tmp_path / "mm.csv", tmp_path / "m.csv"
     write_measurements(good, meas, model3.robot, model3.tool)
     write_measurements(metres, replace(meas, xyz=meas.xyz / 1000.0), model3.robot, model3.tool)
     assert not read_measurements(good, model3.robot, model3.tool).warnings
-    read = read_measurements(metres, model3.robot, model3.tool)
-    assert "look like metres" in read.warnings[0] and "must be in mm" in read.warnings[0]
-    assert "2400 mm" in read.warnings[0]  # the reach: 1000 + 800 + 600 mm
+    with pytest.raises(DataError, match="look like metres, not mm") as info:
+        read_measurements(metres, model3.robot, model3.tool)
+    assert "reaches about 2.40 m" in str(info.value)  # the reach: 1000 + 800 + 600 mm
     out = tmp_path / "r.json"
     code = main(["identify", "--robot", str(URDF), "--tool", str(TOOL), "--data", str(metres),
                  "--model", "joint_offset", "--out", str(out)])
     err = capsys.readouterr().err
-    assert code == 0
-    assert "warning:" in err and "x, y, z look like metres; the file must be in mm" in \
-        err.replace(" (all within ±5 mm while the robot reaches about 2400 mm)", "")
+    assert code == 2 and f"error: {metres}: x, y, z look like metres" in err
+    assert not out.exists()
 
 
 def test_joint_angles_in_radians_are_reported(model3):

@@ -107,6 +107,9 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
             progress(len(steps) - 1, f"{model.spec or '(base + markers)'}: CV RMS "
                                      f"{diag.cv_rms_mm:.4f} mm")
         best = diag.best
+        if diag.outliers:
+            stopped = f"no effect tested: {diag.verdict}"
+            break
         if best is None:
             stopped = ("no candidate effect is significant and lowers the cross-validated RMS "
                        f"by {min_gain:.0%}; " + ("the model is adequate" if diag.adequate else

@@ -18,6 +18,7 @@ from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_model_bui
 from doe_calib.diagnosis.candidate_scoring import score_candidates
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
 from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
+from doe_calib.diagnosis.outliers import gross_outliers, outlier_verdict
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.diagnosis.sign_lead import sign_lead
@@ -25,6 +26,7 @@ from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.design.detectability import SEPARATE
 from doe_calib.errors import DoeCalibError, ModelError
 from doe_calib.estimation.identify import identify_quietly
+from doe_calib.estimation.load_units import kgf_finding
 from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.io.measurements import ESTIMATED, REPEATED
 from doe_calib.io.repeated_readings import copies_words
@@ -248,6 +250,31 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
     return text
 
 
+def _chi2_record(test, tolerance, practical_um, repeated) -> dict:
+    """The χ² test for the diagnosis JSON, with the σ of repeated readings (or None)."""
+    lo, hi = test.ratio_interval()
+    return {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
+            "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,
+            "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
+            "tolerance": tolerance, "chi2_adequate": test.adequate,
+            "misfit_um": test.misfit_um, "practical_um": practical_um,
+            "repeated": None if repeated is None else repeated.to_dict()}
+
+
+def _outlier_result(model, measurements, res, test, cv, split, outliers, level, tolerance,
+                    practical_um, min_gain, notes, repeated) -> DiagnosisResult:
+    """The diagnosis of data with gross outliers: they are named, no effect is proposed."""
+    flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
+    verdict = outlier_verdict(outliers, _adequacy_words(test))
+    return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, False,
+                           _chi2_record(test, tolerance, practical_um, repeated), (), (),
+                           tuple(flagged),
+                           level, verdict, None, int(res.weighted.size),
+                           cv_grouping=split.description, min_gain=min_gain,
+                           gross_errors=tuple(dict.fromkeys(o.pose for o in outliers)),
+                           notes=tuple(n for n in notes if n), outliers=outliers)
+
+
 def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
              grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
              tolerance: float = 0.05, progress=None, registry=None,
@@ -322,9 +349,17 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     test = adequacy(res, rank, sigma_mm, level, measurements.sigma_source)
     doubt = None if settled.repeated is None or test.sigma_source == REPEATED else \
         settled.repeated.disagreement(sigma_mm)
+    copies = copies_words(measurements, model.tool.names)
+    outliers = gross_outliers(model, measurements, fit, level, tolerance, practical_um)
+    units = kgf_finding(params, fit.std(a_posteriori=True), model.robot,
+                        measurements.configurations)
     screen, screened = screening_set(measurements)
     split = make_folds(screen, folds, grouping)
     cv = cross_validated_rms(model, screen, params, split)
+    if outliers:  # no effect is tested on data an outlier pulls
+        return _outlier_result(model, measurements, res, test, cv, split, outliers, level,
+                               tolerance, practical_um, min_gain,
+                               (units, screened, doubt, copies), settled.repeated)
     tried = candidate_tests(model, screen, params, registry=registry, batch=batch)
     tests = list(tried.tests)
     chosen = _groups_to_try(tests, level, cv_top)
@@ -368,13 +403,7 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     elif odd is not None and (proposed is None or odd.cv_rms_mm < proposed.cv_rms_mm):
         verdict += (f" Not proposed although it predicts better (cross-validated RMS "
                     f"{odd.cv_rms_mm:.3g} mm): {odd.spec}, {odd.implausible}.")
-    lo, hi = test.ratio_interval()
-    chi2 = {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
-            "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,
-            "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
-            "tolerance": tolerance, "chi2_adequate": test.adequate,
-            "misfit_um": test.misfit_um, "practical_um": practical_um,
-            "repeated": None if settled.repeated is None else settled.repeated.to_dict()}
+    chi2 = _chi2_record(test, tolerance, practical_um, settled.repeated)
     spec = None if proposed is None else proposed.spec
     candidates = candidate_records(ranked, model.robot,
                                    [describe(t, model.robot, registry) for t in ranked],
@@ -384,6 +413,5 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                            spec, int(res.weighted.size),
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
-                           notes=tuple(n for n in (screened, tried.note(), doubt,
-                                                   copies_words(measurements, model.tool.names))
+                           notes=tuple(n for n in (units, screened, tried.note(), doubt, copies)
                                        if n))

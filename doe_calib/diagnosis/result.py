@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from doe_calib.diagnosis.candidate import Candidate
+from doe_calib.diagnosis.outliers import Outlier
 from doe_calib.diagnosis.variables import Follows
 from doe_calib.estimation.repeatability import Repeatability
 from doe_calib.io.json_file import read_json, write_json
@@ -66,6 +67,9 @@ class DiagnosisResult:
         Coordinates fitted (3 per reading).
     notes : tuple of str
         What the reader should know besides the verdict (numbered in :meth:`summary`).
+    outliers : tuple of Outlier
+        Readings that are gross outliers (:mod:`~doe_calib.diagnosis.outliers`):
+        when there are any, no effect is tested and ``gross_errors`` holds their poses.
     """
 
     model: str
@@ -85,6 +89,7 @@ class DiagnosisResult:
     min_gain: float = 0.02
     gross_errors: tuple = ()
     notes: tuple = field(default=())
+    outliers: tuple = ()
 
     @property
     def significant(self) -> list[Candidate]:
@@ -160,6 +165,14 @@ class DiagnosisResult:
             lines.append(f"     … and {len(self.candidates) - top} more (JSON)")
         return lines
 
+    def _candidate_lines(self, top: int) -> list[str]:
+        if self.outliers:
+            return [f"Gross outliers ({len(self.outliers)}; candidate effects not tested)",
+                    *(f"  {o.words()}" for o in self.outliers)]
+        return [f"Candidate effects ({len(self.candidates)} tried; p Bonferroni-adjusted; "
+                f"proposed: significant at {self.level:g}, CV gain ≥ {self.min_gain:.0%})",
+                *self.candidate_table(top)]
+
     def summary(self, top: int = 8) -> str:
         """The verdict, the adequacy test, the ranked candidates, what the residual follows,
         and numbered notes."""
@@ -167,9 +180,7 @@ class DiagnosisResult:
                  f"{'adequate' if self.adequate else 'NOT adequate'}", "",
                  *textwrap.wrap(self.verdict, 96), "", "Adequacy",
                  *(f"  {x}" for x in self.adequacy_lines()), "",
-                 f"Candidate effects ({len(self.candidates)} tried; p Bonferroni-adjusted; "
-                 f"proposed: significant at {self.level:g}, CV gain ≥ {self.min_gain:.0%})",
-                 *self.candidate_table(top)]
+                 *self._candidate_lines(top)]
         best = self.best
         if best is not None:
             lines += ["", f"Proposed: {best.spec}, {best.words or best.effect}"]
@@ -197,7 +208,8 @@ class DiagnosisResult:
                 "min_gain": self.min_gain, "gross_errors": list(self.gross_errors),
                 "candidates": [t.to_dict() for t in self.candidates],
                 "follows": [f.to_dict() for f in self.follows],
-                "flagged_poses": list(self.flagged), "notes": list(self.notes)}
+                "flagged_poses": list(self.flagged), "notes": list(self.notes),
+                "outliers": [o.to_dict() for o in self.outliers]}
 
     def to_json(self, path=None) -> str:
         return write_json(self.to_dict(), path)
@@ -213,7 +225,8 @@ class DiagnosisResult:
                    tuple(Follows(**f) for f in d["follows"]), tuple(d["flagged_poses"]),
                    d["level"], d["verdict"], d.get("proposed"), d.get("n_observations", 0),
                    d.get("cv_grouping", ""), d.get("min_gain", 0.02),
-                   tuple(d.get("gross_errors", ())), tuple(d.get("notes", ())))
+                   tuple(d.get("gross_errors", ())), tuple(d.get("notes", ())),
+                   tuple(Outlier.from_dict(o) for o in d.get("outliers", ())))
 
     @classmethod
     def from_json(cls, path) -> "DiagnosisResult":

@@ -1,7 +1,7 @@
 """Plausibility checks after a fit: findings in words, never a failure.
 
 Each check looks for a typical mistake that a fit hides rather than reveals:
-a wrong σ, coordinates in metres or joint angles in radians, a placement
+a wrong σ, coordinates in metres or joint angles in radians, a wrench in kgf, a placement
 error as large as a link, a marker layout that cannot fix the orientation, a
 fitted value beyond its parameter's physical bounds or plausible range (as the
 parameter declares them: :class:`~doe_calib.model.parameters.Parameter`).
@@ -12,12 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from doe_calib.estimation.load_units import kgf_finding
+from doe_calib.io.reading_units import metres_finding
+
 #: σ̂/σ outside [low, high] is reported.
 SIGMA_RATIO_RANGE = (0.3, 3.0)
-#: Coordinates all below this (mm) on a robot reaching farther than REACH_FOR_UNITS (mm)
-#: were written in metres.
-METRES_LIMIT_MM = 5.0
-REACH_FOR_UNITS_MM = 100.0
 #: A placement error above this share of its link's length, and above FLOOR_MM, or above
 #: PLACEMENT_MM, is reported.
 PLACEMENT_SHARE, PLACEMENT_FLOOR_MM, PLACEMENT_MM = 0.2, 5.0, 50.0
@@ -30,32 +29,6 @@ BOUND_STDS = 2.0
 #: The other likely cause of a value beyond its bounds, after the parameter's own ``sign``.
 INADEQUATE = ("otherwise an inadequate model: the fit makes this parameter stand in for an "
               "effect the model lacks (run doe-calib diagnose)")
-
-
-def robot_reach(robot) -> float:
-    """Sum of the link lengths from the base to the flange, metres (an upper bound on reach)."""
-    lengths = [np.linalg.norm(j.placement_matrix[:3, 3]) for j in robot.joints]
-    flange = np.array(robot.flange_placement, float).reshape(4, 4)[:3, 3]
-    return float(sum(lengths) + np.linalg.norm(flange))
-
-
-def xyz_in_metres(xyz, robot) -> str | None:
-    """A finding when every coordinate (m, as read from mm) is tiny for the robot's reach.
-
-    Parameters
-    ----------
-    xyz : ndarray, shape (K, 3)
-        Readings in metres (the file's mm / 1000); NaN ignored.
-    robot : Robot
-    """
-    xyz = np.asarray(xyz, float)
-    finite = xyz[np.isfinite(xyz)]
-    if finite.size == 0 or robot_reach(robot) * 1000.0 < REACH_FOR_UNITS_MM:
-        return None
-    if np.abs(finite).max() * 1000.0 < METRES_LIMIT_MM:
-        return (f"x, y, z look like metres (all within ±{METRES_LIMIT_MM:g} mm while the robot "
-                f"reaches about {robot_reach(robot) * 1000.0:.0f} mm); the file must be in mm")
-    return None
 
 
 def angles_in_radians(configurations, robot) -> str | None:
@@ -252,12 +225,16 @@ def check(model, measurements, result) -> tuple:
         found.append(f"σ estimated from the residuals is {sigma_hat_mm:.3g} mm, far more than a "
                      f"laser tracker's noise: a unit mistake or a missing effect "
                      f"(run doe-calib diagnose)")
-    found.append(xyz_in_metres(measurements.xyz, robot))
+    found.append(metres_finding(measurements.xyz, robot, measurements.configurations.q,
+                                measurements.config, model.tool.position_array[measurements.marker],
+                                measurements.sessions[measurements.config]))
     bad_fit = result.sigma_ratio > SIGMA_RATIO_RANGE[1] or \
         (measurements.sigma_estimated and sigma_hat_mm > BAD_SIGMA_HAT_MM)
     if bad_fit:
         found.append(angles_in_radians(measurements.configurations, robot))
     found += placement_findings(result.parameters, robot)
     found += parameter_findings(result.parameters, result.std(a_posteriori=True))
+    found.append(kgf_finding(result.parameters, result.std(a_posteriori=True), robot,
+                             measurements.configurations))
     found.append(marker_layout_finding(model.tool))
     return tuple(f for f in found if f)

@@ -269,6 +269,13 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
         by session (module notes). A joint value past its limit by at most
         :data:`LIMIT_TOLERANCE` of the range is kept, with a message in
         ``warnings``.
+
+    Raises
+    ------
+    DataError
+        Naming file, line and column of a bad value; naming the file when x, y,
+        z look like metres (their spread ~1/1000 of the one the nominal robot
+        gives these joint values: :mod:`~doe_calib.io.reading_units`).
     """
     table = read_table(path)
     default_session = session or Path(str(path)).stem
@@ -355,7 +362,7 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
                         ((_ignored_note(table, extra),) if extra else ()) + tuple(notes),
                         session, estimated,
                         reading_sigma_source("sigma" in table.columns, estimated))
-    return _with_unit_check(meas, robot)
+    return _with_unit_check(meas, robot, tool)
 
 
 def reading_sigma_source(has_column: bool, unknown: bool) -> str:
@@ -364,16 +371,15 @@ def reading_sigma_source(has_column: bool, unknown: bool) -> str:
     return PER_READING if has_column else ESTIMATED if unknown else GIVEN
 
 
-def _with_unit_check(meas, robot) -> Measurements:
-    """``meas`` with a warning first when its x, y, z look like metres (plausibility)."""
-    from dataclasses import replace
+def _with_unit_check(meas, robot, tool) -> Measurements:
+    """``meas``, unless its x, y, z look like metres (:mod:`~doe_calib.io.reading_units`)."""
+    from doe_calib.io.reading_units import metres_finding
 
-    from doe_calib.estimation.plausibility import xyz_in_metres
-
-    finding = xyz_in_metres(meas.xyz, robot)
-    if finding is None:
-        return meas
-    return replace(meas, warnings=(f"{meas.source}: {finding}",) + meas.warnings)
+    finding = metres_finding(meas.xyz, robot, meas.configurations.q, meas.config,
+                             tool.position_array[meas.marker], meas.sessions[meas.config])
+    if finding is not None:
+        raise DataError(finding, meas.source)
+    return meas
 
 
 def read_design(path, robot) -> Configurations:

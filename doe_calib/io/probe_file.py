@@ -27,6 +27,7 @@ from doe_calib.errors import DataError
 from doe_calib.io.columns import Q_TOL, WRENCH, XYZ, joint_columns
 from doe_calib.io.csv_files import parse_rows, row_joints, row_number
 from doe_calib.io.measurements import Configurations, approach_from_order
+from doe_calib.io.reading_units import metres_finding
 from doe_calib.io.table import read_table
 
 #: Angle convention → scipy's sequence (lower case: fixed axes; upper case: intrinsic).
@@ -115,6 +116,12 @@ def read_probe(path, robot, convention: str) -> ProbeReadings:
     -------
     ProbeReadings
 
+    Raises
+    ------
+    DataError
+        Naming file, line and column of a bad value; naming the file when x, y,
+        z look like metres (:mod:`~doe_calib.io.reading_units`).
+
     Examples
     --------
     >>> probe = read_probe("probe.csv", robot, "rpy")   # doctest: +SKIP
@@ -168,7 +175,14 @@ def read_probe(path, robot, convention: str) -> ProbeReadings:
         approach[mine] = approach_from_order(q[mine] * robot.display_factors, Q_TOL)
     cfg = Configurations.from_arrays(q, [r[2] for r in rows], [[r[3]] for r in rows],
                                      [r[0] for r in rows], approach)
-    return ProbeReadings(cfg, np.array([r[5] for r in rows]),
+    position = np.array([r[5] for r in rows])
+    # the probe frame sits near the flange: its origin's spread is the flange's, give or take
+    # the mount's lever; in metres it is a thousandth of it
+    finding = metres_finding(position, robot, q, np.arange(len(q)), np.zeros_like(position),
+                             np.array(session))
+    if finding is not None:
+        raise DataError(finding, table.path)
+    return ProbeReadings(cfg, position,
                          angles_to_matrix([r[6] for r in rows], convention),
                          np.array([line for line, _ in parsed]), table.path, session,
                          convention, tuple(notes))

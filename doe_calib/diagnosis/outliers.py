@@ -1,0 +1,264 @@
+"""Gross outliers: single readings the rest of the data place far from where they were read.
+
+A reading's deletion residual ``e_i = y_i − x_i(p̂₍ᵢ₎)`` is its misfit under the
+fit to the *other* readings: an outlier cannot pull that fit towards itself.
+Under an adequate model ``‖e_i / σ_i‖² ~ χ²(3)`` (the leverage of one reading,
+about P/3K, makes it a few % larger at most; ignored), and over K readings the
+largest is judged by Bonferroni: ``K · P(χ²₃ > t_i) < level``.
+
+With σ estimated from the residuals of the fit, σ̂ holds the outlier and any
+missing effect too, and a pose an effect moves far is not told from an outlier by it. The
+yardstick is then the noise *within* poses: every joint-space effect (a
+compliance, a backlash, a cyclic error) moves the flange, so it moves a
+pose's markers rigidly; what a pose's best small rigid motion
+``e_j ≈ t + ω × x_j`` leaves of its residuals is noise (and marker-position
+error, fitted). Its mean square, over ``3n − rank`` degrees of freedom per
+pose (3 for three markers), is σ̂ free of the model's lacks, taken from the
+poses without suspects (externally studentised); a single marker
+(a lone SMR) has none, and with σ estimated its outliers cannot be told from
+an effect (give σ).
+
+The suspects are found by rounds: the readings beyond the threshold (the
+:data:`MAX_OUTLIERS` worst when more are: an outlier pulls the fit and takes
+other readings past the threshold with it) are left out, the model refitted,
+the threshold applied again to every reading, until the set settles. They are called outliers only when they are few
+(:data:`MAX_OUTLIERS`) and the other readings then fit within the noise (the
+adequacy rules of :func:`~doe_calib.diagnosis.engine.diagnose`; with σ
+estimated, the F test of the rigid part of the residuals against the
+within-pose part): a missing effect leaves many readings beyond the
+threshold, or a rest that still does not fit, and is left to the effect tests.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from doe_calib.estimation.chi_square import chi2_survival, chi2_upper_quantile
+from doe_calib.estimation.f_distribution import f_survival
+from doe_calib.estimation.identify import identify_quietly
+from doe_calib.estimation.weighted_residuals import marker_residuals
+from doe_calib.io.measurements import ESTIMATED
+
+#: More suspects than this (readings) is not "a few outliers" but a model or σ problem.
+MAX_OUTLIERS = 3
+#: Rounds of leave-out-and-refit before the suspects must have settled.
+MAX_ROUNDS = 4
+#: Readings beyond the threshold in the fit to all: up to this many times
+#: :data:`MAX_OUTLIERS` may be the outliers' pull on the fit (they are then left out worst
+#: first); more are a model or σ problem.
+SWAMPED = 10
+
+
+@dataclass(frozen=True)
+class Outlier:
+    """One reading far from where the fit to the other readings puts it.
+
+    Attributes
+    ----------
+    pose : str
+        Its pose id.
+    marker : str
+        Its marker.
+    line : int
+        Its line in ``source`` (0 when not from a file).
+    source : str
+        The file it was read from.
+    size_mm : float
+        Length of its deletion residual, mm.
+    size_sigma : float
+        The same in σ: ``‖e_i‖ / σ_i`` with σ_i the reading's σ (the within-pose
+        σ̂ when σ was estimated), dimensionless.
+    p_value : float
+        ``K · P(χ²₃ > ‖e_i/σ_i‖²)`` (Bonferroni over the K readings), at most 1.
+    n_readings : int
+        K, the readings it was judged among.
+    """
+
+    pose: str
+    marker: str
+    line: int
+    source: str
+    size_mm: float
+    size_sigma: float
+    p_value: float
+    n_readings: int
+
+    def words(self) -> str:
+        """``pose 17, marker B (line 102 of m.csv): 1.5 mm = 50 σ off (p = 1e-300 …)``."""
+        where = f" (line {self.line} of {self.source})" if self.line else ""
+        p = f"p = {self.p_value:.2g}" if self.p_value >= 1e-300 else "p < 1e-300"
+        return (f"pose {self.pose}, marker {self.marker}{where}: {self.size_mm:.3g} mm = "
+                f"{self.size_sigma:.3g} σ from where the other readings put it ({p}, "
+                f"Bonferroni over {self.n_readings} readings)")
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Outlier":
+        return cls(**d)
+
+
+def within_pose(error, predicted, config, rows) -> tuple:
+    """Sum of squares and degrees of freedom of the residuals ``rows`` leave after each
+    configuration's best small rigid motion (module notes).
+
+    Parameters
+    ----------
+    error, predicted : ndarray, shape (K, 3)
+        Residuals and modelled marker positions, m.
+    config : ndarray of int, shape (K,)
+        Configuration of each reading.
+    rows : ndarray of bool, shape (K,)
+        The readings to use; a configuration counts only with all its readings in.
+
+    Returns
+    -------
+    (float, int)
+        Sum of squares (m²) and its degrees of freedom (3n − rank per configuration).
+    """
+    ss, dof = 0.0, 0
+    count = np.bincount(config)
+    complete = np.bincount(config, rows) == count
+    order = np.argsort(config, kind="stable")
+    starts = np.r_[0, np.cumsum(count)]
+    for n in np.unique(count[complete]):  # configurations of n readings, stacked
+        group = np.flatnonzero(complete & (count == n))
+        mine = order[starts[group][:, None] + np.arange(n)]           # (G, n)
+        x = predicted[mine] - predicted[mine].mean(axis=1, keepdims=True)
+        a, b, z = np.moveaxis(x, -1, 0)
+        one, nil = np.ones_like(a), np.zeros_like(a)
+        motion = np.stack([np.stack([one, nil, nil, nil, z, -b], -1),   # e_j = t + ω × x_j
+                           np.stack([nil, one, nil, -z, nil, a], -1),
+                           np.stack([nil, nil, one, b, -a, nil], -1)], 2)  # (G, n, 3, 6)
+        motion = motion.reshape(len(group), 3 * n, 6)
+        e = error[mine].reshape(len(group), 3 * n, 1)
+        left = e - motion @ (np.linalg.pinv(motion, rcond=1e-9) @ e)
+        ss += float(np.sum(left ** 2))
+        dof += int(np.sum(3 * n - np.linalg.matrix_rank(motion, tol=None)))
+    return ss, dof
+
+
+def _fits(t, dof, sigma_m, level, tolerance, practical_um, survival) -> bool:
+    """Diagnose's adequacy rules for a mean square ``t / dof`` against σ² (``survival``: p)."""
+    ratio = np.sqrt(t / max(dof, 1))
+    misfit_um = 1e6 * sigma_m * np.sqrt(max(ratio ** 2 - 1.0, 0.0))
+    return survival >= level or ratio <= 1 + tolerance or misfit_um < practical_um
+
+
+def _rest_fits_the_noise(error, sigma, keep, rank, level, tolerance, practical_um,
+                         within=None) -> bool:
+    """Whether the readings ``keep`` fit within σ: their χ² against σ (given), or with
+    ``within`` (the within-pose sum of squares and dof, σ estimated) the F test of the rest's
+    rigid part against it."""
+    if within is None:
+        t = float(((error[keep] / sigma[keep, None]) ** 2).sum())
+        dof = max(3 * int(keep.sum()) - rank, 1)
+        return _fits(t, dof, float(np.median(sigma[keep])), level, tolerance, practical_um,
+                     chi2_survival(t, dof))
+    ss_in, dof_in = within
+    dof = 3 * int(keep.sum()) - rank - dof_in
+    if dof <= 0:
+        return True
+    s2 = ss_in / dof_in
+    t = (float((error[keep] ** 2).sum()) - ss_in) / s2
+    return _fits(t, dof, np.sqrt(s2), level, tolerance, practical_um, f_survival(t / dof, dof, dof_in))
+
+
+def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: float = 0.05,
+                   practical_um: float = 2.0) -> tuple:
+    """The few readings that are gross outliers (module notes), largest first; () if none.
+
+    Parameters
+    ----------
+    model : Model
+    measurements : Measurements
+        Readings with their σ settled (m); with ``sigma_source`` ``"estimated"`` the
+        scale is the within-pose σ̂ of the poses without suspects (module notes).
+    fit : IdentificationResult
+        ``model`` fitted to every reading.
+    level : float
+        Bonferroni significance over the readings.
+    tolerance, practical_um :
+        With σ known, the other readings must fit within the noise by these
+        rules (as :func:`~doe_calib.diagnosis.engine.diagnose`).
+
+    Returns
+    -------
+    tuple of Outlier
+
+    Examples
+    --------
+    >>> found = gross_outliers(model, measurements, fit)   # doctest: +SKIP
+    >>> found[0].words()                                   # doctest: +SKIP
+    'pose 17, marker B (line 102 of m.csv): 1.5 mm = 50 σ from where the other readings …'
+    """
+    if measurements.observed_per_configuration:  # a probe's virtual points are not readings
+        return ()
+    k = len(measurements)
+    sigma, estimated = measurements.sigma, measurements.sigma_source == ESTIMATED
+    rank = int(fit.parameters.free.sum())
+    error = marker_residuals(model, measurements, fit.parameters.values)
+    out, within = np.zeros(k, bool), None
+    critical = chi2_upper_quantile(min(level / k, 0.5), 3)  # Bonferroni over the K readings
+    for _ in range(MAX_ROUNDS):
+        if estimated:  # the noise within poses, of the poses without suspects
+            within = within_pose(error, measurements.xyz - error, measurements.config, ~out)
+            if within[1] < 3:
+                return ()
+            scale = np.full(k, np.sqrt(within[0] / within[1]))
+        else:
+            scale = sigma
+        t = ((error / scale[:, None]) ** 2).sum(axis=1)
+        beyond = t > critical
+        if np.array_equal(beyond, out):
+            break
+        if not 0 < beyond.sum() <= SWAMPED * MAX_OUTLIERS:
+            return ()
+        if beyond.sum() > MAX_OUTLIERS:  # a few outliers pull the fit: leave out the worst
+            worst = np.zeros(k, bool)
+            worst[np.argsort(t)[-MAX_OUTLIERS:]] = True
+            if np.array_equal(worst, out):  # leaving them out does not clean the rest
+                return ()
+            beyond = worst
+        out = beyond
+        refit = identify_quietly(model, measurements.subset(~out), fit.parameters)
+        error = marker_residuals(model, measurements, refit.parameters.values)
+    else:
+        return ()
+    if not out.any() or not _rest_fits_the_noise(error, sigma, ~out, rank, level, tolerance,
+                                                 practical_um, within):
+        return ()
+    cfg, names = measurements.configurations, model.tool.names
+    found = [Outlier(cfg.pose[measurements.config[i]], names[measurements.marker[i]],
+                     int(measurements.line[i]), str(measurements.source),
+                     float(np.linalg.norm(error[i]) * 1e3),
+                     float(np.linalg.norm(error[i]) / scale[i]),
+                     float(min(chi2_survival(t[i], 3) * k, 1.0)), k)
+             for i in np.flatnonzero(out)]
+    return tuple(sorted(found, key=lambda o: -o.size_sigma))
+
+
+def outlier_verdict(outliers, adequacy_words: str) -> str:
+    """A diagnosis verdict naming the outliers and what to do, no effect proposed.
+
+    Parameters
+    ----------
+    outliers : sequence of Outlier
+    adequacy_words : str
+        The χ² test of every reading, in words (σ̂/σ, its interval, p).
+    """
+    one = len(outliers) == 1
+    poses = list(dict.fromkeys(o.pose for o in outliers))
+    head = "one reading is a gross error" if one else \
+        f"{len(outliers)} readings are gross errors"
+    listed = "; ".join(o.words() for o in outliers)
+    python = "[" + ", ".join(repr(p) for p in poses) + "]"
+    return (f"The model is NOT adequate ({adequacy_words}), but {head}, not an effect: {listed}. "
+            f"A reading off its target, a marker moved or swapped, or a pose typed wrong. "
+            f"Re-measure {'that pose' if len(poses) == 1 else 'those poses'} or leave "
+            f"{'it' if len(poses) == 1 else 'them'} out: rerun with --exclude-poses "
+            f"{','.join(poses)} (each exclusion is reported; in Python "
+            f"measurements.split_by_pose({python})[0]). No effect is tested until then: "
+            f"an effect fitted to these readings would be fitted to the outlier.")
