@@ -47,8 +47,11 @@ def _fixed_note(reason: str, by_block: dict) -> str:
 
 
 def notes(result) -> list[str]:
-    """The numbered notes: one per group of fixed parameters, then one per warning."""
+    """The numbered notes: one per group of fixed parameters, the parameter selection, then
+    one per warning."""
     out = [_fixed_note(r, g) for r, g in fixed_groups(result.parameters)]
+    if result.selection is not None:
+        out.append(result.selection.summary())
     return out + [w for w in result.warnings if not _FIXED_WARNING.match(w)]
 
 

@@ -10,6 +10,7 @@ from doe_calib.estimation.fit_report import fit_report
 from doe_calib.estimation.fit_statistics import FitStatistics, fit_statistics
 from doe_calib.estimation.parameter_estimate import ParameterEstimate, parameter_estimate
 from doe_calib.estimation.predict import Prediction, predict
+from doe_calib.estimation.selection import Selection
 from doe_calib.estimation.covariance import parameter_std, std_from_covariance
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import SIGMA_SOURCES
@@ -56,6 +57,9 @@ class IdentificationResult:
         (default: from ``sigma_estimated``).
     effect_files : dict
         File of each user effect of the model (what :meth:`predict` needs).
+    selection : Selection or None
+        What the parameter selection left at nominal and why
+        (:class:`~doe_calib.estimation.selection.Selection`); None when it was not asked.
 
     Examples
     --------
@@ -80,6 +84,7 @@ class IdentificationResult:
     sigma_estimated: bool = False
     sigma_source: str = ""
     effect_files: dict = field(default_factory=dict)
+    selection: Selection | None = None
 
     def __post_init__(self):
         if not self.sigma_source:
@@ -225,6 +230,7 @@ class IdentificationResult:
                 "n_observations": self.n_observations,
                 "residuals": self.residuals, "convergence": self.convergence,
                 "warnings": list(self.warnings),
+                "selection": None if self.selection is None else self.selection.to_dict(),
                 "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
 
     def to_json(self, path=None) -> str:
@@ -245,7 +251,8 @@ class IdentificationResult:
                    float(d["sigma_ratio"]), d["residuals"], d["convergence"],
                    int(d["n_observations"]), float(d["sigma_mm"]), tuple(d.get("warnings", ())),
                    estimated, d.get("sigma_source") or ("estimated" if estimated else "given"),
-                   dict(d.get("effect_files") or {}))
+                   dict(d.get("effect_files") or {}),
+                   Selection.from_dict(d["selection"]) if d.get("selection") else None)
 
     @classmethod
     def from_json(cls, path) -> "IdentificationResult":
