@@ -126,6 +126,7 @@ def test_the_selection_is_told_in_the_report_and_survives_json(tmp_path, kr270):
     res = _fit(model, train)
     sel = res.selection
     assert sel.left_at_nominal, sel
+    assert any("cannot see" in w for w in res.warnings)  # the whole fit's words, carried
     report = res.fit_report()
     assert f"{len(sel.left_at_nominal)} left at nominal" in report
     assert f"fixed as {REASON.split(' (')[0]}" in report

@@ -46,9 +46,8 @@ CRITERION = "leave-one-pose-out"
 #: Poses per free parameter from which the selection is not run.
 POSES_PER_PARAMETER = 10
 #: Why a parameter was left at nominal (one reason for all: the fit report groups by it).
-REASON = ("not worth fitting on these data (the parameter selection left it at nominal: the "
-          "data separate it least from the others, and the fit without it predicts new poses "
-          "better; select='none', --select none, fits it)")
+REASON = ("not worth fitting on these data (the parameter selection left it at nominal: see "
+          "its note; --select none fits it)")
 
 
 @dataclass(frozen=True)
