@@ -116,14 +116,24 @@ def pose_groups(measurements) -> list[np.ndarray]:
 
 
 def _loo_rms_mm(residual, q, groups, sigma, drop=None) -> float:
-    """Leave-one-pose-out 3-D RMS (mm) of the fit with hat matrix ``Q Qᵀ`` (less ``u uᵀ``)."""
+    """Leave-one-pose-out 3-D RMS (mm) of the fit with hat matrix ``Q Qᵀ`` (less ``u uᵀ``).
+
+    Poses of one size are solved together. A pose alone in seeing some direction
+    (``I − H_g`` singular: no fit on the others predicts it) gets the least-squares
+    solution of its system, the smallest error consistent with it."""
     total = 0.0
-    for g in groups:
-        h = q[g] @ q[g].T
+    for size in sorted({len(g) for g in groups}):
+        rows = np.array([g for g in groups if len(g) == size])  # (n, size)
+        qg = q[rows]
+        m = np.eye(size) - qg @ qg.transpose(0, 2, 1)
         if drop is not None:
-            h -= np.outer(drop[g], drop[g])
-        e = np.linalg.lstsq(np.eye(len(g)) - h, residual[g], rcond=None)[0]
-        total += float(np.sum((e * sigma[g]) ** 2))
+            m += drop[rows][:, :, None] * drop[rows][:, None, :]
+        try:
+            e = np.linalg.solve(m, residual[rows][:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:
+            e = np.array([np.linalg.lstsq(a, b, rcond=None)[0]
+                          for a, b in zip(m, residual[rows])])
+        total += float(np.sum((e * sigma[rows]) ** 2))
     return float(np.sqrt(3.0 * total / len(residual)) * 1e3)
 
 
