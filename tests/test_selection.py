@@ -98,6 +98,22 @@ def test_a_rich_campaign_keeps_every_parameter(tmp_path, kr270):
     assert "every parameter kept" in chosen.fit_report()
 
 
+def test_many_poses_per_parameter_skip_the_selection(tmp_path, kr270):
+    """Ten poses per free parameter or more: the selection is not run, and the result says so."""
+    chain, robot, tool, _ = kr270
+    model = build_model(robot, tool, "joint_offset")
+    rng = np.random.default_rng(3)
+    truth = sim.Truth.random(chain, np.array(list(SMR.values())), rng)
+    q = sim.random_configurations(chain, 150, rng)
+    sim.write_campaign(tmp_path / "many.csv", chain, truth, q, np.zeros((150, 6)), list(SMR),
+                       SIGMA_MM, rng)
+    res = _fit(model, read_measurements(tmp_path / "many.csv", robot, tool))
+    # base 6, marker 3, four offsets (a1's goes with the base, a6's with the reflector)
+    assert res.parameters.free.sum() == 13
+    assert res.selection.predicted_rms_3d_mm == () and res.selection.left_at_nominal == ()
+    assert "parameter selection not run: 150 poses for 13 free parameters" in res.fit_report()
+
+
 def test_few_poses_with_unmodelled_effects_predict_new_poses_no_worse(tmp_path, kr270):
     """Twenty poses for 27 separable parameters, two cyclic joint errors the model lacks: over
     eight campaigns the selected fit predicts 40 new poses (independent truth) better on

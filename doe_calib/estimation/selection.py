@@ -174,7 +174,7 @@ def propose(model, measurements, params, groups) -> Proposal:
     w = np.linalg.solve(rf.T, np.eye(len(free))[:, candidates])  # R⁻ᵀ e_j
     vif = np.sum(w * w, axis=0)
     pick = int(np.argmax(vif))
-    k, i = candidates[pick], free[candidates[pick]]
+    i = free[candidates[pick]]
     u = q @ (w[:, pick] / np.sqrt(vif[pick]))
     shift = jac[:, i] * (params.nominal_values[i] - params.values[i])
     without = _loo_rms_mm(r + u * (u @ shift), q, groups, sigma, drop=u)
