@@ -90,7 +90,7 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
     first = recorded(params)
     kept, selection = choose(model, measurements, first, recorded)
     told = _told(said[id(first)], said[id(kept)]) if kept is not first else said[id(first)]
-    for w in told:
+    for w in list(told):  # a copy: a caller recording warnings may hold the same list
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     notes = kept.warnings + tuple(n for n in first.warnings if n not in kept.warnings and n not in
                                   {str(w.message) for w in said[id(first)]
