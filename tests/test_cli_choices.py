@@ -11,6 +11,7 @@ from doe_calib.collision.model import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE
 from doe_calib.design.criteria import CRITERIA
 from doe_calib.diagnosis.cross_validation import GROUPINGS
 from doe_calib.estimation.identify import ESTIMATORS
+from doe_calib.estimation.selection import SELECTIONS
 from doe_calib.export import FORMATS
 from doe_calib.export.sequence import GROUPINGS as EXPORT_GROUPINGS
 from doe_calib.export.sequence import ORDERS
@@ -23,6 +24,7 @@ HEAVY = ("numpy", "scipy", "casadi", "pinocchio", "coal", "matplotlib", "cvxpy",
 def test_choices_equal_the_library_values():
     assert choices.DEFAULT_MODEL == DEFAULT_MODEL
     assert choices.ESTIMATORS == ESTIMATORS
+    assert choices.SELECTIONS == SELECTIONS
     assert choices.CRITERIA == CRITERIA
     assert choices.CV_GROUPINGS == GROUPINGS
     assert choices.EXPORT_FORMATS == {k: f.description for k, f in FORMATS.items()}

@@ -11,6 +11,8 @@ from __future__ import annotations
 DEFAULT_MODEL = "joint_offset+geometry+joint_compliance"
 #: :data:`doe_calib.estimation.identify.ESTIMATORS`.
 ESTIMATORS = ("point", "two-step", "pose")
+#: :data:`doe_calib.estimation.selection.SELECTIONS`: parameter selection of ``identify``.
+SELECTIONS = ("cv", "none")
 #: :data:`doe_calib.design.criteria.CRITERIA`.
 CRITERIA = ("D", "A", "E", "task")
 #: :data:`doe_calib.diagnosis.cross_validation.GROUPINGS`: how cross-validation folds.

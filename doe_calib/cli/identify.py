@@ -4,7 +4,7 @@ from __future__ import annotations
 import sys
 import warnings
 
-from doe_calib.cli.choices import ESTIMATORS
+from doe_calib.cli.choices import ESTIMATORS, SELECTIONS
 from doe_calib.cli.common import (
     approach_argument,
     data_argument,
@@ -31,6 +31,11 @@ def add_arguments(c):
     c.add_argument("--sigma", type=positive("--sigma", "mm"),
                    help="tracker σ per coordinate, mm, for rows without a sigma column "
                         "(with neither, σ is estimated from the residuals)")
+    c.add_argument("--select", choices=SELECTIONS, default=SELECTIONS[0],
+                   help="cv (default): with few poses for the parameters, leave at nominal those "
+                        "the data separate least from the others while that lowers the "
+                        "leave-one-pose-out error at new poses (the result says which and why); "
+                        "none: fit every parameter the data can separate")
     c.add_argument("--fix", help="comma-separated parameters or blocks to hold at nominal")
     c.add_argument("--free", help="comma-separated parameters or blocks to estimate")
     c.add_argument("--normalisation", type=positive("--normalisation", "m/rad"),
@@ -61,7 +66,7 @@ def run(args):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = identify(model, meas, params, estimator=args.estimator, progress=progress,
-                          **options)
+                          select=args.select, **options)
     if progress:
         print(file=sys.stderr)
     report_warnings(caught)

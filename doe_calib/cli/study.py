@@ -15,6 +15,7 @@ from doe_calib.io.json_file import read_json, strict_json
 STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__main__",
            "tiago_refine": "studies.tiago_refine.__main__",
            "tiago_single_point": "studies.tiago_single_point.__main__",
+           "tiago_one_session": "studies.tiago_one_session.__main__",
            "table2": "studies.table2.__main__", "diagnosis": "studies.diagnosis.__main__",
            "design_sweep": "studies.design_sweep.__main__",
            "compensation": "studies.compensation.__main__",

@@ -113,7 +113,7 @@ def score_candidates(builders, effects, params, measurements, folds,
 def _score(big, effect, params, measurements, folds):
     bp = grown_parameters(big, params)
     try:  # folds start from the grown model's own fit: what they hold fixed is then right
-        fit = identify(big, measurements, bp, register=False)
+        fit = identify(big, measurements, bp, register=False, select="none")  # fitted whole
     except DoeCalibError:
         return None
     new = [n for n in fit.parameters.names if n not in params.names]

@@ -64,10 +64,12 @@ def _reduced_note(result) -> list[str]:
 
 
 def notes(result) -> list[str]:
-    """The numbered notes: one per group of fixed parameters, the reduced set's values,
-    then one per warning."""
+    """The numbered notes: one per group of fixed parameters, the reduced set's values, the
+    parameter selection, then one per warning."""
     out = [_fixed_note(r, g) for r, g in fixed_groups(result.parameters)]
     out += _reduced_note(result)
+    if result.selection is not None:
+        out.append(result.selection.summary())
     return out + [w for w in result.warnings if not _FIXED_WARNING.match(w)]
 
 

@@ -9,10 +9,18 @@ from __future__ import annotations
 import warnings
 from dataclasses import replace
 
-from doe_calib.errors import DataWarning, DoeCalibWarning, MisfitWarning, PlausibilityWarning
+from doe_calib.errors import (
+    ConditioningWarning,
+    ConvergenceWarning,
+    DataWarning,
+    DoeCalibWarning,
+    MisfitWarning,
+    PlausibilityWarning,
+)
 from doe_calib.estimation import plausibility
 from doe_calib.estimation.fit_statistics import misfit_finding
 from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
+from doe_calib.estimation.selection import SELECTIONS, select as choose
 from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.io.repeated_readings import copies_words
 from doe_calib.model.marker_model import for_workload
@@ -21,7 +29,7 @@ ESTIMATORS = ("point", "two-step", "pose")
 
 
 def identify(model, measurements, params=None, estimator: str = "point", progress=None,
-             sigma_mm: float | None = None, **options):
+             sigma_mm: float | None = None, select: str = "cv", **options):
     """Identify the model's parameters from marker readings.
 
     Parameters
@@ -44,6 +52,13 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
         σ per coordinate, mm, for every reading (it replaces the readings' own);
         default: theirs, or, when they have none, σ̂ of this fit
         (:func:`~doe_calib.estimation.sigma.resolve_sigma`).
+    select : {"cv", "none"}
+        ``cv`` (default): when the poses are few for the free parameters, leave at
+        nominal, one at a time, the parameters the data separate least from the
+        others, as long as that lowers the predicted error at new poses
+        (leave-one-pose-out, :mod:`~doe_calib.estimation.selection`); the result's
+        ``selection`` says which and why. ``none``: every parameter the data can
+        separate is fitted.
 
     Returns
     -------
@@ -55,23 +70,66 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
         The σ of repeated readings, when poses were read more than once, is reported
         beside (``sigma_repeated``), never used in place of σ.
     """
+    if select not in SELECTIONS:
+        raise ValueError(f"unknown parameter selection {select!r}; choose one of "
+                         f"{', '.join(SELECTIONS)}")
+    if estimator not in ESTIMATORS:
+        raise ValueError(f"unknown estimator {estimator!r}; choose one of "
+                         f"{', '.join(ESTIMATORS)}")
     settled = resolve_sigma(model, measurements, sigma_mm, in_fit=True)
     measurements = settled.measurements
     model = for_workload(model, FIT_PASSES * len(measurements.configurations), progress)
+
+    def fit(start):
+        return replace(_estimate(model, measurements, start, estimator, progress, options),
+                       sigma_repeated=settled.repeated)
+
+    if select == "none":
+        return with_plausibility(model, measurements, fit(params))
+    said = {}  # each fit's warnings, held back: only the kept fit's are told
+
+    def recorded(start):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            result = fit(start)
+        said[id(result)] = caught
+        return result
+
+    first = recorded(params)
+    kept, selection = choose(model, measurements, first, recorded)
+    told = _told(said[id(first)], said[id(kept)]) if kept is not first else said[id(first)]
+    for w in list(told):  # a copy: a caller recording warnings may hold the same list
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    notes = kept.warnings + tuple(n for n in first.warnings if n not in kept.warnings and n not in
+                                  {str(w.message) for w in said[id(first)]
+                                   if issubclass(w.category, OF_THAT_FIT)})
+    return with_plausibility(model, measurements,
+                             replace(kept, warnings=notes, selection=selection))
+
+
+#: Warnings about one fit's numbers, not about the data: not carried to another fit.
+OF_THAT_FIT = (ConditioningWarning, ConvergenceWarning)
+
+
+def _told(first, kept):
+    """The warnings to issue when a refit is kept: what the first fit found of the data (the
+    parameters it cannot separate, told once), then the kept fit's own."""
+    out = [w for w in first if not issubclass(w.category, OF_THAT_FIT)]
+    seen = {(w.category, str(w.message)) for w in out}
+    return out + [w for w in kept if (w.category, str(w.message)) not in seen]
+
+
+def _estimate(model, measurements, params, estimator, progress, options):
+    """One fit by the estimator named."""
     if estimator == "point":
-        result = identify_point(model, measurements, params, progress=progress, **options)
-    elif estimator == "two-step":
+        return identify_point(model, measurements, params, progress=progress, **options)
+    if estimator == "two-step":
         from doe_calib.estimation.two_step import identify_two_step
 
-        result = identify_two_step(model, measurements, params, **options)
-    elif estimator == "pose":  # SciPy's least_squares: loaded only for it
-        from doe_calib.estimation.pose_estimator import identify_pose
+        return identify_two_step(model, measurements, params, **options)
+    from doe_calib.estimation.pose_estimator import identify_pose  # SciPy: loaded only for it
 
-        result = identify_pose(model, measurements, params, **options)
-    else:
-        raise ValueError(f"unknown estimator {estimator!r}; choose one of "
-                         f"{', '.join(ESTIMATORS)}")
-    return with_plausibility(model, measurements, replace(result, sigma_repeated=settled.repeated))
+    return identify_pose(model, measurements, params, **options)
 
 
 def with_plausibility(model, measurements, result):
@@ -105,10 +163,13 @@ def identify_quietly(model, measurements, params=None, **options):
     """:func:`identify` for fits run many times (cross-validation, diagnosis, refinement).
 
     Identifiability, conditioning, convergence and plausibility trouble is not
-    issued as warnings: it stays, in words, in the result's ``warnings``. Only the
+    issued as warnings: it stays, in words, in the result's ``warnings``. The fit keeps
+    every parameter (``select="none"``) unless ``select`` is given, so the models these
+    callers compare are each fitted whole. Only the
     toolkit's own warnings (:class:`~doe_calib.errors.DoeCalibWarning`) are
     held back; numpy's, scipy's and CasADi's still reach the caller.
     """
+    options.setdefault("select", "none")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DoeCalibWarning)
         return identify(model, measurements, params, **options)

@@ -12,6 +12,7 @@ from doe_calib.estimation.repeatability import Repeatability
 from doe_calib.estimation.parameter_estimate import ParameterEstimate, parameter_estimate
 from doe_calib.estimation.predict import Prediction, predict
 from doe_calib.estimation.reduced_set import combinations, role
+from doe_calib.estimation.selection import Selection
 from doe_calib.estimation.covariance import parameter_std, std_from_covariance
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import SIGMA_SOURCES
@@ -66,6 +67,9 @@ class IdentificationResult:
     sigma_repeated : Repeatability or None
         σ of the readings repeated in one pose, reported beside ``sigma_mm`` (never
         used in its place by ``identify``); None when too few are.
+    selection : Selection or None
+        What the parameter selection left at nominal and why
+        (:class:`~doe_calib.estimation.selection.Selection`); None when it was not asked.
 
     Examples
     --------
@@ -92,6 +96,7 @@ class IdentificationResult:
     effect_files: dict = field(default_factory=dict)
     absorbed: dict = field(default_factory=dict)
     sigma_repeated: Repeatability | None = None
+    selection: Selection | None = None
 
     def __post_init__(self):
         if not self.sigma_source:
@@ -248,6 +253,7 @@ class IdentificationResult:
                 "n_observations": self.n_observations,
                 "residuals": self.residuals, "convergence": self.convergence,
                 "warnings": list(self.warnings),
+                "selection": None if self.selection is None else self.selection.to_dict(),
                 "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
 
     def to_json(self, path=None) -> str:
@@ -272,7 +278,8 @@ class IdentificationResult:
                    {k: tuple((str(n), float(c)) for n, c in v)
                     for k, v in (d.get("absorbed_si") or {}).items()},
                    Repeatability.from_dict(d["sigma_repeated"]) if d.get("sigma_repeated")
-                   else None)
+                   else None,
+                   Selection.from_dict(d["selection"]) if d.get("selection") else None)
 
     @classmethod
     def from_json(cls, path) -> "IdentificationResult":
