@@ -1,6 +1,7 @@
 """``doe-calib compensate``: joint values that make the identified robot reach a program."""
 from __future__ import annotations
 
+import math
 import sys
 import warnings
 from pathlib import Path
@@ -13,6 +14,7 @@ from doe_calib.cli.common import (
     report_warnings,
 )
 from doe_calib.cli.program_options import program_arguments, stations, tool_payload
+from doe_calib.compensation.flags import MAX_SHIFT
 from doe_calib.errors import ConvergenceWarning, DataError, OptionError
 from doe_calib.io.json_file import strict_json
 
@@ -43,12 +45,44 @@ def add_arguments(c):
     c.add_argument("--program-out", help="directory (or file) for --format (default: the "
                                          "folder of --out)")
     c.add_argument("--name", default="compensated", help="program name (default compensated)")
+    c.add_argument("--max-shift", type=float, default=MAX_SHIFT, metavar="DEG",
+                   help=f"flag a row whose joints move more than this (deg; mm for a prismatic "
+                        f"joint; default {MAX_SHIFT:g}): near a singularity, or targets of "
+                        f"another TCP or frame")
+    c.add_argument("--unseen-tolerance", nargs="+", default=(), metavar="[KEY:]VALUE",
+                   help="stated tolerance (1σ) of the parameters the readings cannot separate, "
+                        "carried in the predicted std: VALUE with its unit (mm or deg), for "
+                        "all of that unit or, with KEY:, for a block (geometry:0.01deg) or a "
+                        "parameter (dq_a1:0.02deg); default each parameter's typical "
+                        "deviation, 1 mm and 0.0573 deg")
     program_arguments(c, home="none")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
     effect_file_argument(c)
 
 
 OUTPUTS = {"out": "file", "program_out": "folder"}
+
+
+_UNITS = {"mm": ("m", 1e-3), "deg": ("rad", math.pi / 180.0)}
+
+
+def _tolerance(items) -> dict:
+    """``--unseen-tolerance`` items as :func:`~doe_calib.estimation.unseen.tolerances` keys (SI)."""
+    out = {}
+    for item in items:
+        key, _, text = item.rpartition(":")
+        unit = next((u for u in _UNITS if text.endswith(u)), None)
+        try:
+            value = float(text[:-len(unit)]) if unit else math.nan
+        except ValueError:
+            value = math.nan
+        if unit is None or not value > 0 or not math.isfinite(value):
+            raise OptionError(f"--unseen-tolerance {item!r}: give a positive number with its "
+                              f"unit, mm or deg, optionally after a block or parameter name "
+                              f"(0.2mm, geometry:0.01deg, dq_a1:0.02deg)")
+        si, factor = _UNITS[unit]
+        out[f"{key}:{si}" if key else si] = value * factor
+    return out
 
 
 def _tcp(text: str, result):
@@ -75,7 +109,8 @@ def run(args):
     model = build_model(result.robot, result.tool, result.model, registry=registry)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        out = compensate(model, result, targets, tcp, build_problem(model, args.position_only))
+        out = compensate(model, result, targets, tcp, build_problem(model, args.position_only),
+                         max_shift=args.max_shift, tolerance=_tolerance(args.unseen_tolerance))
     report_warnings([w for w in caught if not issubclass(w.category, ConvergenceWarning)])
     for pose, ok, note in zip(out.pose, out.converged, out.note):
         if not ok:

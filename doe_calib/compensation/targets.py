@@ -44,10 +44,15 @@ class Targets:
     positions : ndarray, shape (M, 3), or None
         Target TCP positions in the tracker frame (m); None when the file has
         no ``x,y,z``: the targets are then where the nominal robot puts the TCP.
+    frame : str
+        The frame the file gave them in (``tracker``, or a robot frame: they were
+        turned into the tracker frame with the identified base pose, which the
+        readings may not fix; :mod:`.accuracy` tells what that costs).
     """
 
     configurations: Configurations
     positions: np.ndarray | None = None
+    frame: str = TRACKER
 
     def __len__(self) -> int:
         return len(self.configurations)
@@ -143,7 +148,7 @@ def read_targets(path, robot, frame: str = TRACKER, result=None) -> Targets:
         except DataError as exc:
             raise DataError(_message(exc), path, exc.line,
                             _renumber(exc.column, table.columns, kept)) from None
-    return Targets(cfg, xyz if frame == TRACKER else in_tracker(xyz, robot, frame, result))
+    return Targets(cfg, xyz if frame == TRACKER else in_tracker(xyz, robot, frame, result), frame)
 
 
 def in_tracker(points, robot, frame: str, result) -> np.ndarray:
