@@ -53,6 +53,11 @@ def unseen_names(params) -> list[str]:
             if any(w in why for w in UNSEEN_WORDS)]
 
 
+def measured_markers(result) -> list[str] | None:
+    """The markers a result's readings measured (its residuals per marker); None: not known."""
+    return list((result.residuals or {}).get("per_marker", {})) or None
+
+
 def tolerances(params, names, given: dict | None = None) -> np.ndarray:
     """Stated prior std (SI) of each parameter in ``names``, shape (D,).
 
@@ -223,3 +228,28 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> U
     reasons = tuple(params.fixed_reason[i] for i in index)
     return UnseenPart(tuple(names), reasons, tolerances(params, names, tolerance),
                       absorbed, free, index, structural)
+
+
+def unseen_notes(effect, seen, marker, names, part: UnseenPart, params) -> tuple:
+    """Words for the readings whose unseen part exceeds the fit's own std; () when none does.
+
+    Parameters
+    ----------
+    effect : ndarray, shape (K, 3, D)
+        :meth:`UnseenPart.effect` of each reading, m.
+    seen : ndarray, shape (K,)
+        3-D std from the fit's covariance, m.
+    marker : ndarray of int, shape (K,)
+        Index of each reading's marker in ``names``.
+    """
+    unseen = np.sqrt(np.sum(effect ** 2, axis=(1, 2)))
+    over = unseen > np.asarray(seen)
+    if not over.any():
+        return ()
+    which = sorted({names[k] for k in np.asarray(marker)[over]})
+    size = np.sqrt(np.sum(effect[over] ** 2, axis=(0, 1)))
+    top = [part.names[i] for i in np.argsort(-size, kind="stable")[:3] if size[i] > 0]
+    return (f"{int(over.sum())} predicted reading(s) of marker(s) {', '.join(which)} rest on "
+            f"what the calibration's readings could not see ({', '.join(top)}): at the stated "
+            f"tolerances ({part.stated(params)}) up to {np.max(unseen) * 1000:.3g} mm (1σ, "
+            f"3-D), included in the std; measure those markers in the calibration to remove it",)

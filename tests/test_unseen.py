@@ -1,9 +1,10 @@
-"""Compensation's stated accuracy where the readings cannot see, judged by ``independent_sim``.
+"""Stated accuracy where the readings cannot see (compensate, predict), judged by ``independent_sim``.
 
 A KR 270 with the 3-marker tool; readings simulated by Pinocchio (offsets σ 0.05°,
 placement errors σ 0.2 mm / 0.01°, markers σ 1 mm, a tracker 2–3 m away), σ 0.03 mm,
 each pose unloaded and with 250 kg. The true TCP is placed by the same simulator.
 """
+import re
 import warnings
 from dataclasses import replace
 
@@ -156,3 +157,22 @@ def test_new_fields_round_trip_and_cli(kr270):
                   for f in ("c1.csv", "c2.csv"))
     assert np.all(half < 0.7 * full)                       # B's place: 0.5 mm instead of 1 mm
     assert main(args + [str(tmp / "c3.csv"), "--unseen-tolerance", "0.5"]) == 2
+
+
+def test_predict_std_covers_markers_never_measured(kr270):
+    """Calibrated on A only, predicting B and C: ~1–3 mm off, stated within 3×, a note says so."""
+    chain, model, truth, _, only_a, program, tmp = kr270
+    sim.write_campaign(tmp / "v.csv", chain, truth, program.q, program.wrench,
+                       list(model.tool.names), SIGMA_MM, np.random.default_rng(9))
+    valid = read_measurements(tmp / "v.csv", model.robot, model.tool)
+    pred = only_a.predict(valid, model)
+    err = np.linalg.norm(pred.residuals(valid), axis=1)
+    std = np.sqrt(np.sum(pred.std ** 2, axis=1) + 3 * (SIGMA_MM / 1000) ** 2)
+    for k, name in enumerate(model.tool.names):
+        rows = valid.marker == k
+        rms, stated = np.sqrt(np.mean(err[rows] ** 2)), np.sqrt(np.mean(std[rows] ** 2))
+        assert rms <= 3 * stated and stated <= 3 * rms, (name, rms, stated)
+        assert (rms > 0.5e-3) == (name != "A")
+    assert len(pred.notes) == 1 and "marker(s) B, C" in pred.notes[0]
+    size = float(re.search(r"up to ([\d.]+) mm", pred.notes[0]).group(1))
+    assert size == pytest.approx(np.sqrt(np.sum(pred.std ** 2, axis=1)).max() * 1000, rel=0.01)
