@@ -132,7 +132,8 @@ def test_large_moves_flagged_with_their_cause(kr270):
     assert all(f == "" for f in np.array(other.flag)[other.shift <= 5.0])
     assert any("another TCP" in w for w in _warned(caught, DataWarning))
     calm, caught = _compensate(model, result, Targets(program, x_b), "A", max_shift=180.0)
-    assert not any(calm.flag) and not _warned(caught, DataWarning)
+    assert not any("moved" in f for f in calm.flag)
+    assert not any("large joint move" in w for w in _warned(caught, DataWarning))
 
 
 def test_new_fields_round_trip_and_cli(kr270):
@@ -176,3 +177,35 @@ def test_predict_std_covers_markers_never_measured(kr270):
     assert len(pred.notes) == 1 and "marker(s) B, C" in pred.notes[0]
     size = float(re.search(r"up to ([\d.]+) mm", pred.notes[0]).group(1))
     assert size == pytest.approx(np.sqrt(np.sum(pred.std ** 2, axis=1)).max() * 1000, rel=0.01)
+
+
+def test_rows_outside_the_measured_region_flagged(kr270):
+    """Calibrated with a2 in its middle half: rows beyond are flagged; the std still covers them."""
+    chain, model, truth, *_ = kr270
+    rng = np.random.default_rng(11)
+    within = np.column_stack([chain.lower, chain.upper])
+    mid, half = within[1].mean(), (within[1, 1] - within[1, 0]) / 4
+    within[1] = [mid - half, mid + half]
+    q, w = sim.unloaded_and_loaded(chain, sim.random_configurations(chain, 30, rng,
+                                                                    within=within), *LOAD)
+    tmp = kr270[-1]
+    sim.write_campaign(tmp / "mid.csv", chain, truth, q, w, list(model.tool.names), SIGMA_MM,
+                       rng)
+    result = identify_quietly(model, read_measurements(tmp / "mid.csv", model.robot,
+                                                       model.tool))
+    qp = sim.random_configurations(chain, 6, rng, within=within, margin=0.1)
+    qp[3:, 1] = within[1, 1] + np.radians([15.0, 25.0, 35.0])
+    qp[3:, 1] = np.minimum(qp[3:, 1], chain.upper[1] - np.radians(1.0))
+    wp = sim.payload_wrench(chain, qp, *LOAD)
+    program = Configurations.from_arrays(qp, wp)
+    x_t = sim.marker_positions(chain, truth, qp, np.zeros_like(wp))[:, 0]
+    out, caught = _compensate(model, result, Targets(program, x_t), "A")
+    err = np.linalg.norm(sim.marker_positions(chain, truth, out.q_compensated, wp)[:, 0] - x_t,
+                         axis=1)
+    assert [bool(f) for f in out.flag] == [False] * 3 + [True] * 3
+    assert all("outside the measured region: a2 at" in f for f in out.flag[3:])
+    assert any("outside the measured region" in w for w in _warned(caught, DataWarning))
+    assert np.all(err <= 3 * out.predicted_std)
+    assert out.predicted_std[3:].min() > out.predicted_std[:3].max()   # it grows out there
+    notes = result.predict(program, model).notes
+    assert len(notes) == 1 and notes[0].startswith("3 configuration(s) outside the joint range")

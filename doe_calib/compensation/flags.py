@@ -10,6 +10,9 @@ from where the identified model puts the TCP at the programmed q:
   ∂pose/∂q′ says how near);
 * the target is far — the targets were probably written for another TCP or
   in another frame.
+
+A row whose q′ lies outside the joint range the calibration measured is
+flagged too (:func:`~doe_calib.estimation.measured_region.outside_flags`).
 """
 from __future__ import annotations
 
@@ -76,3 +79,4 @@ def row_shift_flags(robot, q, q_compensated, max_shift: float, distance, angle,
         out.append(shift_flag(joint.name, float(row[k]), unit, max_shift, float(distance[i]),
                               float(angle[i]), float(condition[i])))
     return tuple(out)
+

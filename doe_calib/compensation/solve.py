@@ -16,6 +16,7 @@ from doe_calib.compensation.result import CompensationResult
 from doe_calib.compensation.targets import TRACKER
 from doe_calib.errors import ConvergenceWarning, DataWarning, IdentifiabilityWarning, OptionError
 from doe_calib.estimation.identifiability import blind_motion_words
+from doe_calib.estimation.measured_region import outside_flags
 from doe_calib.estimation.unseen import unseen_part
 from doe_calib.model.evaluation import evaluate
 
@@ -129,7 +130,8 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
         and the reason in its note; a :class:`ConvergenceWarning` names them.
         ``predicted_std`` holds what the readings cannot see (``unseen_std``); an
         :class:`IdentifiabilityWarning` names its cause, size and remedy where it
-        dominates. Rows moved beyond ``max_shift`` carry a ``flag`` and a
+        dominates. Rows moved beyond ``max_shift``, or whose q′ lies outside the
+        joint range the calibration measured, carry a ``flag`` and a
         :class:`DataWarning` names them.
 
     Examples
@@ -149,12 +151,16 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
         bad = [f"{cfg.pose[i]} ({rows['note'][i]})" for i in np.flatnonzero(~ok)]
         warnings.warn(f"{len(bad)} target(s) not reached: {'; '.join(bad)}", ConvergenceWarning,
                       stacklevel=2)
-    flags = row_shift_flags(model.robot, cfg.q, rows["q"], max_shift, rows["distance"],
-                            rows["angle"], rows["condition"])
-    flagged = [f"{cfg.pose[i]} ({flags[i]})" for i in range(len(cfg)) if flags[i] and ok[i]]
-    if flagged:
-        warnings.warn(f"{len(flagged)} row(s) reached with a large joint move: "
-                      f"{'; '.join(flagged)}", DataWarning, stacklevel=2)
+    shifts = row_shift_flags(model.robot, cfg.q, rows["q"], max_shift, rows["distance"],
+                             rows["angle"], rows["condition"])
+    outside = outside_flags(model.robot, rows["q"], getattr(result, "joint_range", None))
+    for kind, words in (("with a large joint move", shifts), ("outside the measured region",
+                                                               outside)):
+        flagged = [f"{cfg.pose[i]} ({words[i]})" for i in range(len(cfg)) if words[i] and ok[i]]
+        if flagged:
+            warnings.warn(f"{len(flagged)} row(s) reached {kind}: {'; '.join(flagged)}",
+                          DataWarning, stacklevel=2)
+    flags = tuple("; ".join(w for w in pair if w) for pair in zip(shifts, outside))
     measured = list(result.residuals.get("per_marker", {})) or None
     part = unseen_part(model, result.parameters, measured, tolerance)
     frame = getattr(targets, "frame", TRACKER) if targets.positions is not None else TRACKER

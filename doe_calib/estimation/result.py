@@ -56,6 +56,10 @@ class IdentificationResult:
         (default: from ``sigma_estimated``).
     effect_files : dict
         File of each user effect of the model (what :meth:`predict` needs).
+    joint_range : ndarray, shape (N, 2), or None
+        Lowest and highest value of each joint over the measured configurations
+        (rad, m): the region the readings cover. None when not known (a result
+        written before it was kept).
 
     Examples
     --------
@@ -80,6 +84,7 @@ class IdentificationResult:
     sigma_estimated: bool = False
     sigma_source: str = ""
     effect_files: dict = field(default_factory=dict)
+    joint_range: np.ndarray | None = None
 
     def __post_init__(self):
         if not self.sigma_source:
@@ -222,6 +227,8 @@ class IdentificationResult:
                 "sigma_estimated": self.sigma_estimated, "sigma_source": self.sigma_source,
                 "fit_statistics": _stats_dict(self.fit_statistics),
                 "effect_files": dict(self.effect_files),
+                "joint_range_si": None if self.joint_range is None
+                else np.asarray(self.joint_range).tolist(),
                 "n_observations": self.n_observations,
                 "residuals": self.residuals, "convergence": self.convergence,
                 "warnings": list(self.warnings),
@@ -245,7 +252,9 @@ class IdentificationResult:
                    float(d["sigma_ratio"]), d["residuals"], d["convergence"],
                    int(d["n_observations"]), float(d["sigma_mm"]), tuple(d.get("warnings", ())),
                    estimated, d.get("sigma_source") or ("estimated" if estimated else "given"),
-                   dict(d.get("effect_files") or {}))
+                   dict(d.get("effect_files") or {}),
+                   None if d.get("joint_range_si") is None
+                   else np.array(d["joint_range_si"], float).reshape(-1, 2))
 
     @classmethod
     def from_json(cls, path) -> "IdentificationResult":
