@@ -34,6 +34,11 @@ def add_arguments(c):
                    help="frame of the targets' x,y,z: tracker (default), base_link (the URDF "
                         "root), base (the UR controller's: base_link turned 180° about z), or "
                         "any URDF frame fixed to the base")
+    c.add_argument("--base-points", metavar="CSV",
+                   help="points known on the robot's base (x_robot,y_robot,z_robot, mm, in the "
+                        "--targets-frame) with the tracker's readings (x,y,z, mm) in the "
+                        "calibration's session: they place robot-frame targets instead of the "
+                        "identified base, which the readings cannot split from A1")
     c.add_argument("--tcp", required=True, metavar="MARKER|X,Y,Z",
                    help="a marker of the result, or a point in the flange frame (mm)")
     c.add_argument("--out", required=True, help="compensated CSV to write")
@@ -96,6 +101,7 @@ def _tcp(text: str, result):
 
 def run(args):
     from doe_calib.compensation import build_problem, compensate, read_targets
+    from doe_calib.compensation.base_points import read_base_points
     from doe_calib.compensation.program import compensated_design, export_compensated
     from doe_calib.estimation.result import IdentificationResult
     from doe_calib.model.marker_model import build_model
@@ -105,7 +111,9 @@ def run(args):
     registry = effect_registry(args)
     result = IdentificationResult.from_json(args.result)
     tcp = _tcp(args.tcp, result)
-    targets = read_targets(args.targets, result.robot, args.targets_frame, result)
+    base = None if args.base_points is None else \
+        read_base_points(args.base_points, result.sigma_mm / 1000.0)
+    targets = read_targets(args.targets, result.robot, args.targets_frame, result, base)
     model = build_model(result.robot, result.tool, result.model, registry=registry)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -1,4 +1,4 @@
-"""How well a compensated TCP lands: what the fit's covariance says, and what the readings never saw.
+"""How well a compensated TCP lands: what the fit's covariance says and what the readings never saw.
 
 The predicted std of a row has two parts (both 3-D, 1σ, m):
 
@@ -126,8 +126,8 @@ def unseen_warning(accuracy: RowAccuracy, part: UnseenPart, params, frame: str,
         causes.append(f"the targets are in the robot frame {frame!r}, and the readings cannot "
                       f"split the base pose from the first joints "
                       f"({', '.join(accuracy.largest)})")
-        remedies.append("give the targets in the tracker frame, or fix the base frame with "
-                        "points known on the robot's base measured by the tracker")
+        remedies.append("give the targets in the tracker frame, or measure points known on "
+                        "the robot's base with the tracker (--base-points)")
     if not causes:
         causes.append(f"the readings cannot see {', '.join(accuracy.largest)}")
         remedies.append("measure poses that move these parameters")

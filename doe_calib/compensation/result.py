@@ -121,7 +121,7 @@ class CompensationResult:
             lines.append(f"{self.pose[i]:<10}{self.shift[i]:10.4f}"
                          f"{self.predicted_std[i] * 1000:10.4f}{self.unseen_std[i] * 1000:10.4f}"
                          f"{self.residual[i] * 1000:11.2e}  "
-                         f"{self.note[i] or 'reached'}{'; ' + self.flag[i] if self.flag[i] else ''}")
+                         f"{'; '.join(w for w in (self.note[i] or 'reached', self.flag[i]) if w)}")
         if self.unseen:
             lines += ["", f"note: {self.unseen}"]
         return "\n".join(lines)
@@ -173,7 +173,7 @@ class CompensationResult:
         buf.write("# doe_calib compensated program: q in deg (mm for prismatic joints), targets "
                   "in mm (tracker frame), forces in N, moments in N·m; shift_deg is the "
                   "largest |q' - q| (deg, or mm for a prismatic joint); predicted_std_mm "
-                  f"is in the {self.frame} frame{'' if self.frame == 'tracker' else ' (robot base)'}"
+                  f"is in the {self.frame} frame"
                   " and holds unseen_std_mm, what the readings cannot see\n")
         if self.unseen:
             buf.write(f"# note: {self.unseen}\n")

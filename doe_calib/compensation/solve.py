@@ -107,7 +107,8 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
     result : IdentificationResult
     targets : Targets
         Programmed rows (q, wrench), optional target positions (m, tracker frame)
-        and the frame the file gave them in.
+        the frame the file gave them in and, when base points placed them, their
+        std from that registration (added to ``predicted_std``).
     tcp : str or array_like, shape (3,)
         A marker name of the result, or a point in the flange frame (m).
     problem : CompensationProblem, optional
@@ -163,17 +164,20 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
     flags = tuple("; ".join(w for w in pair if w) for pair in zip(shifts, outside))
     measured = list(result.residuals.get("per_marker", {})) or None
     part = unseen_part(model, result.parameters, measured, tolerance)
-    frame = getattr(targets, "frame", TRACKER) if targets.positions is not None else TRACKER
+    frame = targets.frame if targets.positions is not None else TRACKER
+    placed = targets.placement_std   # robot-frame targets placed by measured base points
     compensated = type(cfg).from_arrays(rows["q"], cfg.wrench, cfg.env, cfg.pose)
-    acc = row_accuracy(model, result, compensated, point, part, name, frame)
+    acc = row_accuracy(model, result, compensated, point, part, name,
+                       frame if placed is None else TRACKER)
     words = unseen_warning(acc, part, result.parameters, frame, name, measured)
     if words:
         warnings.warn(words, IdentifiabilityWarning, stacklevel=2)
+    std = acc.total if placed is None else np.hypot(acc.total, placed)
     return CompensationResult(
         robot=model.robot, model=result.model, tcp=point, tcp_marker=name,
         position_only=problem.position_only, pose=cfg.pose, q=cfg.q, q_compensated=rows["q"],
         wrench=cfg.wrench, target=x_t, residual=rows["position"],
-        rotation_residual=rows["rotation"], predicted_std=acc.total, converged=ok,
+        rotation_residual=rows["rotation"], predicted_std=std, converged=ok,
         note=tuple(rows["note"]), unseen_std=acc.unseen, frame=frame, flag=flags,
         unseen=words or "")
 

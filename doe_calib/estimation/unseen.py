@@ -166,7 +166,7 @@ class UnseenPart:
         return [self.names[i] for i in order if size[i] > 0]
 
     def stated(self, params) -> str:
-        """The tolerances in words, display units, e.g. ``1 mm (7 lengths), 0.0573 deg (9 angles)``."""
+        """The tolerances in words, display units: ``1 mm (7 parameters), 0.0573 deg (9 …)``."""
         by = {}
         for name, s in zip(self.names, self.tolerance):
             p = params.parameters[params.position(name)]
