@@ -6,7 +6,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from doe_calib.cli.choices import EXPORT_FORMATS
+from doe_calib.cli.choices import EXPORT_FORMATS, MAX_SHIFT
 from doe_calib.cli.common import (
     effect_file_argument,
     effect_registry,
@@ -14,7 +14,6 @@ from doe_calib.cli.common import (
     report_warnings,
 )
 from doe_calib.cli.program_options import program_arguments, stations, tool_payload
-from doe_calib.compensation.flags import MAX_SHIFT
 from doe_calib.errors import ConvergenceWarning, DataError, OptionError
 from doe_calib.io.json_file import strict_json
 
