@@ -262,3 +262,17 @@ def test_base_points_fix_robot_frame_targets(kr270):
         f"P{k},{k * 100},0,0,{k * 100},0,0" for k in range(3)]) + "\n")
     with pytest.raises(DataError, match="3 point.s. on one line"):
         read_base_points(tmp / "line.csv", 1e-5)
+
+
+def test_point_tcp_rides_with_the_measured_markers(kr270):
+    """--tcp X,Y,Z at the markers' centre: as sharp as a marker, the truth within 3× the std."""
+    chain, model, truth, result, _, program, _ = kr270
+    centre = np.mean([[result.parameters[f"marker_{m}_{a}"] for a in "xyz"] for m in "ABC"], 0)
+    at_centre = replace(truth, markers=truth.markers.mean(axis=0, keepdims=True))
+    x_t = sim.marker_positions(chain, at_centre, program.q, np.zeros_like(program.wrench))[:, 0]
+    out, caught = _compensate(model, result, Targets(program, x_t), centre)
+    err = np.linalg.norm(sim.marker_positions(chain, at_centre, out.q_compensated,
+                                              program.wrench)[:, 0] - x_t, axis=1)
+    assert not _warned(caught, IdentifiabilityWarning)
+    assert np.all(out.unseen_std < 1e-3 * out.predicted_std)
+    assert np.all(err <= 3 * out.predicted_std) and out.predicted_std.max() < 0.05e-3

@@ -11,8 +11,11 @@ The predicted std of a row has two parts (both 3-D, 1σ, m):
   split the base pose from the first joint).
 
 The TCP's Jacobian includes its own marker parameters when the TCP is a
-marker; targets in a robot frame use the TCP in the robot base frame (the
-base pose drops out: what the program commands is a base-frame position).
+marker; a TCP given as a point is taken rigid with the measured markers (it
+was located relative to them, as the result's flange frame is: the tolerance
+of a TCP known only on the mechanical flange is yours to add). Targets in a
+robot frame use the TCP in the robot base frame (the base pose drops out:
+what the program commands is a base-frame position).
 """
 from __future__ import annotations
 
@@ -26,7 +29,7 @@ from doe_calib.model.evaluation import evaluate
 
 
 def point_jacobian(model, values, configurations, point, marker: str | None = None,
-                   frame: str = TRACKER) -> np.ndarray:
+                   frame: str = TRACKER, carried_by=None) -> np.ndarray:
     """Jacobian (M, 3, P) of a flange point's position wrt every parameter, m per SI unit.
 
     Parameters
@@ -35,23 +38,49 @@ def point_jacobian(model, values, configurations, point, marker: str | None = No
         Flange frame, m.
     marker : str, optional
         The marker the point is: its ``marker_<name>_{x,y,z}`` columns get the
-        flange rotation (the point moves with them).
+        flange rotation R (the point moves with them).
     frame : str
         ``tracker``: tracker frame (``model.point``); any other: the robot base frame
         (``model.point_robot``; a frame fixed to the base only turns it).
+    carried_by : sequence of str, optional
+        For a point that is no marker: the measured markers it is rigid with. Their
+        columns get ``R L``, L (3, 3K) the move of the point under the rigid motion
+        that best follows a change of their positions (least squares), so the point
+        goes where the markers take the flange frame.
     """
     f = model.point if frame == TRACKER else model.point_robot
     point = np.asarray(point, float)
     x0, jac = evaluate(f, configurations, values, point)
     jac = np.array(jac)
+    if marker is None and not carried_by:
+        return jac
+    # the point is affine in t: x(t + e_k) − x(t) = R e_k exactly
+    rot = np.stack([evaluate(f, configurations, values, point + e)[0][:, :, 0] - x0[:, :, 0]
+                    for e in np.eye(3)], axis=2)
+    names = model.nominal().names
     if marker is not None:
-        names = model.nominal().names
-        for k in range(3):
-            step = np.zeros(3)
-            step[k] = 1.0   # the point is affine in t: x(t + e_k) − x(t) = R e_k exactly
-            column = evaluate(f, configurations, values, point + step)[0] - x0
-            jac[:, :, names.index(f"marker_{marker}_{'xyz'[k]}")] = column[:, :, 0]
+        carried_by, follow = [marker], np.eye(3)
+    else:
+        where = np.array([[values[names.index(f"marker_{m}_{a}")] for a in "xyz"]
+                          for m in carried_by])
+        follow = _rigid_follow(where, point)
+    for j, m in enumerate(carried_by):
+        cols = [names.index(f"marker_{m}_{a}") for a in "xyz"]
+        jac[:, :, cols] = rot @ follow[:, 3 * j:3 * j + 3]
     return jac
+
+
+def _rigid_follow(markers, point) -> np.ndarray:
+    """L (3, 3K): how ``point`` moves under the small rigid motion fitted to moves of ``markers``
+    (K, 3), all m, flange frame (``δu_j ≈ v + ω × u_j``, least squares, ω scaled by the
+    markers' size; minimum norm where they do not fix the rotation)."""
+    size = max(float(np.ptp(markers, axis=0).max(initial=0.0)), 1e-3)
+    rows = np.vstack([np.hstack([np.eye(3), -_skew(u) / size]) for u in markers])
+    return np.hstack([np.eye(3), -_skew(point) / size]) @ np.linalg.pinv(rows, rcond=1e-9)
+
+
+def _skew(v) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 @dataclass(frozen=True)
@@ -70,7 +99,8 @@ class RowAccuracy:
 
 
 def row_accuracy(model, result, configurations, point, part: UnseenPart,
-                 marker: str | None = None, frame: str = TRACKER) -> RowAccuracy:
+                 marker: str | None = None, frame: str = TRACKER,
+                 carried_by=None) -> RowAccuracy:
     """Seen and unseen std (m) of the TCP at each configuration (module docstring).
 
     Parameters
@@ -82,21 +112,24 @@ def row_accuracy(model, result, configurations, point, part: UnseenPart,
         TCP, flange frame, m.
     part : UnseenPart
         The result's unseen parameters with their tolerances.
-    marker, frame
+    marker, frame, carried_by
         As :func:`point_jacobian`.
     """
     values = result.parameters.values
-    jac = point_jacobian(model, values, configurations, point, marker, frame)
+
+    def jacobian(cfg, in_frame):
+        return point_jacobian(model, values, cfg, point, marker, in_frame, carried_by)
+
+    jac = jacobian(configurations, frame)
     j = jac[:, :, result.parameters.free]
     seen = np.sqrt(np.clip(np.einsum("mij,jk,mik->m", j, result.cov_params(True), j), 0, None))
     bare = type(configurations).from_arrays(configurations.q, None, configurations.env)
-    unloaded = point_jacobian(model, values, bare, point, marker, frame)
+    unloaded = jacobian(bare, frame)
     unseen = part.std_3d(jac, unloaded)
     if frame == TRACKER:
         in_tracker = unseen
     else:
-        in_tracker = part.std_3d(point_jacobian(model, values, configurations, point, marker),
-                                 point_jacobian(model, values, bare, point, marker))
+        in_tracker = part.std_3d(jacobian(configurations, TRACKER), jacobian(bare, TRACKER))
     return RowAccuracy(np.hypot(seen, unseen), seen, unseen, in_tracker,
                        tuple(part.largest(jac, unloaded)))
 
@@ -113,11 +146,7 @@ def unseen_warning(accuracy: RowAccuracy, part: UnseenPart, params, frame: str,
     if not len(accuracy.unseen) or accuracy.unseen[worst] <= accuracy.seen[worst]:
         return None
     causes, remedies = [], []
-    if tcp_marker is None:
-        causes.append("the TCP is a point given on the flange, whose place relative to the "
-                      "measured markers rests on the tool file")
-        remedies.append("measure a marker at the TCP")
-    elif measured is not None and tcp_marker not in measured:
+    if tcp_marker is not None and measured is not None and tcp_marker not in measured:
         causes.append(f"TCP {tcp_marker} was never measured (the readings hold "
                       f"{', '.join(measured)} only): its place on the flange is the tool "
                       f"file's")

@@ -17,7 +17,7 @@ from doe_calib.compensation.targets import TRACKER
 from doe_calib.errors import ConvergenceWarning, DataWarning, IdentifiabilityWarning, OptionError
 from doe_calib.estimation.identifiability import blind_motion_words
 from doe_calib.estimation.measured_region import outside_flags
-from doe_calib.estimation.unseen import unseen_part
+from doe_calib.estimation.unseen import measured_markers, unseen_part
 from doe_calib.model.evaluation import evaluate
 
 log = logging.getLogger(__name__)
@@ -106,7 +106,7 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
         Built from the result: ``build_model(result.robot, result.tool, result.model)``.
     result : IdentificationResult
     targets : Targets
-        Programmed rows (q, wrench), optional target positions (m, tracker frame)
+        Programmed rows (q, wrench), optional target positions (m, tracker frame),
         the frame the file gave them in and, when base points placed them, their
         std from that registration (added to ``predicted_std``).
     tcp : str or array_like, shape (3,)
@@ -154,7 +154,7 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
                       stacklevel=2)
     shifts = row_shift_flags(model.robot, cfg.q, rows["q"], max_shift, rows["distance"],
                              rows["angle"], rows["condition"])
-    outside = outside_flags(model.robot, rows["q"], getattr(result, "joint_range", None))
+    outside = outside_flags(model.robot, rows["q"], result.joint_range)
     for kind, words in (("with a large joint move", shifts), ("outside the measured region",
                                                                outside)):
         flagged = [f"{cfg.pose[i]} ({words[i]})" for i in range(len(cfg)) if words[i] and ok[i]]
@@ -162,13 +162,14 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
             warnings.warn(f"{len(flagged)} row(s) reached {kind}: {'; '.join(flagged)}",
                           DataWarning, stacklevel=2)
     flags = tuple("; ".join(w for w in pair if w) for pair in zip(shifts, outside))
-    measured = list(result.residuals.get("per_marker", {})) or None
+    measured = measured_markers(result)
     part = unseen_part(model, result.parameters, measured, tolerance)
     frame = targets.frame if targets.positions is not None else TRACKER
     placed = targets.placement_std   # robot-frame targets placed by measured base points
     compensated = type(cfg).from_arrays(rows["q"], cfg.wrench, cfg.env, cfg.pose)
     acc = row_accuracy(model, result, compensated, point, part, name,
-                       frame if placed is None else TRACKER)
+                       frame if placed is None else TRACKER,
+                       None if name else measured or list(model.tool.names))
     words = unseen_warning(acc, part, result.parameters, frame, name, measured)
     if words:
         warnings.warn(words, IdentifiabilityWarning, stacklevel=2)

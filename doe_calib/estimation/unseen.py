@@ -18,9 +18,9 @@ parameter, that part's covariance is ``G diag(s²) Gᵀ``.
 
 ``A`` is found on configurations drawn over the whole joint range, unloaded
 (the dependence the fit found is a property of the model and of the markers
-read; a parameter the campaign did not excite but those configurations do,
-a compliance without load, is not taken up by the free ones: ``A`` is 0 for
-it and it moves the point by its full effect).
+read). A parameter whose effect the free ones cannot reproduce there — one
+the campaign did not excite (a compliance), a marker never read — is not
+taken up: ``A`` is 0 for it and it moves the point by its full effect.
 """
 from __future__ import annotations
 
@@ -223,7 +223,10 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> U
         b_dep = b_dep / params.scales[index]
         b_free = b_free / params.scales[free]
         rest = np.linalg.norm(b_dep - b_free @ absorbed, axis=0)
-        structural = rest <= STRUCTURAL * np.maximum(np.linalg.norm(b_dep, axis=0), 1e-300)
+        size = np.linalg.norm(b_dep, axis=0)
+        # a column without effect here (a compliance, unloaded; an unmeasured marker) is not
+        # taken up by the free parameters: its full effect under the row's load counts
+        structural = (size > 0) & (rest <= STRUCTURAL * size)
         absorbed[:, ~structural] = 0.0
     reasons = tuple(params.fixed_reason[i] for i in index)
     return UnseenPart(tuple(names), reasons, tolerances(params, names, tolerance),
