@@ -7,7 +7,7 @@ import numpy as np
 
 from doe_calib.errors import DataError, ModelError
 from doe_calib.io.measurements import Configurations, Measurements
-from doe_calib.estimation.measured_region import outside_flags
+from doe_calib.estimation.measured_region import outside_joints
 from doe_calib.estimation.session import reregister, session_notes
 from doe_calib.estimation.unseen import measured_markers, unseen_notes, unseen_part
 from doe_calib.model.evaluation import observation_matrix
@@ -220,8 +220,8 @@ def predict(result, data, model=None, *, registry=None, a_posteriori: bool = Tru
                              params)
         var = var + np.sum(effect ** 2, axis=-1)
     std = np.sqrt(np.clip(var, 0.0, None))
-    outside = [f"{p} ({w.split(': ', 1)[1].split(';')[0]})" for p, w in
-               zip(cfg.pose, outside_flags(result.robot, cfg.q, result.joint_range)) if w]
+    outside = [f"{p} ({w})" for p, w in
+               zip(cfg.pose, outside_joints(result.robot, cfg.q, result.joint_range)) if w]
     if outside:
         notes = notes + (f"{len(outside)} configuration(s) outside the joint range the "
                          f"calibration measured: {'; '.join(outside)}; their std extrapolates "
