@@ -118,7 +118,9 @@ def run(args):
         warnings.simplefilter("always")
         out = compensate(model, result, targets, tcp, build_problem(model, args.position_only),
                          max_shift=args.max_shift, tolerance=_tolerance(args.unseen_tolerance))
-    report_warnings([w for w in caught if not issubclass(w.category, ConvergenceWarning)])
+    # rows not reached are listed below, and the unseen part's words end the summary
+    report_warnings([w for w in caught if not issubclass(w.category, ConvergenceWarning)
+                     and (args.json or str(w.message) != out.unseen)])
     for pose, ok, note in zip(out.pose, out.converged, out.note):
         if not ok:
             print(f"warning: target {pose} not reached: {note}", file=sys.stderr)
