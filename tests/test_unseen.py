@@ -144,6 +144,7 @@ def test_new_fields_round_trip_and_cli(kr270):
     back = CompensationResult.from_dict(out.to_dict())
     assert np.array_equal(back.unseen_std, out.unseen_std) and back.unseen == out.unseen
     assert back.flag == out.flag and back.frame == out.frame
+    assert back.tolerances == out.tolerances and "1 mm (" in out.tolerances
     out.to_csv(tmp / "c.csv")
     rows = read_compensated_csv(tmp / "c.csv", out.robot)
     assert np.allclose(rows["unseen_std"], out.unseen_std, rtol=1e-12)

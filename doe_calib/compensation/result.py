@@ -65,6 +65,9 @@ class CompensationResult:
     unseen : str
         The warning on the unseen part (cause, size, tolerances, remedy); "" when
         the fit's own std dominates every row.
+    tolerances : str
+        The stated tolerances ``unseen_std`` is for, in words; "" when the fit
+        left nothing unseen.
     """
 
     robot: Robot
@@ -86,6 +89,7 @@ class CompensationResult:
     frame: str = "tracker"
     flag: tuple = ()
     unseen: str = ""
+    tolerances: str = ""
 
     def __post_init__(self):
         if self.unseen_std is None:
@@ -122,6 +126,9 @@ class CompensationResult:
                          f"{self.predicted_std[i] * 1000:10.4f}{self.unseen_std[i] * 1000:10.4f}"
                          f"{self.residual[i] * 1000:11.2e}  "
                          f"{'; '.join(w for w in (self.note[i] or 'reached', self.flag[i]) if w)}")
+        if self.tolerances:
+            lines += ["", f"unseen part for the stated tolerances of the parameters the "
+                          f"readings cannot separate: {self.tolerances}"]
         if self.unseen:
             lines += ["", f"note: {self.unseen}"]
         return "\n".join(lines)
@@ -139,6 +146,7 @@ class CompensationResult:
                 "converged": self.converged.tolist(), "note": list(self.note),
                 "unseen_std": self.unseen_std.tolist(), "frame": self.frame,
                 "flag": list(self.flag), "unseen": self.unseen,
+                "tolerances": self.tolerances,
                 "robot": self.robot.to_dict()}
 
     @classmethod
@@ -155,6 +163,7 @@ class CompensationResult:
                    pose=tuple(d["pose"]), converged=np.array(d["converged"], bool),
                    note=tuple(d["note"]), frame=d.get("frame", "tracker"),
                    flag=tuple(d.get("flag", ())), unseen=d.get("unseen", ""),
+                   tolerances=d.get("tolerances", ""),
                    unseen_std=np.array(d["unseen_std"], float) if "unseen_std" in d else None,
                    **a)
 
@@ -174,7 +183,9 @@ class CompensationResult:
                   "in mm (tracker frame), forces in N, moments in N·m; shift_deg is the "
                   "largest |q' - q| (deg, or mm for a prismatic joint); predicted_std_mm "
                   f"is in the {self.frame} frame"
-                  " and holds unseen_std_mm, what the readings cannot see\n")
+                  " and holds unseen_std_mm, what the readings cannot see"
+                  + (f" (stated tolerances: {self.tolerances})" if self.tolerances else "")
+                  + "\n")
         if self.unseen:
             buf.write(f"# note: {self.unseen}\n")
         w = csv.writer(buf, lineterminator="\n")

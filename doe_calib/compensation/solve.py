@@ -180,7 +180,7 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
         wrench=cfg.wrench, target=x_t, residual=rows["position"],
         rotation_residual=rows["rotation"], predicted_std=std, converged=ok,
         note=tuple(rows["note"]), unseen_std=acc.unseen, frame=frame, flag=flags,
-        unseen=words or "")
+        unseen=words or "", tolerances=part.stated(result.parameters) if len(part) else "")
 
 
 def _solve_rows(problem, model, values, cfg, point, x_t, r_nom) -> dict:
