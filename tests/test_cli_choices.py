@@ -8,6 +8,7 @@ import sys
 
 from doe_calib.cli import choices
 from doe_calib.collision.model import DEFAULT_CLEARANCE, DEFAULT_SELF_CLEARANCE
+from doe_calib.compensation.flags import MAX_SHIFT
 from doe_calib.design.criteria import CRITERIA
 from doe_calib.diagnosis.cross_validation import GROUPINGS
 from doe_calib.estimation.identify import ESTIMATORS
@@ -33,6 +34,7 @@ def test_choices_equal_the_library_values():
     assert choices.ANGLE_CONVENTIONS == tuple(ANGLE_CONVENTIONS)
     assert choices.DEFAULT_CLEARANCE == DEFAULT_CLEARANCE
     assert choices.DEFAULT_SELF_CLEARANCE == DEFAULT_SELF_CLEARANCE
+    assert choices.MAX_SHIFT == MAX_SHIFT
 
 
 def test_help_loads_no_heavy_library():

@@ -29,3 +29,5 @@ ANGLE_CONVENTIONS = ("rpy", "xyz-euler", "zyx-euler", "rotvec")
 #: :data:`doe_calib.collision.model.DEFAULT_CLEARANCE` and ``DEFAULT_SELF_CLEARANCE``, m.
 DEFAULT_CLEARANCE = 0.02
 DEFAULT_SELF_CLEARANCE = 0.005
+#: :data:`doe_calib.compensation.flags.MAX_SHIFT`, deg (mm for a prismatic joint).
+MAX_SHIFT = 5.0

@@ -1,11 +1,12 @@
 """``doe-calib compensate``: joint values that make the identified robot reach a program."""
 from __future__ import annotations
 
+import math
 import sys
 import warnings
 from pathlib import Path
 
-from doe_calib.cli.choices import EXPORT_FORMATS
+from doe_calib.cli.choices import EXPORT_FORMATS, MAX_SHIFT
 from doe_calib.cli.common import (
     effect_file_argument,
     effect_registry,
@@ -32,6 +33,11 @@ def add_arguments(c):
                    help="frame of the targets' x,y,z: tracker (default), base_link (the URDF "
                         "root), base (the UR controller's: base_link turned 180° about z), or "
                         "any URDF frame fixed to the base")
+    c.add_argument("--base-points", metavar="CSV",
+                   help="points known on the robot's base (x_robot,y_robot,z_robot, mm, in the "
+                        "--targets-frame) with the tracker's readings (x,y,z, mm) in the "
+                        "calibration's session: they place robot-frame targets instead of the "
+                        "identified base, which the readings cannot split from A1")
     c.add_argument("--tcp", required=True, metavar="MARKER|X,Y,Z",
                    help="a marker of the result, or a point in the flange frame (mm)")
     c.add_argument("--out", required=True, help="compensated CSV to write")
@@ -43,12 +49,44 @@ def add_arguments(c):
     c.add_argument("--program-out", help="directory (or file) for --format (default: the "
                                          "folder of --out)")
     c.add_argument("--name", default="compensated", help="program name (default compensated)")
+    c.add_argument("--max-shift", type=float, default=MAX_SHIFT, metavar="DEG",
+                   help=f"flag a row whose joints move more than this (deg; mm for a prismatic "
+                        f"joint; default {MAX_SHIFT:g}): near a singularity, or targets of "
+                        f"another TCP or frame")
+    c.add_argument("--unseen-tolerance", nargs="+", default=(), metavar="[KEY:]VALUE",
+                   help="stated tolerance (1σ) of the parameters the readings cannot separate, "
+                        "carried in the predicted std: VALUE with its unit (mm or deg), for "
+                        "all of that unit or, with KEY:, for a block (geometry:0.01deg) or a "
+                        "parameter (dq_a1:0.02deg); default each parameter's typical "
+                        "deviation, 1 mm and 0.0573 deg")
     program_arguments(c, home="none")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
     effect_file_argument(c)
 
 
 OUTPUTS = {"out": "file", "program_out": "folder"}
+
+
+_UNITS = {"mm": ("m", 1e-3), "deg": ("rad", math.pi / 180.0)}
+
+
+def _tolerance(items) -> dict:
+    """``--unseen-tolerance`` items as :func:`~doe_calib.estimation.unseen.tolerances` keys (SI)."""
+    out = {}
+    for item in items:
+        key, _, text = item.rpartition(":")
+        unit = next((u for u in _UNITS if text.endswith(u)), None)
+        try:
+            value = float(text[:-len(unit)]) if unit else math.nan
+        except ValueError:
+            value = math.nan
+        if unit is None or not value > 0 or not math.isfinite(value):
+            raise OptionError(f"--unseen-tolerance {item!r}: give a positive number with its "
+                              f"unit, mm or deg, optionally after a block or parameter name "
+                              f"(0.2mm, geometry:0.01deg, dq_a1:0.02deg)")
+        si, factor = _UNITS[unit]
+        out[f"{key}:{si}" if key else si] = value * factor
+    return out
 
 
 def _tcp(text: str, result):
@@ -62,6 +100,7 @@ def _tcp(text: str, result):
 
 def run(args):
     from doe_calib.compensation import build_problem, compensate, read_targets
+    from doe_calib.compensation.base_points import read_base_points
     from doe_calib.compensation.program import compensated_design, export_compensated
     from doe_calib.estimation.result import IdentificationResult
     from doe_calib.model.marker_model import build_model
@@ -71,12 +110,17 @@ def run(args):
     registry = effect_registry(args)
     result = IdentificationResult.from_json(args.result)
     tcp = _tcp(args.tcp, result)
-    targets = read_targets(args.targets, result.robot, args.targets_frame, result)
+    base = None if args.base_points is None else \
+        read_base_points(args.base_points, result.sigma_mm / 1000.0)
+    targets = read_targets(args.targets, result.robot, args.targets_frame, result, base)
     model = build_model(result.robot, result.tool, result.model, registry=registry)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        out = compensate(model, result, targets, tcp, build_problem(model, args.position_only))
-    report_warnings([w for w in caught if not issubclass(w.category, ConvergenceWarning)])
+        out = compensate(model, result, targets, tcp, build_problem(model, args.position_only),
+                         max_shift=args.max_shift, tolerance=_tolerance(args.unseen_tolerance))
+    # rows not reached are listed below, and the unseen part's words end the summary
+    report_warnings([w for w in caught if not issubclass(w.category, ConvergenceWarning)
+                     and (args.json or str(w.message) != out.unseen)])
     for pose, ok, note in zip(out.pose, out.converged, out.note):
         if not ok:
             print(f"warning: target {pose} not reached: {note}", file=sys.stderr)

@@ -71,6 +71,7 @@ def run(args):
         print(f"{len(meas)} readings: RMS {error['rms_mm']:.4f} mm per coordinate, "
               f"3-D RMS {error['rms_3d_mm']:.4f} mm, mean 3-D {error['mean_3d_mm']:.4f} mm, "
               f"max 3-D {error['max_3d_mm']:.4f} mm (model {result.model})")
+    if not args.json:
         for note in pred.notes:
             print(f"note: {note}")
     print(f"written: {args.out}", file=sys.stderr)

@@ -6,8 +6,8 @@
 """
 from doe_calib.compensation.problem import CompensationProblem, build_problem
 from doe_calib.compensation.result import CompensationResult, read_compensated_csv
-from doe_calib.compensation.solve import compensate, nominal_targets, tcp_point, tcp_std
+from doe_calib.compensation.solve import compensate, nominal_targets, tcp_point
 from doe_calib.compensation.targets import Targets, read_targets
 
 __all__ = ["CompensationProblem", "CompensationResult", "Targets", "build_problem", "compensate",
-           "nominal_targets", "read_compensated_csv", "read_targets", "tcp_point", "tcp_std"]
+           "nominal_targets", "read_compensated_csv", "read_targets", "tcp_point"]

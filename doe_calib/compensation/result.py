@@ -47,11 +47,27 @@ class CompensationResult:
     rotation_residual : ndarray, shape (M,)
         Rotation (rad) from the target orientation (0 when position only).
     predicted_std : ndarray, shape (M,)
-        3-D standard deviation of the TCP position at q′ (m) from the
-        result's a-posteriori covariance.
+        3-D standard deviation of the TCP position at q′ (m): the result's
+        a-posteriori covariance and, added in quadrature, ``unseen_std``
+        (:mod:`.accuracy`); in the robot base frame when the targets were given in
+        a robot frame.
     converged : ndarray of bool, shape (M,)
     note : tuple of str
         Why a row was not reached ("" when it was).
+    unseen_std : ndarray, shape (M,)
+        The part of ``predicted_std`` the readings cannot see (the parameters they
+        could not separate, at their stated tolerances), m.
+    frame : str
+        The frame the targets were given in (``tracker`` or a robot frame).
+    flag : tuple of str
+        Why a reached row is worth a look (a large joint move and its likely
+        cause, :mod:`.flags`); "" when it is not.
+    unseen : str
+        The warning on the unseen part (cause, size, tolerances, remedy); "" when
+        the fit's own std dominates every row.
+    tolerances : str
+        The stated tolerances ``unseen_std`` is for, in words; "" when the fit
+        left nothing unseen.
     """
 
     robot: Robot
@@ -69,6 +85,17 @@ class CompensationResult:
     predicted_std: np.ndarray
     converged: np.ndarray
     note: tuple
+    unseen_std: np.ndarray = None
+    frame: str = "tracker"
+    flag: tuple = ()
+    unseen: str = ""
+    tolerances: str = ""
+
+    def __post_init__(self):
+        if self.unseen_std is None:
+            object.__setattr__(self, "unseen_std", np.zeros(len(self.pose)))
+        if not self.flag:
+            object.__setattr__(self, "flag", ("",) * len(self.pose))
 
     def __len__(self) -> int:
         return len(self.pose)
@@ -86,15 +113,24 @@ class CompensationResult:
         """Rows reached, shifts and predicted accuracy, in words and a table."""
         tcp = self.tcp_marker or ",".join(f"{v * 1000:g}" for v in self.tcp) + " mm"
         what = "position" if self.position_only else "pose (position and orientation)"
-        lines = [f"Compensation of {len(self)} targets, model {self.model}, TCP {tcp}, {what}",
-                 f"{int(self.converged.sum())} reached, {int((~self.converged).sum())} not; "
-                 f"largest shift {self.shift.max():.4g} deg, predicted TCP std "
-                 f"{self.predicted_std.max() * 1000:.4g} mm at most", "",
-                 f"{'pose':<10}{'shift':>10}{'std mm':>10}{'resid mm':>11}  note"]
+        flagged = sum(1 for f in self.flag if f)
+        lines = [f"Compensation of {len(self)} targets ({self.frame} frame), model {self.model}, "
+                 f"TCP {tcp}, {what}",
+                 f"{int(self.converged.sum())} reached, {int((~self.converged).sum())} not, "
+                 f"{flagged} flagged; largest shift {self.shift.max():.4g} deg, predicted TCP "
+                 f"std {self.predicted_std.max() * 1000:.4g} mm at most (unseen part "
+                 f"{self.unseen_std.max() * 1000:.4g} mm)", "",
+                 f"{'pose':<10}{'shift':>10}{'std mm':>10}{'unseen':>10}{'resid mm':>11}  note"]
         for i in range(len(self)):
             lines.append(f"{self.pose[i]:<10}{self.shift[i]:10.4f}"
-                         f"{self.predicted_std[i] * 1000:10.4f}{self.residual[i] * 1000:11.2e}  "
-                         f"{self.note[i] or 'reached'}")
+                         f"{self.predicted_std[i] * 1000:10.4f}{self.unseen_std[i] * 1000:10.4f}"
+                         f"{self.residual[i] * 1000:11.2e}  "
+                         f"{'; '.join(w for w in (self.note[i] or 'reached', self.flag[i]) if w)}")
+        if self.tolerances:
+            lines += ["", f"unseen part for the stated tolerances of the parameters the "
+                          f"readings cannot separate: {self.tolerances}"]
+        if self.unseen:
+            lines += ["", f"note: {self.unseen}"]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -108,6 +144,9 @@ class CompensationResult:
                 "rotation_residual": self.rotation_residual.tolist(),
                 "predicted_std": self.predicted_std.tolist(),
                 "converged": self.converged.tolist(), "note": list(self.note),
+                "unseen_std": self.unseen_std.tolist(), "frame": self.frame,
+                "flag": list(self.flag), "unseen": self.unseen,
+                "tolerances": self.tolerances,
                 "robot": self.robot.to_dict()}
 
     @classmethod
@@ -122,7 +161,11 @@ class CompensationResult:
         return cls(robot=Robot.from_dict(d["robot"]), model=d["model"],
                    tcp_marker=d["tcp_marker"], position_only=bool(d["position_only"]),
                    pose=tuple(d["pose"]), converged=np.array(d["converged"], bool),
-                   note=tuple(d["note"]), **a)
+                   note=tuple(d["note"]), frame=d.get("frame", "tracker"),
+                   flag=tuple(d.get("flag", ())), unseen=d.get("unseen", ""),
+                   tolerances=d.get("tolerances", ""),
+                   unseen_std=np.array(d["unseen_std"], float) if "unseen_std" in d else None,
+                   **a)
 
     def to_json(self, path=None) -> str:
         return write_json(self.to_dict(), path)
@@ -138,7 +181,13 @@ class CompensationResult:
         buf = _io.StringIO()
         buf.write("# doe_calib compensated program: q in deg (mm for prismatic joints), targets "
                   "in mm (tracker frame), forces in N, moments in N·m; shift_deg is the "
-                  "largest |q' - q| (deg, or mm for a prismatic joint)\n")
+                  "largest |q' - q| (deg, or mm for a prismatic joint); predicted_std_mm "
+                  f"is in the {self.frame} frame"
+                  " and holds unseen_std_mm, what the readings cannot see"
+                  + (f" (stated tolerances: {self.tolerances})" if self.tolerances else "")
+                  + "\n")
+        if self.unseen:
+            buf.write(f"# note: {self.unseen}\n")
         w = csv.writer(buf, lineterminator="\n")
         w.writerow(csv_header(self.robot))
         k = self.robot.display_factors
@@ -147,24 +196,25 @@ class CompensationResult:
                         *[repr(float(v)) for v in self.wrench[i]],
                         *[repr(float(v)) for v in self.target[i] * 1000.0],
                         repr(float(self.shift[i])), repr(float(self.predicted_std[i] * 1000)),
+                        repr(float(self.unseen_std[i] * 1000)),
                         repr(float(self.residual[i] * 1000)),
-                        "true" if self.converged[i] else "false", self.note[i]])
+                        "true" if self.converged[i] else "false", self.note[i], self.flag[i]])
         Path(path).write_text(buf.getvalue(), encoding="utf-8")
 
 
 def csv_header(robot) -> list[str]:
     """Columns of the compensated CSV for ``robot``."""
     return ["pose", *[f"q{k + 1}" for k in range(robot.n_joints)], *WRENCH, "x_target",
-            "y_target", "z_target", "shift_deg", "predicted_std_mm", "residual_mm", "converged",
-            "note"]
+            "y_target", "z_target", "shift_deg", "predicted_std_mm", "unseen_std_mm", "residual_mm",
+            "converged", "note", "flag"]
 
 
 def read_compensated_csv(path, robot) -> dict:
     """The columns of a compensated CSV as arrays (q in rad/m, lengths in m).
 
     Returns a dict with ``pose`` (tuple), ``q`` (M, N), ``wrench`` (M, 6),
-    ``target`` (M, 3), ``shift_deg``, ``predicted_std``, ``residual`` (M,),
-    ``converged`` (bool, M) and ``note``.
+    ``target`` (M, 3), ``shift_deg``, ``predicted_std``, ``unseen_std``, ``residual``
+    (M,), ``converged`` (bool, M), ``note`` and ``flag``.
     """
     with open(path, encoding="utf-8") as f:
         rows = [r for r in csv.reader(line for line in f if not line.startswith("#"))]
@@ -184,6 +234,8 @@ def read_compensated_csv(path, robot) -> dict:
             "wrench": num(WRENCH), "target": num(["x_target", "y_target", "z_target"]) / 1000,
             "shift_deg": num(["shift_deg"])[:, 0],
             "predicted_std": num(["predicted_std_mm"])[:, 0] / 1000,
+            "unseen_std": num(["unseen_std_mm"])[:, 0] / 1000,
             "residual": num(["residual_mm"])[:, 0] / 1000,
             "converged": np.array([r[col["converged"]] == "true" for r in body]),
-            "note": tuple(r[col["note"]] for r in body)}
+            "note": tuple(r[col["note"]] for r in body),
+            "flag": tuple(r[col["flag"]] for r in body)}

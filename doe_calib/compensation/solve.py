@@ -9,10 +9,15 @@ import warnings
 
 import numpy as np
 
+from doe_calib.compensation.accuracy import row_accuracy, unseen_warning
+from doe_calib.compensation.flags import MAX_SHIFT, row_shift_flags
 from doe_calib.compensation.problem import CompensationProblem, build_problem
 from doe_calib.compensation.result import CompensationResult
-from doe_calib.errors import ConvergenceWarning, IdentifiabilityWarning, OptionError
+from doe_calib.compensation.targets import TRACKER
+from doe_calib.errors import ConvergenceWarning, DataWarning, IdentifiabilityWarning, OptionError
 from doe_calib.estimation.identifiability import blind_motion_words
+from doe_calib.estimation.measured_region import outside_flags
+from doe_calib.estimation.unseen import measured_markers, unseen_part
 from doe_calib.model.evaluation import evaluate
 
 log = logging.getLogger(__name__)
@@ -61,18 +66,6 @@ def nominal_targets(model, parameters, configurations, tcp) -> tuple[np.ndarray,
     return origin[:, :, 0] + rot @ tcp, rot
 
 
-def tcp_std(model, result, configurations, tcp) -> np.ndarray:
-    """3-D standard deviation (m) of the TCP position predicted at each configuration, (M,).
-
-    ``sqrt(tr(J Σ Jᵀ))`` with J the TCP position Jacobian wrt the free
-    parameters and Σ the result's a-posteriori covariance (σ̂).
-    """
-    (_, jac) = evaluate(model.point, configurations, result.parameters.values, tcp)
-    j = jac[:, :, result.parameters.free]
-    cov = result.cov_params(a_posteriori=True)
-    return np.sqrt(np.einsum("mij,jk,mik->m", j, cov, j))
-
-
 #: Condition number of ∂(pose)/∂q′ above which a configuration is called near-singular.
 SINGULAR_CONDITION = 1e4
 
@@ -103,7 +96,8 @@ def _warn_unseen_orientation(tool, tcp_marker, position_only: bool) -> None:
 
 
 def compensate(model, result, targets, tcp, problem: CompensationProblem | None = None,
-               position_only: bool = False) -> CompensationResult:
+               position_only: bool = False, max_shift: float = MAX_SHIFT,
+               tolerance: dict | None = None) -> CompensationResult:
     """Joint values that make the identified model reach each target.
 
     Parameters
@@ -112,19 +106,34 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
         Built from the result: ``build_model(result.robot, result.tool, result.model)``.
     result : IdentificationResult
     targets : Targets
-        Programmed rows (q, wrench) and optional target positions (m, tracker frame).
+        Programmed rows (q, wrench), optional target positions (m, tracker frame),
+        the frame the file gave them in and, when base points placed them, their
+        std from that registration (added to ``predicted_std``).
     tcp : str or array_like, shape (3,)
         A marker name of the result, or a point in the flange frame (m).
     problem : CompensationProblem, optional
         Built by :func:`~.problem.build_problem` (built here when not given).
     position_only : bool
         Leave the orientation free (ignored when ``problem`` is given).
+    max_shift : float
+        Largest joint move (deg; mm for a prismatic joint) of a row not flagged
+        (:mod:`.flags`).
+    tolerance : dict, optional
+        Stated prior std (SI) of the parameters the readings cannot separate, by
+        name, ``block:unit`` or unit (``{"m": 2e-4, "geometry:rad": 1.7e-4}``); a
+        parameter not named keeps its scale (1 mm, 1 mrad): see
+        :func:`~doe_calib.estimation.unseen.tolerances`.
 
     Returns
     -------
     CompensationResult
         A row that is not reached keeps its best q′ with ``converged`` False
         and the reason in its note; a :class:`ConvergenceWarning` names them.
+        ``predicted_std`` holds what the readings cannot see (``unseen_std``); an
+        :class:`IdentifiabilityWarning` names its cause, size and remedy where it
+        dominates. Rows moved beyond ``max_shift``, or whose q′ lies outside the
+        joint range the calibration measured, carry a ``flag`` and a
+        :class:`DataWarning` names them.
 
     Examples
     --------
@@ -137,39 +146,69 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
     _warn_unseen_orientation(model.tool, name, problem.position_only)
     x_nom, r_nom = nominal_targets(model, result.parameters, cfg, point)
     x_t = x_nom if targets.positions is None else np.asarray(targets.positions, float)
-    values = result.parameters.values
+    rows = _solve_rows(problem, model, result.parameters.values, cfg, point, x_t, r_nom)
+    ok = np.array([not n for n in rows["note"]], bool)
+    if not ok.all():
+        bad = [f"{cfg.pose[i]} ({rows['note'][i]})" for i in np.flatnonzero(~ok)]
+        warnings.warn(f"{len(bad)} target(s) not reached: {'; '.join(bad)}", ConvergenceWarning,
+                      stacklevel=2)
+    shifts = row_shift_flags(model.robot, cfg.q, rows["q"], max_shift, rows["distance"],
+                             rows["angle"], rows["condition"])
+    outside = outside_flags(model.robot, rows["q"], result.joint_range)
+    for kind, words in (("with a large joint move", shifts), ("outside the measured region",
+                                                               outside)):
+        flagged = [f"{cfg.pose[i]} ({words[i]})" for i in range(len(cfg)) if words[i] and ok[i]]
+        if flagged:
+            warnings.warn(f"{len(flagged)} row(s) reached {kind}: {'; '.join(flagged)}",
+                          DataWarning, stacklevel=2)
+    flags = tuple("; ".join(w for w in pair if w) for pair in zip(shifts, outside))
+    measured = measured_markers(result)
+    part = unseen_part(model, result.parameters, measured, tolerance)
+    frame = targets.frame if targets.positions is not None else TRACKER
+    placed = targets.placement_std   # robot-frame targets placed by measured base points
+    compensated = type(cfg).from_arrays(rows["q"], cfg.wrench, cfg.env, cfg.pose)
+    acc = row_accuracy(model, result, compensated, point, part, name,
+                       frame if placed is None else TRACKER,
+                       None if name else measured or list(model.tool.names))
+    words = unseen_warning(acc, part, result.parameters, frame, name, measured)
+    if words:
+        warnings.warn(words, IdentifiabilityWarning, stacklevel=2)
+    std = acc.total if placed is None else np.hypot(acc.total, placed)
+    return CompensationResult(
+        robot=model.robot, model=result.model, tcp=point, tcp_marker=name,
+        position_only=problem.position_only, pose=cfg.pose, q=cfg.q, q_compensated=rows["q"],
+        wrench=cfg.wrench, target=x_t, residual=rows["position"],
+        rotation_residual=rows["rotation"], predicted_std=std, converged=ok,
+        note=tuple(rows["note"]), unseen_std=acc.unseen, frame=frame, flag=flags,
+        unseen=words or "", tolerances=part.stated(result.parameters) if len(part) else "")
+
+
+def _solve_rows(problem, model, values, cfg, point, x_t, r_nom) -> dict:
+    """Solve each row: q′ (M, N), its errors, note, and what the flags need (module words)."""
     robot = model.robot
     lower, upper = robot.lower, robot.upper
-    q_out, notes, ok = np.empty_like(cfg.q), [], np.zeros(len(cfg), bool)
-    pos_err, rot_err = np.empty(len(cfg)), np.empty(len(cfg))
-    for i in range(len(cfg)):
-        p = problem.nlp_parameters(x_t[i], r_nom[i], cfg.wrench[i], cfg.env[i], values, point,
-                                   cfg.q[i])
+    m = len(cfg)
+    out = {"q": np.empty_like(cfg.q), "note": [], **{k: np.empty(m) for k in (
+        "position", "rotation", "distance", "angle", "condition")}}
+    for i in range(m):
+        args = (cfg.wrench[i], cfg.env[i], values, point)
+        p = problem.nlp_parameters(x_t[i], r_nom[i], *args, cfg.q[i])
         sol = problem.solver(x0=np.clip(cfg.q[i], lower, upper), p=p, lbx=lower, ubx=upper,
                              lbg=0.0, ubg=0.0)
         status = problem.solver.stats()["return_status"]
         # IPOPT relaxes the bounds by ~1e-8: the program must stay inside them
-        q_out[i] = np.clip(np.asarray(sol["x"]).ravel(), lower, upper)
-        e_pos, e_rot = problem.error(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
-                                     x_t[i], r_nom[i])
-        pos_err[i] = float(np.linalg.norm(np.asarray(e_pos)))
-        rot_err[i] = 0.0 if problem.position_only else \
-            float(np.arcsin(min(1.0, np.linalg.norm(np.asarray(e_rot)))))
-        at_limit = [j.name for j, v in zip(robot.joints, q_out[i])
+        q = out["q"][i] = np.clip(np.asarray(sol["x"]).ravel(), lower, upper)
+        for key, at in (("position", q), ("distance", cfg.q[i])):
+            e_pos, e_rot = problem.error(at, *args, x_t[i], r_nom[i])
+            out[key][i] = float(np.linalg.norm(np.asarray(e_pos)))
+            turn = "rotation" if key == "position" else "angle"
+            out[turn][i] = 0.0 if problem.position_only else \
+                float(np.arcsin(min(1.0, np.linalg.norm(np.asarray(e_rot)))))
+        at_limit = [j.name for j, v in zip(robot.joints, q)
                     if min(v - j.lower, j.upper - v) < 1e-9]
-        jac = np.asarray(problem.jacobian(q_out[i], cfg.wrench[i], cfg.env[i], values, point,
-                                          x_t[i], r_nom[i]))
-        notes.append(_reason(status, pos_err[i], rot_err[i], at_limit, np.linalg.cond(jac)))
-        ok[i] = not notes[-1]
-        log.debug("row %s: %s, %.3g mm", cfg.pose[i], status, pos_err[i] * 1000)
-    if not ok.all():
-        bad = [f"{cfg.pose[i]} ({notes[i]})" for i in np.flatnonzero(~ok)]
-        warnings.warn(f"{len(bad)} target(s) not reached: {'; '.join(bad)}", ConvergenceWarning,
-                      stacklevel=2)
-    compensated = type(cfg).from_arrays(q_out, cfg.wrench, cfg.env, cfg.pose)
-    return CompensationResult(
-        robot=robot, model=result.model, tcp=point, tcp_marker=name,
-        position_only=problem.position_only, pose=cfg.pose, q=cfg.q, q_compensated=q_out,
-        wrench=cfg.wrench, target=x_t, residual=pos_err, rotation_residual=rot_err,
-        predicted_std=tcp_std(model, result, compensated, point), converged=ok,
-        note=tuple(notes))
+        jac = np.asarray(problem.jacobian(q, *args, x_t[i], r_nom[i]))
+        out["condition"][i] = np.linalg.cond(jac)
+        out["note"].append(_reason(status, out["position"][i], out["rotation"][i], at_limit,
+                                   out["condition"][i]))
+        log.debug("row %s: %s, %.3g mm", cfg.pose[i], status, out["position"][i] * 1000)
+    return out

@@ -44,10 +44,20 @@ class Targets:
     positions : ndarray, shape (M, 3), or None
         Target TCP positions in the tracker frame (m); None when the file has
         no ``x,y,z``: the targets are then where the nominal robot puts the TCP.
+    frame : str
+        The frame the file gave them in (``tracker``, or a robot frame: they were
+        turned into the tracker frame with the identified base pose, which the
+        readings may not fix, :mod:`.accuracy` tells what that costs; or with
+        measured base points, :mod:`.base_points`).
+    placement_std : ndarray, shape (M,), or None
+        3-D std (m) each target has from the base points' registration; None
+        when no base points placed them.
     """
 
     configurations: Configurations
     positions: np.ndarray | None = None
+    frame: str = TRACKER
+    placement_std: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.configurations)
@@ -72,7 +82,7 @@ def _renumber(message_column, columns, kept):
     return message_column
 
 
-def read_targets(path, robot, frame: str = TRACKER, result=None) -> Targets:
+def read_targets(path, robot, frame: str = TRACKER, result=None, base_points=None) -> Targets:
     """Read a targets CSV (design columns, optional ``x,y,z`` in mm).
 
     Parameters
@@ -85,7 +95,11 @@ def read_targets(path, robot, frame: str = TRACKER, result=None) -> Targets:
         :func:`~doe_calib.model.frames.frame_placement`), turned into the
         tracker frame with ``result``'s identified base pose.
     result : IdentificationResult, optional
-        Needed when ``frame`` is not ``tracker``.
+        Needed when ``frame`` is not ``tracker`` (and no ``base_points``).
+    base_points : BasePoints, optional
+        Points known in ``frame`` and measured by the tracker
+        (:func:`~.base_points.read_base_points`): they place the robot frame in the
+        tracker frame instead of the identified base pose.
 
     Returns
     -------
@@ -98,7 +112,8 @@ def read_targets(path, robot, frame: str = TRACKER, result=None) -> Targets:
         own line and column), only some of ``x,y,z``, or a value there that
         is not a finite number.
     OptionError
-        A robot ``frame`` without ``result``.
+        A robot ``frame`` without ``result`` or ``base_points``; ``base_points`` with
+        targets in the tracker frame or without x, y, z.
     ModelError
         A ``frame`` the URDF does not have (or one moving with a joint).
 
@@ -110,6 +125,9 @@ def read_targets(path, robot, frame: str = TRACKER, result=None) -> Targets:
     """
     table = read_table(path)
     present = [c for c in XYZ if c in table.columns]
+    if base_points is not None and (frame == TRACKER or not present):
+        raise OptionError("base points place targets given in a robot frame: give x, y, z in "
+                          "the targets and name their frame (--targets-frame)")
     if not present:
         return Targets(read_design(path, robot))
     header_line = table.rows[0][0] - 1
@@ -143,7 +161,10 @@ def read_targets(path, robot, frame: str = TRACKER, result=None) -> Targets:
         except DataError as exc:
             raise DataError(_message(exc), path, exc.line,
                             _renumber(exc.column, table.columns, kept)) from None
-    return Targets(cfg, xyz if frame == TRACKER else in_tracker(xyz, robot, frame, result))
+    if base_points is not None:
+        x_t, std = base_points.to_tracker(xyz)
+        return Targets(cfg, x_t, frame, std)
+    return Targets(cfg, xyz if frame == TRACKER else in_tracker(xyz, robot, frame, result), frame)
 
 
 def in_tracker(points, robot, frame: str, result) -> np.ndarray:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.estimation.covariance import covariance_from_r_factor
+from doe_calib.estimation.measured_region import joint_range
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.estimation.weighted_residuals import marker_residuals, reduce_jacobian
 
@@ -65,7 +66,8 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
         residual_statistics(model, measurements, params.values), convergence, n_obs,
         sigma_mm, tuple(notes), estimated,
         "estimated" if estimated else measurements.sigma_source,
-        effect_files(model.effects), dict(absorbed or {}))
+        effect_files(model.effects), dict(absorbed or {}),
+        joint_range=joint_range(measurements))
 
 
 def effect_files(effects) -> dict:

@@ -7,7 +7,9 @@ import numpy as np
 
 from doe_calib.errors import DataError, ModelError
 from doe_calib.io.measurements import Configurations, Measurements
+from doe_calib.estimation.measured_region import outside_joints
 from doe_calib.estimation.session import reregister, session_notes
+from doe_calib.estimation.unseen import measured_markers, unseen_notes, unseen_part
 from doe_calib.model.evaluation import observation_matrix
 
 
@@ -138,7 +140,7 @@ def aligned_parameters(model, result):
 
 
 def predict(result, data, model=None, *, registry=None, a_posteriori: bool = True,
-            register: str | None = None) -> Prediction:
+            register: str | None = None, tolerance: dict | None = None) -> Prediction:
     """Marker positions ``result`` predicts for readings or configurations.
 
     Parameters
@@ -162,13 +164,20 @@ def predict(result, data, model=None, *, registry=None, a_posteriori: bool = Tru
         (:func:`~doe_calib.estimation.session.reregister`): a new session
         whose tracker moved or whose probe was remounted. Needs readings with
         x, y, z.
+    tolerance : dict, optional
+        Stated prior std (SI) of the parameters the readings could not separate,
+        by name, ``block:unit`` or unit (:func:`~doe_calib.estimation.unseen.tolerances`;
+        default each one's scale, 1 mm, 1 mrad).
 
     Returns
     -------
     Prediction
-        Positions (m) and their std ``√diag(B Σ Bᵀ)`` with ``B`` the
-        observation matrix of each reading and Σ the covariance of the free
-        parameters. When the readings have x, y, z and the error is far beyond
+        Positions (m) and their std ``√diag(B Σ Bᵀ + G S Gᵀ)`` with ``B`` the
+        observation matrix of each reading, Σ the covariance of the free
+        parameters and ``G S Gᵀ`` what the calibration's readings could not see
+        (:mod:`~doe_calib.estimation.unseen`: ~0 for a marker they measured, the
+        tool file's tolerance for one they never did); ``notes`` says so where it
+        dominates. When the readings have x, y, z and the error is far beyond
         that std, ``notes`` says whether a re-registration removes it.
 
     Raises
@@ -201,11 +210,25 @@ def predict(result, data, model=None, *, registry=None, a_posteriori: bool = Tru
     bf = b[config, marker][..., params.free]
     cov = result.cov_params(a_posteriori=a_posteriori)
     var = np.einsum("kif,fg,kig->ki", bf, cov, bf)
-    std = np.sqrt(np.clip(var, 0.0, None))
+    part = unseen_part(model, params, measured_markers(result), tolerance)
     notes = ()
+    if len(part):
+        _, b_bare = observation_matrix(model, params.values, type(cfg).from_arrays(
+            cfg.q, None, cfg.env))
+        effect = part.effect(b[config, marker], b_bare[config, marker])
+        notes = unseen_notes(effect, np.sqrt(np.sum(var, 1)), marker, result.tool.names, part,
+                             params)
+        var = var + np.sum(effect ** 2, axis=-1)
+    std = np.sqrt(np.clip(var, 0.0, None))
+    outside = [f"{p} ({w})" for p, w in
+               zip(cfg.pose, outside_joints(result.robot, cfg.q, result.joint_range)) if w]
+    if outside:
+        notes = notes + (f"{len(outside)} configuration(s) outside the joint range the "
+                         f"calibration measured: {'; '.join(outside)}; their std extrapolates "
+                         f"the model, and an effect it lacks may grow there",)
     if measured:
         sigma = result.sigma_mm * result.sigma_ratio / 1000.0
         expected = float(np.sqrt(sigma ** 2 + np.mean(std ** 2)))
-        notes = session_notes(model, params, data, expected, done)
+        notes = notes + session_notes(model, params, data, expected, done)
     return Prediction(x[config, marker], std, np.asarray(config), np.asarray(marker),
                       tuple(result.tool.names), done, notes)

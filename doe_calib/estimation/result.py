@@ -70,6 +70,10 @@ class IdentificationResult:
     selection : Selection or None
         What the parameter selection left at nominal and why
         (:class:`~doe_calib.estimation.selection.Selection`); None when it was not asked.
+    joint_range : ndarray, shape (N, 2), or None
+        Lowest and highest value of each joint over the measured configurations
+        (rad, m): the region the readings cover. None when not known (a result
+        written before it was kept).
 
     Examples
     --------
@@ -97,6 +101,7 @@ class IdentificationResult:
     absorbed: dict = field(default_factory=dict)
     sigma_repeated: Repeatability | None = None
     selection: Selection | None = None
+    joint_range: np.ndarray | None = None
 
     def __post_init__(self):
         if not self.sigma_source:
@@ -250,6 +255,8 @@ class IdentificationResult:
                 "combinations": [c.to_dict() for c in self.combinations()],
                 "sigma_repeated": None if self.sigma_repeated is None else
                 self.sigma_repeated.to_dict(),
+                "joint_range_si": None if self.joint_range is None
+                else np.asarray(self.joint_range).tolist(),
                 "n_observations": self.n_observations,
                 "residuals": self.residuals, "convergence": self.convergence,
                 "warnings": list(self.warnings),
@@ -279,7 +286,9 @@ class IdentificationResult:
                     for k, v in (d.get("absorbed_si") or {}).items()},
                    Repeatability.from_dict(d["sigma_repeated"]) if d.get("sigma_repeated")
                    else None,
-                   Selection.from_dict(d["selection"]) if d.get("selection") else None)
+                   Selection.from_dict(d["selection"]) if d.get("selection") else None,
+                   joint_range=None if d.get("joint_range_si") is None
+                   else np.array(d["joint_range_si"], float).reshape(-1, 2))
 
     @classmethod
     def from_json(cls, path) -> "IdentificationResult":

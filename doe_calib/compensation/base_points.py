@@ -1,0 +1,151 @@
+"""Base reference points: points known on the robot's base, measured by the tracker.
+
+Readings of flange markers cannot split the robot's base pose from its first
+joint (its rotation about A1 from the A1 offset, its height from the first
+link's): a target written in a robot frame and placed by the *identified* base
+lands millimetres off. Points whose robot-frame coordinates are known (reference
+bores on the base, the base frame's definition) and that the tracker measures
+in the calibration's session fix the base pose directly (docs/formats.md §12)::
+
+    p_tracker,k ≈ R p_robot,k + t      (R, t) by least squares (Kabsch)
+
+A target ``x`` in the robot frame is then ``R x + t`` in the tracker frame,
+with the std of the registration at that point: ``Σ = σ² (Σ_k J_kᵀ J_k)⁻¹``
+for ``(δt, δω)``, ``J_k = [I, −[R p_k]×]``, and ``J_x Σ J_xᵀ`` at the target.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from doe_calib.errors import DataError, DataWarning
+from doe_calib.estimation.registration import register
+from doe_calib.io.table import read_table
+
+#: The columns of a base-points file (mm): robot-frame coordinates, then the tracker's reading.
+COLUMNS = ("point", "x_robot", "y_robot", "z_robot", "x", "y", "z")
+#: Share of the points' spread under which they lie on one line (no rotation about it).
+ON_A_LINE = 1e-3
+#: Registration residual (multiples of σ, RMS per coordinate) above which the points do not fit.
+MISFIT = 3.0
+
+
+def _skew(v) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+@dataclass(frozen=True, eq=False)
+class BasePoints:
+    """Reference points of the robot's base: where they are on it and where the tracker saw them.
+
+    Attributes
+    ----------
+    names : tuple of str
+    in_robot : ndarray, shape (K, 3)
+        Coordinates in the robot frame of the targets, m.
+    measured : ndarray, shape (K, 3)
+        The tracker's readings, m.
+    sigma : ndarray, shape (K,)
+        Std of each reading per coordinate, m.
+    source : str
+        The file they were read from.
+    """
+
+    names: tuple
+    in_robot: np.ndarray
+    measured: np.ndarray
+    sigma: np.ndarray
+    source: str = ""
+
+    def placement(self):
+        """The robot frame in the tracker frame: R (3, 3), t (3,) m, and the covariance (6, 6)
+        of ``(δt (m), δω (rad))``, tracker axes."""
+        w = 1.0 / self.sigma ** 2
+        rot, t = register(self.in_robot, self.measured, w)
+        jac = np.stack([np.hstack([np.eye(3), -_skew(rot @ p)]) for p in self.in_robot])
+        info = np.einsum("kij,k,kil->jl", jac, w, jac)
+        return rot, t, np.linalg.inv(info)
+
+    def to_tracker(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """Robot-frame points (M, 3) m in the tracker frame, and the 3-D std (M,) m each has
+        from the registration."""
+        rot, t, cov = self.placement()
+        points = np.atleast_2d(np.asarray(points, float))
+        jac = np.stack([np.hstack([np.eye(3), -_skew(rot @ p)]) for p in points])
+        var = np.einsum("mij,jk,mik->m", jac, cov, jac)
+        return points @ rot.T + t, np.sqrt(np.clip(var, 0.0, None))
+
+    def residual_rms(self) -> float:
+        """RMS per coordinate (m) of the readings about the registered points."""
+        rot, t, _ = self.placement()
+        return float(np.sqrt(np.mean((self.in_robot @ rot.T + t - self.measured) ** 2)))
+
+
+def read_base_points(path, sigma: float) -> BasePoints:
+    """Read a base-points CSV (:data:`COLUMNS`, mm; optional ``sigma`` in mm).
+
+    Parameters
+    ----------
+    path : path-like
+    sigma : float
+        Std of a reading per coordinate (m) where the file gives no ``sigma``.
+
+    Returns
+    -------
+    BasePoints
+
+    Raises
+    ------
+    DataError
+        A missing column, a value that is not a finite number (naming file, line,
+        column), a point named twice, fewer than 3 points or points on one line.
+
+    Warns
+    -----
+    DataWarning
+        The readings do not fit the robot-frame coordinates (RMS above
+        :data:`MISFIT` σ): a point misread, or coordinates in another frame.
+    """
+    table = read_table(path)
+    missing = [c for c in COLUMNS if c not in table.columns]
+    if missing:
+        raise DataError(f"missing column(s) {', '.join(missing)}: a base-points file has "
+                        f"{', '.join(COLUMNS)} (mm) and optionally sigma (mm)", path,
+                        table.header_line)
+    numeric = list(COLUMNS[1:]) + (["sigma"] if "sigma" in table.columns else [])
+    names, values = [], []
+    for line, fields in table.rows:
+        row = {}
+        for c in numeric:
+            i = table.columns.index(c)
+            text = fields[i] if i < len(fields) else ""
+            try:
+                v = float(text.replace(",", ".") if table.decimal_comma else text)
+            except ValueError:
+                v = np.nan
+            if not np.isfinite(v) or (c == "sigma" and v <= 0):
+                raise DataError(f"{text!r} is not a {'positive' if c == 'sigma' else 'finite'} "
+                                f"number (mm)", path, line, table.col(c))
+            row[c] = v / 1000.0
+        name = fields[table.columns.index("point")]
+        if name in names:
+            raise DataError(f"point {name!r} appears twice", path, line, table.col("point"))
+        names.append(name)
+        values.append(row)
+    in_robot = np.array([[r[c] for c in COLUMNS[1:4]] for r in values])
+    spread = np.linalg.svd(in_robot - in_robot.mean(axis=0), compute_uv=False)
+    if len(names) < 3 or spread[1] <= ON_A_LINE * max(spread[0], 1e-12):
+        raise DataError(f"{len(names)} point(s){' on one line' if len(names) >= 3 else ''}: "
+                        f"the base pose needs at least 3 points not on one line", path)
+    points = BasePoints(tuple(names), in_robot,
+                        np.array([[r[c] for c in COLUMNS[4:]] for r in values]),
+                        np.array([r.get("sigma", sigma) for r in values]), str(path))
+    rms = points.residual_rms()
+    if rms > MISFIT * float(np.sqrt(np.mean(points.sigma ** 2))):
+        sigma_mm = float(np.mean(points.sigma)) * 1000
+        warnings.warn(f"{path}: the tracker's readings of the base points lie {rms * 1000:.3g} mm "
+                      f"RMS from their robot-frame coordinates (σ {sigma_mm:.3g} mm): a point "
+                      f"misread, or coordinates in another frame?", DataWarning, stacklevel=2)
+    return points

@@ -1,0 +1,258 @@
+"""What the readings cannot see, and how far it can move a point they did not measure.
+
+The fit fixes the parameters the readings cannot separate (the result's
+fixed list, each with its reason: "not separable from …", "has no effect on
+the measured markers …"). Their true values differ from the ones the fit
+kept by a deviation δ_d the readings never see: the free parameters took it
+up instead, by ``A δ_d`` (``A`` (F, D) from ``B_free A = B_d``, B the
+observation matrix of the measured markers). Every measured marker is
+predicted as well as before; any other quantity with Jacobian ``J`` moves by::
+
+    G δ_d,   G = J_d − J_free A
+
+which is zero for a measured marker in the tracker frame and not zero for a
+TCP never measured, or for the TCP in a robot frame when the readings cannot
+split the base pose from the first joint (its rotation about A1 from the A1
+offset). With a stated tolerance (prior std) ``s_d`` on each unseen
+parameter, that part's covariance is ``G diag(s²) Gᵀ``.
+
+``A`` is found on configurations drawn over the whole joint range, unloaded
+(the dependence the fit found is a property of the model and of the markers
+read). A parameter whose effect the free ones cannot reproduce there — one
+the campaign did not excite (a compliance), a marker never read — is not
+taken up: ``A`` is 0 for it and it moves the point by its full effect.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from doe_calib.errors import OptionError
+from doe_calib.io.measurements import Configurations
+from doe_calib.model.evaluation import observation_matrix
+from doe_calib.model.simulate import random_configurations
+
+#: Words of a fixed parameter's reason that say the readings could not see it.
+UNSEEN_WORDS = ("not separable", "no effect")
+#: Configurations over the joint range on which the dependence is found (fixed seed).
+GENERIC_POSES = 40
+#: Remaining share of a column above which its dependence is not structural (``A`` is 0).
+STRUCTURAL = 1e-6
+
+
+def unseen_names(params) -> list[str]:
+    """Names of the parameters the fit found not separable (whatever values they were given).
+
+    Parameters
+    ----------
+    params : ParameterSet
+        A result's parameters: the reason of each fixed parameter says why.
+    """
+    return [p.name for p, why in zip(params.parameters, params.fixed_reason)
+            if any(w in why for w in UNSEEN_WORDS)]
+
+
+def measured_markers(result) -> list[str] | None:
+    """The markers a result's readings measured (its residuals per marker); None: not known."""
+    return list((result.residuals or {}).get("per_marker", {})) or None
+
+
+def tolerances(params, names, given: dict | None = None) -> np.ndarray:
+    """Stated prior std (SI) of each parameter in ``names``, shape (D,).
+
+    Parameters
+    ----------
+    params : ParameterSet
+    names : sequence of str
+    given : dict, optional
+        Tolerances (SI) by key, the most specific key winning: a parameter name
+        (``dq_a1`` or ``dq_a1:rad``), a block and unit (``geometry:rad``), or a unit
+        (``m``, ``rad``).
+        A parameter no key names keeps its ``scale``, its typical deviation
+        (1 mm for a length, 1 mrad = 0.057° for an angle, 1 µrad/(N·m) for a
+        compliance).
+
+    Raises
+    ------
+    OptionError
+        A tolerance that is not a positive finite number.
+
+    Examples
+    --------
+    >>> from doe_calib import Robot, build_model, examples, Tool
+    >>> m = build_model(Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML),
+    ...                 "joint_offset+geometry")
+    >>> tolerances(m.nominal(), ["dq_a1", "g_a1_rz", "g_a1_tz"], {"rad": 1e-3,
+    ...            "geometry:rad": 2e-4})
+    array([0.001 , 0.0002, 0.001 ])
+    """
+    given = {} if given is None else dict(given)
+    for key, v in given.items():
+        if not (np.isfinite(v) and v > 0):
+            raise OptionError(f"the tolerance {key!r} of the unseen parameters must be a "
+                              f"positive number, not {v}")
+    out = []
+    for i in params.index(list(names)) if len(names) else []:
+        p = params.parameters[i]
+        keys = (p.name, f"{p.name}:{p.unit}", f"{p.block}:{p.unit}", p.unit)
+        out.append(next((given[k] for k in keys if k in given), p.scale))
+    return np.array(out, float)
+
+
+@dataclass(frozen=True, eq=False)
+class UnseenPart:
+    """The parameters the readings cannot see, their stated tolerance and how the fit took them up.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The not-separable parameters (D).
+    reasons : tuple of str
+        Why each is not separable (the result's words).
+    tolerance : ndarray, shape (D,)
+        Stated prior std of each, SI (m, rad, rad/(N·m)).
+    absorbed : ndarray, shape (F, D)
+        ``A``: the free parameters' change that reproduces each one's effect on the
+        measured markers (0 for one whose effect they cannot reproduce).
+    free : ndarray of bool, shape (P,)
+        The result's free parameters.
+    index : ndarray of int, shape (D,)
+        Position of each unseen parameter in the parameter vector.
+    structural : ndarray of bool, shape (D,)
+        Whether the free parameters reproduce its effect on the measured markers
+        (``absorbed`` holds how), or the readings just did not excite it.
+    """
+
+    names: tuple
+    reasons: tuple
+    tolerance: np.ndarray
+    absorbed: np.ndarray
+    free: np.ndarray
+    index: np.ndarray
+    structural: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def effect(self, jac, unloaded=None) -> np.ndarray:
+        """``G s``: the move of a quantity per unseen parameter at its tolerance, (…, k, D).
+
+        Parameters
+        ----------
+        jac : ndarray, shape (…, k, P)
+            Jacobian of the quantity (a point: k = 3, m) wrt every parameter.
+        unloaded : ndarray, shape (…, k, P), optional
+            The same without the wrench, for the structural columns: ``A`` holds
+            their dependence unloaded, and a load adds only the change of its
+            deflection with the geometry (second order: compliance × deviation,
+            µm), which the readings of a loaded campaign do not split either.
+        """
+        jac = np.asarray(jac, float)
+        base = jac if unloaded is None else np.asarray(unloaded, float)
+        g = base[..., self.index] - base[..., self.free] @ self.absorbed
+        g[..., ~self.structural] = jac[..., self.index[~self.structural]]
+        return g * self.tolerance
+
+    def std_3d(self, jac, unloaded=None) -> np.ndarray:
+        """3-D std of a point's unseen part, ``√tr(G diag(s²) Gᵀ)``, shape (…,), m."""
+        return np.sqrt(np.sum(self.effect(jac, unloaded) ** 2, axis=(-2, -1)))
+
+    def largest(self, jac, unloaded=None, count: int = 3) -> list[str]:
+        """The ``count`` unseen parameters moving the quantity most (summed over its rows)."""
+        size = np.sqrt(np.sum(self.effect(jac, unloaded) ** 2,
+                              axis=tuple(range(np.ndim(jac) - 1))))
+        order = np.argsort(-size, kind="stable")[:count]
+        return [self.names[i] for i in order if size[i] > 0]
+
+    def stated(self, params) -> str:
+        """The tolerances in words, display units: ``1 mm (7 parameters), 0.0573 deg (9 …)``."""
+        by = {}
+        for name, s in zip(self.names, self.tolerance):
+            p = params.parameters[params.position(name)]
+            key = f"{s * p.display_factor:.3g} {p.display_unit}"
+            by[key] = by.get(key, 0) + 1
+        return ", ".join(f"{k} ({n} parameter{'s' if n > 1 else ''})" for k, n in by.items())
+
+
+def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> UnseenPart:
+    """The unseen part of a result: its not-separable parameters and how the fit took them up.
+
+    Parameters
+    ----------
+    model : Model
+        The model the result was identified with.
+    params : ParameterSet
+        The result's parameters (:func:`unseen_names` picks the unseen ones).
+    markers : sequence of str, optional
+        The markers the readings measured (default all of the tool's).
+    tolerance : dict, optional
+        Stated prior std of the unseen parameters (SI) by name, ``block:unit`` or unit
+        (:func:`tolerances`); default each parameter's scale.
+
+    Returns
+    -------
+    UnseenPart
+
+    Examples
+    --------
+    >>> from doe_calib import Robot, Tool, build_model, examples
+    >>> m = build_model(Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML),
+    ...                 "joint_offset")
+    >>> p = m.nominal().fixed(["dq_a1"], "offset of joint a1 is not separable from base rz")
+    >>> part = unseen_part(m, p)
+    >>> part.names, part.tolerance
+    (('dq_a1',), array([0.001]))
+    """
+    names = unseen_names(params)
+    index = np.array(params.index(names), int) if names else np.zeros(0, int)
+    free = np.asarray(params.free, bool).copy()
+    free[index] = False
+    absorbed = np.zeros((int(free.sum()), len(names)))
+    structural = np.ones(len(names), bool)
+    if names:
+        rng = np.random.default_rng(0)
+        cfg = Configurations.from_arrays(random_configurations(model.robot, GENERIC_POSES, rng))
+        _, b = observation_matrix(model, params.values, cfg)
+        if markers is not None:
+            b = b[:, [model.tool.index(n) for n in markers]]
+        b = b.reshape(-1, b.shape[-1]) * params.scales   # columns at their typical size
+        b_free, b_dep = b[:, free], b[:, index]
+        absorbed = np.linalg.lstsq(b_free, b_dep, rcond=None)[0]
+        absorbed *= params.scales[free][:, None] / params.scales[index]
+        b_dep = b_dep / params.scales[index]
+        b_free = b_free / params.scales[free]
+        rest = np.linalg.norm(b_dep - b_free @ absorbed, axis=0)
+        size = np.linalg.norm(b_dep, axis=0)
+        # a column without effect here (a compliance, unloaded; an unmeasured marker) is not
+        # taken up by the free parameters: its full effect under the row's load counts
+        structural = (size > 0) & (rest <= STRUCTURAL * size)
+        absorbed[:, ~structural] = 0.0
+    reasons = tuple(params.fixed_reason[i] for i in index)
+    return UnseenPart(tuple(names), reasons, tolerances(params, names, tolerance),
+                      absorbed, free, index, structural)
+
+
+def unseen_notes(effect, seen, marker, names, part: UnseenPart, params) -> tuple:
+    """Words for the readings whose unseen part exceeds the fit's own std; () when none does.
+
+    Parameters
+    ----------
+    effect : ndarray, shape (K, 3, D)
+        :meth:`UnseenPart.effect` of each reading, m.
+    seen : ndarray, shape (K,)
+        3-D std from the fit's covariance, m.
+    marker : ndarray of int, shape (K,)
+        Index of each reading's marker in ``names``.
+    """
+    unseen = np.sqrt(np.sum(effect ** 2, axis=(1, 2)))
+    over = unseen > np.asarray(seen)
+    if not over.any():
+        return ()
+    which = sorted({names[k] for k in np.asarray(marker)[over]})
+    size = np.sqrt(np.sum(effect[over] ** 2, axis=(0, 1)))
+    top = [part.names[i] for i in np.argsort(-size, kind="stable")[:3] if size[i] > 0]
+    return (f"{int(over.sum())} predicted reading(s) of marker(s) {', '.join(which)} rest on "
+            f"what the calibration's readings could not see ({', '.join(top)}): at the stated "
+            f"tolerances ({part.stated(params)}) up to {np.max(unseen) * 1000:.3g} mm (1σ, "
+            f"3-D), included in the std; measure those markers in the calibration to remove it",)
