@@ -13,13 +13,16 @@ from doe_calib.model.simulate import random_configurations
 LONG_NAMES = """<robot name="long_names">
   <link name="base"/><link name="l1"/><link name="l2"/><link name="tip"/>
   <joint name="arm_2_joint" type="revolute"><parent link="base"/><child link="l1"/>
-    <origin xyz="0 0 0.3"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="100" velocity="1"/>
+    <origin xyz="0 0 0.3"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="100" velocity="1"/>
   </joint>
   <joint name="arm_3_joint" type="revolute"><parent link="l1"/><child link="l2"/>
-    <origin xyz="0.4 0 0"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="100" velocity="1"/>
+    <origin xyz="0.4 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="100" velocity="1"/>
   </joint>
   <joint name="arm_4_joint" type="revolute"><parent link="l2"/><child link="tip"/>
-    <origin xyz="0.3 0 0"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="100" velocity="1"/>
+    <origin xyz="0.3 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="100" velocity="1"/>
   </joint>
 </robot>
 """
