@@ -152,3 +152,13 @@ def test_values_in_range_come_back(check, value, minimum):
     args = ("x", value) if minimum is None else ("x", value, minimum)
     assert check(*args) == value
     assert type(check(*args)) is (int if check is ranges.whole else float)
+
+
+@pytest.mark.parametrize("keyword", ["clearance", "self_clearance", "move_clearance",
+                                     "move_self_clearance"])
+def test_collision_model_refuses_a_negative_clearance(keyword):
+    from doe_calib.collision import build_collision_model
+
+    robot = Robot.from_urdf(examples.THREE_DOF_URDF)
+    with pytest.raises(OptionError, match=f"^{keyword}=-0.001: must be 0 m or more"):
+        build_collision_model(robot, **{keyword: -0.001})
