@@ -252,9 +252,9 @@ class ParameterSet:
 
         ``joints``: the robot's joint names along the chain (see the class).
 
-        Rows in display units (``unit`` is the display unit: mm, deg, …). Files
-        written before rows held ``scale`` get one display unit as the scale,
-        before they held ``bounds``/``plausible``/``sign`` none.
+        Rows in display units (``unit`` is the display unit: mm, deg, …). A row
+        without ``scale`` gets one display unit as the scale; one without
+        ``bounds``, ``plausible`` or ``sign``, none.
 
         Raises
         ------
