@@ -168,10 +168,14 @@ class ParameterSet:
         """
         if isinstance(names, str):
             names = [names]
+        lookup = {p.name: i for i, p in enumerate(self.parameters)}
         out = []
         for n in names:
+            if n in lookup:
+                out.append(lookup[n])
+                continue
             block = [i for i, p in enumerate(self.parameters) if p.block == n]
-            out.extend(block if block and n not in self.names else [self.position(n)])
+            out.extend(block or [self.position(n)])
         return np.array(out, dtype=int)
 
     def _unknown(self, name: str) -> str:
