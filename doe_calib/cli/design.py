@@ -18,8 +18,8 @@ from doe_calib.cli.common import (
 )
 from doe_calib.cli.options import count, positive, probability
 from doe_calib.errors import DoeCalibError, OptionError
-from doe_calib.io.setting_ranges import level_and_power
 from doe_calib.io.json_file import strict_json
+from doe_calib.io.setting_ranges import level_and_power
 
 HELP = "choose optimal measurement poses (D, A, E or task criterion; constraints; loads)"
 EXAMPLE = ("doe-calib design --robot kr270.urdf --tool tool.yaml --poses 15 "
@@ -111,10 +111,10 @@ def _csv_beside(out: str) -> Path:
 
 def _check_level_and_power(args):
     """Refuse, before any work, a detection test whose power is not above its level."""
-    option = "--min-power" if args.min_power is not None else "--power"
-    if args.detect:
-        level_and_power(args.alpha, args.power if args.min_power is None else args.min_power,
-                        ("--alpha", option))
+    if args.detect and args.min_power is not None:
+        level_and_power(args.alpha, args.min_power, ("--alpha", "--min-power"))
+    elif args.detect:
+        level_and_power(args.alpha, args.power, ("--alpha", "--power"))
 
 
 def _discovery_goal(args):
