@@ -163,4 +163,4 @@ def test_design_detect_through_the_cli(tmp_path, capsys, monkeypatch):
                  "--model", MODEL, "--poses", "12", "--candidates", "600", "--no-refine",
                  "--no-collision", "--detect", "cyclic(j3)", "--alpha", "0.9",
                  "--out", str(tmp_path / "e.json")]) == 2
-    assert "0 < alpha < power < 1" in capsys.readouterr().err
+    assert "the power must be above the level (alpha < power)" in capsys.readouterr().err

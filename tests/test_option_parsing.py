@@ -6,7 +6,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from doe_calib.cli.common import MAX_LOAD_KG, model_option, parse_floats, parse_load
-from doe_calib.cli.options import at_least, count, positive
+from doe_calib.cli.options import at_least, count, fraction, positive, probability
 from doe_calib.errors import DataError, DoeCalibError
 from doe_calib.io.table import read_table
 from doe_calib.model.effects import parse_model
@@ -43,7 +43,9 @@ def test_parse_floats(text, n):
 def test_number_options(text):
     for convert, ok in ((positive("--sigma", "mm"), lambda v: v > 0),
                         (at_least("--dwell", 0.0, "s"), lambda v: v >= 0),
-                        (count("--poses", 1), lambda v: isinstance(v, int) and v >= 1)):
+                        (count("--poses", 1), lambda v: isinstance(v, int) and v >= 1),
+                        (probability("--level"), lambda v: 0 < v < 1),
+                        (fraction("--min-gain"), lambda v: 0 <= v < 1)):
         try:
             value = convert(text)
         except DoeCalibError as exc:

@@ -17,6 +17,7 @@ from doe_calib.collision import (
     plan_move,
     planner,
 )
+from doe_calib.errors import OptionError
 
 
 @pytest.fixture(scope="module")
@@ -109,9 +110,11 @@ def test_the_check_budget_ends_a_search_that_finds_nothing(kr270, monkeypatch):
     assert 2 + 2 * 300 - 2 <= n <= 2 + 2 * 305 - 2, n
 
 
-@pytest.mark.parametrize("bad", [dict(checks=0), dict(checks=2.5), dict(time=0.0)])
+@pytest.mark.parametrize("bad", [dict(checks=0), dict(checks=2.5), dict(time=0.0),
+                                 dict(attempts=0), dict(seed=-1)])
 def test_settings_refuse_a_budget_that_is_not_one(bad):
-    with pytest.raises(ValueError, match="planner's"):
+    (name, value), = bad.items()
+    with pytest.raises(OptionError, match=f"^{name}={value!r}: must be"):
         PlannerSettings(**bad)
 
 

@@ -187,6 +187,19 @@ def test_identify_and_predict_commands_with_an_effect_file(tmp_path, robot6, too
     assert main(["compare", str(out), "--effect-file", str(path), "--json"]) == 0
 
 
+def test_design_report_with_an_effect_file(tmp_path, capsys):
+    """The report draws the design on the model it was designed for, user effect included."""
+    from doe_calib.cli import main
+
+    out, report = tmp_path / "d.json", tmp_path / "d.html"
+    code = main(["design", "--robot", examples.ROBOT_URDF, "--tool", examples.TOOL_YAML,
+                 "--effect-file", EXAMPLE_FILE, "--model", "joint_offset+progressive_stiffness(j2)",
+                 "--load", "250@0,0,200", "--poses", "4", "--candidates", "200", "--no-refine",
+                 "--no-collision", "--seed", "1", "--out", str(out), "--report", str(report)])
+    assert code == 0, capsys.readouterr().err
+    assert "progressive_stiffness_a2_a" in report.read_text(encoding="utf-8")
+
+
 def test_loading_is_idempotent_and_specs_round_trip(tmp_path, robot6):
     path = _write(tmp_path, WOBBLE)
     first = DEFAULT_REGISTRY.with_file(path)

@@ -16,9 +16,10 @@ from doe_calib.cli.common import (
     robot_arguments,
     stage_progress,
 )
-from doe_calib.cli.options import count, positive
+from doe_calib.cli.options import count, positive, probability
 from doe_calib.errors import DoeCalibError, OptionError
 from doe_calib.io.json_file import strict_json
+from doe_calib.io.setting_ranges import level_and_power
 
 HELP = "choose optimal measurement poses (D, A, E or task criterion; constraints; loads)"
 EXAMPLE = ("doe-calib design --robot kr270.urdf --tool tool.yaml --poses 15 "
@@ -71,9 +72,9 @@ def add_arguments(c):
                    help="also say what these poses can reveal: the smallest detectable size of "
                         "each effect ('+'-joined effect strings, or 'catalogue' for every "
                         "catalogue effect on every joint it can sit on)")
-    c.add_argument("--alpha", type=positive("--alpha", "(a probability)"), default=0.05,
+    c.add_argument("--alpha", type=probability("--alpha"), default=0.05,
                    help="level of the detection test (--detect), default 0.05")
-    c.add_argument("--power", type=positive("--power", "(a probability)"), default=0.8,
+    c.add_argument("--power", type=probability("--power"), default=0.8,
                    help="power asked of the detection test (--detect), default 0.8")
     c.add_argument("--detect-size", type=positive("--detect-size", "(the effect's unit)"),
                    metavar="S",
@@ -81,7 +82,7 @@ def add_arguments(c):
                         "detectable at this size (its display unit, e.g. deg) with --min-power; "
                         "load cases and approach sides become design variables, and the best "
                         "size reachable is reported when S is not")
-    c.add_argument("--min-power", type=positive("--min-power", "(a probability)"),
+    c.add_argument("--min-power", type=probability("--min-power"),
                    help="power asked at --detect-size (default --power)")
     c.add_argument("--load-directions", metavar="DIRS",
                    help="with --detect (with or without --detect-size) or --augment: "
@@ -106,6 +107,14 @@ def _csv_beside(out: str) -> Path:
                           f"give a .json name (e.g. --out {Path(out).with_suffix('.json')}, "
                           f"which also writes {Path(out).with_suffix('.csv')})")
     return Path(out).with_suffix(".csv")
+
+
+def _check_level_and_power(args):
+    """Refuse, before any work, a detection test whose power is not above its level."""
+    if args.detect and args.min_power is not None:
+        level_and_power(args.alpha, args.min_power, ("--alpha", "--min-power"))
+    elif args.detect:
+        level_and_power(args.alpha, args.power, ("--alpha", "--power"))
 
 
 def _discovery_goal(args):
@@ -142,6 +151,7 @@ def run(args):
     from doe_calib.model.marker_model import build_model
 
     csv_path = _csv_beside(args.out)
+    _check_level_and_power(args)
     if args.report and Path(args.report).resolve() == csv_path.resolve():
         raise OptionError(f"--report {args.report}: the design CSV is written there; give the "
                           f"report its own name")
@@ -170,9 +180,6 @@ def run(args):
                                   f"--augment chooses the poses that add most to the campaign "
                                   f"(give --diagnosis D.json to separate its candidates) and "
                                   f"reports the detectability of --detect before and after")
-        if args.detect and not (0 < args.alpha < 1 and args.alpha < args.power < 1):
-            raise OptionError(f"--alpha {args.alpha:g} and --power {args.power:g}: give "
-                              f"0 < alpha < power < 1")
         from doe_calib.cli.design_augment import run_augment
 
         return run_augment(args, model, loads, candidates, constraints, collision,
@@ -188,9 +195,6 @@ def run(args):
     if progress:
         print(file=sys.stderr)
     if args.detect and discovery is None:
-        if not (0 < args.alpha < 1 and args.alpha < args.power < 1):
-            raise OptionError(f"--alpha {args.alpha:g} and --power {args.power:g}: give "
-                              f"0 < alpha < power < 1")
         from doe_calib.design.effect_detection import with_detectability
 
         result = with_detectability(result, model, args.detect, args.alpha, args.power,
@@ -201,5 +205,5 @@ def run(args):
     print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
     if args.report:
         from doe_calib.report import design_report
-        design_report(result, args.report)
+        design_report(result, args.report, registry=effect_registry(args))
         print(f"report: {args.report}", file=sys.stderr)

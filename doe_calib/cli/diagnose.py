@@ -12,7 +12,7 @@ from doe_calib.cli.common import (
     model_and_measurements,
     robot_arguments,
 )
-from doe_calib.cli.options import count, positive
+from doe_calib.cli.options import at_least, count, fraction, positive, probability
 from doe_calib.io.json_file import strict_json
 
 HELP = "test the model against the measurements and rank the effects it is missing"
@@ -26,19 +26,19 @@ def measurement_arguments(c):
     c.add_argument("--sigma", type=positive("--sigma", "mm"), help="tracker σ per coordinate, "
                                                                     "mm, for rows without a "
                                                                     "sigma column")
-    c.add_argument("--level", type=float, default=0.01,
+    c.add_argument("--level", type=probability("--level"), default=0.01,
                    help="significance level, Bonferroni over every candidate (default 0.01)")
-    c.add_argument("--min-gain", type=float, default=0.02,
+    c.add_argument("--min-gain", type=fraction("--min-gain"), default=0.02,
                    help="material gain: an effect must lower the cross-validated RMS by this "
                         "fraction (default 0.02)")
-    c.add_argument("--tolerance", type=float, default=0.05,
+    c.add_argument("--tolerance", type=at_least("--tolerance", 0.0), default=0.05,
                    help="σ̂ within this fraction of σ, with no material candidate, is adequate "
                         "(default 0.05)")
     c.add_argument("--cv-by", choices=CV_GROUPINGS, default="auto",
                    help="what cross-validation holds out: pose, session, region of joint "
                         "space; auto = session when there are several, else pose")
-    c.add_argument("--folds", type=int, default=5, help="folds for --cv-by pose|region "
-                                                        "(default 5)")
+    c.add_argument("--folds", type=count("--folds", 2, "folds"), default=5,
+                   help="folds for --cv-by pose|region (default 5; at least 2)")
     c.add_argument("--exclude-poses", metavar="P1,P2",
                    help="leave these poses out (each exclusion is reported)")
     c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")

@@ -2,7 +2,9 @@
 
 Number converters are argparse ``type=`` functions that raise
 :class:`~doe_calib.errors.OptionError` naming the option, so a bad value stops
-the command before any work with one line (``error: --sigma -1: ...``).
+the command before any work with one line (``error: --sigma -1: ...``); the
+range checks are the library's own (:mod:`doe_calib.io.setting_ranges`), so an
+option and the keyword argument it becomes refuse the same values.
 
 Each command module may declare ``OUTPUTS``: option destination → ``"file"``
 (written as given: its folder must exist) or ``"folder"`` (created if needed:
@@ -20,6 +22,7 @@ import re
 from pathlib import Path
 
 from doe_calib.errors import OptionError
+from doe_calib.io import setting_ranges as ranges
 
 
 def _number(option: str, text: str, kind, what: str):
@@ -36,33 +39,40 @@ def positive(option: str, unit: str):
     """A ``type=`` converter: a finite number > 0 in ``unit`` (e.g. ``--sigma`` in mm)."""
     def convert(text: str) -> float:
         value = _number(option, text, float, f"a positive number in {unit}")
-        if not value > 0:
-            raise OptionError(f"{option} {text}: must be positive (in {unit}), got {value:g}")
-        return value
+        return ranges.positive(option, value, unit)
     return convert
 
 
 def at_least(option: str, minimum: float, unit: str = ""):
     """A ``type=`` converter: a finite number ≥ ``minimum`` (e.g. ``--dwell`` ≥ 0 s)."""
-    unit = f" {unit}" if unit else ""
-
     def convert(text: str) -> float:
-        value = _number(option, text, float, f"a number of {minimum:g}{unit} or more")
-        if not value >= minimum:
-            raise OptionError(f"{option} {text}: must be {minimum:g}{unit} or more")
-        return value
+        said = f" {unit}" if unit else ""
+        value = _number(option, text, float, f"a number of {minimum:g}{said} or more")
+        return ranges.at_least(option, value, minimum, unit)
+    return convert
+
+
+def probability(option: str):
+    """A ``type=`` converter: a probability strictly between 0 and 1 (e.g. ``--level``)."""
+    def convert(text: str) -> float:
+        value = _number(option, text, float, "a probability between 0 and 1")
+        return ranges.probability(option, value)
+    return convert
+
+
+def fraction(option: str):
+    """A ``type=`` converter: a fraction from 0 to 1, 1 excluded (e.g. ``--min-gain``)."""
+    def convert(text: str) -> float:
+        return ranges.fraction(option, _number(option, text, float, "a fraction from 0 to 1"))
     return convert
 
 
 def count(option: str, minimum: int = 1, what: str = ""):
     """A ``type=`` converter: an integer ≥ ``minimum`` (e.g. ``--poses``)."""
-    what = f" {what}" if what else ""
-
     def convert(text: str) -> int:
-        value = _number(option, text, int, f"a whole number of {minimum}{what} or more")
-        if value < minimum:
-            raise OptionError(f"{option} {text}: must be {minimum}{what} or more")
-        return value
+        said = f" {what}" if what else ""
+        value = _number(option, text, int, f"a whole number of {minimum}{said} or more")
+        return ranges.whole(option, value, minimum, what)
     return convert
 
 

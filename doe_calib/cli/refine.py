@@ -11,6 +11,7 @@ from doe_calib.cli.common import (
     robot_arguments,
 )
 from doe_calib.cli.diagnose import measurement_arguments
+from doe_calib.cli.options import count
 from doe_calib.io.json_file import strict_json
 
 HELP = "grow the model by the best significant effect until it is adequate; write the fit"
@@ -24,7 +25,8 @@ def add_arguments(c):
     c.add_argument("--validation", nargs="+", metavar="CSV",
                    help="held-out measurement CSV(s): their RMS is shown per step, never used "
                         "to choose")
-    c.add_argument("--max-steps", type=int, default=5, help="effects added at most (default 5)")
+    c.add_argument("--max-steps", type=count("--max-steps", 0, "effects"), default=5,
+                   help="effects added at most (default 5; 0: only diagnose the model given)")
     c.add_argument("--out", required=True, help="identification result JSON of the final model "
                                                 "(what predict takes)")
     c.add_argument("--history", help="refinement steps JSON (default: beside --out)")

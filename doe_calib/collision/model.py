@@ -18,6 +18,7 @@ from doe_calib.collision import pairs as pair_rules
 from doe_calib.collision.planner import PlannerSettings
 from doe_calib.collision.shapes import cell_shapes, load_shapes, tool_shapes
 from doe_calib.errors import ModelError
+from doe_calib.io.setting_ranges import at_least
 
 log = logging.getLogger(__name__)
 
@@ -212,6 +213,11 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
         How moves no simple route clears are planned (default
         :data:`DEFAULT_PLANNER`); None: they are not.
 
+    Raises
+    ------
+    OptionError
+        A clearance that is negative or not a finite number.
+
     Examples
     --------
     >>> from doe_calib import Robot, Tool, examples
@@ -225,9 +231,10 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
     move_clearance = MOVE_SHARE * clearance if move_clearance is None else move_clearance
     move_self_clearance = MOVE_SHARE * self_clearance if move_self_clearance is None \
         else move_self_clearance
-    least = min(clearance, self_clearance, move_clearance, move_self_clearance)
-    if least < 0:
-        raise ModelError(f"a clearance must not be negative, got {1000 * least:g} mm")
+    for name, value in (("clearance", clearance), ("self_clearance", self_clearance),
+                        ("move_clearance", move_clearance),
+                        ("move_self_clearance", move_self_clearance)):
+        at_least(name, value, 0.0, "m")
     for move, pose, what in ((move_clearance, clearance, "clearance"),
                              (move_self_clearance, self_clearance, "self-clearance")):
         if move > pose:

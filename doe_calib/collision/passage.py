@@ -32,7 +32,7 @@ import numpy as np
 from doe_calib.collision.bounds import SLACK
 
 #: Spacing of the values tried on a joint a path must pass, rad (a blocked stretch narrower
-#: than this may go unproven: the move is then searched for as before).
+#: than this may go unproven: the planner then searches for the move as for any other).
 VALUE_STEP = np.radians(5.0)
 #: Positions of the swept joint tested at the move's margin before its sweep (any free: none).
 PROBES = 8

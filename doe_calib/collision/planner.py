@@ -33,6 +33,7 @@ import numpy as np
 
 from doe_calib.collision.clearance import SEGMENT_STEP, Workspace, check_path, too_close
 from doe_calib.collision.passage import blocked_passage
+from doe_calib.io.setting_ranges import positive, whole
 
 #: Joint step at which the search checks its motions, rad (the final check is at 1°).
 SEARCH_STEP = np.radians(3.0)
@@ -63,6 +64,12 @@ class PlannerSettings:
         ends without a path (about 0.1 ms each). The searches of a measurement
         program take a hundred to a few thousand (one in the benchmark's UR5
         cell needs 3 000–5 000: what 1 s of wall time gave on a loaded machine).
+
+    Raises
+    ------
+    OptionError
+        ``time`` not positive, ``seed`` negative, ``attempts`` or ``checks`` below 1,
+        or any of the three not a whole number.
     """
 
     time: float = 30.0
@@ -71,11 +78,10 @@ class PlannerSettings:
     checks: int = 5000
 
     def __post_init__(self):
-        if not self.time > 0:
-            raise ValueError(f"the planner's time cap must be positive, s; got {self.time}")
-        if int(self.checks) != self.checks or self.checks < 1:
-            raise ValueError(f"the planner's check budget must be a positive whole number; "
-                             f"got {self.checks}")
+        positive("time", self.time, "s")
+        whole("seed", self.seed, 0)
+        whole("attempts", self.attempts, 1)
+        whole("checks", self.checks, 1)
 
 
 @dataclass(frozen=True)

@@ -42,9 +42,10 @@ from doe_calib.design.reachability import (
     reachable_choice,
 )
 from doe_calib.design.updates import regularised
-from doe_calib.errors import OptionError, SolverError
+from doe_calib.errors import SolverError
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.io.measurements import concatenate
+from doe_calib.io.setting_ranges import level_and_power, positive, whole
 from doe_calib.model.marker_model import build_model
 
 #: Targets taken from a diagnosis: its top candidate and its confounded ones, at most this many.
@@ -188,8 +189,11 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     -------
     AugmentResult
     """
-    if n_poses < 1:
-        raise OptionError(f"{n_poses} poses (--poses): augmenting needs at least 1 new pose")
+    whole("n_poses", n_poses, 1, "new pose")
+    positive("sigma", sigma, "m")
+    if not isinstance(candidates, CandidatePoses):
+        whole("candidates", candidates, 1)
+    level_and_power(alpha, power)
     rng = np.random.default_rng() if rng is None else rng
     params = model.nominal() if params is None else params
     constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints

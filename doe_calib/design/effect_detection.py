@@ -25,6 +25,7 @@ from doe_calib.design.detectability import assess
 from doe_calib.diagnosis.effect_tests import candidate_effects, fitted_basis, projected_columns
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.io.measurements import Measurements
+from doe_calib.io.setting_ranges import level_and_power
 from doe_calib.model.effects import parse_model
 from doe_calib.model.evaluation import marker_positions
 
@@ -62,12 +63,18 @@ def detectability(model, params, measurements, effects, alpha: float = 0.05,
     effects : sequence of Effect
         Candidates, e.g. from :func:`detect_effects`.
     alpha, power : float
-        Level of the score test and the power asked for.
+        Level of the score test and the power asked for: probabilities, alpha < power.
 
     Returns
     -------
     tuple of Detectability, in the order of ``effects``.
+
+    Raises
+    ------
+    OptionError
+        ``alpha`` or ``power`` is not a probability, or ``power`` is not above ``alpha``.
     """
+    alpha, power = level_and_power(alpha, power)
     _, q_basis = fitted_basis(model, measurements, params)
     jac = []  # the model's free weighted Jacobian, made once and only if words need it
 

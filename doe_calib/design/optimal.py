@@ -47,6 +47,7 @@ from doe_calib.design.relaxation import (
 )
 from doe_calib.design.result import DesignResult
 from doe_calib.errors import OptionError, SolverError
+from doe_calib.io.setting_ranges import positive, whole
 
 log = logging.getLogger(__name__)
 
@@ -131,8 +132,10 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
         raise OptionError("ask for the task criterion by name, criterion=\"task\", with task= "
                           "poses: its matrix depends on the parameters designed for")
     check(criterion, task)
-    if n_poses < 1:
-        raise OptionError(f"{n_poses} poses (--poses): a design needs at least 1 pose")
+    whole("n_poses", n_poses, 1, "pose")
+    positive("sigma", sigma, "m")
+    if not isinstance(candidates, CandidatePoses):
+        whole("candidates", candidates, 1)
     rng = np.random.default_rng() if rng is None else rng
     params = model.nominal() if params is None else params
     constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints

@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from doe_calib.model.parameter_names import alias_hint, resolve
 from doe_calib.model.parameters import DISPLAY_UNITS
 
 #: Display unit → (SI unit, factor SI → display), the inverse of DISPLAY_UNITS.
@@ -61,11 +62,14 @@ class StdMapping(Mapping):
     """Read-only mapping parameter name → predicted std in SI units.
 
     ``display()`` gives name → (std, unit) in display units; ``record(name)``
-    the :class:`PredictedStd`. Iterates in the design's parameter order.
+    the :class:`PredictedStd`. Iterates in the design's parameter order. With the
+    robot's ``joints`` (names along the chain), a name may write its joint as a
+    model string does: ``k_j3`` for ``k_a3`` (:mod:`~doe_calib.model.parameter_names`).
     """
 
-    def __init__(self, records):
+    def __init__(self, records, joints=()):
         self._records = {r.name: r for r in records}
+        self._joints = tuple(joints)
 
     def __getitem__(self, name: str) -> float:
         return self.record(name).std
@@ -78,11 +82,12 @@ class StdMapping(Mapping):
 
     def record(self, name: str) -> PredictedStd:
         """The :class:`PredictedStd` of ``name``; KeyError naming the parameters designed for."""
-        try:
-            return self._records[name]
-        except KeyError:
-            raise KeyError(f"{name!r} is not a parameter of this design; it predicts "
-                           f"{', '.join(self._records) or 'none'}") from None
+        found = resolve(name, self._records, self._joints)
+        if found is None:
+            raise KeyError(f"{name!r} is not a parameter of this design"
+                           f"{alias_hint(self._joints)}; it predicts "
+                           f"{', '.join(self._records) or 'none'}")
+        return self._records[found]
 
     def display(self) -> dict:
         """Name → (std, unit) in display units (mm, deg, µrad/(N·m) …)."""

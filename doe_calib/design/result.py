@@ -109,7 +109,8 @@ class DesignResult:
     @property
     def std(self) -> StdMapping:
         """Parameter name → predicted std in SI units; ``.display()`` in display units."""
-        return StdMapping(predicted_std(n, s, u) for n, (s, u) in self.predicted_std.items())
+        return StdMapping((predicted_std(n, s, u) for n, (s, u) in self.predicted_std.items()),
+                          self.robot.joint_names)
 
     def __getitem__(self, name: str) -> PredictedStd:
         """The predicted std of parameter ``name``: SI and display value, both units."""

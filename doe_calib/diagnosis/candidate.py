@@ -80,7 +80,7 @@ class Candidate:
         Columns left once what the model already absorbs is projected out:
         the numerator degrees of freedom of F.
     dof : int or None
-        Denominator degrees of freedom of F (3K − rank J − rank); None in old files.
+        Denominator degrees of freedom of F (3K − rank J − rank); None when read from a file without it.
     statistic : float
         The score test's F.
     p_value, p_value_raw : float

@@ -215,7 +215,8 @@ def candidate_batch(model, effects) -> CandidateBatch:
         A candidate whose parameters clash or whose chain cannot be built.
     """
     names = [[p.name for p in e.parameters(model.robot)] for e in effects]
-    batch = next(_BATCHES)  # a batch of its own: built from the effects' code as it is now
+    batch = next(_BATCHES)  # a tag of its own: build_model's cache cannot hand back an
+    # earlier batch, built from what may be other code of the same effects (a file reloaded)
     tagged = tuple(_Tagged(e, f"b{batch}c{i}:", n)
                    for i, (e, n) in enumerate(zip(effects, names)))
     big = build_model(model.robot, model.tool, tuple(model.effects) + tagged)

@@ -15,9 +15,11 @@ from doe_calib.diagnosis.cross_validation import validation_rms
 from doe_calib.diagnosis.effect_tests import augmented
 from doe_calib.diagnosis.engine import candidate_batch_for, diagnose
 from doe_calib.diagnosis.refine_result import RefineResult, RefineStep
+from doe_calib.diagnosis.settings import check_settings
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.io.repeated_readings import copies_words
+from doe_calib.io.setting_ranges import whole
 from doe_calib.model.effects import parse_effect
 
 __all__ = ["refine", "RefineResult", "RefineStep"]
@@ -85,7 +87,15 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
     Returns
     -------
     RefineResult
+
+    Raises
+    ------
+    OptionError
+        A setting out of its range (:func:`~doe_calib.diagnosis.settings.check_settings`;
+        ``max_steps`` a whole number ≥ 0).
     """
+    check_settings(level, folds, min_gain, tolerance, practical_um, workers)
+    whole("max_steps", max_steps, 0, "effects")
     settled = resolve_sigma(model, measurements, sigma_mm, fit=fit)
     if settled.measurements is not measurements:  # σ settled here: fit at that σ
         measurements, fit = settled.measurements, None

@@ -21,6 +21,7 @@ from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
 from doe_calib.diagnosis.outliers import gross_outliers, outlier_verdict
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
+from doe_calib.diagnosis.settings import check_settings
 from doe_calib.diagnosis.sign_lead import sign_lead
 from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.design.detectability import SEPARATE
@@ -30,6 +31,7 @@ from doe_calib.estimation.load_units import kgf_finding
 from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.io.measurements import ESTIMATED, REPEATED
 from doe_calib.io.repeated_readings import copies_words
+from doe_calib.io.setting_ranges import whole
 from doe_calib.model.effects import parse_effect
 
 #: A residual "follows" a variable when its adjusted R² reaches this.
@@ -336,7 +338,15 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     Returns
     -------
     DiagnosisResult
+
+    Raises
+    ------
+    OptionError
+        A setting out of its range (:func:`~doe_calib.diagnosis.settings.check_settings`;
+        ``cv_top`` a whole number ≥ 1).
     """
+    check_settings(level, folds, min_gain, tolerance, practical_um, workers)
+    whole("cv_top", cv_top, 1)
     settled = resolve_sigma(model, measurements, sigma_mm, fit=fit)
     if settled.measurements is not measurements:  # σ settled here: fit at that σ
         measurements, fit = settled.measurements, None

@@ -110,6 +110,7 @@ def parameter_estimate(result, name: str) -> ParameterEstimate:
     """
     p = result.parameters
     i = p.position(name)
+    name = p.names[i]  # the parameter's own name, however its joint was written
     par = p.parameters[i]
     std, post = result.std(name), result.std(name, a_posteriori=True)
     correlations = ()

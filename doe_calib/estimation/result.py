@@ -274,7 +274,7 @@ class IdentificationResult:
         Needs no model build and no effect file (only :meth:`predict` does).
         """
         robot, tool = Robot.from_dict(d["robot"]), Tool.from_dict(d["tool"])
-        params = ParameterSet.from_rows(d["parameters"])
+        params = ParameterSet.from_rows(d["parameters"], robot.joint_names)
         estimated = bool(d.get("sigma_estimated", False))
         return cls(robot, tool, d["model"], d["estimator"], params,
                    np.array(d["covariance_si"], float).reshape(int(params.free.sum()), -1),

@@ -8,8 +8,8 @@ configurations are keyed by integer codes (``numpy.unique``). This path
 never reports: on the first thing it does not accept (a bad number, an
 empty cell without a default, a value past a joint limit, an unknown marker,
 a repeated reading, rows of one pose disagreeing on q) it returns None, and
-the caller reads the file row by row, which names the file, line and column
-of every problem exactly as before.
+the caller reads the file row by row, the reader that names the file, line
+and column of every problem.
 """
 from __future__ import annotations
 

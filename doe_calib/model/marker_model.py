@@ -80,8 +80,9 @@ class ModelDescription:
         return len(self.parameters)
 
     def nominal(self) -> ParameterSet:
-        """Parameter set at nominal values, every parameter free."""
-        return ParameterSet.nominal(self.parameters)
+        """Parameter set at nominal values, every parameter free; names may write a joint
+        as the model string does (``k_j2``)."""
+        return ParameterSet.nominal(self.parameters, self.robot.joint_names)
 
 
 def describe_model(robot, tool, model: str | tuple = DEFAULT_MODEL,

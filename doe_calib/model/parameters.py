@@ -11,6 +11,7 @@ from difflib import get_close_matches
 import numpy as np
 
 from doe_calib.errors import DataError, OptionError
+from doe_calib.model.parameter_names import alias_hint, joint_aliases, resolve
 
 # SI unit → (display unit, factor SI→display). Files and reports use display units.
 DISPLAY_UNITS = {
@@ -120,19 +121,24 @@ class ParameterSet:
     free : ndarray of bool, shape (P,)
     fixed_reason : tuple of str
         Why each fixed parameter is fixed ("" for free ones).
+    joints : tuple of str
+        The robot's joint names along the chain: names may write a joint as a
+        model string does, ``k_j2`` for ``k_a2`` (:mod:`~doe_calib.model.parameter_names`);
+        empty: only the parameters' own names.
     """
 
     parameters: tuple
     values: np.ndarray
     free: np.ndarray
     fixed_reason: tuple
+    joints: tuple = ()
 
     @classmethod
-    def nominal(cls, parameters) -> "ParameterSet":
-        """All parameters free, at their nominal values."""
+    def nominal(cls, parameters, joints=()) -> "ParameterSet":
+        """All parameters free, at their nominal values (``joints``: see the class)."""
         parameters = tuple(parameters)
         return cls(parameters, np.array([p.nominal for p in parameters], float),
-                   np.ones(len(parameters), bool), ("",) * len(parameters))
+                   np.ones(len(parameters), bool), ("",) * len(parameters), tuple(joints))
 
     def __len__(self) -> int:
         return len(self.parameters)
@@ -152,6 +158,8 @@ class ParameterSet:
     def index(self, names) -> np.ndarray:
         """Positions of ``names`` (a name, a list of names, or a block name).
 
+        A name may write its joint as a model string does (``k_j2``; see the class).
+
         Raises
         ------
         OptionError
@@ -167,18 +175,18 @@ class ParameterSet:
                 out.append(lookup[n])
                 continue
             block = [i for i, p in enumerate(self.parameters) if p.block == n]
-            if not block:
-                raise OptionError(self._unknown(n))
-            out.extend(block)
+            out.extend(block or [self.position(n)])
         return np.array(out, dtype=int)
 
     def _unknown(self, name: str) -> str:
         """Words for an unknown name, with the closest parameter and block names."""
         blocks = list(dict.fromkeys(p.block for p in self.parameters))
-        close = get_close_matches(str(name), self.names + blocks, n=5, cutoff=0.6)
+        close = [c for n in [str(name), *joint_aliases(str(name), self.joints)]
+                 for c in get_close_matches(n, self.names + blocks, n=5, cutoff=0.6)]
+        close = list(dict.fromkeys(close))[:5]
         hint = (f"; did you mean {', '.join(close)}?" if close else
                 f"; blocks: {', '.join(blocks)}")
-        return f"no parameter or block named {name!r}{hint}"
+        return f"no parameter or block named {name!r}{alias_hint(self.joints)}{hint}"
 
     def __getitem__(self, name: str) -> float:
         return float(self.values[self.index(name)[0]])
@@ -243,12 +251,14 @@ class ParameterSet:
         return rows
 
     @classmethod
-    def from_rows(cls, rows) -> "ParameterSet":
+    def from_rows(cls, rows, joints=()) -> "ParameterSet":
         """A set rebuilt from :meth:`to_list` rows alone: no model, no effect file.
 
-        Rows in display units (``unit`` is the display unit: mm, deg, …). Files
-        written before rows held ``scale`` get one display unit as the scale,
-        before they held ``bounds``/``plausible``/``sign`` none.
+        ``joints``: the robot's joint names along the chain (see the class).
+
+        Rows in display units (``unit`` is the display unit: mm, deg, …). A row
+        without ``scale`` gets one display unit as the scale; one without
+        ``bounds``, ``plausible`` or ``sign``, none.
 
         Raises
         ------
@@ -275,20 +285,24 @@ class ParameterSet:
         twice = sorted({n for n in names if names.count(n) > 1})
         if twice:
             raise DataError(f"parameter names given twice: {', '.join(twice)}")
-        return cls(tuple(parameters), np.array(values, float), np.array(free, bool), tuple(why))
+        return cls(tuple(parameters), np.array(values, float), np.array(free, bool), tuple(why),
+                   tuple(joints))
 
     def position(self, name: str) -> int:
         """Position of the parameter ``name`` (a parameter, not a block).
 
+        ``name`` may write its joint as a model string does (``k_j2``; see the class).
+
         Raises
         ------
         OptionError
-            Not a parameter name (the message lists the closest names).
+            Not a parameter name (the message lists the closest names), or a
+            joint alias that stands for several parameters.
         """
-        for i, p in enumerate(self.parameters):
-            if p.name == name:
-                return i
-        raise OptionError(self._unknown(name))
+        found = resolve(name, self.names, self.joints)
+        if found is None:
+            raise OptionError(self._unknown(name))
+        return self.names.index(found)
 
     def __repr__(self) -> str:
         blocks = dict.fromkeys(p.block for p in self.parameters)

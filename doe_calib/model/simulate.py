@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.io.measurements import Measurements
+from doe_calib.io.setting_ranges import at_least
 from doe_calib.model.evaluation import marker_positions
 
 
@@ -28,7 +29,13 @@ def simulate(model, values, configurations, sigma: float, rng=None, markers=None
     -------
     Measurements
         One reading per configuration and marker, in measurement order.
+
+    Raises
+    ------
+    OptionError
+        ``sigma`` is negative or not a finite number.
     """
+    at_least("sigma", sigma, 0.0, "m")
     rng = np.random.default_rng() if rng is None else rng
     values = getattr(values, "values", values)
     names = model.tool.names if markers is None else list(markers)

@@ -46,18 +46,20 @@ def flatten(d: dict, prefix: str = "") -> list[list]:
     return rows
 
 
-def pose_geometry(design):
+def pose_geometry(design, registry=None):
     """Flange and marker positions of each pose on the design's nominal model, mm.
 
     The first configuration of each pose (unloaded) is used; the nominal base
-    is the identity, so positions are in the robot base frame.
+    is the identity, so positions are in the robot base frame. ``registry``
+    names the effects the design's model string may use (default the catalogue;
+    a model with user effects needs the registry it was designed with).
 
     Returns
     -------
     flange : ndarray, shape (M, 3)
     markers : ndarray, shape (M, n, 3)
     """
-    model = build_model(design.robot, design.tool, design.model)
+    model = build_model(design.robot, design.tool, design.model, registry=registry)
     values = model.nominal().values
     cfg = design.configurations
     first = sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())
@@ -70,10 +72,11 @@ def pose_geometry(design):
 MAX_DRAWN = 16
 
 
-def robot_drawing(design, dpi: int = 90):
+def robot_drawing(design, dpi: int = 90, registry=None):
     """The robot as a stick figure in each pose (the first :data:`MAX_DRAWN`), with its cell.
 
-    Returns the report blocks (figure and caption) of the design report's "Robot in each pose".
+    Returns the report blocks (figure and caption) of the design report's "Robot in each pose";
+    ``registry`` as in :func:`pose_geometry`.
     """
     from doe_calib.model.skeleton import skeleton_points
 
@@ -81,7 +84,7 @@ def robot_drawing(design, dpi: int = 90):
     first = sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())[:MAX_DRAWN]
     ids = [cfg.pose[i] for i in first]
     skeletons = skeleton_points(robot, cfg.q[first]) * 1000.0
-    _, markers = pose_geometry(design)
+    _, markers = pose_geometry(design, registry)
     clear = list(design.clearances)
     titles = [f"pose {p}" + (f"\n{clear[k][0]:.0f} mm: {clear[k][1]}" if k < len(clear) else "")
               for k, p in enumerate(ids)]
@@ -114,8 +117,11 @@ def _pose_rows(design):
     return rows
 
 
-def design_sections(design, dpi: int = 90) -> list:
-    """The report sections of a design: poses, joint chart, 3-D view, constraints, bound, std."""
+def design_sections(design, dpi: int = 90, registry=None) -> list:
+    """The report sections of a design: poses, joint chart, 3-D view, constraints, bound, std.
+
+    ``registry`` names the effects of the design's model (:func:`pose_geometry`).
+    """
     robot, png = design.robot, figures.to_png
     units = [j.display_unit for j in robot.joints]
     clear = ["clearance (mm)", "closest pair"] if design.clearances else []
@@ -134,7 +140,7 @@ def design_sections(design, dpi: int = 90) -> list:
                                       units), dpi),
         "joint positions of the chosen poses with the joint limits shaded",
         "Joint positions of the chosen poses; grey: URDF joint limits.")))
-    flange, markers = pose_geometry(design)
+    flange, markers = pose_geometry(design, registry)
     los = design.constraints.get("line_of_sight") or {}
     tracker = los.get("tracker")
     sections.append(section("Poses in space", figure(
@@ -142,7 +148,7 @@ def design_sections(design, dpi: int = 90) -> list:
         "3-D view of flange and marker positions of each pose",
         "Flange (numbered by pose) and markers on the nominal model, robot base frame (mm)"
         + ("; red: the tracker." if tracker is not None else "."))))
-    sections.append(section("Robot in each pose", robot_drawing(design, dpi)))
+    sections.append(section("Robot in each pose", robot_drawing(design, dpi, registry)))
     met = [table(["constraint", "value"], flatten(design.constraints))]
     if design.candidates:
         met += ["Candidate poses drawn and removed by each constraint:",
@@ -218,7 +224,7 @@ def design_fragment(design, dpi: int = 72) -> Html:
     return Html("<div>" + "\n".join(parts) + "</div>")
 
 
-def design_report(design, path, dpi: int = 90):
+def design_report(design, path, dpi: int = 90, registry=None):
     """Write an HTML report of a measurement design.
 
     Parameters
@@ -228,6 +234,10 @@ def design_report(design, path, dpi: int = 90):
         HTML file to write; self-contained (figures embedded as PNG).
     dpi : int
         Resolution of the figures.
+    registry : EffectRegistry, optional
+        The effects the design's model string may name (default the built-in
+        catalogue); a design with user effects needs its registry
+        (:func:`~doe_calib.model.effects.registry_with_files`).
 
     Returns
     -------
@@ -238,7 +248,7 @@ def design_report(design, path, dpi: int = 90):
     --------
     >>> design_report(DesignResult.from_json("design.json"), "design.html")  # doctest: +SKIP
     """
-    sections = design_sections(design, dpi)
+    sections = design_sections(design, dpi, registry)
     sections.append(section("Summary", preformatted(design.summary())))
     title = (f"Measurement design for {design.robot.name}: {design.model}, "
              f"{design.criterion} criterion")
