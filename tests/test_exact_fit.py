@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from doe_calib import (IdentificationResult, Robot, Tool, build_model, examples, identify,
                        predict, read_measurements)
+from studies.exact_fit.study import truth as placement_truth
 
 MARKERS_M = np.array([[150.0, 0.0, 120.0], [-75.0, 129.9, 120.0], [-75.0, -129.9, 120.0]]) / 1e3
 NAMES = ["A", "B", "C"]
@@ -24,18 +25,6 @@ def kr270():
     tool = Tool.from_yaml(examples.TOOL_YAML)
     return sim.Chain.from_urdf(examples.ROBOT_URDF, "tool0"), robot, tool, \
         build_model(robot, tool, MODEL)
-
-
-def _truth(chain, rng, mm: float, deg: float, scale: float = 1.0):
-    """Tracker frame, markers and offsets as Truth.random; every placement off by up to
-    ``mm`` / ``deg`` on each axis; a compliance of 0.5–3 µrad/(N·m)... ×0.1 on each joint."""
-    t = sim.Truth.random(chain, MARKERS_M, rng, scale=scale)
-    n = len(chain.joints)
-    twists = np.c_[rng.uniform(-1, 1, (n, 3)) * mm * 1e-3,
-                   rng.uniform(-1, 1, (n, 3)) * np.radians(deg)]
-    compliance = tuple(sim.SmoothAngleCompliance(k, c, 0.0)
-                       for k, c in enumerate(rng.uniform(0.5, 3.0, n) * 1e-7))
-    return sim.Truth(t.base_rotvec, t.base_position, t.markers, t.offsets, twists, compliance)
 
 
 def _readings(path, chain, robot, tool, truth, poses, rng, sigma_mm):
@@ -63,7 +52,7 @@ def test_noise_free_campaign_is_predicted_exactly_at_new_poses(kr270, tmp_path, 
     30 new poses are predicted to the files' rounding, whatever the size of the errors."""
     chain, robot, tool, model = kr270
     rng = np.random.default_rng(7)
-    truth = _truth(chain, rng, mm, deg)
+    truth = placement_truth(sim, chain, rng, mm, deg)
     train = _readings(tmp_path / "c.csv", chain, robot, tool, truth, 60, rng, 0.0)
     new = _readings(tmp_path / "v.csv", chain, robot, tool, truth, 30, rng, 0.0)
     result = _fit(model, train, 0.01)
@@ -72,11 +61,11 @@ def test_noise_free_campaign_is_predicted_exactly_at_new_poses(kr270, tmp_path, 
 
 
 def test_correct_model_passes_the_chi_square_test_at_large_n(kr270, tmp_path):
-    """30 000 readings, σ 5 µm, placements 2 mm / 0.3°: the correct model's χ² passes and σ̂/σ
-    is 1 to its 95 % interval (a second-order misfit of 1 µm would fail both)."""
+    """30 000 readings, σ 5 µm, placements 2 mm / 0.3°: the correct model's χ² passes and
+    σ̂/σ is 1 to its 95 % interval (a second-order misfit of 1 µm would fail both)."""
     chain, robot, tool, model = kr270
     rng = np.random.default_rng(3)
-    truth = _truth(chain, rng, 2.0, 0.3)
+    truth = placement_truth(sim, chain, rng, 2.0, 0.3)
     data = _readings(tmp_path / "big.csv", chain, robot, tool, truth, 5000, rng, 0.005)
     stats = _fit(model, data, 0.005).fit_statistics
     assert stats.p_value > 1e-3
@@ -164,7 +153,7 @@ def test_roles_and_combinations_survive_the_json_file(kr270, tmp_path):
     chain, robot, tool, model = kr270
     rng = np.random.default_rng(2)
     result = _fit(model, _readings(tmp_path / "c.csv", chain, robot, tool,
-                                   _truth(chain, rng, 1.0, 0.1), 30, rng, 0.01), 0.01)
+                                   placement_truth(sim, chain, rng, 1.0, 0.1), 30, rng, 0.01), 0.01)
     result.to_json(tmp_path / "r.json")
     back = IdentificationResult.from_json(tmp_path / "r.json")
     assert back.absorbed == result.absorbed and back.absorbed

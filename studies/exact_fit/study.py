@@ -10,15 +10,14 @@ poses; ``doe-calib diagnose`` on a 100 000-reading campaign with noise.
 """
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 from studies.commands import run_command
+from studies.independent import independent_sim
 
 ROBOT = Path(__file__).resolve().parents[2] / "doe_calib" / "examples"
 MODEL = "joint_offset+geometry+joint_compliance"
@@ -26,16 +25,6 @@ MARKERS_M = np.array([[150.0, 0.0, 120.0], [-75.0, 129.9, 120.0], [-75.0, -129.9
 NAMES = ["A", "B", "C"]
 #: Placement errors tried: (mm, deg) on each axis, uniform.
 SIZES = ((1.0, 0.1), (2.0, 0.3), (5.0, 1.0))
-
-
-def independent_sim():
-    """``tests/independent_sim.py``, the simulator that owes nothing to our effect modules."""
-    path = Path(__file__).resolve().parents[2] / "tests" / "independent_sim.py"
-    spec = importlib.util.spec_from_file_location("independent_sim", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault(spec.name, module)
-    spec.loader.exec_module(module)
-    return module
 
 
 def truth(sim, chain, rng, mm: float, deg: float):

@@ -14,8 +14,6 @@ positive), where that deflection looks like geometry and other shoulder effects.
 """
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +22,7 @@ from doe_calib import Robot, Tool, build_model, diagnose, read_measurements
 from doe_calib.design.augment import augment_design, diagnosis_targets
 from doe_calib.diagnosis.effect_selection import refine
 from doe_calib.io.measurements import concatenate
+from studies.independent import independent_sim
 
 START = "joint_offset+geometry"
 MARKERS = {"A": [0.1, 0.0, 0.05], "B": [-0.05, 0.087, 0.05], "C": [-0.05, -0.087, 0.05]}
@@ -31,16 +30,6 @@ ONE_BRANCH = np.array([[-np.pi, np.pi], [-2.8, -0.3], [0.3, 2.5], [-np.pi, np.pi
                        [-np.pi, np.pi]])  # shoulder lift, elbow up, wrist 2 positive
 OWN_WEIGHT = 4e-7  # rad/(N·m)
 SIGMA_MM = 0.02
-
-
-def independent_sim():
-    """``tests/independent_sim.py``, the simulator that owes nothing to our effect modules."""
-    path = Path(__file__).resolve().parents[2] / "tests" / "independent_sim.py"
-    spec = importlib.util.spec_from_file_location("independent_sim", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault(spec.name, module)
-    spec.loader.exec_module(module)
-    return module
 
 
 def _measure(sim, chain, truth, q, robot, tool, path, rng):
