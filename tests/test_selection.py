@@ -151,3 +151,16 @@ def test_the_selection_is_told_in_the_report_and_survives_json(tmp_path, kr270):
     assert back.selection == sel
     assert {f["name"] for f in back.to_dict()["fixed"] if f["reason"] == REASON} == \
         set(sel.left_at_nominal)
+
+
+def test_the_kept_fit_names_the_values_of_the_reduced_set(tmp_path, kr270):
+    """A refit with parameters left at nominal still says which values absorb the parameters
+    the data cannot separate (the rank analysis of the whole fit) and their combinations."""
+    model = kr270[3]
+    (train,) = _campaign(tmp_path, kr270, seed=1, n=20, amplitude_deg=0.05)
+    res = _fit(model, train)
+    whole = _fit(model, train, select="none")
+    assert res.selection.left_at_nominal
+    kept = {n for n in whole.absorbed if n in res.free_names}
+    assert kept and {c.parameter for c in res.combinations()} == kept
+    assert all(res[n].role == "reduced set" for n in kept)

@@ -104,7 +104,8 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
                                   {str(w.message) for w in said[id(first)]
                                    if issubclass(w.category, OF_THAT_FIT)})
     return with_plausibility(model, measurements,
-                             replace(kept, warnings=notes, selection=selection))
+                             replace(kept, warnings=notes, selection=selection,
+                                     absorbed=first.absorbed))
 
 
 #: Warnings about one fit's numbers, not about the data: not carried to another fit.
