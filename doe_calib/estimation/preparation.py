@@ -22,6 +22,13 @@ COND_WARN = 1e6
 NOT_SEPARABLE = "; fixed at its current value"
 
 
+def not_separable(params) -> list[str]:
+    """Names of the parameters the rank analysis fixed (their reason ends in
+    :data:`NOT_SEPARABLE`), whatever values they hold."""
+    return [p.name for p, free, why in zip(params.parameters, params.free, params.fixed_reason)
+            if not free and why.endswith(NOT_SEPARABLE)]
+
+
 def register_base(model, measurements, params):
     """Start values of the base pose from a point-set registration of all readings.
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from doe_calib.estimation.preparation import NOT_SEPARABLE
+from doe_calib.estimation.preparation import not_separable
 
 #: What a parameter's value is, by :func:`role`.
 ROLES = {"physical": "identified: the physical value",
@@ -73,14 +73,7 @@ def role(result, name: str) -> str:
     i = p.position(name)
     if p.free[i]:
         return "reduced set" if name in result.absorbed else "physical"
-    return "not separable" if name in _not_separable(result) else "fixed"
-
-
-def _not_separable(result) -> set:
-    """Names of the parameters the rank analysis fixed."""
-    p = result.parameters
-    return {n for n, f, why in zip(p.names, p.free, p.fixed_reason)
-            if not f and why.endswith(NOT_SEPARABLE)}
+    return "not separable" if name in not_separable(p) else "fixed"
 
 
 def combinations(result) -> tuple:

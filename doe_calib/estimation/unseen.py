@@ -29,28 +29,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.errors import OptionError
+from doe_calib.estimation.preparation import not_separable
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.evaluation import observation_matrix
 from doe_calib.model.simulate import random_configurations
 
-#: Words of a fixed parameter's reason that say the readings could not see it.
-UNSEEN_WORDS = ("not separable", "no effect")
 #: Configurations over the joint range on which the dependence is found (fixed seed).
 GENERIC_POSES = 40
 #: Remaining share of a column above which its dependence is not structural (``A`` is 0).
 STRUCTURAL = 1e-6
-
-
-def unseen_names(params) -> list[str]:
-    """Names of the parameters the fit found not separable (whatever values they were given).
-
-    Parameters
-    ----------
-    params : ParameterSet
-        A result's parameters: the reason of each fixed parameter says why.
-    """
-    return [p.name for p, why in zip(params.parameters, params.fixed_reason)
-            if any(w in why for w in UNSEEN_WORDS)]
 
 
 def measured_markers(result) -> list[str] | None:
@@ -183,7 +170,8 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> U
     model : Model
         The model the result was identified with.
     params : ParameterSet
-        The result's parameters (:func:`unseen_names` picks the unseen ones).
+        The result's parameters; the unseen ones are those the rank analysis fixed
+        (:func:`~doe_calib.estimation.preparation.not_separable`).
     markers : sequence of str, optional
         The markers the readings measured (default all of the tool's).
     tolerance : dict, optional
@@ -204,7 +192,7 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> U
     >>> part.names, part.tolerance
     (('dq_a1',), array([0.001]))
     """
-    names = unseen_names(params)
+    names = not_separable(params)
     index = np.array(params.index(names), int) if names else np.zeros(0, int)
     free = np.asarray(params.free, bool).copy()
     free[index] = False

@@ -1,6 +1,7 @@
 """The TIAGo of the study: URDF from example-robot-data, flange, the tracked body's four points."""
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 from doe_calib import Robot, Tool
@@ -52,6 +53,23 @@ def missing(data_dir) -> str | None:
     if tiago_urdf() is None:
         return "the TIAGo URDF needs `pip install example-robot-data`"
     return None
+
+
+def session_study_parser(name: str) -> argparse.ArgumentParser:
+    """The command line of a study on the session CSVs: ``--data DIR`` and ``--out DIR``."""
+    ap = argparse.ArgumentParser(prog=f"python -m studies.{name}")
+    ap.add_argument("--data", type=Path, default=DEFAULT_DATA / "csv",
+                    help="folder of the session CSVs in the measurement format")
+    ap.add_argument("--out", type=Path, default=Path("results"), help="output folder")
+    return ap
+
+
+def skipped(name: str, data_dir) -> bool:
+    """True, having said why, when the study ``name`` cannot run here (:func:`missing`)."""
+    why = missing(data_dir)
+    if why:
+        print(f"{name}: skipped: {why}")
+    return why is not None
 
 
 def tiago_robot(urdf=None) -> Robot:

@@ -1,25 +1,19 @@
 """Command line: ``python -m studies.tiago_sequential [--data DIR] [--out DIR]``."""
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 
-from studies.tiago_mocap.robot import DEFAULT_DATA, missing, tiago_urdf
+from studies.tiago_mocap.robot import session_study_parser, skipped, tiago_urdf
 
 from .study import markdown, run
 
 
 def main(argv=None) -> int:
     """Run the study; skip cleanly without the data or the URDF."""
-    ap = argparse.ArgumentParser(prog="python -m studies.tiago_sequential")
-    ap.add_argument("--data", type=Path, default=DEFAULT_DATA / "csv",
-                    help="folder of the session CSVs in the measurement format")
-    ap.add_argument("--out", type=Path, default=Path("results"), help="output folder")
+    ap = session_study_parser("tiago_sequential")
     args = ap.parse_args(argv)
-    why = missing(args.data)
-    if why:
-        print(f"tiago_sequential: skipped: {why}")
+    if skipped("tiago_sequential", args.data):
         return 0
     s = run(tiago_urdf(), args.data)
     args.out.mkdir(parents=True, exist_ok=True)

@@ -1,26 +1,20 @@
 """Command line: ``python -m studies.tiago_single_point [--data DIR] [--out DIR] [--point P]``."""
 from __future__ import annotations
 
-import argparse
 import tempfile
 from pathlib import Path
 
-from studies.tiago_mocap.robot import DEFAULT_DATA, missing, tiago_urdf
+from studies.tiago_mocap.robot import session_study_parser, skipped, tiago_urdf
 
 from .study import POINT, run
 
 
 def main(argv=None) -> int:
     """Run the study; skip cleanly without the data or the URDF."""
-    ap = argparse.ArgumentParser(prog="python -m studies.tiago_single_point")
-    ap.add_argument("--data", type=Path, default=DEFAULT_DATA / "csv",
-                    help="folder of the session CSVs in the measurement format")
-    ap.add_argument("--out", type=Path, default=Path("results"), help="output folder")
+    ap = session_study_parser("tiago_single_point")
     ap.add_argument("--point", default=POINT, help=f"the one point kept (default {POINT})")
     args = ap.parse_args(argv)
-    why = missing(args.data)
-    if why:
-        print(f"tiago_single_point: skipped: {why}")
+    if skipped("tiago_single_point", args.data):
         return 0
     with tempfile.TemporaryDirectory() as work:
         s = run(tiago_urdf(), args.data, args.out, Path(work), args.point)
