@@ -33,7 +33,7 @@ import numpy as np
 
 from doe_calib import Configurations, Robot, Tool, build_model, examples, simulate
 from doe_calib.diagnosis import diagnose
-from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.refine import refine
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.io.csv_files import write_measurements
 from doe_calib.model.loads import hanging_mass_wrench

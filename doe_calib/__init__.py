@@ -68,12 +68,12 @@ _PUBLIC = {
     "compare": "doe_calib.design.comparison",
     "Comparison": "doe_calib.design.comparison",
     # diagnosis
-    "diagnose": "doe_calib.diagnosis.engine",
+    "diagnose": "doe_calib.diagnosis.diagnose",
     "DiagnosisResult": "doe_calib.diagnosis.result",
-    "refine": "doe_calib.diagnosis.effect_selection",
+    "refine": "doe_calib.diagnosis.refine",
     "RefineResult": "doe_calib.diagnosis.refine_result",
     # compensation and export
-    "compensate": "doe_calib.compensation.solve",
+    "compensate": "doe_calib.compensation.compensate",
     "CompensationResult": "doe_calib.compensation.result",
     "read_targets": "doe_calib.compensation.targets",
     "export_design": "doe_calib.export",

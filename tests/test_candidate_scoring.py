@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from doe_calib import Configurations, build_model, simulate
-from doe_calib.diagnosis.engine import diagnose
+from doe_calib.diagnosis.diagnose import diagnose
 from doe_calib.errors import DoeCalibWarning
 from doe_calib.io.json_file import strict_json
 from doe_calib.model.loads import hanging_mass_wrench

@@ -23,7 +23,7 @@ from doe_calib.compensation import (
     read_compensated_csv,
     read_targets,
 )
-from doe_calib.compensation.program import compensated_design
+from doe_calib.export.compensated_program import compensated_design
 from doe_calib.errors import ConvergenceWarning, ModelError
 from doe_calib.io.csv_files import write_design
 from doe_calib.model.evaluation import evaluate

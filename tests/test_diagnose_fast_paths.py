@@ -19,9 +19,9 @@ import pytest
 
 from doe_calib import Configurations, build_model, examples, simulate
 from doe_calib.diagnosis.candidate_batch import grown_model_builders
-from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.refine import refine
 from doe_calib.diagnosis.effect_tests import augmented, candidate_effects
-from doe_calib.diagnosis.engine import diagnose
+from doe_calib.diagnosis.diagnose import diagnose
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.model.effects import parse_effect

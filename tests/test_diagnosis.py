@@ -8,7 +8,7 @@ import pytest
 
 from doe_calib import Configurations, build_model, identify, simulate
 from doe_calib.diagnosis import diagnose, validation_rms
-from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.refine import refine
 from doe_calib.model.loads import hanging_mass_wrench
 from doe_calib.model.simulate import random_configurations, random_truth
 

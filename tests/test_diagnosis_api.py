@@ -13,7 +13,7 @@ from test_diagnosis import SIGMA, _campaign
 
 from doe_calib import build_model
 from doe_calib.diagnosis import Candidate, DiagnosisResult, FittedSize, diagnose
-from doe_calib.diagnosis.effect_selection import RefineResult, refine
+from doe_calib.diagnosis.refine import RefineResult, refine
 from doe_calib.model import marker_model
 from doe_calib.model.effects import DEFAULT_REGISTRY
 from doe_calib.model.effects.user import EXAMPLE_FILE

@@ -13,7 +13,7 @@ import pytest
 
 from doe_calib import build_model, examples
 from doe_calib.diagnosis import diagnose, validation_rms
-from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.refine import refine
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.model.effects import DEFAULT_REGISTRY

@@ -13,7 +13,7 @@ from test_export import urscript_structure
 
 from doe_calib import Configurations, OptionError, Robot, Tool, build_model, simulate
 from doe_calib.cli import main
-from doe_calib.compensation.program import compensated_design, row_loads
+from doe_calib.export.compensated_program import compensated_design, row_loads
 from doe_calib.design import LoadCase
 from doe_calib.design.optimal import optimal_design
 from doe_calib.export import Payload, Plan, export_design, moves, zero_home

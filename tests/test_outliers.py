@@ -13,7 +13,7 @@ import pytest
 from doe_calib import build_model, examples
 from doe_calib.cli import main
 from doe_calib.diagnosis import diagnose
-from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.refine import refine
 from doe_calib.diagnosis.outliers import gross_outliers, within_pose
 from doe_calib.diagnosis.result import DiagnosisResult
 from doe_calib.estimation.identify import identify_quietly

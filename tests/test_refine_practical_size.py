@@ -1,4 +1,4 @@
-"""``refine --practical-um`` (diagnosis/effect_selection.py → diagnose): on a correct model
+"""``refine --practical-um`` (diagnosis/refine.py → diagnose): on a correct model
 fitted to many readings whose σ is stated 15 % too small (independently simulated), the
 misfit beyond the noise, σ·√(1.15² − 1) ≈ 2.5 µm, makes the final verdict "not adequate"
 at the default practical size of 2 µm and "adequate" at 4 µm; no effect is added either way."""
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from doe_calib import build_model, examples
-from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.refine import refine
 from doe_calib.io.csv_files import read_measurements
 
 MARKERS = {"A": [0.15, 0.0, 0.08], "B": [-0.075, 0.13, 0.08], "C": [-0.075, -0.13, 0.08],

@@ -16,8 +16,8 @@ from scipy import optimize, stats
 
 from doe_calib import Configurations, build_model, examples, simulate
 from doe_calib.diagnosis.candidate_batch import candidate_batch
-from doe_calib.diagnosis.effect_selection import refine
-from doe_calib.diagnosis.engine import candidate_batch_for
+from doe_calib.diagnosis.refine import refine
+from doe_calib.diagnosis.diagnose import candidate_batch_for
 from doe_calib.diagnosis.effect_tests import candidate_effects
 from doe_calib.errors import DoeCalibWarning
 from doe_calib.estimation.identify import identify_quietly

@@ -141,7 +141,7 @@ def _render(html_path, tmp_path):
 @pytest.fixture(scope="module")
 def refine_html(robot6, tool6, tmp_path_factory):
     """A refine report (error falling, diagnosis sections) on data with a hidden cyclic error."""
-    from doe_calib.diagnosis.effect_selection import refine
+    from doe_calib.diagnosis.refine import refine
     from doe_calib.report import refine_report
 
     rng = np.random.default_rng(3)

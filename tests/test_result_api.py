@@ -364,8 +364,8 @@ def test_load_identification_parameters_design_diagnosis(files):
 
 
 def test_load_refine_comparison_compensation(files, capsys, tmp_path):
-    from doe_calib.compensation.problem import build_problem
-    from doe_calib.compensation.solve import compensate
+    from doe_calib.compensation.nlp import build_problem
+    from doe_calib.compensation.compensate import compensate
     from doe_calib.compensation.targets import Targets
     from doe_calib.design.comparison import Comparison
 

@@ -9,7 +9,7 @@ from doe_calib.cli import main
 from doe_calib.design.augment import augment_design
 from doe_calib.design.optimal import optimal_design
 from doe_calib.diagnosis import diagnose
-from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.refine import refine
 from doe_calib.errors import OptionError
 from doe_calib.io import setting_ranges as ranges
 from doe_calib.model.simulate import random_configurations

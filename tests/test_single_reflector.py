@@ -14,7 +14,7 @@ import pytest
 from doe_calib import Robot, Tool, build_model, examples
 from doe_calib.cli import main
 from doe_calib.diagnosis import validation_rms
-from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.refine import refine
 from doe_calib.estimation.identify import identify, identify_quietly
 from doe_calib.io.csv_files import read_measurements
 

@@ -101,7 +101,7 @@ def _tcp(text: str, result):
 def run(args):
     from doe_calib.compensation import build_problem, compensate, read_targets
     from doe_calib.compensation.base_points import read_base_points
-    from doe_calib.compensation.program import compensated_design, export_compensated
+    from doe_calib.export.compensated_program import compensated_design, export_compensated
     from doe_calib.estimation.result import IdentificationResult
     from doe_calib.model.marker_model import build_model
 

@@ -43,7 +43,7 @@ def run(args):
 
     import numpy as np
 
-    from doe_calib.diagnosis.effect_selection import refine
+    from doe_calib.diagnosis.refine import refine
     from doe_calib.model.marker_model import build_model
     from doe_calib.report.figure_worker import FigureWorker
 

@@ -271,7 +271,7 @@ _DECISIONS = (("not significant", "not significant"), ("not cross-validated", "n
 def why_not(p_value, cv_rms_mm, implausible, cv_rms_before_mm, level, min_gain, proposed,
             proposed_spec) -> str:
     """Why a candidate is not proposed, in words ("" when it is); the rule of
-    :func:`~doe_calib.diagnosis.engine.diagnose`."""
+    :func:`~doe_calib.diagnosis.diagnose.diagnose`."""
     if proposed:
         return ""
     if p_value >= level:

@@ -23,7 +23,7 @@ The suspects are found by rounds: the readings beyond the threshold (the
 other readings past the threshold with it) are left out, the model refitted,
 the threshold applied again to every reading, until the set settles. They are called outliers only when they are few
 (:data:`MAX_OUTLIERS`) and the other readings then fit within the noise (the
-adequacy rules of :func:`~doe_calib.diagnosis.engine.diagnose`; with σ
+adequacy rules of :func:`~doe_calib.diagnosis.diagnose.diagnose`; with σ
 estimated, the F test of the rigid part of the residuals against the
 within-pose part): a missing effect leaves many readings beyond the
 threshold, or a rest that still does not fit, and is left to the effect tests.
@@ -182,7 +182,7 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
         Bonferroni significance over the readings.
     tolerance, practical_um :
         With σ known, the other readings must fit within the noise by these
-        rules (as :func:`~doe_calib.diagnosis.engine.diagnose`).
+        rules (as :func:`~doe_calib.diagnosis.diagnose.diagnose`).
 
     Returns
     -------

@@ -1,5 +1,5 @@
 """The numeric settings of :func:`~doe_calib.diagnosis.diagnose` and
-:func:`~doe_calib.diagnosis.effect_selection.refine`, checked where they enter."""
+:func:`~doe_calib.diagnosis.refine.refine`, checked where they enter."""
 from __future__ import annotations
 
 from doe_calib.io.setting_ranges import at_least, fraction, positive, probability, whole

@@ -57,7 +57,7 @@ def sign_lead(model, odd, proposed, cv, folds, words: str, registry=None) -> str
     folds : Folds
         The cross-validation (its ``description`` is quoted).
     words : str
-        ``odd`` in its effect's words (:func:`~doe_calib.diagnosis.engine.describe`).
+        ``odd`` in its effect's words (:func:`~doe_calib.diagnosis.diagnose.describe`).
     registry : EffectRegistry, optional
     """
     wrong = wrong_signs(odd, model.robot, registry)

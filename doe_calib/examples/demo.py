@@ -18,12 +18,12 @@ import numpy as np
 from doe_calib import examples
 from doe_calib.collision import build_collision_model
 from doe_calib.compensation import compensate
-from doe_calib.compensation.program import export_compensated
+from doe_calib.export.compensated_program import export_compensated
 from doe_calib.compensation.targets import read_targets
 from doe_calib.design import LoadCase, read_constraints
 from doe_calib.design.optimal import optimal_design
 from doe_calib.diagnosis import diagnose, validation_rms
-from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.refine import refine
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.result import save_parameters
 from doe_calib.export import export_design, moves

@@ -5,7 +5,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from doe_calib.diagnosis.effect_selection import RefineStep
+from doe_calib.diagnosis.refine import RefineStep
 from doe_calib.report.diagnosis_figures import error_falling
 
 

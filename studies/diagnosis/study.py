@@ -5,7 +5,7 @@ import numpy as np
 
 from doe_calib import Robot, Tool, build_model, examples
 from doe_calib.diagnosis import diagnose, validation_rms
-from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.refine import refine
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.model.simulate import random_truth
 from doe_calib.runtime.progress import Progress

@@ -20,7 +20,7 @@ import numpy as np
 
 from doe_calib import Robot, Tool, build_model, diagnose, read_measurements
 from doe_calib.design.augment import augment_design, diagnosis_targets
-from doe_calib.diagnosis.effect_selection import refine
+from doe_calib.diagnosis.refine import refine
 from doe_calib.io.measurements import concatenate
 from studies.independent import independent_sim
 

@@ -325,7 +325,7 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         Filled, when the candidates were fitted on every reading (no screening subset),
         with spec → (``model`` + the effect, its fit to ``measurements`` from this fit's
         values, the effect's parameters at nominal): what
-        :func:`~doe_calib.diagnosis.effect_selection.refine` takes on, not fitting again.
+        :func:`~doe_calib.diagnosis.refine.refine` takes on, not fitting again.
     batch : CandidateBatch, optional
         The candidates of a model ``model`` grew from, built once (refine's, from
         :func:`candidate_batch_for`): the candidates' columns and grown models come from it

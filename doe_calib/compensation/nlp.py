@@ -11,7 +11,7 @@ rotation error (sin of the angle times the axis, rad); ``L`` (m) makes it a
 length. The orientation term is dropped for a position-only problem.
 
 Construction only: :func:`build_problem` returns named CasADi Functions and an
-IPOPT solver; :mod:`.solve` evaluates them.
+IPOPT solver; :mod:`.compensate` evaluates them.
 """
 from __future__ import annotations
 

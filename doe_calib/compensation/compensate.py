@@ -1,6 +1,6 @@
 """Numeric compensation: targets in, compensated joint values and their predicted accuracy out.
 
-Takes the Functions of :mod:`.problem` and arrays; builds no expression.
+Takes the Functions of :mod:`.nlp` and arrays; builds no expression.
 """
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy as np
 
 from doe_calib.compensation.accuracy import row_accuracy, unseen_warning
 from doe_calib.compensation.flags import MAX_SHIFT, row_shift_flags
-from doe_calib.compensation.problem import CompensationProblem, build_problem
+from doe_calib.compensation.nlp import CompensationProblem, build_problem
 from doe_calib.compensation.result import CompensationResult
 from doe_calib.compensation.targets import TRACKER
 from doe_calib.errors import ConvergenceWarning, DataWarning, IdentifiabilityWarning, OptionError

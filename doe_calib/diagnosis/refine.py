@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from doe_calib.diagnosis.cross_validation import validation_rms
 from doe_calib.diagnosis.effect_tests import augmented
-from doe_calib.diagnosis.engine import candidate_batch_for, diagnose
+from doe_calib.diagnosis.diagnose import candidate_batch_for, diagnose
 from doe_calib.diagnosis.refine_result import RefineResult, RefineStep
 from doe_calib.diagnosis.settings import check_settings
 from doe_calib.estimation.identify import identify_quietly
@@ -66,15 +66,15 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         Whose catalogue the candidate effects come from (default the built-in one;
         user effects: ``DEFAULT_REGISTRY.with_file(path)``). A candidate whose
         fitted values are physically implausible (its parameters' bounds and
-        plausible ranges, :func:`~doe_calib.diagnosis.engine.diagnose`) is not added.
+        plausible ranges, :func:`~doe_calib.diagnosis.diagnose.diagnose`) is not added.
     sigma_mm : float, optional
         σ per coordinate, mm, for every reading (replacing the readings' own).
     practical_um : float
         Practical size, µm: a misfit beyond the noise below it, with no material
-        candidate, is adequate (as :func:`~doe_calib.diagnosis.engine.diagnose`).
+        candidate, is adequate (as :func:`~doe_calib.diagnosis.diagnose.diagnose`).
     tolerance : float
         σ̂ within this fraction of σ, with no material candidate, is adequate (as
-        :func:`~doe_calib.diagnosis.engine.diagnose`).
+        :func:`~doe_calib.diagnosis.diagnose.diagnose`).
     one_batch : bool
         Build the starting model's candidates once, in one batch, and take every step's
         candidate columns and grown models from it
