@@ -1,13 +1,13 @@
 """``load``: any JSON file the toolkit writes, read back by its ``format`` key.
 
-Each format's reader is imported only when a file of that format is read, and
-none builds a model: reading needs no CasADi and no user effect file.
+The one module that knows every result type, so it sits above the layers (no result
+and no reader in a layer imports it). Each format's reader is imported only when a file
+of that format is read, and none builds a model: reading needs no CasADi and no user
+effect file.
 """
 from __future__ import annotations
 
 from pathlib import Path
-
-import numpy as np
 
 from doe_calib.errors import DataError
 from doe_calib.io.json_file import read_json
@@ -52,20 +52,7 @@ def _compensation(d, path):
 def _comparison(d, path):
     from doe_calib.design.comparison import Comparison
 
-    def array(rows):
-        return np.array([[np.nan if v is None else v for v in r] for r in rows], float)
-
-    src, par, task = d["sources"], d["parameters"], d.get("task")
-    extra = {} if not task else {
-        "task_poses": tuple(task["poses"]), "task_point_mm": tuple(task["point_mm"]),
-        "task_std": array(task["position_std_mm"]).reshape(len(task["poses"]), len(src))}
-    return Comparison(
-        labels=tuple(s["label"] for s in src), kinds=tuple(s["kind"] for s in src),
-        models=tuple(s["model"] for s in src), n_poses=tuple(s["poses"] for s in src),
-        n_observations=tuple(s["observations"] for s in src),
-        sigma_mm=tuple(s["sigma_mm"] for s in src), names=tuple(p["name"] for p in par),
-        units=tuple(p["unit"] for p in par),
-        std=array([p["std"] for p in par]).reshape(len(par), len(src)), **extra)
+    return Comparison.from_dict(d)
 
 
 def _refine(d, path):
