@@ -111,3 +111,7 @@ def __getattr__(name: str):
 
 def __dir__():
     return __all__
+
+
+# A result shows as its report in a notebook: the report gives each result type its view.
+import_module("doe_calib.report.notebook").watch()
