@@ -7,52 +7,22 @@ effect file.
 """
 from __future__ import annotations
 
+from importlib import import_module
 from pathlib import Path
 
 from doe_calib.errors import DataError
 from doe_calib.io.json_file import read_json
 
 
-def _identification(d, path):
-    from doe_calib.estimation.result import IdentificationResult
-
-    return IdentificationResult.from_dict(d)
+def _from_dict(module: str, name: str):
+    """The reader of a format whose class rebuilds itself: ``module.name.from_dict``."""
+    return lambda d, path: getattr(import_module(module), name).from_dict(d)
 
 
 def _parameters(d, path):
     from doe_calib.model.parameters import ParameterSet
 
     return ParameterSet.from_rows(d["parameters"])
-
-
-def _design(d, path):
-    from doe_calib.design.result import DesignResult
-
-    return DesignResult.from_dict(d)
-
-
-def _augment(d, path):
-    from doe_calib.design.augment_result import AugmentResult
-
-    return AugmentResult.from_dict(d)
-
-
-def _diagnosis(d, path):
-    from doe_calib.diagnosis.result import DiagnosisResult
-
-    return DiagnosisResult.from_dict(d)
-
-
-def _compensation(d, path):
-    from doe_calib.compensation.result import CompensationResult
-
-    return CompensationResult.from_dict(d)
-
-
-def _comparison(d, path):
-    from doe_calib.design.comparison import Comparison
-
-    return Comparison.from_dict(d)
 
 
 def _refine(d, path):
@@ -69,20 +39,21 @@ def _refine(d, path):
         doc = read_json(beside, what="identification result")
         if doc.get("format") == "doe_calib.identification" and \
                 doc.get("model") == d.get("final_model"):
-            history = replace(history, fit=_identification(doc, beside))
+            history = replace(history, fit=READERS["doe_calib.identification"](doc, beside))
     return history
 
 
 #: ``format`` key → reader(dict, path).
 READERS = {
-    "doe_calib.identification": _identification,
+    "doe_calib.identification": _from_dict("doe_calib.estimation.result",
+                                           "IdentificationResult"),
     "doe_calib.parameters": _parameters,
-    "doe_calib.design": _design,
-    "doe_calib.augment": _augment,
-    "doe_calib.diagnosis": _diagnosis,
+    "doe_calib.design": _from_dict("doe_calib.design.result", "DesignResult"),
+    "doe_calib.augment": _from_dict("doe_calib.design.augment_result", "AugmentResult"),
+    "doe_calib.diagnosis": _from_dict("doe_calib.diagnosis.result", "DiagnosisResult"),
     "doe_calib.refine": _refine,
-    "doe_calib.comparison": _comparison,
-    "doe_calib.compensation": _compensation,
+    "doe_calib.comparison": _from_dict("doe_calib.design.comparison", "Comparison"),
+    "doe_calib.compensation": _from_dict("doe_calib.compensation.result", "CompensationResult"),
 }
 
 
@@ -96,11 +67,9 @@ def load(path):
     Returns
     -------
     object
-        ``IdentificationResult``, ``ParameterSet``, ``DesignResult``,
-        ``AugmentResult`` (``design --augment``), ``DiagnosisResult``, ``RefineResult``,
-        ``Comparison`` or ``CompensationResult``, by the file's format
-        (``doe_calib.identification``, ``.parameters``, ``.design``, ``.augment``,
-        ``.diagnosis``, ``.refine``, ``.comparison``, ``.compensation``).
+        By the file's format (a key of :data:`READERS`): ``IdentificationResult``,
+        ``ParameterSet``, ``DesignResult``, ``AugmentResult`` (``design --augment``),
+        ``DiagnosisResult``, ``RefineResult``, ``Comparison`` or ``CompensationResult``.
 
     Raises
     ------

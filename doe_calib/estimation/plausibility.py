@@ -61,12 +61,8 @@ def placement_findings(params, robot) -> list[str]:
     """Findings for geometry translations ``g_<frame>_t{x,y,z}`` comparable to their link."""
     from doe_calib.model.effects.geometry import frame_names
 
-    frames = frame_names(robot)
-    flange = np.array(robot.flange_placement, float).reshape(4, 4)[:3, 3]
-    lengths = [np.linalg.norm(j.placement_matrix[:3, 3]) for j in robot.joints] + \
-        [np.linalg.norm(flange)]
     out = []
-    for f, length in zip(frames, lengths):
+    for f, length in zip(frame_names(robot), robot.link_lengths):
         names = [f"g_{f}_t{a}" for a in "xyz"]
         if not all(n in params.names for n in names):
             continue

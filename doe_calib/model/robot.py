@@ -134,6 +134,12 @@ class Robot:
         return np.array([j.upper for j in self.joints])
 
     @property
+    def link_lengths(self) -> np.ndarray:
+        """Offset of each joint frame from the one before, then of the flange, shape (N + 1,), m."""
+        flange = np.array(self.flange_placement, float).reshape(4, 4)[:3, 3]
+        return np.linalg.norm([*(j.placement_matrix[:3, 3] for j in self.joints), flange], axis=1)
+
+    @property
     def display_factors(self) -> np.ndarray:
         """Per-joint factors SI → controller units (deg, mm), shape (N,)."""
         return np.array([j.display_factor for j in self.joints])

@@ -1,12 +1,10 @@
 """Results in a notebook: each result type's ``_repr_html_``, given by the report.
 
-A result holds data and never imports the report that draws it (the report is the
-higher layer). Here the report gives each result class with an HTML view its
-``_repr_html_`` when the class's module is first imported, so a result shows as its
-report fragment in Jupyter however it was made (``doe_calib.load``,
-``doe_calib.identify``, ``from doe_calib.estimation.identify import identify``),
-and ``import doe_calib`` imports no result module (``doe-calib --help`` stays light).
-``doe_calib/__init__.py`` calls :func:`watch` once.
+A result holds data and never imports the report that draws it (a higher layer). The
+report gives each result class with an HTML view its ``_repr_html_`` as the class's
+module is imported, so a result shows as its report fragment in Jupyter however it was
+made (``doe_calib.load``, ``from doe_calib.estimation.identify import identify``), and
+``import doe_calib`` imports no result module. ``doe_calib/__init__.py`` calls :func:`watch`.
 """
 from __future__ import annotations
 
@@ -24,35 +22,24 @@ VIEWS = {
 }
 
 
-def _view(report: str, function: str):
-    def _repr_html_(self) -> str:
-        """This result as its report's HTML fragment, no page chrome (what Jupyter shows)."""
-        return str(getattr(import_module(f"doe_calib.report.{report}"), function)(self))
-
-    return _repr_html_
-
-
-def attach(module) -> None:
-    """Give the result class of ``module`` (a key of :data:`VIEWS`) its ``_repr_html_``."""
-    name, report, function = VIEWS[module.__name__]
-    getattr(module, name)._repr_html_ = _view(report, function)
-
-
 class _AttachAfter:
-    """A result module's own loader, then :func:`attach`."""
+    """A result module's own loader, then its class's view attached."""
 
     def __init__(self, loader):
         self.loader = loader
 
-    def create_module(self, spec):
-        return self.loader.create_module(spec)
+    def __getattr__(self, name):  # create_module, get_source, … of the loader it wraps
+        return getattr(self.loader, name)
 
     def exec_module(self, module):
         self.loader.exec_module(module)
-        attach(module)
+        name, report, function = VIEWS[module.__name__]
 
-    def __getattr__(self, name):  # get_source, get_filename, … of the loader it wraps
-        return getattr(self.loader, name)
+        def _repr_html_(result) -> str:
+            """This result as its report's HTML fragment, no page chrome (what Jupyter shows)."""
+            return str(getattr(import_module(f"doe_calib.report.{report}"), function)(result))
+
+        getattr(module, name)._repr_html_ = _repr_html_
 
 
 class _ResultModules:
@@ -70,9 +57,5 @@ class _ResultModules:
 
 
 def watch() -> None:
-    """Attach the views of the result modules imported so far, and of each imported later."""
-    if not any(isinstance(f, _ResultModules) for f in sys.meta_path):
-        sys.meta_path.insert(0, _ResultModules())
-    for name in VIEWS:
-        if name in sys.modules:
-            attach(sys.modules[name])
+    """Attach each view as its result module is imported (from here on)."""
+    sys.meta_path.insert(0, _ResultModules())
