@@ -45,7 +45,7 @@ _PUBLIC = {
     "read_measurements": "doe_calib.io.csv_files",
     "write_measurements": "doe_calib.io.csv_files",
     "read_design": "doe_calib.io.csv_files",
-    "load": "doe_calib.io.result_files",
+    "load": "doe_calib.result_files",
     # estimation
     "identify": "doe_calib.estimation.identify",
     "IdentificationResult": "doe_calib.estimation.result",
@@ -111,3 +111,7 @@ def __getattr__(name: str):
 
 def __dir__():
     return __all__
+
+
+# A result shows as its report in a notebook: the report gives each result type its view.
+import_module("doe_calib.report.notebook").watch()

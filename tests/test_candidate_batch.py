@@ -16,7 +16,7 @@ from doe_calib.diagnosis.effect_tests import (augmented, candidate_columns, cand
                                               fitted_basis, projected_columns)
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects import DEFAULT_REGISTRY
-from doe_calib.model.effects.user import EXAMPLE_FILE
+from doe_calib.examples import EFFECT_FILE as EXAMPLE_FILE
 from doe_calib.model.evaluation import evaluate
 from doe_calib.model.loads import hanging_mass_wrench
 from doe_calib.model.simulate import random_configurations, random_truth

@@ -16,7 +16,7 @@ from doe_calib.diagnosis import Candidate, DiagnosisResult, FittedSize, diagnose
 from doe_calib.diagnosis.refine import RefineResult, refine
 from doe_calib.model import marker_model
 from doe_calib.model.effects import DEFAULT_REGISTRY
-from doe_calib.model.effects.user import EXAMPLE_FILE
+from doe_calib.examples import EFFECT_FILE as EXAMPLE_FILE
 from doe_calib.model.simulate import random_truth
 
 START = "joint_offset+joint_compliance"

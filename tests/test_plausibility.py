@@ -10,9 +10,10 @@ from doe_calib import Configurations, Robot, Tool, build_model, simulate
 from doe_calib.cli import main
 from doe_calib.errors import DataError, ModelError
 from doe_calib.estimation.identify import identify_quietly
-from doe_calib.estimation.plausibility import marker_condition, marker_layout_finding
+from doe_calib.estimation.plausibility import marker_layout_finding
 from doe_calib.io.csv_files import read_measurements, write_measurements
 from doe_calib.model.simulate import random_configurations
+from doe_calib.model.tool import marker_condition
 
 DATA = Path(doe_calib.__file__).parent / "examples"
 URDF, TOOL = DATA / "three_dof.urdf", DATA / "three_dof_tool.yaml"

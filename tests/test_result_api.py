@@ -25,7 +25,7 @@ from doe_calib.errors import DataError, ModelError, OptionError
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.model import marker_model
 from doe_calib.model.effects import DEFAULT_REGISTRY
-from doe_calib.model.effects.user import EXAMPLE_FILE
+from doe_calib.examples import EFFECT_FILE as EXAMPLE_FILE
 from doe_calib.model.evaluation import marker_positions
 from doe_calib.model.loads import unloaded_and_loaded
 from doe_calib.model.simulate import random_configurations

@@ -11,7 +11,8 @@ from doe_calib.diagnosis import diagnose
 from doe_calib.errors import DataError, DoeCalibError, ModelError
 from doe_calib.estimation.preparation import fix_unidentifiable, register_base
 from doe_calib.model.effects import DEFAULT_REGISTRY, parse_model
-from doe_calib.model.effects.user import EXAMPLE_FILE, load_effect_file
+from doe_calib.examples import EFFECT_FILE as EXAMPLE_FILE
+from doe_calib.model.effects.user import load_effect_file
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 from doe_calib.model.loads import hanging_mass_wrench, unloaded_and_loaded
 from doe_calib.model.simulate import random_configurations, random_truth

@@ -139,11 +139,6 @@ class RefineResult:
     def __str__(self) -> str:
         return self.summary()
 
-    def _repr_html_(self) -> str:
-        from doe_calib.report.diagnosis import refine_html  # report draws; this holds data
-
-        return refine_html(self)
-
     def summary(self) -> str:
         """The models step by step, each added effect with its size ± std and the CV RMS
         before → after, why refinement stopped."""
@@ -182,8 +177,3 @@ class RefineResult:
     @classmethod
     def from_json(cls, path) -> "RefineResult":
         return cls.from_dict(read_json(path, FORMAT, "refine history"))
-
-    @staticmethod
-    def steps_from_json(path) -> list[RefineStep]:
-        """The steps of a refine file (for plots and reports)."""
-        return [RefineStep.from_dict(s) for s in read_json(path, FORMAT, "refine history")["steps"]]

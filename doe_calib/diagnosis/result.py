@@ -112,11 +112,6 @@ class DiagnosisResult:
     def __str__(self) -> str:
         return self.summary()
 
-    def _repr_html_(self) -> str:
-        from doe_calib.report.diagnosis import diagnosis_html  # report draws; this holds data
-
-        return diagnosis_html(self)
-
     def adequacy_lines(self) -> list[str]:
         """The adequacy test in a few lines: RMS, σ and its source, χ², σ̂/σ and its interval."""
         c = self.chi2

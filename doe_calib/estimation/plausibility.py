@@ -14,6 +14,7 @@ import numpy as np
 
 from doe_calib.estimation.load_units import kgf_finding
 from doe_calib.io.reading_units import metres_finding
+from doe_calib.model.tool import marker_condition
 
 #: σ̂/σ outside [low, high] is reported.
 SIGMA_RATIO_RANGE = (0.3, 3.0)
@@ -60,12 +61,8 @@ def placement_findings(params, robot) -> list[str]:
     """Findings for geometry translations ``g_<frame>_t{x,y,z}`` comparable to their link."""
     from doe_calib.model.effects.geometry import frame_names
 
-    frames = frame_names(robot)
-    flange = np.array(robot.flange_placement, float).reshape(4, 4)[:3, 3]
-    lengths = [np.linalg.norm(j.placement_matrix[:3, 3]) for j in robot.joints] + \
-        [np.linalg.norm(flange)]
     out = []
-    for f, length in zip(frames, lengths):
+    for f, length in zip(frame_names(robot), robot.link_lengths):
         names = [f"g_{f}_t{a}" for a in "xyz"]
         if not all(n in params.names for n in names):
             continue
@@ -169,21 +166,6 @@ def parameter_findings(params, std) -> list[str]:
         out.append(f"the fitted {p.description} is {value_words(p, value)}: implausible for it "
                    f"(expected {_range_words(p, 'plausible')})")
     return out
-
-
-def marker_condition(positions) -> float:
-    """Condition number σ₁/σ₂ of the centred marker positions (inf: collinear or coincident).
-
-    Examples
-    --------
-    >>> marker_condition([[0, 0, 0], [1, 0, 0], [0, 1, 0]]) < 3
-    True
-    """
-    p = np.asarray(positions, float)
-    s = np.linalg.svd(p - p.mean(axis=0), compute_uv=False)
-    if s[0] <= 1e-9 or s[1] <= 1e-9 * max(s[0], 1.0):
-        return float("inf")
-    return float(s[0] / s[1])
 
 
 def marker_layout_finding(tool) -> str | None:

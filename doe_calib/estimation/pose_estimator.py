@@ -42,7 +42,7 @@ def check_tool_fixes_the_pose(markers, source: str = "") -> None:
     The pose estimator reconstructs each configuration's full flange pose,
     which takes at least 3 markers not on one line.
     """
-    from doe_calib.estimation.plausibility import marker_condition
+    from doe_calib.model.tool import marker_condition
 
     markers = np.asarray(markers, float).reshape(-1, 3)
     if len(markers) < 3 or not np.isfinite(marker_condition(markers)):

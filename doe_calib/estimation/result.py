@@ -198,11 +198,6 @@ class IdentificationResult:
                 f"{self.residuals['rms_mm']:.4g} mm, σ̂/σ {self.sigma_ratio:.3g}"
                 f"{' (σ estimated)' if self.sigma_estimated else ''}>")
 
-    def _repr_html_(self) -> str:
-        from doe_calib.report.identification import result_html
-
-        return result_html(self)
-
     def to_dataframe(self):
         """The parameters as a pandas DataFrame (display units), one row per parameter.
 

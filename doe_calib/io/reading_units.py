@@ -22,13 +22,6 @@ MIN_NOMINAL_SPREAD_M = 0.05
 MAX_CONFIGURATIONS = 2000
 
 
-def robot_reach(robot) -> float:
-    """Sum of the link lengths from the base to the flange, metres (an upper bound on reach)."""
-    lengths = [np.linalg.norm(j.placement_matrix[:3, 3]) for j in robot.joints]
-    flange = np.array(robot.flange_placement, float).reshape(4, 4)[:3, 3]
-    return float(sum(lengths) + np.linalg.norm(flange))
-
-
 def nominal_points(robot, q, config, offsets) -> np.ndarray:
     """Where the nominal robot puts each reading, robot base frame, m.
 
@@ -47,9 +40,7 @@ def nominal_points(robot, q, config, offsets) -> np.ndarray:
     -------
     ndarray, shape (K, 3)
     """
-    from doe_calib.model.skeleton import flange_poses
-
-    rot, trans = flange_poses(robot, q)
+    rot, trans = robot.flange_poses(q)
     return np.einsum("kij,kj->ki", rot[config], offsets) + trans[config]
 
 
@@ -113,4 +104,4 @@ def metres_finding(xyz, robot, q, config, offsets, sessions) -> str | None:
     return (f"x, y, z look like metres, not mm: the readings spread {found * 1e3:.3g} about "
             f"their centre (RMS, file units) where the robot's nominal model puts these points "
             f"{expected * 1e3:.0f} mm from theirs ({1 / ratio:.0f}× more; the robot reaches "
-            f"about {robot_reach(robot):.2f} m); multiply x, y, z by 1000")
+            f"about {robot.link_lengths.sum():.2f} m); multiply x, y, z by 1000")

@@ -134,9 +134,43 @@ class Robot:
         return np.array([j.upper for j in self.joints])
 
     @property
+    def link_lengths(self) -> np.ndarray:
+        """Offset of each joint frame from the one before, then of the flange, shape (N + 1,), m."""
+        flange = np.array(self.flange_placement, float).reshape(4, 4)[:3, 3]
+        return np.linalg.norm([*(j.placement_matrix[:3, 3] for j in self.joints), flange], axis=1)
+
+    @property
     def display_factors(self) -> np.ndarray:
         """Per-joint factors SI → controller units (deg, mm), shape (N,)."""
         return np.array([j.display_factor for j in self.joints])
+
+    def flange_poses(self, q) -> tuple[np.ndarray, np.ndarray]:
+        """Nominal flange pose at each configuration, robot base frame (Pinocchio).
+
+        Parameters
+        ----------
+        q : array_like, shape (M, N)
+            Joint values, rad (m for prismatic joints).
+
+        Returns
+        -------
+        rotation : ndarray, shape (M, 3, 3)
+        translation : ndarray, shape (M, 3)
+            Metres.
+        """
+        import pinocchio as pin
+
+        from doe_calib.model.skeleton import chain_model
+
+        model = chain_model(self)
+        data = model.createData()
+        flange = model.getFrameId("flange")
+        rot, trans = [], []
+        for pose in np.atleast_2d(np.asarray(q, float)):
+            pin.framesForwardKinematics(model, data, pose)
+            rot.append(data.oMf[flange].rotation.copy())
+            trans.append(data.oMf[flange].translation.copy())
+        return np.array(rot), np.array(trans)
 
     def to_dict(self) -> dict:
         """Plain JSON-able description (SI units)."""

@@ -176,6 +176,21 @@ def _check_not_metres(positions, path, line) -> None:
                         f"mm (write {largest:g} as {largest * 1000:g})", path, line, 1)
 
 
+def marker_condition(positions) -> float:
+    """Condition number σ₁/σ₂ of the centred marker positions (inf: collinear or coincident).
+
+    Examples
+    --------
+    >>> marker_condition([[0, 0, 0], [1, 0, 0], [0, 1, 0]]) < 3
+    True
+    """
+    p = np.asarray(positions, float)
+    s = np.linalg.svd(p - p.mean(axis=0), compute_uv=False)
+    if s[0] <= 1e-9 or s[1] <= 1e-9 * max(s[0], 1.0):
+        return float("inf")
+    return float(s[0] / s[1])
+
+
 def _check_layout(positions, path) -> None:
     """Refuse marker layouts that are surely a mistake.
 
@@ -183,8 +198,6 @@ def _check_layout(positions, path) -> None:
     then says what they cannot see. Two markers at one point, or a plate of
     three or more all on one line, are refused.
     """
-    from doe_calib.estimation.plausibility import marker_condition
-
     p = np.asarray(positions, float)
     for i in range(len(p)):
         for j in range(i):

@@ -7,7 +7,8 @@ predicted standard deviations; :func:`diagnosis_report` and
 :func:`refine_report` the verdict, the ranked candidate effects and the error
 falling step by step; :func:`compare_report` designs and results side by
 side; :func:`augment_report` the poses ``design --augment`` adds to a campaign and what
-they add; :func:`write_report` writes any sections built with :mod:`.html`.
+they add; :func:`write_report` writes any sections built with :mod:`.html`;
+:mod:`.notebook` gives each result type its ``_repr_html_`` (a notebook's view).
 Reporting code formats and plots; it computes nothing
 the library does not already provide.
 """

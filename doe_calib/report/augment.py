@@ -11,7 +11,8 @@ import numpy as np
 
 from doe_calib.report.compare import grouped_bars
 from doe_calib.report.figures import new_figure, to_png
-from doe_calib.report.html import figure, paragraph, preformatted, section, table, write_report
+from doe_calib.report.html import (
+    Html, figure, paragraph, preformatted, section, table, write_report)
 
 
 def _num(v):
@@ -148,6 +149,11 @@ def augment_sections(result, measured=None, dpi: int = 90) -> list:
     if result.detect_after:
         out.append(detectability_section(result))
     return out
+
+
+def augment_fragment(result, dpi: int = 72) -> Html:
+    """The report's sections without page chrome, for a notebook."""
+    return Html("<div>" + "\n".join(augment_sections(result, dpi=dpi)) + "</div>")
 
 
 def augment_report(result, path, measured=None, dpi: int = 90):

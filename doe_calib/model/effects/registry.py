@@ -37,8 +37,8 @@ class EffectRegistry(Mapping):
     Examples
     --------
     >>> from doe_calib.model.effects import DEFAULT_REGISTRY
-    >>> from doe_calib.model.effects.user import EXAMPLE_FILE
-    >>> mine = DEFAULT_REGISTRY.with_file(EXAMPLE_FILE)
+    >>> from doe_calib.examples import EFFECT_FILE
+    >>> mine = DEFAULT_REGISTRY.with_file(EFFECT_FILE)
     >>> "progressive_stiffness" in mine, "progressive_stiffness" in DEFAULT_REGISTRY
     (True, False)
     """

@@ -61,17 +61,18 @@ the vertical load and shifts with the angle of one joint (m)::
         return None, [p["s"] * ca.sin(q[joint]), 0, p["c"] * wrench[2]]
 
 A per-joint deflection example ships as ``doe_calib/examples/example_effect.py``
-(:data:`EXAMPLE_FILE`). Result files name the model by its string, so
+(:data:`doe_calib.examples.EFFECT_FILE`). Result files name the model by its string, so
 reading back a result (``predict``, ``compare``, a report) needs the same
 ``--effect-file``, or a registry with the file passed to
 :meth:`IdentificationResult.from_json` (``registry=``).
 
 Examples
 --------
+>>> from doe_calib.examples import EFFECT_FILE
 >>> from doe_calib.model.effects import DEFAULT_REGISTRY, parse_model
->>> [cls.name for cls in load_effect_file(EXAMPLE_FILE)]
+>>> [cls.name for cls in load_effect_file(EFFECT_FILE)]
 ['progressive_stiffness']
->>> mine = DEFAULT_REGISTRY.with_file(EXAMPLE_FILE)
+>>> mine = DEFAULT_REGISTRY.with_file(EFFECT_FILE)
 >>> parse_model("progressive_stiffness(j2)", registry=mine)[0].spec()
 'progressive_stiffness(j2)'
 >>> "progressive_stiffness" in DEFAULT_REGISTRY   # the default registry is unchanged
@@ -90,13 +91,9 @@ from types import MappingProxyType
 import casadi as ca
 import numpy as np
 
-from doe_calib.examples import EFFECT_FILE
 from doe_calib.errors import DataError, DoeCalibError, ModelError
 from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
 from doe_calib.model.parameters import DISPLAY_UNITS, Parameter
-
-#: The shipped example effect file.
-EXAMPLE_FILE = EFFECT_FILE
 
 #: Function name → its arguments, in the order they are passed.
 FUNCTIONS = {"joint_correction": ("q", "env", "p", "joint"),
@@ -399,7 +396,8 @@ def load_effect_file(path) -> list[type]:
     path = Path(path)
     if not path.is_file():
         raise DataError("no such effect file; give the path of a Python file declaring NAME, "
-                        f"PARAMETERS and the effect's functions (example: {EXAMPLE_FILE})", path)
+                        "PARAMETERS and the effect's functions (example: "
+                        "doe_calib/examples/example_effect.py)", path)
     source = str(path.resolve())
     module = _import(source)
     decls = _field(module, "EFFECTS", None)
