@@ -140,12 +140,14 @@ def excluding(meas, poses: str | None):
 
 
 def stage_progress():
-    """A one-line ``stage: note`` display on a terminal (stderr); None (silent) otherwise."""
+    """A one-line ``note (done/total)`` display on a terminal (stderr), following the progress
+    protocol (:mod:`doe_calib.runtime.progress`); None (silent) otherwise."""
     if not sys.stderr.isatty():
         return None
 
-    def show(stage, note):
-        print(f"\r{stage}: {note}"[:100].ljust(100), end="", file=sys.stderr, flush=True)
+    def show(done, total, note):
+        count = "" if total is None else f" ({done}/{total})"
+        print(f"\r{note}{count}"[:100].ljust(100), end="", file=sys.stderr, flush=True)
     return show
 
 

@@ -305,8 +305,9 @@ def for_workload(model: Model, evaluations: int, progress=None) -> Model:
     model : Model
     evaluations : int
         Configurations × passes the caller expects to evaluate.
-    progress : callable(stage, note), optional
-        Told when the model is compiled (a first compilation takes seconds).
+    progress : callable(done, total, note), optional
+        Told when the model is compiled (a first compilation takes seconds;
+        :mod:`doe_calib.runtime.progress`).
 
     Returns
     -------
@@ -325,7 +326,7 @@ def for_workload(model: Model, evaluations: int, progress=None) -> Model:
         return model
     log.info("running model %s as native code for %d evaluations", model.spec, evaluations)
     if progress is not None:
-        progress("native code", f"compiling {model.spec} (first time only; then cached)")
+        progress(0, None, f"native code: compiling {model.spec} (first time only; then cached)")
     return build_model(model.description, compile=True)
 
 
