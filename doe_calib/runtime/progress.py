@@ -14,7 +14,7 @@ import time
 class Progress:
     """A one-line progress bar: ``label done/total [####    ] elapsed``.
 
-    Quiet unless ``stream`` is a terminal (or ``force``), so logs and pipes stay clean.
+    Quiet unless ``stream`` is a terminal, so logs and pipes stay clean.
 
     Examples
     --------
@@ -24,11 +24,10 @@ class Progress:
     >>> bar.close()
     """
 
-    def __init__(self, total: int, label: str, stream=None, force: bool = False,
-                 width: int = 30):
+    def __init__(self, total: int, label: str, stream=None, width: int = 30):
         self.total, self.label, self.width = max(int(total), 1), label, width
         self.stream = sys.stderr if stream is None else stream
-        self.active = force or bool(getattr(self.stream, "isatty", lambda: False)())
+        self.active = bool(getattr(self.stream, "isatty", lambda: False)())
         self.start = time.perf_counter()
         self.done = 0
 
