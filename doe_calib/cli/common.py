@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from doe_calib.cli.choices import DEFAULT_CLEARANCE, DEFAULT_MODEL, DEFAULT_SELF_CLEARANCE
@@ -151,21 +150,6 @@ def stage_progress():
     return show
 
 
-#: Measurement files larger than this (≈ 30 000 readings) are fitted with native code
-#: (:func:`~doe_calib.model.marker_model.for_workload`), compiled while they are read.
-LARGE_DATA_BYTES = 2_500_000
-
-
-def _data_bytes(paths) -> int:
-    total = 0
-    for path in paths if isinstance(paths, (list, tuple)) else [paths]:
-        try:
-            total += Path(path).stat().st_size
-        except OSError:
-            pass  # the reader names the file
-    return total
-
-
 def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
     """The model (``--model``) and the measurements (``--data``, ``--sigma``, ``--skip-bad``,
     ``--exclude-poses``, ``--approach-sign``).
@@ -174,13 +158,11 @@ def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
     σ is set to the σ̂ of the starting model (:func:`with_estimated_sigma`).
     ``registry`` names the effects ``--model`` may use (default :func:`effect_registry`).
     """
-    from doe_calib.model.marker_model import build_model, compile_in_background
+    from doe_calib.model.marker_model import build_model
 
     robot, tool = load_robot_tool(args)
     registry = effect_registry(args) if registry is None else registry
     model = build_model(robot, tool, args.model, registry=registry)
-    if _data_bytes(args.data) > LARGE_DATA_BYTES:  # the fit will run native code: compile
-        compile_in_background(model)               # it while the file is read
     meas = read_data(args.data, robot, tool, args.sigma, args.skip_bad,
                      approach_sign=getattr(args, "approach_sign", APPROACH_SIGNS[0]))
     meas = excluding(meas, getattr(args, "exclude_poses", None))

@@ -273,22 +273,6 @@ def build_model(robot, tool=None, model: str | tuple = DEFAULT_MODEL,
     return built
 
 
-def compile_in_background(model: Model) -> threading.Thread | None:
-    """Start compiling ``model`` to native code in a background thread.
-
-    The compiler runs in its own processes, so the caller goes on (reading
-    a large measurement file, say) meanwhile; :func:`for_workload` then finds
-    the native model built, or waits for the build under way. None (nothing
-    started) when ``DOE_CALIB_COMPILE=never`` or the model is native already.
-    """
-    if model.native or os.environ.get("DOE_CALIB_COMPILE", "").strip().lower() == "never":
-        return None
-    thread = threading.Thread(target=build_model, args=(model.description, None, "", True),
-                              name="doe_calib-compile", daemon=True)
-    thread.start()
-    return thread
-
-
 #: Observation-matrix evaluations (configurations × passes) from which
 #: :func:`for_workload` runs a model as native code: about where a first
 #: compilation (10–20 s for a 6R model with compliance) pays for itself
