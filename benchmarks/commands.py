@@ -156,6 +156,9 @@ def run(quick: bool = False) -> Section:
              "shared machine varies by ±20 %); ratio = after ÷ before.",
              f"load average (1 min) at the start of each timed run: "
              f"{min(loads):.1f}–{max(loads):.1f} on {os.cpu_count()} CPUs.",
+             "diagnose and refine draw their PNG figure in a child process that imports "
+             "matplotlib while the command computes (doe_calib/report/figure_worker.py): the "
+             "CPU figures include the child's time, the cProfile tables only the command's own.",
              "the 100 000-reading identify/diagnose rows are section (f); the observation "
              "matrix per pose is section (a).")
     return Section("(g) everyday commands, each in its own process", tuple(rows),

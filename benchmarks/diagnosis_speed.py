@@ -165,7 +165,7 @@ def run(quick: bool = False) -> Section:
              "refine builds the starting model's candidates once and sees that batch from "
              "each grown model; the "
              "chosen candidates fitted in threads (diagnosis/candidate_scoring.py), each "
-             "grown model built while the others fit.")
+             "grown model built while the others fit; the figure drawn in a child process.")
     return Section("(h) diagnose and refine, in-process and the refine command", tuple(rows),
                    "this round's start, same calls", notes,
                    tables=(("what each call found", ("case", "effects"), tuple(found)),))

@@ -68,22 +68,24 @@ def run(args):
     from doe_calib.diagnosis import diagnose
     from doe_calib.diagnosis.residual_plot_data import reading_columns, residual_norms_mm
     from doe_calib.estimation.identify import identify_quietly
-    from doe_calib.report.figures import residual_scatter, save_figure
+    from doe_calib.report.figure_worker import FigureWorker
 
     plot = args.plot or str(Path(args.out).with_suffix("")) + "_residuals.png"
-    registry = effect_registry(args)
-    model, meas = model_and_measurements(args, registry=registry)
-    print(f"diagnosing {model.spec or '(base + markers)'} on {len(meas)} readings…",
-          file=sys.stderr)
-    fit = identify_quietly(model, meas)
-    d = diagnose(model, meas, fit, level=args.level, folds=args.folds, grouping=args.cv_by,
-                 min_gain=args.min_gain, tolerance=args.tolerance, registry=registry,
-                 practical_um=args.practical_um, workers=args.workers,
-                 progress=lambda i, n, s: print(f"  cross-validating {s} ({i + 1}/{n})",
-                                                file=sys.stderr))
-    d.to_json(args.out)
-    save_figure(residual_scatter(residual_norms_mm(model, meas, fit.parameters.values),
-                                 reading_columns(model, meas)), plot)
+    with FigureWorker() as figures:  # matplotlib loads and draws beside the diagnosis
+        registry = effect_registry(args)
+        model, meas = model_and_measurements(args, registry=registry)
+        print(f"diagnosing {model.spec or '(base + markers)'} on {len(meas)} readings…",
+              file=sys.stderr)
+        fit = identify_quietly(model, meas)
+        figures.draw("residual_scatter", plot,
+                     residual_norms_mm(model, meas, fit.parameters.values),
+                     reading_columns(model, meas))
+        d = diagnose(model, meas, fit, level=args.level, folds=args.folds, grouping=args.cv_by,
+                     min_gain=args.min_gain, tolerance=args.tolerance, registry=registry,
+                     practical_um=args.practical_um, workers=args.workers,
+                     progress=lambda i, n, s: print(f"  cross-validating {s} ({i + 1}/{n})",
+                                                    file=sys.stderr))
+        d.to_json(args.out)
     if args.report:
         from doe_calib.report import diagnosis_report
         print(f"report: {diagnosis_report(d, model, meas, fit, args.report, registry=registry)}",

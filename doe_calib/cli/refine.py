@@ -39,33 +39,40 @@ OUTPUTS = {"out": "file", "history": "file", "plot": "file", "report": "file"}
 
 
 def run(args):
+    from types import SimpleNamespace
+
     import numpy as np
 
     from doe_calib.diagnosis.refine import refine
     from doe_calib.model.marker_model import build_model
-    from doe_calib.report.diagnosis_figures import error_falling
-    from doe_calib.report.figures import save_figure
+    from doe_calib.report.figure_worker import FigureWorker
 
     stem = str(Path(args.out).with_suffix(""))
     history = args.history or stem + "_refine.json"
     plot = args.plot or stem + "_refine.png"
-    registry = effect_registry(args)
-    model, meas = model_and_measurements(args, registry=registry)
-    val = None
-    if args.validation:
-        sigma_mm = args.sigma or float(np.median(meas.sigma)) * 1000.0  # σ̂ when not given
-        val = read_data(args.validation, model.robot, model.tool, sigma_mm,
-                        approach_sign=args.approach_sign)
-    print(f"refining from {model.spec or '(base + markers)'} on {len(meas)} readings…",
-          file=sys.stderr)
-    out = refine(model, meas, val, level=args.level, max_steps=args.max_steps,
-                 min_gain=args.min_gain, folds=args.folds, grouping=args.cv_by,
-                 progress=lambda i, text: print(f"  step {i}: {text}", file=sys.stderr),
-                 registry=registry, practical_um=args.practical_um,
-                 tolerance=args.tolerance, workers=args.workers)
-    out.fit.to_json(args.out)
-    out.to_json(history)
-    save_figure(error_falling(out.steps, out.noise_floor_mm, out.noise_words), plot)
+    with FigureWorker() as figures:  # matplotlib loads beside the refinement
+        registry = effect_registry(args)
+        model, meas = model_and_measurements(args, registry=registry)
+        val = None
+        if args.validation:
+            sigma_mm = args.sigma or float(np.median(meas.sigma)) * 1000.0  # σ̂ when not given
+            val = read_data(args.validation, model.robot, model.tool, sigma_mm,
+                            approach_sign=args.approach_sign)
+        print(f"refining from {model.spec or '(base + markers)'} on {len(meas)} readings…",
+              file=sys.stderr)
+        out = refine(model, meas, val, level=args.level, max_steps=args.max_steps,
+                     min_gain=args.min_gain, folds=args.folds, grouping=args.cv_by,
+                     progress=lambda i, text: print(f"  step {i}: {text}", file=sys.stderr),
+                     registry=registry, practical_um=args.practical_um,
+                     tolerance=args.tolerance, workers=args.workers)
+        # the steps' plotted numbers only: the child need not load the diagnosis package;
+        # it draws while the files are written
+        figures.draw("error_falling", plot, [SimpleNamespace(
+            added=s.added, rms_mm=s.rms_mm, cv_rms_mm=s.cv_rms_mm,
+            validation_rms_mm=s.validation_rms_mm) for s in out.steps], out.noise_floor_mm,
+            out.noise_words)
+        out.fit.to_json(args.out)
+        out.to_json(history)
     if args.report:
         from doe_calib.report import refine_report
         final = build_model(model.robot, model.tool, out.fit.model, registry=registry)

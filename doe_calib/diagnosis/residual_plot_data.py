@@ -1,7 +1,8 @@
 """What the residual figures plot: each reading's residual norm and the variables it may follow.
 
-Kept apart from :mod:`doe_calib.report` (and matplotlib): the figure's data are
-computed here, the figure drawn there.
+Kept apart from :mod:`doe_calib.report` (and matplotlib) so that a command can
+compute the figure's data while the figure itself is drawn elsewhere
+(:mod:`doe_calib.report.figure_worker`).
 """
 from __future__ import annotations
 

@@ -2,19 +2,15 @@
 
 Every function takes what it plots, already in display units (mm, deg, N,
 N·m), and returns a :class:`matplotlib.figure.Figure`; :func:`to_png` turns
-one into PNG bytes, :func:`save_figure` into a file. Nothing here computes
-model quantities.
+one into PNG bytes. Nothing here computes model quantities.
 """
 from __future__ import annotations
 
 import io
-from pathlib import Path
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-
-from doe_calib.errors import DoeCalibError
 
 
 def new_figure(width: float, height: float, layout: str | None = "constrained") -> Figure:
@@ -56,21 +52,6 @@ def plain_ticks(ax) -> None:
         axis.set_major_formatter(formatter)
         axis.set_major_locator(MaxNLocator(5))
     ax.tick_params(labelsize=7)
-
-
-def save_figure(fig: Figure, path, dpi: int = 90) -> None:
-    """Write ``fig`` to ``path`` (its format from the suffix: PNG for ``.png``) at ``dpi``
-    dots per inch.
-
-    Raises
-    ------
-    DoeCalibError
-        The file cannot be written (its path and the reason named).
-    """
-    try:
-        fig.savefig(path, dpi=dpi)
-    except OSError as e:
-        raise DoeCalibError(f"cannot write {Path(path)}: {e.strerror or e}") from None
 
 
 def to_png(fig: Figure, dpi: int = 90) -> bytes:
