@@ -2,9 +2,10 @@
 
     python -m benchmarks [--quick] [--only observation identification ...] [--output PATH]
 
-With ``--only``, the sections run replace their own sections of an existing
-output file in place (found by their ``<!-- benchmark: NAME -->`` markers); the
-other sections are kept as they were.
+The sections run replace their own sections of an existing output file in
+place (found by their ``<!-- benchmark: NAME -->`` markers); the other sections
+(with ``--only``, and those no benchmark writes, such as "Speed code kept") are
+kept as they were.
 """
 from __future__ import annotations
 
@@ -84,12 +85,10 @@ def main(argv=None) -> int:
     chosen = [n for n in BENCHMARKS if n in args.only] if args.only else list(BENCHMARKS)
     command = "python -m benchmarks" + (" --quick" if args.quick else "") + (
         " --only " + " ".join(chosen) if args.only else "")
-    kept = {}
-    if args.only and args.output.exists():
-        kept = split_sections(args.output.read_text())
-        if not kept:
-            print(f"{args.output} has no section markers: writing only the sections run",
-                  file=sys.stderr)
+    kept = split_sections(args.output.read_text()) if args.output.exists() else {}
+    if args.only and not kept:
+        print(f"{args.output} has no section markers: writing only the sections run",
+              file=sys.stderr)
     new = {}
     for name in [PREAMBLE, *chosen]:
         when = datetime.datetime.now().isoformat(timespec="seconds")

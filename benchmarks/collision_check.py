@@ -6,7 +6,7 @@ as URScript. Every move the export checks (straight moves, routes tried, planned
 re-checked) is recorded once, then checked again in this process at ≤ 1° steps, first with
 every pair tested at every pose (``Workspace(cm, bounded=False)``, what the check did before),
 then with the poses skipped where the lower bound on a pair's distance proves it clear
-(collision/bounds.py) and a move checked before answered from the workspace's memory. Both give
+(collision/bounds.py). Both give
 the same first pose and pair for every move (checked here). The moves the export proves no path
 can make (collision/passage.py) are searched again as before, by the planner, and proven again.
 CPU time (user + system) is what a loaded machine does not inflate. The `export` command
@@ -193,8 +193,7 @@ def run(quick: bool = False) -> Section:
                                           else "NOT met")
     rows = (Row(f"{len(moves)} moves checked at ≤ 1° ({samples} poses), every pair at every "
                 "pose", dense_s, "s CPU", 1.0, f"{1e6 * dense_s / samples:.1f} µs per pose"),
-            Row("the same moves, poses skipped where a pair is proven clear, a move checked "
-                "before remembered", fast_s, "s CPU", fast_s / dense_s,
+            Row("the same moves, poses skipped where a pair is proven clear", fast_s, "s CPU", fast_s / dense_s,
                 f"{1e6 * fast_s / samples:.1f} µs per pose; same first pose and pair for every "
                 f"move"),
             Row(f"{len(blocked)} moves no path can make (the program's turns chosen blind to "

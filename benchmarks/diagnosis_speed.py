@@ -162,12 +162,10 @@ def run(quick: bool = False) -> Section:
              "command's wall time, judged against the issue's goal as the issue measures.",
              "before/after give the same verdicts, proposals and added effects; their "
              "numbers agree to rounding (~1e-13 relative).",
-             "this round: refine builds the starting model's candidates once and sees that "
-             "batch from each grown model; a repeated evaluation reads the last call's "
-             "buffers; no scipy.special/optimize import; the chosen candidates fitted in "
-             "threads (diagnosis/candidate_scoring.py), each grown model built while the "
-             "others fit; the figure drawn in a child process; a known robot read without "
-             "Pinocchio (model/urdf_cache.py).")
+             "refine builds the starting model's candidates once and sees that batch from "
+             "each grown model; the "
+             "chosen candidates fitted in threads (diagnosis/candidate_scoring.py), each "
+             "grown model built while the others fit; the figure drawn in a child process.")
     return Section("(h) diagnose and refine, in-process and the refine command", tuple(rows),
                    "this round's start, same calls", notes,
                    tables=(("what each call found", ("case", "effects"), tuple(found)),))

@@ -92,7 +92,7 @@ def monte_carlo(cfg, reps, seed, lam, approaches=("pose", "point"), scheduler=No
     sizes = [min(_CHUNK, reps - i) for i in range(0, reps, _CHUNK)]
     tasks = [(cfg.q, n, s, lam, approaches) for n, s in zip(sizes, task_seeds(seed, len(sizes)))]
     chunks = run_tasks(_monte_carlo_chunk, tasks, scheduler, workers,
-                       progress and (lambda done, total: progress(sum(sizes[:done]), reps)))
+                       progress and (lambda done, total, note: progress(sum(sizes[:done]), reps, note)))
     return {a: np.concatenate([c[a] for c in chunks]) for a in approaches}
 
 

@@ -5,7 +5,6 @@ every pair at every pose (what check_segment did before it skipped), and each pa
 (pin.computeDistance) at every pose. The skipping check must find the same first pose and pair
 as the first, and never pass a pose where the second finds a pair inside its margin.
 """
-import importlib
 import math
 from importlib import metadata
 from pathlib import Path
@@ -220,18 +219,15 @@ def test_a_move_that_ends_touching_is_found_as_the_dense_check_finds_it(cell):
         assert inside[-1] and not inside[:-1].any()
 
 
-def test_a_workspace_answers_a_move_it_checked_from_memory(cell, monkeypatch):
-    """The same ends, margins and step: the check remembered; any of them changed: checked."""
+def test_a_move_checked_again_with_other_margins_or_step_is_the_dense_check(cell):
+    """One workspace checks a move with other margins and steps: each check is the dense one."""
     robot, cm = cell
-    clearance = importlib.import_module("doe_calib.collision.clearance")
     rng = np.random.default_rng(23)
     lo, hi = _limits(robot)
     qa, qb = rng.uniform(lo, hi, (2, robot.n_joints))
     ws, dense = Workspace(cm), Workspace(cm, bounded=False)
     first = check_segment(cm, qa, qb, cm.move_margins, workspace=ws)
-    assert check_segment(cm, qa.copy(), qb.copy(), cm.move_margins, workspace=ws) is first
     assert first == check_segment(cm, qa, qb, cm.move_margins, workspace=dense)
-    assert dense.checked is None  # the reference remembers nothing
     for margin, step in ((0.0, SEGMENT_STEP), (0.3, SEGMENT_STEP), (None, 2 * SEGMENT_STEP)):
         again = check_segment(cm, qa, qb, margin, step, workspace=ws)
         margins = np.broadcast_to(np.asarray(cm.margins if margin is None else margin, float),
@@ -240,7 +236,3 @@ def test_a_workspace_answers_a_move_it_checked_from_memory(cell, monkeypatch):
             (again.samples, again.first, again.pair)
         assert (again.samples, again.first, again.pair) == (n, at, pair)
     assert check_segment(cm, qa, qb, 0.3, workspace=ws).pair is not None  # 30 cm: touching
-    monkeypatch.setattr(clearance, "REMEMBERED", 4)
-    for k in range(10):
-        check_segment(cm, qa, qa + (k + 1) * 0.01, workspace=ws)
-        assert len(ws.checked) <= 4

@@ -32,7 +32,7 @@ def test_local_dask_cluster_gives_the_same_numbers(local):
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster:
         on_dask = sweep.run(quick=True, scheduler=cluster.scheduler_address,
-                            progress=lambda done, total: seen.append((done, total)))
+                            progress=lambda done, total, note: seen.append((done, total)))
     assert _numbers(on_dask["points"]) == _numbers(local["points"])
     assert seen[-1] == (3, 3)
 

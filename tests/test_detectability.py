@@ -8,7 +8,7 @@ from scipy import stats
 
 from doe_calib import Configurations, Robot, Tool, build_model, examples, identify
 from doe_calib.design.detectability import Detectability
-from doe_calib.estimation.noncentral_chi_square import noncentrality_for_power
+from doe_calib.estimation.chi_square import noncentrality_for_power
 from doe_calib.design.effect_detection import design_readings, detect_effects, detectability
 from doe_calib.diagnosis.effect_tests import projected_columns
 from doe_calib.estimation.preparation import fix_unidentifiable

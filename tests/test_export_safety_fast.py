@@ -1,4 +1,4 @@
-"""A program's collision check with the fast move check (skipping, remembered moves) against the
+"""A program's collision check with the fast move check (poses skipped) against the
 reference (every pair at every pose of every move, ``Workspace(cm, bounded=False)``): the same
 routes, via-points, planned paths, colliding moves and count of poses, on KR 270 programs that go
 through the floor (routed through a free pose, planned, or colliding)."""

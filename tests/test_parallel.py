@@ -29,7 +29,7 @@ def test_monte_carlo_on_a_local_dask_cluster_matches_local_processes():
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster:
         on_dask = table1.monte_carlo(cfg, 60, 11, 0.1, scheduler=cluster.scheduler_address,
-                                     progress=lambda done, total: seen.append(done))
+                                     progress=lambda done, total, note: seen.append(done))
     for a in ("pose", "point"):
         assert on_dask[a].shape == (60, 6)
         assert np.array_equal(on_dask[a], local[a])

@@ -1,10 +1,9 @@
 """The refine fast paths against the reference ones (issue 22).
 
-A repeated evaluation returns the buffers of the last call (the same bits as evaluating
-again); the detection power's noncentrality (now estimation/noncentral_chi_square.py) is
-the root of SciPy's power equation; refine builds the starting model's candidates once and sees
-that batch from each grown model (the columns and grown models of a batch built for it, to
-1e-12; the same refine to 1e-9).
+A repeated evaluation in one workspace is the evaluation; the detection power's
+noncentrality (estimation/chi_square.py) is the root of SciPy's power equation; refine builds
+the starting model's candidates once and sees that batch from each grown model (the columns
+and grown models of a batch built for it, to 1e-12; the same refine to 1e-9).
 """
 import warnings
 
@@ -21,7 +20,7 @@ from doe_calib.diagnosis.diagnose import candidate_batch_for
 from doe_calib.diagnosis.effect_tests import candidate_effects
 from doe_calib.errors import DoeCalibWarning
 from doe_calib.estimation.identify import identify_quietly
-from doe_calib.estimation.noncentral_chi_square import noncentrality_for_power
+from doe_calib.estimation.chi_square import noncentrality_for_power
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.model.evaluation import Workspace, observation_matrix
 from doe_calib.model.loads import hanging_mass_wrench
@@ -55,7 +54,7 @@ def test_a_repeated_evaluation_is_the_evaluation(model6):
     other_cfg, other = _campaign(model6, 2)
     ws = Workspace()
     first = observation_matrix(model6, values, cfg, workspace=ws)
-    again = observation_matrix(model6, values, cfg, workspace=ws)  # from the buffers
+    again = observation_matrix(model6, values, cfg, workspace=ws)
     for a, b in zip(first, again):
         assert np.array_equal(a, b)
         a[...] = 0.0  # the caller owns what it was given: the buffers are not touched

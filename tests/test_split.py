@@ -3,8 +3,7 @@
 The policy (:func:`split_workers`: one thread off the main thread, with BLAS
 free to run its own threads, or in a pool's worker), :func:`run_parts`, and
 each threaded path against its serial run: the pose maps (several chunks),
-the packed information (several chunks), the relaxation built on it, and the
-matrix-vector products split by rows.
+the packed information (several chunks) and the relaxation built on it.
 """
 import threading
 
@@ -16,8 +15,7 @@ from numpy.testing import assert_array_equal
 from doe_calib.design.batch import CHUNK, map_poses
 from doe_calib.design.relaxation import packed_information, relax
 from doe_calib.runtime.parallel import default_workers
-from doe_calib.runtime import split
-from doe_calib.runtime.split import matvec, run_parts, split_workers
+from doe_calib.runtime.split import run_parts, split_workers
 from doe_calib.runtime.threads import BLAS_THREADS
 
 
@@ -55,19 +53,6 @@ def test_parts_run_at_once_in_order():
     assert len({n for _, n in names}) == 3
     assert run_parts(lambda i: i + 1, [4]) == [5]
     assert run_parts(lambda i: i, []) == []
-
-
-@pytest.mark.parametrize("rows", [64, 1000, 1003, 4097])
-def test_products_split_by_rows_are_the_plain_ones(pinned, monkeypatch, rows):
-    monkeypatch.setattr(split, "MIN_PART", 500)  # each split, up to three ways
-    monkeypatch.setattr(split, "split_workers", lambda: 3)
-    rng = np.random.default_rng(rows)
-    a = rng.normal(size=(rows, 703)) * rng.lognormal(0, 3, size=(rows, 1))
-    for _ in range(3):
-        x = rng.normal(size=703)
-        assert_array_equal(matvec(a, x), a @ x)
-    f = np.asfortranarray(a)
-    assert_array_equal(matvec(f, x), f @ x)  # not C-ordered: the plain product
 
 
 def test_pose_map_in_threads_is_the_serial_one():

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from doe_calib.cli.choices import DEFAULT_CLEARANCE, DEFAULT_MODEL, DEFAULT_SELF_CLEARANCE
@@ -140,28 +139,15 @@ def excluding(meas, poses: str | None):
 
 
 def stage_progress():
-    """A one-line ``stage: note`` display on a terminal (stderr); None (silent) otherwise."""
+    """A one-line ``note (done/total)`` display on a terminal (stderr), following the progress
+    protocol (:mod:`doe_calib.runtime.progress`); None (silent) otherwise."""
     if not sys.stderr.isatty():
         return None
 
-    def show(stage, note):
-        print(f"\r{stage}: {note}"[:100].ljust(100), end="", file=sys.stderr, flush=True)
+    def show(done, total, note):
+        count = "" if total is None else f" ({done}/{total})"
+        print(f"\r{note}{count}"[:100].ljust(100), end="", file=sys.stderr, flush=True)
     return show
-
-
-#: Measurement files larger than this (≈ 30 000 readings) are fitted with native code
-#: (:func:`~doe_calib.model.marker_model.for_workload`), compiled while they are read.
-LARGE_DATA_BYTES = 2_500_000
-
-
-def _data_bytes(paths) -> int:
-    total = 0
-    for path in paths if isinstance(paths, (list, tuple)) else [paths]:
-        try:
-            total += Path(path).stat().st_size
-        except OSError:
-            pass  # the reader names the file
-    return total
 
 
 def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
@@ -172,13 +158,11 @@ def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
     σ is set to the σ̂ of the starting model (:func:`with_estimated_sigma`).
     ``registry`` names the effects ``--model`` may use (default :func:`effect_registry`).
     """
-    from doe_calib.model.marker_model import build_model, compile_in_background
+    from doe_calib.model.marker_model import build_model
 
     robot, tool = load_robot_tool(args)
     registry = effect_registry(args) if registry is None else registry
     model = build_model(robot, tool, args.model, registry=registry)
-    if _data_bytes(args.data) > LARGE_DATA_BYTES:  # the fit will run native code: compile
-        compile_in_background(model)               # it while the file is read
     meas = read_data(args.data, robot, tool, args.sigma, args.skip_bad,
                      approach_sign=getattr(args, "approach_sign", APPROACH_SIGNS[0]))
     meas = excluding(meas, getattr(args, "exclude_poses", None))

@@ -24,8 +24,6 @@ from doe_calib.collision.bounds import SLACK, motion_weights
 
 #: Largest joint step between the checked samples of a move, rad (m for prismatic joints).
 SEGMENT_STEP = np.radians(1.0)
-#: Moves a workspace remembers the check of (a program tries the same move again and again).
-REMEMBERED = 10_000
 
 
 @dataclass(frozen=True)
@@ -91,10 +89,9 @@ class Workspace:
     cm : CollisionModel
     bounded : bool
         Let :func:`check_segment` skip the poses where a pair is proven clear
-        and answer a move it has checked before (the same ends, margins and
-        step) from memory (default); False: test every pair at every pose of
-        every move (the reference the benchmarks and tests compare with: the
-        same answers, slower).
+        (default); False: test every pair at every pose of every move (the
+        reference the benchmarks and tests compare with: the same answers,
+        slower).
     """
 
     def __init__(self, cm, bounded: bool = True):
@@ -105,14 +102,6 @@ class Workspace:
         self.results = list(self.geometry.collisionResults)
         self.bounded = bounded
         self._motion = False  # not computed yet
-        self.checked = {} if bounded else None
-
-    def remember(self, key, check) -> None:
-        """Keep a move's check (at most :data:`REMEMBERED`; the oldest half forgotten then)."""
-        if len(self.checked) >= REMEMBERED:
-            for old in list(self.checked)[:REMEMBERED // 2]:
-                del self.checked[old]
-        self.checked[key] = check
 
     def weights(self, cm) -> np.ndarray | None:
         """Per pair and joint, how fast the pair can close (:meth:`motion`), when moves'
@@ -228,18 +217,7 @@ def check_segment(cm, qa, qb, margin: float | None = None, step: float = SEGMENT
     qa, qb = np.asarray(qa, float), np.asarray(qb, float)
     ws = Workspace(cm) if workspace is None else workspace
     pairs = None if pairs is None else tuple(int(k) for k in pairs)
-    key = None
-    if ws.checked is not None:
-        key = (qa.tobytes(), qb.tobytes(),
-               None if margin is None else np.asarray(margin, float).tobytes(), float(step),
-               pairs)
-        known = ws.checked.get(key)
-        if known is not None:
-            return known
-    check = _check(cm, qa, qb, margin, step, ws, pairs)
-    if key is not None:
-        ws.remember(key, check)
-    return check
+    return _check(cm, qa, qb, margin, step, ws, pairs)
 
 
 def check_path(cm, path, margin=None, workspace: Workspace | None = None,

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from doe_calib.estimation.noncentral_chi_square import noncentrality_for_power
+from doe_calib.estimation.chi_square import noncentrality_for_power
 
 #: A direction of the effect whose typical size (its parameters' scales) changes the
 #: weighted readings by less than this (in σ, root of the sum of squares) is invisible.

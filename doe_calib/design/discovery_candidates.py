@@ -20,7 +20,7 @@ from doe_calib.design.feasibility import build_feasibility
 from doe_calib.diagnosis.effect_tests import augmented
 from doe_calib.errors import OptionError
 from doe_calib.estimation.identifiability import analyse
-from doe_calib.estimation.noncentral_chi_square import noncentrality_for_power
+from doe_calib.estimation.chi_square import noncentrality_for_power
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.effects.backlash import Backlash
 from doe_calib.model.effects.base import joint_index

@@ -17,7 +17,6 @@ from doe_calib.design.relaxation import (
 )
 from doe_calib.design.updates import added_values, best_added, regularised
 from doe_calib.errors import SolverError
-from doe_calib.runtime.split import matvec
 
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
 _NOISE = 1e-6  # relaxation weights below this fraction of the largest rank as zero
@@ -27,7 +26,7 @@ def _sensitivities(blocks, weights, crit, packed=None):
     """ψ_i of every candidate at the relaxation's information."""
     support = weights > 0  # zero weights add nothing to the information
     h, _ = crit.sensitivity(regularised(information(blocks[support], weights[support])))
-    return traces(blocks, h) if packed is None else matvec(packed, packed_weights(h))
+    return traces(blocks, h) if packed is None else packed @ packed_weights(h)
 
 
 def _pool(weights, psi, size, bins, noise=0.0):

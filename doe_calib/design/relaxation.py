@@ -24,7 +24,7 @@ import numpy as np
 from doe_calib.design.criteria import Criterion
 from doe_calib.design.outcome import DesignOutcome
 from doe_calib.errors import OptionError
-from doe_calib.runtime.split import matvec, run_parts, split_workers
+from doe_calib.runtime.split import run_parts, split_workers
 
 _CHUNK = 4096  # candidates per step when sweeping all of them (bounds memory)
 #: With ``screen``: rounds while candidates outside the working set still violate the
@@ -62,7 +62,7 @@ def equivalence_ratio(blocks: np.ndarray | None, m: np.ndarray, criterion="D",
     may then be None).
     """
     h, c = Criterion.from_name(criterion, task).sensitivity(m)
-    psi = traces(blocks, h) if packed is None else matvec(packed, packed_weights(h))
+    psi = traces(blocks, h) if packed is None else packed @ packed_weights(h)
     return float(c * psi.max())
 
 
@@ -243,7 +243,7 @@ def relax(blocks: np.ndarray | None, criterion="D", task: np.ndarray | None = No
     k, p = len(packed), _packed_order(packed.shape[1])
     w_all = np.full(k, 1.0 / k) if start is None else np.asarray(start, float) / np.sum(start)
     h, c = crit.sensitivity(unpack(w_all @ packed, p))
-    psi_all = matvec(packed, packed_weights(h))
+    psi_all = packed @ packed_weights(h)
     support = np.flatnonzero(w_all > 0) if start is not None else np.array([], int)
     work = np.union1d(support, np.argsort(-psi_all)[:working_set])
     w = w_all[work] if start is not None else np.full(len(work), 1.0 / len(work))
@@ -260,7 +260,7 @@ def relax(blocks: np.ndarray | None, criterion="D", task: np.ndarray | None = No
             work, w = work[heavy], w[heavy] / w[heavy].sum()
             m = unpack(w @ packed[work], p)
         h, c = crit.sensitivity(m)
-        psi_all = matvec(packed, packed_weights(h))
+        psi_all = packed @ packed_weights(h)
         if iterations >= max_iterations or (round_tol == tol and psi_all.max() <= 1 + tol):
             break
         violators = np.setdiff1d(np.flatnonzero(psi_all > 1 + round_tol), work)

@@ -9,7 +9,6 @@ import numpy as np
 
 from doe_calib.design.criteria import Criterion, DOptimal
 from doe_calib.design.relaxation import packed_weights
-from doe_calib.runtime.split import matvec
 
 _RIDGE = 1e-10
 
@@ -91,7 +90,7 @@ def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray
     r = blocks.shape[1]
     base = np.linalg.slogdet(m)[1]
     # every candidate's trace, then the allowed ones: no copy of their packed rows
-    bound = base + r * np.log1p(matvec(packed, packed_weights(np.linalg.inv(m)))[index] / r)
+    bound = base + r * np.log1p((packed @ packed_weights(np.linalg.inv(m)))[index] / r)
     rank = np.argsort(-bound, kind="stable")
     order, bound = index[rank], bound[rank]
     best, value = -1, -np.inf

@@ -20,12 +20,12 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy.special import fdtrc
 
 from doe_calib.diagnosis.candidate_batch import batched_columns
 from doe_calib.design.detectability import (MOSTLY_ABSORBED, Detectability, absorbing_parameters,
                                             assess)
 from doe_calib.errors import DoeCalibError
-from doe_calib.estimation.f_distribution import f_survival
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects import DEFAULT_REGISTRY, joint_index
 from doe_calib.model.marker_model import build_model, describe_model
@@ -262,7 +262,7 @@ def candidate_tests(model, measurements, params, effects=None,
         dss = float(((u[:, keep].T @ r) ** 2).sum())
         f = (dss / q) / max((ss - dss) / dof, 1e-300)
         with np.errstate(divide="ignore"):  # −inf (p = 0) past underflow, no warning
-            log_p = float(np.log(f_survival(f, q, dof)))
+            log_p = float(np.log(fdtrc(q, dof, f)))
         by = ()
         if absorbed > MOSTLY_ABSORBED and log_p < np.log(SIGNIFICANT_RAW):
             # what the model's own parameters made of the signature the residual asks for

@@ -33,9 +33,9 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
+from scipy.special import fdtrc
 
 from doe_calib.estimation.chi_square import chi2_survival, chi2_upper_quantile
-from doe_calib.estimation.f_distribution import f_survival
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.weighted_residuals import marker_residuals
 from doe_calib.io.measurements import ESTIMATED
@@ -163,7 +163,8 @@ def _rest_fits_the_noise(error, sigma, keep, rank, level, tolerance, practical_u
         return True
     s2 = ss_in / dof_in
     t = (float((error[keep] ** 2).sum()) - ss_in) / s2
-    return _fits(t, dof, np.sqrt(s2), level, tolerance, practical_um, f_survival(t / dof, dof, dof_in))
+    return _fits(t, dof, np.sqrt(s2), level, tolerance, practical_um,
+                 fdtrc(dof, dof_in, max(t / dof, 0.0)))  # a negative t: p = 1
 
 
 def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: float = 0.05,

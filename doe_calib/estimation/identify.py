@@ -46,7 +46,7 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
         ``two-step``: the paper's alternation of base+markers and robot
         parameters. ``pose``: full poses reconstructed from the markers, only
         for comparison (``normalisation`` option, m/rad).
-    progress : callable(stage, note), optional
+    progress : callable(done, total, note), optional
         Told of long steps (compiling the model, each iteration of ``point``).
     sigma_mm : float, optional
         σ per coordinate, mm, for every reading (it replaces the readings' own);

@@ -172,8 +172,9 @@ def levenberg_marquardt(norm2, reduce, x0, scale, ftol: float = 1e-12, xtol: flo
         ``gtol`` of orthogonal to r (cosine).
     max_iterations : int
         Jacobian passes allowed; residual passes are limited to 10× that.
-    progress : callable(iteration, norm2), optional
-        Called after every Jacobian pass.
+    progress : callable(done, total, note), optional
+        Told of every Jacobian pass: ``progress(iteration, max_iterations, note)``,
+        the note ``‖r‖²`` (:mod:`doe_calib.runtime.progress`).
     first : Reduction, optional
         ``reduce(x0)`` when the caller has it already (saves one pass over the data).
     """
@@ -187,7 +188,7 @@ def levenberg_marquardt(norm2, reduce, x0, scale, ftol: float = 1e-12, xtol: flo
     status, message = 0, "the iteration limit was reached before convergence"
     while iterations <= max_iterations and evaluations <= 10 * max_iterations:
         if progress is not None:
-            progress(iterations, f)
+            progress(iterations, max_iterations, f"Levenberg–Marquardt, ‖r‖² {f:.4g}")
         if _gradient_cosine(red) <= gtol:
             status, message = 1, "the gradient is orthogonal to the residual (gtol)"
             break

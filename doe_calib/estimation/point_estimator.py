@@ -41,8 +41,8 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
         Jacobian evaluations allowed.
     register : bool
         Start the base pose from a point-set registration.
-    progress : callable(stage, note), optional
-        Told of each iteration (weighted RMS of the residuals).
+    progress : callable(done, total, note), optional
+        Told of each iteration (:mod:`doe_calib.runtime.progress`).
 
     Raises
     ------

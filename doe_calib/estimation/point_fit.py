@@ -27,8 +27,8 @@ def point_fit(model, measurements, params, max_iterations: int = 200, progress=N
         Start values (SI) and which parameters are free.
     max_iterations : int
         Jacobian evaluations allowed.
-    progress : callable(stage, note), optional
-        Told of each iteration (weighted RMS of the residuals).
+    progress : callable(done, total, note), optional
+        Told of each iteration (:func:`~doe_calib.estimation.least_squares.levenberg_marquardt`).
     start : Reduction, optional
         Of ``[J | r]`` for all parameters, unscaled, at ``params.values`` (the rank
         analysis' own, :func:`~doe_calib.estimation.preparation.prepare`): the first
@@ -47,7 +47,6 @@ def point_fit(model, measurements, params, max_iterations: int = 200, progress=N
     """
     free = params.free
     scale = params.scales[free]
-    n_obs = measurements.n_coordinates
 
     def values(x):
         return params.with_free_values(x).values
@@ -57,8 +56,7 @@ def point_fit(model, measurements, params, max_iterations: int = 200, progress=N
         lambda x: reduce_jacobian(model, measurements, values(x), free, scale),
         params.free_values(), scale, max_iterations=max_iterations,
         first=None if start is None else restrict(start, np.flatnonzero(free), scale),
-        progress=None if progress is None else lambda k, f: progress(
-            "Levenberg–Marquardt", f"iteration {k}, weighted RMS {np.sqrt(f / n_obs):.4g}"))
+        progress=progress)
     if not np.all(np.isfinite(sol.x)):
         raise SolverError("the identification diverged (non-finite parameters); check the "
                           "tool file and the units of the measurement file")

@@ -273,22 +273,6 @@ def build_model(robot, tool=None, model: str | tuple = DEFAULT_MODEL,
     return built
 
 
-def compile_in_background(model: Model) -> threading.Thread | None:
-    """Start compiling ``model`` to native code in a background thread.
-
-    The compiler runs in its own processes, so the caller goes on (reading
-    a large measurement file, say) meanwhile; :func:`for_workload` then finds
-    the native model built, or waits for the build under way. None (nothing
-    started) when ``DOE_CALIB_COMPILE=never`` or the model is native already.
-    """
-    if model.native or os.environ.get("DOE_CALIB_COMPILE", "").strip().lower() == "never":
-        return None
-    thread = threading.Thread(target=build_model, args=(model.description, None, "", True),
-                              name="doe_calib-compile", daemon=True)
-    thread.start()
-    return thread
-
-
 #: Observation-matrix evaluations (configurations × passes) from which
 #: :func:`for_workload` runs a model as native code: about where a first
 #: compilation (10–20 s for a 6R model with compliance) pays for itself
@@ -305,8 +289,9 @@ def for_workload(model: Model, evaluations: int, progress=None) -> Model:
     model : Model
     evaluations : int
         Configurations × passes the caller expects to evaluate.
-    progress : callable(stage, note), optional
-        Told when the model is compiled (a first compilation takes seconds).
+    progress : callable(done, total, note), optional
+        Told when the model is compiled (a first compilation takes seconds;
+        :mod:`doe_calib.runtime.progress`).
 
     Returns
     -------
@@ -325,7 +310,7 @@ def for_workload(model: Model, evaluations: int, progress=None) -> Model:
         return model
     log.info("running model %s as native code for %d evaluations", model.spec, evaluations)
     if progress is not None:
-        progress("native code", f"compiling {model.spec} (first time only; then cached)")
+        progress(0, None, f"native code: compiling {model.spec} (first time only; then cached)")
     return build_model(model.description, compile=True)
 
 

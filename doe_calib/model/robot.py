@@ -11,13 +11,12 @@ translation along) its unit axis; the flange is ``T_f = T_N · M_f``.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from doe_calib.errors import ModelError
-from doe_calib.model import urdf_cache
 
 _REVOLUTE = {"JointModelRX": (1, 0, 0), "JointModelRY": (0, 1, 0), "JointModelRZ": (0, 0, 1),
              "JointModelRUBX": (1, 0, 0), "JointModelRUBY": (0, 1, 0), "JointModelRUBZ": (0, 0, 1)}
@@ -199,9 +198,6 @@ class Robot:
     def from_urdf(cls, path, flange: str | None = None) -> "Robot":
         """Read the chain from the URDF root to ``flange`` with Pinocchio.
 
-        A chain read before from the same bytes comes from the cache directory, without
-        Pinocchio (:mod:`~doe_calib.model.urdf_cache`).
-
         Parameters
         ----------
         path : path-like
@@ -219,19 +215,6 @@ class Robot:
         path = Path(path)
         if not path.is_file():
             raise ModelError(f"robot file {path} does not exist")
-        k = urdf_cache.key(path.read_bytes(), flange, Path(__file__).read_bytes())
-        stored = urdf_cache.load(k)
-        if stored is not None:
-            try:
-                return replace(cls.from_dict(stored), source=str(path))
-            except (KeyError, TypeError, ValueError):
-                pass  # a damaged entry: read the file anew
-        robot = cls._read_urdf(path, flange)
-        urdf_cache.store(k, robot.to_dict())
-        return robot
-
-    @classmethod
-    def _read_urdf(cls, path: Path, flange: str | None) -> "Robot":
         import pinocchio as pin
 
         try:

@@ -18,7 +18,7 @@ from doe_calib.runtime.parallel import default_workers
 _RUNNING: tuple = ()
 
 
-def forked_map(function, shared, n: int, workers: int | None = None, order=None) -> list:
+def forked_map(function, shared, n: int, workers: int | None = None) -> list:
     """``[function(shared, i) for i in range(n)]``, in ``workers`` forked processes.
 
     Parameters
@@ -31,22 +31,17 @@ def forked_map(function, shared, n: int, workers: int | None = None, order=None)
         Tasks.
     workers : int, optional
         Processes (default: the CPUs this process may use; 1: in this process).
-    order : sequence of int, optional
-        The order the tasks are handed out in (the slowest first shortens the
-        wait for the last); the results are in task order whatever it is.
     """
     workers = default_workers() if workers is None else max(1, int(workers))
     if workers == 1 or n < 2 or "fork" not in multiprocessing.get_all_start_methods():
         return [function(shared, i) for i in range(n)]
     global _RUNNING
-    order = list(range(n)) if order is None else list(order)
     _RUNNING = (function, shared)
     try:
         with multiprocessing.get_context("fork").Pool(min(workers, n)) as pool:
-            done = dict(zip(order, pool.imap(_task, order, chunksize=1)))
+            return pool.map(_task, range(n), chunksize=1)
     finally:
         _RUNNING = ()
-    return [done[i] for i in range(n)]
 
 
 def _task(i: int):

@@ -45,7 +45,8 @@ def run_tasks(func, tasks, scheduler: str | None = None, workers: int | None = N
     workers : int, optional
         Local processes (default: the CPUs available); 1 runs in this process.
     progress : callable, optional
-        ``progress(done, total)`` after each finished task.
+        ``progress(done, total, "")`` after each finished task
+        (:mod:`doe_calib.runtime.progress`).
     connect_timeout : float
         Seconds to wait for the Dask scheduler before giving up.
     """
@@ -58,7 +59,7 @@ def run_tasks(func, tasks, scheduler: str | None = None, workers: int | None = N
         for t in tasks:
             out.append(func(t))
             if progress:
-                progress(len(out), len(tasks))
+                progress(len(out), len(tasks), "")
         return out
     from concurrent.futures import ProcessPoolExecutor, as_completed  # 15 ms: when used
 
@@ -68,7 +69,7 @@ def run_tasks(func, tasks, scheduler: str | None = None, workers: int | None = N
         for done, fut in enumerate(as_completed(futures), start=1):
             out[futures[fut]] = fut.result()
             if progress:
-                progress(done, len(tasks))
+                progress(done, len(tasks), "")
     return out
 
 
@@ -91,5 +92,5 @@ def _on_dask(func, tasks, scheduler, progress, connect_timeout) -> list:
         for done, fut in enumerate(dask_completed(futures), start=1):
             out[index[fut.key]] = fut.result()
             if progress:
-                progress(done, len(tasks))
+                progress(done, len(tasks), "")
     return out

@@ -1,4 +1,10 @@
-"""Progress of long work on the terminal: a bar on stderr, silent when stderr is not a terminal."""
+"""Progress of long work: the one protocol, and a bar on stderr that follows it.
+
+Every long-running function takes ``progress``, a callable it calls as
+``progress(done, total, note)``: ``done`` an int (steps finished), ``total`` an
+int or None when unknown, ``note`` a str (the stage's name or a figure, e.g.
+a cost). :class:`Progress` is such a callable, drawn on the terminal.
+"""
 from __future__ import annotations
 
 import sys
@@ -8,26 +14,28 @@ import time
 class Progress:
     """A one-line progress bar: ``label done/total [####    ] elapsed``.
 
-    Quiet unless ``stream`` is a terminal (or ``force``), so logs and pipes stay clean.
+    Quiet unless ``stream`` is a terminal, so logs and pipes stay clean.
 
     Examples
     --------
     >>> bar = Progress(100, "Monte Carlo")
     >>> for k in range(100):
-    ...     bar.update(k + 1)
+    ...     bar(k + 1, None, "")
     >>> bar.close()
     """
 
-    def __init__(self, total: int, label: str, stream=None, force: bool = False,
-                 width: int = 30):
+    def __init__(self, total: int, label: str, stream=None, width: int = 30):
         self.total, self.label, self.width = max(int(total), 1), label, width
         self.stream = sys.stderr if stream is None else stream
-        self.active = force or bool(getattr(self.stream, "isatty", lambda: False)())
+        self.active = bool(getattr(self.stream, "isatty", lambda: False)())
         self.start = time.perf_counter()
         self.done = 0
 
-    def update(self, done: int, note: str = "") -> None:
-        """Show ``done`` of ``total`` finished, with an optional note (e.g. a duality gap)."""
+    def __call__(self, done: int, total: int | None, note: str) -> None:
+        """Show ``done`` of ``total`` finished (None: the total kept), with ``note`` (a stage
+        or a figure): the protocol's ``progress(done, total, note)``."""
+        if total is not None:
+            self.total = max(int(total), 1)
         self.done = done
         if not self.active:
             return
@@ -43,9 +51,3 @@ class Progress:
         if self.active:
             self.stream.write("\n")
             self.stream.flush()
-
-    def __call__(self, done: int, total: int | None = None) -> None:
-        """Callback form ``progress(done, total)`` used by long-running functions."""
-        if total is not None:
-            self.total = max(int(total), 1)
-        self.update(done)

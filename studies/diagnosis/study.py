@@ -62,14 +62,14 @@ def run(seed: int = 1) -> dict:
     for i, (hidden, start) in enumerate(cases):
         drift = 0.002 if i == len(cases) - 1 else 0.0
         rows.append(one_case(robot, tool, hidden, start, seed + i, drift_m=drift))
-        bar.update(i + 1, hidden or "control")
+        bar(i + 1, None, hidden or "control")
     rng = np.random.default_rng(seed + 100)
     true = build_model(robot, tool, REFINE_TRUTH)
     truth = random_truth(true, rng)
     train, valid = (campaign(true, truth, robot, n, rng) for n in (40, 20))
     out = refine(build_model(robot, tool, "joint_offset"), train, valid)
     reference = validation_rms(true, identify_quietly(true, train).parameters.values, valid)
-    bar.update(len(cases) + 1, "refine")
+    bar(len(cases) + 1, None, "refine")
     bar.close()
     return {"robot": robot.name, "sigma_mm": SIGMA_M * 1e3, "cases": rows,
             "refine": {"truth": REFINE_TRUTH, "steps": [s.to_dict() for s in out.steps],
