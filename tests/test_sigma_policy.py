@@ -81,9 +81,9 @@ def test_the_three_sources(model3, files):
     assert per.source == "per reading" and per.sigma_mm == pytest.approx(SIGMA_MM)
     assert "sigma column" in per.words
     given = resolve_sigma(model3, read_measurements(without, model3.robot, model3.tool,
-                                                    sigma_mm=0.05))
+                                                    sigma=5e-5))
     assert given.source == "given" and given.words == "σ given: 0.05 mm"
-    assert resolve_sigma(model3, per.measurements, sigma_mm=0.07).measurements.sigma.max() == \
+    assert resolve_sigma(model3, per.measurements, sigma=7e-5).measurements.sigma.max() == \
         pytest.approx(7e-5)
     raw = read_measurements(without, model3.robot, model3.tool)
     assert raw.sigma_estimated and raw.sigma_source == "estimated"
@@ -105,7 +105,7 @@ def test_sources_survive_subset_concatenate_and_replace(model3, files):
     with_, without = files
     per = read_measurements(with_, model3.robot, model3.tool)
     raw = read_measurements(without, model3.robot, model3.tool)
-    given = read_measurements(without, model3.robot, model3.tool, sigma_mm=0.03)
+    given = read_measurements(without, model3.robot, model3.tool, sigma=3e-5)
     assert per.subset(np.arange(10)).sigma_source == "per reading"
     assert raw.subset(np.arange(10)).sigma_estimated
     assert concatenate([per, given]).sigma_source == "per reading"
@@ -121,7 +121,7 @@ def test_the_result_says_where_sigma_came_from(model3, files):
     with_sigma, without = files
     robot, tool = model3.robot, model3.tool
     cases = [(read_measurements(with_sigma, robot, tool), "per reading"),
-             (read_measurements(without, robot, tool, sigma_mm=0.05), "given"),
+             (read_measurements(without, robot, tool, sigma=5e-5), "given"),
              (read_measurements(without, robot, tool), "estimated")]
     for meas, source in cases:
         fit = identify_quietly(model3, meas)

@@ -23,7 +23,8 @@ def run_augment(args, model, loads, candidates, constraints, collision, registry
     if args.criterion == "task":
         raise OptionError("--augment designs for the model's parameters (D, A or E) or, with "
                           "--diagnosis, to separate its candidates; not for --task")
-    measured = read_measurements(args.augment, model.robot, model.tool, sigma_mm=args.sigma)
+    measured = read_measurements(args.augment, model.robot, model.tool,
+                                 sigma=args.sigma / 1000.0)
     targets = ()
     if args.diagnosis:
         targets = tuple(diagnosis_targets(read_json(args.diagnosis, what="diagnosis")))
