@@ -222,11 +222,33 @@ def read_design(path, robot) -> Configurations:
         cfg = read_design_json(path, robot)
         approach_ = np.where(cfg.approach != 0, cfg.approach, derived_approach(cfg.q, robot))
         return Configurations.from_arrays(cfg.q, cfg.wrench, pose=cfg.pose, approach=approach_)
+    return read_design_csv(path, robot)[0]
+
+
+def read_design_csv(path, robot, positions: bool = False) -> tuple:
+    """A design CSV's configurations and, with ``positions``, its optional columns x, y, z.
+
+    Returns
+    -------
+    (Configurations, ndarray or None)
+        The configurations, and the positions (M, 3) in m, or None when the file has
+        no x, y, z (or ``positions`` is False).
+
+    Raises
+    ------
+    DataError
+        The first bad value, with file, line and column; some of x, y, z but not all.
+    """
     table = read_table(path)
-    extra = check_columns(table, ["pose", *joint_columns(robot)],
+    given = [c for c in XYZ if positions and c in table.columns]
+    if given and len(given) < 3:
+        missing = ", ".join(c for c in XYZ if c not in given)
+        raise DataError(f"target column(s) {', '.join(given)} without {missing}: give all "
+                        f"of x, y, z (mm, tracker frame) or none", path, table.header_line)
+    extra = check_columns(table, ["pose", *joint_columns(robot), *given],
                           [*WRENCH, "temperature", *approach_columns(robot)])
     if extra:  # the design's configurations have no place for notes
-        warnings.warn(ignored_note(table, extra), DataWarning, stacklevel=2)
+        warnings.warn(ignored_note(table, extra), DataWarning, stacklevel=3)
     explicit = approach_given(table, robot)
     problems = RowProblems(table)
     check_width(table, problems, 0)
@@ -235,10 +257,11 @@ def read_design(path, robot) -> Configurations:
     wrench = numbers(table, problems, 3, WRENCH, 0.0)
     temp = numbers(table, problems, 4, ["temperature"], np.nan)
     appr = approach(table, problems, 5, robot) if explicit else None
+    xyz = numbers(table, problems, 6, given) / 1000.0 if given else None
     problems.raise_first()
     check_not_radians(q, robot, table.path)
-    return Configurations.from_arrays(q, wrench, temp, pose,
-                                      appr if explicit else derived_approach(q, robot))
+    return (Configurations.from_arrays(q, wrench, temp, pose,
+                                       appr if explicit else derived_approach(q, robot)), xyz)
 
 
 def _configuration_fields(cfg, c, robot) -> list[str]:
