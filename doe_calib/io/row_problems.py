@@ -12,8 +12,9 @@ rank; with ``skip_bad`` every bad row is dropped and told by its first problem.
 >>> p = RowProblems(t)
 >>> p.check(1, np.array([False, False, True]), lambda i: "empty pose id", "pose")
 >>> p.check(2, np.array([False, True, True]), lambda i: "not a number", "x")
->>> p.first()
-"f.csv, line 3, column 'x' (2): not a number"
+>>> p.raise_first()
+Traceback (most recent call last):
+doe_calib.errors.DataError: f.csv, line 3, column 'x' (2): not a number
 """
 from __future__ import annotations
 
@@ -50,11 +51,6 @@ class RowProblems:
         _, _, message, column = min((c for c in self.checks if c[1][i]), key=lambda c: c[0])
         return DataError(message(i), self.table.path, self.table.numbers[i],
                          None if column is None else self.table.col(column))
-
-    def first(self) -> str | None:
-        """The problem a reader going row by row meets first, or None."""
-        bad = np.flatnonzero(self.failing())
-        return str(self.error(int(bad[0]))) if bad.size else None
 
     def raise_first(self) -> None:
         """Raise the problem a reader going row by row meets first, if any."""

@@ -120,7 +120,7 @@ class Table:
             self.cache.update({("cells", n): out[:, k].tolist() for k, n in enumerate(todo)})
         elif at:
             self.cache.update({("cells", n): [f[i] if i < len(f) else "" for _, f in self.rows]
-                                   for n, i in zip(todo, at)})
+                               for n, i in zip(todo, at)})
         return {n: self.cache["cells", n] for n in names}
 
     def floats(self, names) -> dict:
@@ -142,10 +142,10 @@ class Table:
         if out is not None and out.shape == (len(self.text), len(todo)):
             none = np.zeros(len(self.text), bool)
             self.cache.update({("floats", n): Numbers(out[:, k], none, none)
-                                   for k, n in enumerate(todo)})
+                               for k, n in enumerate(todo)})
         elif todo:
             self.cache.update({("floats", n): _converted(texts, self.decimal_comma)
-                                   for n, texts in self.cells(todo).items()})
+                               for n, texts in self.cells(todo).items()})
         return {n: self.cache["floats", n] for n in names}
 
 
