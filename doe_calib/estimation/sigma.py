@@ -154,8 +154,8 @@ def resolve_sigma(model, measurements, sigma: float | None = None, params=None, 
         settled = with_sigma(measurements, sigma)
         return SettledSigma(settled, GIVEN, sigma * 1000.0, f"σ given: {sigma * 1000.0:.3g} mm",
                             rep)
-    median = float(np.median(measurements.sigma) * 1000.0) if len(measurements) else np.nan
     if not measurements.sigma_estimated:
+        median = float(np.median(measurements.sigma) * 1000.0) if len(measurements) else np.nan
         words = {GIVEN: f"σ given: {median:.3g} mm",
                  PER_READING: f"σ per reading (the file's sigma column): median "
                               f"{median:.3g} mm",
