@@ -8,7 +8,9 @@ Columns are read whole: the numbers of a clean table (no quote, white space
 or NUL anywhere, every row as wide as the header) in one ``numpy.loadtxt``
 pass over its text; any other table, or a column ``loadtxt`` refuses (an
 empty cell, ``1_000``), from its split fields with ``float``. Both give the
-same correctly rounded values. A cell that is not a number is marked, not
+same correctly rounded values; the ``loadtxt`` pass is what makes a large file
+quick (the 100 002-reading CSV of benchmarks section (f): 0.6–1.3 s read
+whole, 3.7–4.0 s from split fields, 2 loaded cores). A cell that is not a number is marked, not
 raised: the readers report the first bad cell of the file
 (:mod:`~doe_calib.io.row_problems`).
 """
