@@ -1,4 +1,5 @@
-"""The columns a measurement, design and probe file share, read and checked a column at a time.
+"""The columns a measurement, design and probe file share (formats.md §3, §4), their names
+and plausible values, read and checked a column at a time.
 
 Each function converts whole columns (:meth:`~doe_calib.io.table.Table.floats`)
 and records what it refuses with a :class:`~doe_calib.io.row_problems.RowProblems`
@@ -13,8 +14,13 @@ from difflib import get_close_matches
 import numpy as np
 
 from doe_calib.errors import DataError
-from doe_calib.io.columns import PLAUSIBLE, Q_TOL, approach_columns, joint_columns
 from doe_calib.io.measurements import approach_from_order
+
+WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
+XYZ = ("x", "y", "z")
+Q_TOL = 1e-9  # file units: rows of one pose agree on q to this
+#: Column → (lowest, highest, unit) of a plausible value; outside is a unit or typing error.
+PLAUSIBLE = {"temperature": (-50.0, 150.0, "°C")}
 
 #: Columns that look like doe_calib's own (a joint or approach column of another robot).
 _OWN_PATTERN = re.compile(r"^(q|approach)\d+$")
@@ -25,6 +31,16 @@ TYPO_CUTOFF = 0.75
 LIMIT_TOLERANCE = 0.02
 #: Configurations a file needs before all-small angles are taken for radians.
 RADIANS_MIN_CONFIGURATIONS = 3
+
+
+def joint_columns(robot) -> list[str]:
+    """Joint columns q1 … qN of a robot's measurement and design files (deg or mm)."""
+    return [f"q{k + 1}" for k in range(robot.n_joints)]
+
+
+def approach_columns(robot) -> list[str]:
+    """Approach-direction columns approach1 … approachN (+1, −1 or 0)."""
+    return [f"approach{k + 1}" for k in range(robot.n_joints)]
 
 
 def check_columns(table, required, optional) -> tuple:

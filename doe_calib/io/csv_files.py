@@ -39,10 +39,13 @@ from pathlib import Path
 import numpy as np
 
 from doe_calib.errors import DataError, DataWarning
-from doe_calib.io.columns import Q_TOL, WRENCH, XYZ, approach_columns, joint_columns
 from doe_calib.io.configuration_columns import (
     LIMIT_TOLERANCE,
+    Q_TOL,
+    WRENCH,
+    XYZ,
     approach,
+    approach_columns,
     approach_given,
     check_columns,
     check_not_radians,
@@ -51,6 +54,7 @@ from doe_calib.io.configuration_columns import (
     combined,
     derived_approach,
     ignored_note,
+    joint_columns,
     joints,
     numbers,
     texts,

@@ -24,12 +24,15 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from doe_calib.errors import DataError
-from doe_calib.io.columns import Q_TOL, WRENCH, XYZ, joint_columns
 from doe_calib.io.configuration_columns import (
     LIMIT_TOLERANCE,
+    Q_TOL,
+    WRENCH,
+    XYZ,
     check_width,
     codes,
     combined,
+    joint_columns,
     joints,
     numbers,
     texts,
