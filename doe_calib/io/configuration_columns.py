@@ -115,8 +115,8 @@ def numbers(table, problems, rank, names, default=None) -> np.ndarray:
     """Columns ``names`` as floats (file units), shape (R, len(names)); ``default`` for empty
     cells and absent columns (None: an empty cell is refused, the column is required).
 
-    Each column's check has rank ``(rank, k)``; a value outside the :data:`PLAUSIBLE`
-    range of its column is refused just after.
+    Column k is checked at rank ``(rank, 2k)`` (a number) and ``(rank, 2k + 1)`` (inside
+    the :data:`PLAUSIBLE` range of its column).
     """
     got = table.floats(names)
     out = np.empty((len(table.numbers), len(names)))
