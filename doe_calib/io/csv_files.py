@@ -305,8 +305,8 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
 
     The approach columns are written only when reading back would not derive
     the same directions from the order of the rows (module notes); the
-    ``session`` column only when the readings come from several sessions.
-    ``std`` (K, 3), m: a prediction's standard deviation of each coordinate,
+    ``session`` column only when the readings come from several sessions; the
+    ``sigma`` column only when some reading has a σ. ``std`` (K, 3), m: a prediction's standard deviation of each coordinate,
     written as the :data:`PREDICTED_STD` columns in mm (ignored on reading).
     """
     cfg = measurements.configurations
@@ -316,8 +316,9 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     with_approach = _approach_needed(cfg, order, robot)
     sessions = measurements.sessions
     with_session = len(set(sessions)) > 1
+    with_sigma = not np.isnan(measurements.sigma).all()  # none given: none written
     header = ["pose", *joint_columns(robot), *WRENCH, "marker", *XYZ,
-              *(["temperature"] if with_temp else []), "sigma",
+              *(["temperature"] if with_temp else []), *(["sigma"] if with_sigma else []),
               *(approach_columns(robot) if with_approach else []),
               *(["session"] if with_session else []), *(PREDICTED_STD if std is not None else [])]
     std_mm = None if std is None else np.asarray(std, float) * 1000.0
@@ -327,7 +328,7 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
         temp = [repr(float(cfg.env[c, 0])) if np.isfinite(cfg.env[c, 0]) else ""]
         rows.append([*_configuration_fields(cfg, c, robot), tool.names[j],
                      *map(repr, map(float, xyz * 1000.0)), *(temp if with_temp else []),
-                     repr(float(s * 1000.0)),
+                     *([repr(float(s * 1000.0)) if np.isfinite(s) else ""] if with_sigma else []),
                      *(_approach_fields(cfg, c) if with_approach else []),
                      *([sessions[c]] if with_session else []),
                      *(map(repr, map(float, std_mm[len(rows)])) if std is not None else [])])
