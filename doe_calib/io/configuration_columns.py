@@ -201,9 +201,17 @@ def approach(table, problems, rank, robot) -> np.ndarray:
     return out
 
 
-def derived_approach(q, robot) -> np.ndarray:
-    """Approach directions from the visiting order of configurations q (M, N), SI."""
-    return approach_from_order(np.asarray(q) * robot.display_factors, Q_TOL)
+def derived_approach(q, robot, sessions=None) -> np.ndarray:
+    """Approach directions from the visiting order of configurations q (M, N), SI: the
+    order of the rows, each session's own when ``sessions`` (M,) names them."""
+    shown = np.asarray(q) * robot.display_factors
+    if sessions is None:
+        return approach_from_order(shown, Q_TOL)
+    out = np.zeros_like(shown)
+    for name in dict.fromkeys(sessions):
+        mine = np.array([s == name for s in sessions])
+        out[mine] = approach_from_order(shown[mine], Q_TOL)
+    return out
 
 
 def check_not_radians(q, robot, path) -> None:

@@ -169,15 +169,10 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     config, first_row = rank[config].reshape(-1), rows[first_row[order]]
     check_not_radians(q[first_row], robot, table.path)
     session = tuple(sessions[r] for r in first_row.tolist())
-    if explicit:
-        directions = appr[first_row]
-    else:  # each session's own visiting order
-        directions = np.zeros((len(first_row), robot.n_joints))
-        for name in dict.fromkeys(session):
-            mine = np.array([s == name for s in session])
-            directions[mine] = derived_approach(q[first_row][mine], robot)
     cfg = Configurations.from_arrays(q[first_row], wrench[first_row], temp[first_row, None],
-                                     [pose[r] for r in first_row.tolist()], directions)
+                                     [pose[r] for r in first_row.tolist()],
+                                     appr[first_row] if explicit else
+                                     derived_approach(q[first_row], robot, session))
     given = not np.isnan(sigma_m).any()
     kept = set(rows.tolist())
     meas = Measurements(cfg, config, marker[rows], xyz[rows], sigma_m[rows],
@@ -306,8 +301,9 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     The approach columns are written only when reading back would not derive
     the same directions from the order of the rows (module notes); the
     ``session`` column only when the readings come from several sessions; the
-    ``sigma`` column only when some reading has a σ. ``std`` (K, 3), m: a prediction's standard deviation of each coordinate,
-    written as the :data:`PREDICTED_STD` columns in mm (ignored on reading).
+    ``sigma`` column only when some reading has a σ. ``std`` (K, 3), m: a prediction's
+    standard deviation of each coordinate, written as the :data:`PREDICTED_STD` columns in
+    mm (ignored on reading).
     """
     cfg = measurements.configurations
     with_temp = bool(np.isfinite(cfg.temperature).any())

@@ -26,18 +26,18 @@ from scipy.spatial.transform import Rotation
 from doe_calib.errors import DataError
 from doe_calib.io.configuration_columns import (
     LIMIT_TOLERANCE,
-    Q_TOL,
     WRENCH,
     XYZ,
     check_width,
     codes,
     combined,
+    derived_approach,
     joint_columns,
     joints,
     numbers,
     texts,
 )
-from doe_calib.io.measurements import Configurations, approach_from_order
+from doe_calib.io.measurements import Configurations
 from doe_calib.io.reading_units import metres_finding
 from doe_calib.io.row_problems import RowProblems, earlier_in_group
 from doe_calib.io.table import read_table
@@ -172,11 +172,7 @@ def read_probe(path, robot, convention: str) -> ProbeReadings:
         f"{table.numbers[first[i]]}): a probe file has one row per pose and load"), "pose")
     problems.raise_first()
     session = tuple(session)
-    approach = np.zeros_like(q)
-    for name in dict.fromkeys(session):
-        mine = np.array([s == name for s in session])
-        approach[mine] = approach_from_order(q[mine] * robot.display_factors, Q_TOL)
-    cfg = Configurations.from_arrays(q, wrench, temp, pose, approach)
+    cfg = Configurations.from_arrays(q, wrench, temp, pose, derived_approach(q, robot, session))
     # the probe frame sits near the flange: its origin's spread is the flange's, give or take
     # the mount's lever; in metres it is a thousandth of it
     finding = metres_finding(position, robot, q, np.arange(len(q)), np.zeros_like(position),
