@@ -131,9 +131,7 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     sessions = texts(table, problems, 2, "session", "session name",
                      session or Path(str(path)).stem)
     names = texts(table, problems, 3, "marker")
-    index = {}
-    for i, name in enumerate(tool.names):
-        index.setdefault(name, i)
+    index = {name: i for i, name in enumerate(tool.names)}
     marker = np.array([index.get(m, -1) for m in names], int)
     problems.check(3, marker < 0, lambda i: f"marker {names[i]!r} is not in the tool file "
                                             f"(markers: {', '.join(tool.names)})", "marker")
