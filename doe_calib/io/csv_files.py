@@ -1,14 +1,16 @@
 """Reading and writing the users' files: measurement CSV and design CSV (formats.md §3, §4).
 
 Files are in controller and tracker units (deg, mm, N, N·m, °C); everything
-returned is SI. Every problem raises :class:`~doe_calib.errors.DataError`
-naming the file, the physical line and the column; with ``skip_bad`` a bad
-row is dropped instead and reported in ``Measurements.dropped``.
+returned is SI. The first bad value of a file raises :class:`~doe_calib.errors.DataError`
+naming the file, the physical line and the column; with ``skip_bad`` every bad
+row is dropped instead and reported in ``Measurements.dropped``. Whole columns
+are converted and checked at once (:mod:`~doe_calib.io.configuration_columns`).
 
 Files are UTF-8 (a bad byte is reported with its line and column); fields are
 separated by commas, or by semicolons or tabs as the header shows, and then a
 number may have a decimal comma (``1,5``). Values outside a plausible range
-(:data:`PLAUSIBLE`: a temperature outside -50 … 150 °C) are errors.
+(:data:`~doe_calib.io.configuration_columns.PLAUSIBLE`: a temperature outside
+-50 … 150 °C) are errors.
 
 Approach directions (for ``backlash``): the optional columns ``approach1``
 … ``approachN`` give, for each row, the direction from which joint k reached
