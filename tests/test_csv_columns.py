@@ -138,3 +138,24 @@ def test_the_first_bad_value_deep_in_a_large_file_is_named(rt, tmp_path, column,
     assert str(err.value) == (f"{path}, line 15003, column '{name}' ({column + 1}): "
                               + str(err.value).split(": ", 1)[1])
     assert words in str(err.value)
+
+
+def test_each_bad_row_is_told_by_its_first_problem(rt, tmp_path):
+    """Checked a column at a time, told as read along each row: in a row with several
+    problems the first in the row's order; a repeat against the first good reading."""
+    good = "p1,10,-90,90,0,30,0,A,1000.5,20.25,1500"
+    path = _write(tmp_path / "bad.csv", [r.split(",") for r in [
+        good,
+        good.replace(",A,", ",B,").replace(",30,", ",31,").replace("20.25", "abc"),  # q5, y
+        good.replace("1500", "1501"),                                              # A again
+        good.replace(",A,", ",Z,").replace("1000.5", "x"),                         # marker, x
+        good.replace(",A,", ",C,")]], "pose,q1,q2,q3,q4,q5,q6,marker,x,y,z", comments=False)
+    meas = read_measurements(path, *rt, sigma=2e-5, skip_bad=True)  # a comment on line 1
+    assert list(meas.line) == [3, 7]
+    q5, again, unknown = meas.dropped
+    assert "line 4, column 'q5' (6): pose 'p1' has q5 = 31 here but 30 on line 3" in q5
+    assert ("line 5, column 'marker' (8): marker 'A' is read twice in pose 'p1' under the same "
+            "load (first on line 3)") in again
+    assert "line 6, column 'marker' (8): marker 'Z' is not in the tool" in unknown
+    with pytest.raises(DataError, match=r"line 4, column 'q5' \(6\)"):
+        read_measurements(path, *rt, sigma=2e-5)
