@@ -47,7 +47,7 @@ def _write(tmp_path, lines, name="m.csv"):
 
 
 def _read(path, robot6, tool6):
-    return read_measurements(path, robot6, tool6, sigma_mm=0.02)
+    return read_measurements(path, robot6, tool6, sigma=2e-5)
 
 
 # --- (a) reading and writing ---------------------------------------------------------------
@@ -214,7 +214,7 @@ def test_exact_recovery_from_static_poses_reached_from_both_sides(robot6, tool6,
         write_measurements(tmp_path / "m.csv", simulate(model, truth, cfg, 0.0, rng), robot6,
                            tool6)
         assert "approach" not in (tmp_path / "m.csv").read_text()
-        meas = read_measurements(tmp_path / "m.csv", robot6, tool6, sigma_mm=1e-3)
+        meas = read_measurements(tmp_path / "m.csv", robot6, tool6, sigma=1e-6)
         assert np.array_equal(meas.configurations.approach, cfg.approach)
         res = identify(model, meas, start.with_values(truth.nominal_values))
     i = res.parameters.index("backlash")

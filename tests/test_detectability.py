@@ -63,7 +63,7 @@ def test_a_cyclic_error_at_its_min_detectable_size_is_detected_at_the_stated_pow
     path = tmp_path / "campaign.csv"
     sim.write_campaign(path, chain, truth, cfg.q, cfg.wrench, tool.names, 0.0, rng,
                        write_sigma=False)
-    meas = read_measurements(path, robot, tool, sigma_mm=SIGMA_MM)
+    meas = read_measurements(path, robot, tool, sigma=SIGMA_MM / 1000)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fit = identify(model, meas)  # noise-free: the misfit is the effect's unabsorbed part

@@ -138,7 +138,7 @@ def test_a_horizontal_pull_makes_a1_torque_backlash_detectable_at_the_size_asked
     path = tmp_path / "campaign.csv"
     sim.write_campaign(path, chain, truth, cfg.q, cfg.wrench, tool.names, 0.0, rng,
                        write_sigma=False)
-    meas = read_measurements(path, robot, tool, sigma_mm=1000 * SIGMA)
+    meas = read_measurements(path, robot, tool, sigma=SIGMA)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fit = identify(kr270, meas)  # noise-free: the misfit is the backlash's unabsorbed part

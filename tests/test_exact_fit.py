@@ -38,7 +38,7 @@ def _readings(path, chain, robot, tool, truth, poses, rng, sigma_mm):
 def _fit(model, data, sigma_mm):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return identify(model, data, sigma_mm=sigma_mm)
+        return identify(model, data, sigma=sigma_mm / 1000)
 
 
 def _rms_3d_um(result, model, data) -> float:

@@ -24,7 +24,7 @@ def _write(tmp_path, *lines, name="m.csv"):
 def _error(tmp_path, rt, *lines, **kw):
     path = _write(tmp_path, *lines)
     with pytest.raises(DataError) as info:
-        read_measurements(path, *rt, sigma_mm=kw.pop("sigma_mm", 0.02), **kw)
+        read_measurements(path, *rt, sigma=kw.pop("sigma", 2e-5), **kw)
     return str(info.value)
 
 
@@ -61,11 +61,11 @@ def test_prismatic_joints_in_mm(tmp_path):
     robot = Robot.from_urdf(urdf)
     tool = Tool.from_markers({"A": [0, 0, 10], "B": [10, 0, 0], "C": [0, 10, 0]})
     path = _write(tmp_path, "pose,q1,q2,marker,x,y,z", "1,250,45,A,1,2,3")
-    meas = read_measurements(path, robot, tool, sigma_mm=0.01)
+    meas = read_measurements(path, robot, tool, sigma=1e-5)
     assert meas.configurations.q[0] == pytest.approx([0.25, np.radians(45)])
     bad = _write(tmp_path, "pose,q1,q2,marker,x,y,z", "1,600,45,A,1,2,3")
     with pytest.raises(DataError, match=r"line 2, column 'q1' \(2\).*600 mm is outside"):
-        read_measurements(bad, robot, tool, sigma_mm=0.01)
+        read_measurements(bad, robot, tool, sigma=1e-5)
 
 
 def test_design_round_trip(rt, tmp_path):
@@ -101,9 +101,9 @@ def test_bad_measurement_file(rt, tmp_path, lines, where, words):
 
 
 def test_no_sigma_anywhere_marks_sigma_unknown(rt, tmp_path):
-    meas = read_measurements(_write(tmp_path, HEADER, GOOD), *rt, sigma_mm=None)
-    assert meas.sigma_estimated and meas.sigma.tolist() == [1e-3]
-    given = read_measurements(_write(tmp_path, HEADER, GOOD), *rt, sigma_mm=0.02)
+    meas = read_measurements(_write(tmp_path, HEADER, GOOD), *rt, sigma=None)
+    assert meas.sigma_estimated and np.isnan(meas.sigma).all()  # not given: no σ made up
+    given = read_measurements(_write(tmp_path, HEADER, GOOD), *rt, sigma=2e-5)
     assert not given.sigma_estimated and given.sigma.tolist() == [2e-5]
 
 
@@ -115,7 +115,7 @@ def test_sigma_column_must_be_positive(rt, tmp_path):
 def test_skip_bad_reports_every_dropped_row(rt, tmp_path):
     path = _write(tmp_path, HEADER, GOOD, GOOD.replace(",A,", ",Q,"),
                   GOOD.replace(",A,", ",B,").replace("20.25", "x"), GOOD.replace(",A,", ",C,"))
-    meas = read_measurements(path, *rt, sigma_mm=0.02, skip_bad=True)
+    meas = read_measurements(path, *rt, sigma=2e-5, skip_bad=True)
     assert len(meas) == 2 and list(meas.line) == [2, 5]
     assert len(meas.dropped) == 2
     assert "line 3" in meas.dropped[0] and "line 4" in meas.dropped[1]
@@ -124,7 +124,7 @@ def test_skip_bad_reports_every_dropped_row(rt, tmp_path):
 def test_missing_file_and_bad_design(rt, tmp_path):
     robot, tool = rt
     with pytest.raises(DataError, match="cannot read"):
-        read_measurements(tmp_path / "nope.csv", robot, tool, sigma_mm=0.02)
+        read_measurements(tmp_path / "nope.csv", robot, tool, sigma=2e-5)
     path = _write(tmp_path, "pose,q1,q2,q3,q4,q5,q6,fz", "1,0,-90,90,0,0,0,heavy", name="d.csv")
     with pytest.raises(DataError, match=r"d.csv, line 2, column 'fz' \(8\)"):
         read_design(path, robot)
@@ -151,7 +151,7 @@ def test_a_joint_a_hair_past_its_limit_is_a_warning_far_past_an_error(rt, tmp_pa
     span = np.degrees(robot.upper[1] - robot.lower[1])
     rows = [f"p{i},10,{q2:.6g},90,0,30,0,A,1000.5,20.25,1500"
             for i, q2 in enumerate((upper + 0.01 * span, upper - 1.0))]
-    meas = read_measurements(_write(tmp_path, HEADER, *rows), robot, tool, sigma_mm=0.02)
+    meas = read_measurements(_write(tmp_path, HEADER, *rows), robot, tool, sigma=2e-5)
     assert len(meas) == 2 and meas.configurations.q[0, 1] > robot.upper[1]  # kept as measured
     (warning,) = meas.warnings
     assert "line 2" in warning and "'q2' (3)" in warning and "accepted as measured" in warning
@@ -172,13 +172,13 @@ def test_sessions_from_a_column_or_from_several_files(rt, tmp_path):
     rows = [f"p{i},10,{-90 + i},90,0,30,0,{m},1000.5,20.25,1500,{'s1' if i < 3 else 's2'}"
             for i in range(6) for m in "ABC"]
     meas = read_measurements(_write(tmp_path, HEADER + ",session", *rows), robot, tool,
-                             sigma_mm=0.02)
+                             sigma=2e-5)
     assert list(meas.sessions) == ["s1"] * 3 + ["s2"] * 3
     folds = make_folds(meas)
     assert folds.grouping == "session" and len(folds.held) == 2
     assert [int(h.sum()) for h in folds.held] == [9, 9]
     one = read_measurements(_write(tmp_path, HEADER, *[r.rsplit(",", 1)[0] for r in rows[:9]],
-                                   name="monday.csv"), robot, tool, sigma_mm=0.02)
+                                   name="monday.csv"), robot, tool, sigma=2e-5)
     assert make_folds(one).grouping == "pose" and set(one.sessions) == {"monday"}
     both = concatenate([one, meas.subset(np.arange(9, 18))])
     assert list(dict.fromkeys(both.sessions)) == ["monday", "s2"]

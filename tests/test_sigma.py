@@ -62,7 +62,7 @@ def test_sigma_estimated_from_the_residuals_when_not_given(model3, no_sigma_file
     assert res.sigma_mm == pytest.approx(SIGMA * 1000.0, rel=0.10)
     # the covariance is the one for σ = σ̂: the same as with σ̂ given
     given = identify_quietly(model3, read_measurements(no_sigma_file, model3.robot, model3.tool,
-                                                       sigma_mm=res.sigma_mm))
+                                                       sigma=res.sigma_mm / 1000))
     assert np.allclose(res.std(), given.std(), rtol=1e-6)
     assert not given.sigma_estimated
     words = f"σ estimated from the residuals: {res.sigma_mm:.3g} mm"
@@ -140,7 +140,7 @@ def test_predicted_std_matches_a_monte_carlo_of_identifications(model3, truth):
 
 
 def test_predict_writes_std_columns_that_read_back(model3, truth, tmp_path, no_sigma_file):
-    meas = read_measurements(no_sigma_file, model3.robot, model3.tool, sigma_mm=0.02)
+    meas = read_measurements(no_sigma_file, model3.robot, model3.tool, sigma=2e-5)
     res = identify_quietly(model3, meas)
     res.to_json(tmp_path / "r.json")
     pred = tmp_path / "p.csv"
@@ -160,7 +160,7 @@ def test_predict_writes_std_columns_that_read_back(model3, truth, tmp_path, no_s
 def test_simulated_data_without_sigma_and_a_sigma_given_disagree_by_the_ratio(
         model3, no_sigma_file):
     """A σ given 2× too large: σ̂/σ ≈ 0.5, while the estimate is the true σ."""
-    meas = read_measurements(no_sigma_file, model3.robot, model3.tool, sigma_mm=0.04)
+    meas = read_measurements(no_sigma_file, model3.robot, model3.tool, sigma=4e-5)
     res = identify_quietly(model3, meas)
     assert res.sigma_ratio == pytest.approx(0.5, rel=0.10)
 

@@ -96,7 +96,7 @@ def test_a_reading_present_twice_in_one_file_is_named_and_tells_no_noise(cell, t
     header, body = rows[0] + ",session", [r + ",s1" for r in rows[1:]]
     path = tmp_path / "one.csv"  # pose 1's three readings again, as session s2: lines 92-94
     path.write_text("\n".join([header, *body, *(r[:-2] + "s2" for r in body[:3])]) + "\n")
-    meas = read_measurements(path, robot, tool, sigma_mm=SIGMA_MM)
+    meas = read_measurements(path, robot, tool, sigma=SIGMA_MM / 1000)
     assert identical_copies(meas).tolist() == [[0, 90], [1, 91], [2, 92]]
     words = copies_words(meas, tool.names)
     assert words.startswith(f"{path}: 3 readings are present twice")
@@ -117,7 +117,7 @@ def test_repeated_readings_are_reported_beside_a_sigma_given_and_used_when_none_
     # identify: the σ given is used, the repeats beside it, in the report and the file
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DoeCalibWarning)
-        fit = identify(build_model(robot, tool, EXACT), both, sigma_mm=0.05)
+        fit = identify(build_model(robot, tool, EXACT), both, sigma=5e-5)
     assert fit.sigma_mm == 0.05 and fit.sigma_source == "given" and fit.sigma_repeated == rep
     assert rep.summary() in fit.summary()
     assert IdentificationResult.from_dict(fit.to_dict()).sigma_repeated == rep
@@ -150,7 +150,7 @@ def test_repeated_readings_are_reported_beside_a_sigma_given_and_used_when_none_
 def test_identify_warns_when_the_chi2_test_rejects_clearly(cell):
     robot, tool, d = cell
     model = build_model(robot, tool, EXACT)
-    hidden = read_measurements(d / "cyclic.csv", robot, tool, sigma_mm=SIGMA_MM)
+    hidden = read_measurements(d / "cyclic.csv", robot, tool, sigma=SIGMA_MM / 1000)
     with pytest.warns(MisfitWarning, match="run doe-calib diagnose") as caught:
         fit = identify(model, hidden)
     stats = fit.fit_statistics
@@ -158,7 +158,7 @@ def test_identify_warns_when_the_chi2_test_rejects_clearly(cell):
     assert str(next(w for w in caught if w.category is MisfitWarning).message) in fit.warnings
     with warnings.catch_warnings():
         warnings.simplefilter("error", MisfitWarning)
-        identify(model, read_measurements(d / "a.csv", robot, tool, sigma_mm=SIGMA_MM))
+        identify(model, read_measurements(d / "a.csv", robot, tool, sigma=SIGMA_MM / 1000))
         # σ estimated from the fit's own residuals: the test is not informative
         assert math.isnan(identify(model, read_measurements(d / "cyclic.csv", robot, tool))
                           .fit_statistics.p_value)

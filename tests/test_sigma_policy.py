@@ -81,9 +81,9 @@ def test_the_three_sources(model3, files):
     assert per.source == "per reading" and per.sigma_mm == pytest.approx(SIGMA_MM)
     assert "sigma column" in per.words
     given = resolve_sigma(model3, read_measurements(without, model3.robot, model3.tool,
-                                                    sigma_mm=0.05))
+                                                    sigma=5e-5))
     assert given.source == "given" and given.words == "σ given: 0.05 mm"
-    assert resolve_sigma(model3, per.measurements, sigma_mm=0.07).measurements.sigma.max() == \
+    assert resolve_sigma(model3, per.measurements, sigma=7e-5).measurements.sigma.max() == \
         pytest.approx(7e-5)
     raw = read_measurements(without, model3.robot, model3.tool)
     assert raw.sigma_estimated and raw.sigma_source == "estimated"
@@ -105,7 +105,7 @@ def test_sources_survive_subset_concatenate_and_replace(model3, files):
     with_, without = files
     per = read_measurements(with_, model3.robot, model3.tool)
     raw = read_measurements(without, model3.robot, model3.tool)
-    given = read_measurements(without, model3.robot, model3.tool, sigma_mm=0.03)
+    given = read_measurements(without, model3.robot, model3.tool, sigma=3e-5)
     assert per.subset(np.arange(10)).sigma_source == "per reading"
     assert raw.subset(np.arange(10)).sigma_estimated
     assert concatenate([per, given]).sigma_source == "per reading"
@@ -121,7 +121,7 @@ def test_the_result_says_where_sigma_came_from(model3, files):
     with_sigma, without = files
     robot, tool = model3.robot, model3.tool
     cases = [(read_measurements(with_sigma, robot, tool), "per reading"),
-             (read_measurements(without, robot, tool, sigma_mm=0.05), "given"),
+             (read_measurements(without, robot, tool, sigma=5e-5), "given"),
              (read_measurements(without, robot, tool), "estimated")]
     for meas, source in cases:
         fit = identify_quietly(model3, meas)
@@ -131,3 +131,41 @@ def test_the_result_says_where_sigma_came_from(model3, files):
     # σ estimated: σ̂ near the simulated σ; σ given 2.5× too large: σ̂/σ near 0.4
     assert identify_quietly(model3, cases[2][0]).sigma_mm == pytest.approx(SIGMA_MM, rel=0.15)
     assert identify_quietly(model3, cases[1][0]).sigma_ratio == pytest.approx(0.4, rel=0.15)
+
+
+def test_the_reader_makes_no_sigma_up(model3, files):
+    """Readings without σ come back as not given (NaN); a σ given or a sigma column is kept."""
+    with_, without = files
+    robot, tool = model3.robot, model3.tool
+    raw = read_measurements(without, robot, tool)
+    assert np.isnan(raw.sigma).all() and raw.sigma_estimated and raw.sigma_source == "estimated"
+    given = read_measurements(without, robot, tool, sigma=5e-5)
+    assert np.all(given.sigma == 5e-5) and given.sigma_source == "given"
+    per = read_measurements(with_, robot, tool, sigma=5e-5)  # the column wins, reading by reading
+    assert np.allclose(per.sigma, SIGMA_MM / 1000) and per.sigma_source == "per reading"
+
+
+def test_one_function_decides_given_per_reading_or_estimated(model3, files):
+    with_, without = files
+    robot, tool = model3.robot, model3.tool
+    raw = read_measurements(without, robot, tool)
+    given = resolve_sigma(model3, raw, sigma=5e-5)
+    assert given.source == "given" and np.all(given.measurements.sigma == 5e-5)
+    per = resolve_sigma(model3, read_measurements(with_, robot, tool))
+    assert per.source == "per reading" and np.allclose(per.measurements.sigma, 2e-5)
+    est = resolve_sigma(model3, raw)
+    assert est.source == "estimated" and np.all(np.isfinite(est.measurements.sigma))
+    assert est.measurements.sigma[0] == pytest.approx(SIGMA_MM / 1000, rel=0.1)
+
+
+def test_sigma_in_mm_on_the_command_line_and_in_metres_in_python_agree(model3, files, tmp_path,
+                                                                        capsys):
+    without = files[1]
+    cli = _cli(capsys, "identify", "--robot", str(URDF), "--tool", str(TOOL), "--data",
+               str(without), "--model", "joint_offset", "--sigma", "0.02", "--out",
+               str(tmp_path / "r.json"), "--json")
+    py = identify_quietly(model3, read_measurements(without, model3.robot, model3.tool),
+                          sigma=2e-5, select="cv").to_dict()
+    assert cli["sigma_mm"] == py["sigma_mm"] == 0.02 and cli["sigma_source"] == "given"
+    assert [p["value"] for p in cli["parameters"]] == [p["value"] for p in py["parameters"]]
+    assert cli["sigma_ratio"] == py["sigma_ratio"]

@@ -22,7 +22,7 @@ def test_chosen_postures_come_from_the_pool_and_predict_the_held_out_session():
     from studies.tiago_mocap.robot import tiago_robot
 
     poses = set(read_measurements(pool, tiago_robot(), Tool.from_yaml(DATA / "tool.yaml"),
-                                  sigma_mm=0.3).configurations.pose)
+                                  sigma=3e-4).configurations.pose)
     assert len(set(chosen)) == 4 and set(chosen) <= poses
     assert f["k"]["4"]["criterion_gain"] > 0
     # real data: the start model predicts another session to a few mm

@@ -25,7 +25,7 @@ def _diagnosis(tmp_path, effects, seed, poses, **options):
     sim.write_campaign(tmp_path / "m.csv", chain, truth, q, np.zeros((len(q), 6)),
                        list(MARKERS), NOISE_MM, rng)
     meas = read_measurements(tmp_path / "m.csv", robot, tool)
-    return diagnose(build_model(robot, tool, START), meas, sigma_mm=STATED_MM, **options)
+    return diagnose(build_model(robot, tool, START), meas, sigma=STATED_MM / 1000, **options)
 
 
 def test_a_correct_model_with_sigma_three_percent_small_is_adequate_by_the_practical_size(

@@ -90,10 +90,11 @@ def approach_argument(c):
                         "approach then fits positive); default as-read")
 
 
-def read_data(paths, robot, tool, sigma_mm=None, skip_bad=False, require_xyz=True,
+def read_data(paths, robot, tool, sigma=None, skip_bad=False, require_xyz=True,
               approach_sign: str = APPROACH_SIGNS[0]):
     """Measurements of one or several files (sessions), with what was dropped or doubted on stderr.
 
+    ``sigma`` (m): σ of the readings without their own (:func:`sigma_option`).
     Rows dropped on request are reported one line each; joint readings a hair
     past a limit (accepted) are summarised. ``approach_sign`` ``"reversed"``
     negates every approach direction (said on stderr).
@@ -102,7 +103,7 @@ def read_data(paths, robot, tool, sigma_mm=None, skip_bad=False, require_xyz=Tru
     from doe_calib.io.measurements import concatenate
 
     paths = [paths] if isinstance(paths, str) else list(paths)
-    meas = concatenate([read_measurements(p, robot, tool, sigma_mm=sigma_mm, skip_bad=skip_bad,
+    meas = concatenate([read_measurements(p, robot, tool, sigma=sigma, skip_bad=skip_bad,
                                           require_xyz=require_xyz) for p in paths])
     for msg in meas.dropped:
         print(f"dropped: {msg}", file=sys.stderr)
@@ -163,12 +164,17 @@ def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
     robot, tool = load_robot_tool(args)
     registry = effect_registry(args) if registry is None else registry
     model = build_model(robot, tool, args.model, registry=registry)
-    meas = read_data(args.data, robot, tool, args.sigma, args.skip_bad,
+    meas = read_data(args.data, robot, tool, sigma_option(args), args.skip_bad,
                      approach_sign=getattr(args, "approach_sign", APPROACH_SIGNS[0]))
     meas = excluding(meas, getattr(args, "exclude_poses", None))
     if estimate_sigma and meas.sigma_estimated:
         meas = with_estimated_sigma(model, meas)
     return model, meas
+
+
+def sigma_option(args) -> float | None:
+    """``--sigma``, given in mm (the unit of the users' files), in metres (the Python API's)."""
+    return None if getattr(args, "sigma", None) is None else args.sigma / 1000.0
 
 
 def with_estimated_sigma(model, meas):

@@ -23,7 +23,8 @@ def run_augment(args, model, loads, candidates, constraints, collision, registry
     if args.criterion == "task":
         raise OptionError("--augment designs for the model's parameters (D, A or E) or, with "
                           "--diagnosis, to separate its candidates; not for --task")
-    measured = read_measurements(args.augment, model.robot, model.tool, sigma_mm=args.sigma)
+    sigma = args.sigma / 1000.0  # --sigma in mm, the API's σ in m
+    measured = read_measurements(args.augment, model.robot, model.tool, sigma=sigma)
     targets = ()
     if args.diagnosis:
         targets = tuple(diagnosis_targets(read_json(args.diagnosis, what="diagnosis")))
@@ -31,7 +32,7 @@ def run_augment(args, model, loads, candidates, constraints, collision, registry
             raise OptionError(f"--diagnosis {args.diagnosis}: the diagnosis lists no candidate "
                               f"effect to separate")
     result = augment_design(model, measured, args.poses, loads,
-                            candidates=candidates, sigma=args.sigma / 1000.0,
+                            candidates=candidates, sigma=sigma,
                             criterion=args.criterion, targets=targets, detect=args.detect or "",
                             constraints=constraints, collision=collision,
                             rng=np.random.default_rng(args.seed), alpha=args.alpha,

@@ -54,7 +54,7 @@ def run(args):
     registry = effect_registry(args)
     result = IdentificationResult.from_json(args.result)
     model = build_model(result.robot, result.tool, result.model, registry=registry)
-    meas = read_data(args.data, result.robot, result.tool, sigma_mm=1.0, require_xyz=False)
+    meas = read_data(args.data, result.robot, result.tool, require_xyz=False)
     pred = predict(result, meas, model, a_posteriori=False, register=args.register)
     sigma = np.full(len(meas), result.sigma_mm / 1000.0)
     write_measurements(args.out, replace(meas, xyz=pred.xyz, sigma=sigma), result.robot,

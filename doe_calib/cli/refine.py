@@ -9,6 +9,7 @@ from doe_calib.cli.common import (
     model_and_measurements,
     read_data,
     robot_arguments,
+    sigma_option,
 )
 from doe_calib.cli.diagnose import measurement_arguments
 from doe_calib.cli.options import count
@@ -41,8 +42,6 @@ OUTPUTS = {"out": "file", "history": "file", "plot": "file", "report": "file"}
 def run(args):
     from types import SimpleNamespace
 
-    import numpy as np
-
     from doe_calib.diagnosis.refine import refine
     from doe_calib.model.marker_model import build_model
     from doe_calib.report.figure_worker import FigureWorker
@@ -55,8 +54,7 @@ def run(args):
         model, meas = model_and_measurements(args, registry=registry)
         val = None
         if args.validation:
-            sigma_mm = args.sigma or float(np.median(meas.sigma)) * 1000.0  # σ̂ when not given
-            val = read_data(args.validation, model.robot, model.tool, sigma_mm,
+            val = read_data(args.validation, model.robot, model.tool, sigma_option(args),
                             approach_sign=args.approach_sign)
         print(f"refining from {model.spec or '(base + markers)'} on {len(meas)} readings…",
               file=sys.stderr)

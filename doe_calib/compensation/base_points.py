@@ -22,6 +22,8 @@ import numpy as np
 
 from doe_calib.errors import DataError, DataWarning
 from doe_calib.estimation.registration import register
+from doe_calib.io.configuration_columns import codes, numbers, texts
+from doe_calib.io.row_problems import RowProblems, earlier_in_group
 from doe_calib.io.table import read_table
 
 #: The columns of a base-points file (mm): robot-frame coordinates, then the tracker's reading.
@@ -114,34 +116,22 @@ def read_base_points(path, sigma: float) -> BasePoints:
         raise DataError(f"missing column(s) {', '.join(missing)}: a base-points file has "
                         f"{', '.join(COLUMNS)} (mm) and optionally sigma (mm)", path,
                         table.header_line)
-    numeric = list(COLUMNS[1:]) + (["sigma"] if "sigma" in table.columns else [])
-    names, values = [], []
-    for line, fields in table.rows:
-        row = {}
-        for c in numeric:
-            i = table.columns.index(c)
-            text = fields[i] if i < len(fields) else ""
-            try:
-                v = float(text.replace(",", ".") if table.decimal_comma else text)
-            except ValueError:
-                v = np.nan
-            if not np.isfinite(v) or (c == "sigma" and v <= 0):
-                raise DataError(f"{text!r} is not a {'positive' if c == 'sigma' else 'finite'} "
-                                f"number (mm)", path, line, table.col(c))
-            row[c] = v / 1000.0
-        name = fields[table.columns.index("point")]
-        if name in names:
-            raise DataError(f"point {name!r} appears twice", path, line, table.col("point"))
-        names.append(name)
-        values.append(row)
-    in_robot = np.array([[r[c] for c in COLUMNS[1:4]] for r in values])
+    problems = RowProblems(table)
+    names = texts(table, problems, 0, "point")
+    values = numbers(table, problems, 1, COLUMNS[1:]) / 1000.0
+    own = numbers(table, problems, 2, ["sigma"], np.nan)[:, 0] / 1000.0
+    problems.check(3, ~(own > 0) & ~np.isnan(own), lambda i: f"σ {own[i] * 1000:g} mm is not "
+                                                             f"positive", "sigma")
+    first = earlier_in_group(codes(names), ~problems.failing())
+    problems.check(4, first >= 0, lambda i: f"point {names[i]!r} appears twice", "point")
+    problems.raise_first()
+    in_robot = values[:, :3]
     spread = np.linalg.svd(in_robot - in_robot.mean(axis=0), compute_uv=False)
     if len(names) < 3 or spread[1] <= ON_A_LINE * max(spread[0], 1e-12):
         raise DataError(f"{len(names)} point(s){' on one line' if len(names) >= 3 else ''}: "
                         f"the base pose needs at least 3 points not on one line", path)
-    points = BasePoints(tuple(names), in_robot,
-                        np.array([[r[c] for c in COLUMNS[4:]] for r in values]),
-                        np.array([r.get("sigma", sigma) for r in values]), str(path))
+    points = BasePoints(tuple(names), in_robot, values[:, 3:],
+                        np.where(np.isnan(own), sigma, own), str(path))
     rms = points.residual_rms()
     if rms > MISFIT * float(np.sqrt(np.mean(points.sigma ** 2))):
         sigma_mm = float(np.mean(points.sigma)) * 1000

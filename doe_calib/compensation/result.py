@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from doe_calib.errors import DataError
-from doe_calib.io.columns import WRENCH
+from doe_calib.io.configuration_columns import WRENCH
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.robot import Robot

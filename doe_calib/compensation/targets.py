@@ -5,26 +5,19 @@ deg/mm, optional wrench, temperature and approach columns) that may carry
 ``x``, ``y``, ``z`` (mm, tracker frame unless a ``frame`` is given: the robot's
 ``base_link``, the UR controller's ``base``, or any URDF frame fixed to the base,
 :mod:`doe_calib.model.frames`): where the TCP must go for that row.
-The design columns are read by :func:`doe_calib.io.csv_files.read_design`; this module
-only reads the three extra columns (and hands ``read_design`` the file
-without them, line numbers kept).
+The file is read by :func:`doe_calib.io.csv_files.read_design_csv`, x, y, z with the
+design columns.
 """
 from __future__ import annotations
 
-import csv
-import io
-import re
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from doe_calib.errors import DataError, OptionError
-from doe_calib.io.columns import XYZ
-from doe_calib.io.csv_files import read_design
+from doe_calib.errors import OptionError
+from doe_calib.io.csv_files import read_design, read_design_csv
 from doe_calib.io.measurements import Configurations
-from doe_calib.io.table import delimiter, read_table
 from doe_calib.model.frames import frame_placement, transform_points
 from doe_calib.model.rotations import rotation_vector_to_matrix
 
@@ -61,25 +54,6 @@ class Targets:
 
     def __len__(self) -> int:
         return len(self.configurations)
-
-
-def _split_line(line: str, delimiter: str, drop: list) -> str:
-    """``line`` without the fields at ``drop`` (quoted fields kept whole)."""
-    fields = next(csv.reader([line], delimiter=delimiter))
-    buf = io.StringIO()
-    csv.writer(buf, delimiter=delimiter, lineterminator="").writerow(
-        [f for i, f in enumerate(fields) if i not in drop])
-    return buf.getvalue()
-
-
-def _renumber(message_column, columns, kept):
-    """A DataError column ``'q3' (4)`` of the stripped file as a column of the original."""
-    if not isinstance(message_column, str):
-        return message_column if message_column is None else kept[message_column - 1] + 1
-    match = re.fullmatch(r"'(.*)' \((\d+)\)", message_column)
-    if match and match.group(1) in columns:
-        return f"'{match.group(1)}' ({columns.index(match.group(1)) + 1})"
-    return message_column
 
 
 def read_targets(path, robot, frame: str = TRACKER, result=None, base_points=None) -> Targets:
@@ -123,44 +97,13 @@ def read_targets(path, robot, frame: str = TRACKER, result=None, base_points=Non
     >>> targets.positions is None                       # doctest: +SKIP
     True
     """
-    table = read_table(path)
-    present = [c for c in XYZ if c in table.columns]
-    if base_points is not None and (frame == TRACKER or not present):
+    cfg, xyz = (read_design(path, robot), None) if Path(path).suffix.lower() == ".json" else \
+        read_design_csv(path, robot, positions=True)
+    if base_points is not None and (frame == TRACKER or xyz is None):
         raise OptionError("base points place targets given in a robot frame: give x, y, z in "
                           "the targets and name their frame (--targets-frame)")
-    if not present:
-        return Targets(read_design(path, robot))
-    header_line = table.rows[0][0] - 1
-    if len(present) < 3:
-        missing = ", ".join(c for c in XYZ if c not in present)
-        raise DataError(f"target column(s) {', '.join(present)} without {missing}: give all "
-                        f"of x, y, z (mm, tracker frame) or none", path, header_line)
-    drop = [table.columns.index(c) for c in XYZ]
-    kept = [i for i in range(len(table.columns)) if i not in drop]
-    xyz = np.empty((len(table.rows), 3))
-    for r, (line, fields) in enumerate(table.rows):
-        for a, c in enumerate(XYZ):
-            text = fields[drop[a]] if drop[a] < len(fields) else ""
-            try:
-                value = float(text.replace(",", ".") if table.decimal_comma else text)
-            except ValueError:
-                raise DataError(f"{text!r} is not a number (target {c} in mm)", path, line,
-                                table.col(c)) from None
-            if not np.isfinite(value):
-                raise DataError(f"{text!r} is not a finite number", path, line, table.col(c))
-            xyz[r, a] = value / 1000.0
-    sep = delimiter(_first_line(path))
-    text = Path(path).read_text(encoding="utf-8-sig")
-    lines = [ln if not ln.strip() or ln.lstrip().startswith("#") else
-             _split_line(ln, sep, drop) for ln in text.splitlines()]
-    with tempfile.TemporaryDirectory() as tmp:
-        stripped = Path(tmp) / Path(path).name
-        stripped.write_text("\n".join(lines) + "\n", encoding="utf-8")
-        try:
-            cfg = read_design(stripped, robot)
-        except DataError as exc:
-            raise DataError(_message(exc), path, exc.line,
-                            _renumber(exc.column, table.columns, kept)) from None
+    if xyz is None:
+        return Targets(cfg)
     if base_points is not None:
         x_t, std = base_points.to_tracker(xyz)
         return Targets(cfg, x_t, frame, std)
@@ -179,16 +122,3 @@ def in_tracker(points, robot, frame: str, result) -> np.ndarray:
     base = result.parameters.values[result.parameters.index("base")]
     in_base = transform_points(frame_placement(robot, frame), points)
     return in_base @ rotation_vector_to_matrix(base[3:]).T + base[:3]
-
-
-def _message(exc: DataError) -> str:
-    """The message of a DataError without its ``path, line, column:`` prefix."""
-    where = DataError("", exc.path, exc.line, exc.column)
-    return str(exc)[len(str(where)):]
-
-
-def _first_line(path) -> str:
-    for line in Path(path).read_text(encoding="utf-8-sig").splitlines():
-        if line.strip() and not line.lstrip().startswith("#"):
-            return line
-    return ""

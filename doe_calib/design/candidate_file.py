@@ -80,7 +80,7 @@ def read_candidates(path, robot, tool=None) -> CandidatePoses:
     if path.suffix.lower() != ".json" and _is_measurement_csv(path):
         if tool is None:
             raise DataError("a measurement CSV as candidates needs the tool (its markers)", path)
-        cfg = read_measurements(path, robot, tool, sigma_mm=1.0, require_xyz=False).configurations
+        cfg = read_measurements(path, robot, tool, require_xyz=False).configurations
     else:
         cfg = read_design(path, robot)
     if len(cfg) == 0:

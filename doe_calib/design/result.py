@@ -8,12 +8,12 @@ import numpy as np
 from doe_calib.design.detectability import Detectability
 from doe_calib.design.predicted_std import PredictedStd, StdMapping, predicted_std
 from doe_calib.errors import DataError
+from doe_calib.io.design_json import FORMAT, pose_configurations
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.robot import Robot
 from doe_calib.model.tool import Tool
 
-FORMAT = "doe_calib.design"
 
 
 @dataclass(frozen=True, eq=False)
@@ -218,12 +218,7 @@ class DesignResult:
     @classmethod
     def from_dict(cls, d: dict) -> "DesignResult":
         robot = Robot.from_dict(d["robot"])
-        rows = [(p["pose"], p["q_deg"], w, _approach(p, robot.n_joints))
-                for p in d["poses"] for w in p["wrenches"]]
-        cfg = Configurations.from_arrays(np.array([r[1] for r in rows]) / robot.display_factors,
-                                         np.array([r[2] for r in rows]),
-                                         pose=[r[0] for r in rows],
-                                         approach=np.array([r[3] for r in rows], float))
+        cfg = pose_configurations(d["poses"], robot.display_factors)
         return cls(robot, Tool.from_dict(d["tool"]), d["model"], cfg, d["criterion"],
                    float(d["value"]), float(d["bound"]), float(d["efficiency"]),
                    {r["name"]: (r["std"], r["unit"]) for r in d["predicted_std"]},
@@ -243,13 +238,3 @@ class DesignResult:
         """Read a design file written by :meth:`to_json`."""
         return cls.from_dict(read_json(path, FORMAT, "doe_calib design file"))
 
-
-def _approach(pose: dict, n_joints: int) -> list:
-    """A pose entry's planned approach directions (N values of 1, -1, 0; all 0 when absent)."""
-    approach = pose.get("approach", [0] * n_joints)
-    if not (isinstance(approach, list) and len(approach) == n_joints
-            and all(a in (-1, 0, 1) for a in approach)):
-        raise DataError(f"pose {pose.get('pose')!r}: \"approach\" must be a list of {n_joints} "
-                        f"values 1 (joint reached moving up), -1 (moving down) or 0 (no "
-                        f"requirement), got {approach!r}")
-    return approach

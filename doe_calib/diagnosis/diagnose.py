@@ -280,7 +280,7 @@ def _outlier_result(model, measurements, res, test, cv, split, outliers, level, 
 def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
              grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
              tolerance: float = 0.05, progress=None, registry=None,
-             sigma_mm: float | None = None, practical_um: float = 2.0,
+             sigma: float | None = None, practical_um: float = 2.0,
              candidate_fits: dict | None = None, batch=None,
              workers: int | None = None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
@@ -315,8 +315,8 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         Its :meth:`~doe_calib.model.effects.registry.EffectRegistry.catalogue` is what
         is tested as missing (default the built-in catalogue; user effects:
         ``DEFAULT_REGISTRY.with_file(path)``).
-    sigma_mm : float, optional
-        σ per coordinate, mm, for every reading (replacing the readings' own).
+    sigma : float, optional
+        σ per coordinate, m, for every reading (replacing the readings' own).
     practical_um : float
         Practical size, µm per coordinate: a misfit beyond the noise
         √(σ̂² − σ²) below it, with no material candidate, is adequate even when
@@ -347,7 +347,7 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     """
     check_settings(level, folds, min_gain, tolerance, practical_um, workers)
     whole("cv_top", cv_top, 1)
-    settled = resolve_sigma(model, measurements, sigma_mm, fit=fit)
+    settled = resolve_sigma(model, measurements, sigma, fit=fit)
     if settled.measurements is not measurements:  # σ settled here: fit at that σ
         measurements, fit = settled.measurements, None
     if fit is None:

@@ -33,7 +33,7 @@ def _size_words(sizes) -> str:
 
 def refine(model, measurements, validation=None, level: float = 0.01, max_steps: int = 5,
            min_gain: float = 0.02, folds: int = 5, grouping: str = "auto", progress=None,
-           fit=None, registry=None, sigma_mm: float | None = None,
+           fit=None, registry=None, sigma: float | None = None,
            practical_um: float = 2.0, tolerance: float = 0.05,
            one_batch: bool = True, workers: int | None = None) -> RefineResult:
     """Grow ``model`` one effect at a time while an effect predicts materially better.
@@ -67,8 +67,8 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
         user effects: ``DEFAULT_REGISTRY.with_file(path)``). A candidate whose
         fitted values are physically implausible (its parameters' bounds and
         plausible ranges, :func:`~doe_calib.diagnosis.diagnose.diagnose`) is not added.
-    sigma_mm : float, optional
-        σ per coordinate, mm, for every reading (replacing the readings' own).
+    sigma : float, optional
+        σ per coordinate, m, for every reading (replacing the readings' own).
     practical_um : float
         Practical size, µm: a misfit beyond the noise below it, with no material
         candidate, is adequate (as :func:`~doe_calib.diagnosis.diagnose.diagnose`).
@@ -96,7 +96,7 @@ def refine(model, measurements, validation=None, level: float = 0.01, max_steps:
     """
     check_settings(level, folds, min_gain, tolerance, practical_um, workers)
     whole("max_steps", max_steps, 0, "effects")
-    settled = resolve_sigma(model, measurements, sigma_mm, fit=fit)
+    settled = resolve_sigma(model, measurements, sigma, fit=fit)
     if settled.measurements is not measurements:  # σ settled here: fit at that σ
         measurements, fit = settled.measurements, None
     fit = identify_quietly(model, measurements) if fit is None else fit

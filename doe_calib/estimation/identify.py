@@ -21,7 +21,7 @@ from doe_calib.estimation import plausibility
 from doe_calib.estimation.fit_statistics import misfit_finding
 from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
 from doe_calib.estimation.selection import SELECTIONS, select as choose
-from doe_calib.estimation.sigma import resolve_sigma
+from doe_calib.estimation.sigma import provisional, resolve_sigma
 from doe_calib.io.repeated_readings import copies_words
 from doe_calib.model.marker_model import for_workload
 
@@ -29,7 +29,7 @@ ESTIMATORS = ("point", "two-step", "pose")
 
 
 def identify(model, measurements, params=None, estimator: str = "point", progress=None,
-             sigma_mm: float | None = None, select: str = "cv", **options):
+             sigma: float | None = None, select: str = "cv", **options):
     """Identify the model's parameters from marker readings.
 
     Parameters
@@ -48,8 +48,8 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
         for comparison (``normalisation`` option, m/rad).
     progress : callable(done, total, note), optional
         Told of long steps (compiling the model, each iteration of ``point``).
-    sigma_mm : float, optional
-        σ per coordinate, mm, for every reading (it replaces the readings' own);
+    sigma : float, optional
+        σ per coordinate, m, for every reading (it replaces the readings' own);
         default: theirs, or, when they have none, σ̂ of this fit
         (:func:`~doe_calib.estimation.sigma.resolve_sigma`).
     select : {"cv", "none"}
@@ -76,8 +76,8 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
     if estimator not in ESTIMATORS:
         raise ValueError(f"unknown estimator {estimator!r}; choose one of "
                          f"{', '.join(ESTIMATORS)}")
-    settled = resolve_sigma(model, measurements, sigma_mm, in_fit=True)
-    measurements = settled.measurements
+    settled = resolve_sigma(model, measurements, sigma, in_fit=True)
+    measurements = provisional(settled.measurements)
     model = for_workload(model, FIT_PASSES * len(measurements.configurations), progress)
 
     def fit(start):

@@ -199,6 +199,10 @@ def predict(result, data, model=None, *, registry=None, a_posteriori: bool = Tru
     else:
         params = aligned_parameters(model, result)
     measured = isinstance(data, Measurements) and bool(np.all(np.isfinite(data.xyz)))
+    if measured:  # a re-registration weighs readings without σ alike
+        from doe_calib.estimation.sigma import provisional  # sigma imports the estimators
+
+        data = provisional(data)
     done = None
     if register is not None:
         if not measured:

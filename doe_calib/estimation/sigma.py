@@ -3,8 +3,8 @@
 A reading's σ has one of four sources (:data:`SIGMA_SOURCES`):
 
 ``"given"``
-    an option or keyword (``--sigma``, ``sigma_mm=``) for every reading
-    without a σ of its own;
+    an option or keyword (``--sigma`` in mm, ``sigma=`` in m) for every
+    reading without a σ of its own;
 ``"per reading"``
     the measurement file's ``sigma`` column;
 ``"repeated readings"``
@@ -16,12 +16,13 @@ A reading's σ has one of four sources (:data:`SIGMA_SOURCES`):
 A σ given is the σ used: repeated readings never replace it, they are
 reported beside it (:attr:`SettledSigma.repeated`).
 
-The readers mark readings without σ ``sigma_estimated`` (σ still to be
-estimated, a provisional 1 mm in the meantime). :func:`resolve_sigma` settles
-it: every task that needs a σ before it fits (diagnose, refine and the
-commands built on them) calls it first, so the Python API and the command
-line test a model against the same σ. ``identify`` settles it in its own fit:
-its σ̂ *is* the starting model's, and its covariance is scaled to it.
+The readers return each reading's σ, or NaN where none is given (the readings
+are then marked ``sigma_estimated``). :func:`resolve_sigma` is the one place
+that decides: identify, diagnose, refine and the commands built on them call
+it first, so the Python API and the command line test a model against the
+same σ. ``identify`` leaves the estimate to its own fit (``in_fit``): its σ̂
+*is* the starting model's, and its covariance is scaled to it; the fit weighs
+the readings with a provisional σ meanwhile (:func:`provisional`).
 """
 from __future__ import annotations
 
@@ -44,7 +45,7 @@ from doe_calib.io.measurements import (
 from doe_calib.model.marker_model import for_workload
 
 __all__ = ["GIVEN", "PER_READING", "ESTIMATED", "REPEATED", "SIGMA_SOURCES", "SettledSigma",
-           "resolve_sigma", "with_sigma"]
+           "resolve_sigma", "with_sigma", "provisional"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,23 +75,37 @@ class SettledSigma:
     repeated: Repeatability | None = None
 
 
-def with_sigma(measurements, sigma_mm: float, source: str = GIVEN) -> Measurements:
-    """``measurements`` with every reading's σ set to ``sigma_mm`` (mm), from ``source``.
+#: σ (m) a fit that estimates σ weighs readings without one by: any uniform σ gives the same
+#: estimate, and σ̂ replaces it.
+PROVISIONAL_SIGMA = 1e-3
+
+
+def with_sigma(measurements, sigma: float, source: str = GIVEN) -> Measurements:
+    """``measurements`` with every reading's σ set to ``sigma`` (m), from ``source``.
 
     Raises
     ------
     OptionError
-        When ``sigma_mm`` is not a positive finite number.
+        When ``sigma`` is not a positive finite number.
     """
-    if not (np.isfinite(sigma_mm) and sigma_mm > 0):
-        raise OptionError(f"σ must be a positive number of mm, got {sigma_mm!r}")
+    if not (np.isfinite(sigma) and sigma > 0):
+        raise OptionError(f"σ must be a positive number of metres, got {sigma!r}")
     if source not in SIGMA_SOURCES:
         raise OptionError(f"unknown σ source {source!r}; one of {', '.join(SIGMA_SOURCES)}")
-    return replace(measurements, sigma=np.full(len(measurements), sigma_mm / 1000.0),
+    return replace(measurements, sigma=np.full(len(measurements), float(sigma)),
                    sigma_source=source, sigma_estimated=False)
 
 
-def resolve_sigma(model, measurements, sigma_mm: float | None = None, params=None, fit=None,
+def provisional(measurements) -> Measurements:
+    """The readings a fit that estimates σ weighs: those without σ at
+    :data:`PROVISIONAL_SIGMA`, still ``sigma_estimated``."""
+    missing = np.isnan(measurements.sigma)
+    if not missing.any():
+        return measurements
+    return replace(measurements, sigma=np.where(missing, PROVISIONAL_SIGMA, measurements.sigma))
+
+
+def resolve_sigma(model, measurements, sigma: float | None = None, params=None, fit=None,
                   in_fit: bool = False) -> SettledSigma:
     """Settle the σ of ``measurements``: given, per reading, from repeated readings, or estimated.
 
@@ -100,8 +115,8 @@ def resolve_sigma(model, measurements, sigma_mm: float | None = None, params=Non
         The starting model, whose fit estimates σ when none is known.
     measurements : Measurements
         Readings in SI, as read (``sigma_estimated`` when no σ came with them).
-    sigma_mm : float, optional
-        σ per coordinate, mm, for every reading (source ``"given"``); it
+    sigma : float, optional
+        σ per coordinate, m, for every reading (source ``"given"``); it
         replaces whatever σ the readings carry.
     params : ParameterSet, optional
         Start values and free parameters of the starting fit (default nominal).
@@ -131,15 +146,16 @@ def resolve_sigma(model, measurements, sigma_mm: float | None = None, params=Non
     ...                     Tool.from_yaml(examples.TOOL_YAML), "joint_offset")
     >>> cfg = Configurations.from_arrays(random_configurations(model.robot, 20))
     >>> meas = simulate(model, model.nominal().values, cfg, 2e-5)
-    >>> resolve_sigma(model, meas, sigma_mm=0.03).words
+    >>> resolve_sigma(model, meas, sigma=3e-5).words
     'σ given: 0.03 mm'
     """
     rep = repeatability(measurements)
-    if sigma_mm is not None:
-        settled = with_sigma(measurements, sigma_mm)
-        return SettledSigma(settled, GIVEN, float(sigma_mm), f"σ given: {sigma_mm:.3g} mm", rep)
-    median = float(np.median(measurements.sigma) * 1000.0) if len(measurements) else np.nan
+    if sigma is not None:
+        settled = with_sigma(measurements, sigma)
+        return SettledSigma(settled, GIVEN, sigma * 1000.0, f"σ given: {sigma * 1000.0:.3g} mm",
+                            rep)
     if not measurements.sigma_estimated:
+        median = float(np.median(measurements.sigma) * 1000.0) if len(measurements) else np.nan
         words = {GIVEN: f"σ given: {median:.3g} mm",
                  PER_READING: f"σ per reading (the file's sigma column): median "
                               f"{median:.3g} mm",
@@ -152,15 +168,15 @@ def resolve_sigma(model, measurements, sigma_mm: float | None = None, params=Non
         return SettledSigma(measurements, ESTIMATED, float("nan"),
                             "σ not given: estimated from the residuals of this fit", rep)
     if rep is not None:
-        return SettledSigma(with_sigma(measurements, rep.sigma_mm, REPEATED), REPEATED,
+        return SettledSigma(with_sigma(measurements, rep.sigma_mm / 1000.0, REPEATED), REPEATED,
                             rep.sigma_mm, f"σ not given: {rep.summary()}", rep)
     if fit is None or not fit.sigma_estimated:
         fit = _starting_fit(model, measurements, params)
     if not (fit.sigma_estimated and np.isfinite(fit.sigma_mm) and fit.sigma_mm > 0):
         raise DataError(f"σ is not given and cannot be estimated: {3 * len(measurements)} "
                         f"coordinates for {int(fit.parameters.free.sum())} free parameters; give "
-                        f"σ (a sigma column, --sigma or sigma_mm=)", measurements.source or None)
-    return SettledSigma(with_sigma(measurements, fit.sigma_mm, ESTIMATED), ESTIMATED,
+                        f"σ (a sigma column, --sigma or sigma=)", measurements.source or None)
+    return SettledSigma(with_sigma(measurements, fit.sigma_mm / 1000.0, ESTIMATED), ESTIMATED,
                         fit.sigma_mm, f"σ not given: estimated from the residuals of the "
                                       f"starting model, {fit.sigma_mm:.3g} mm")
 
@@ -171,4 +187,4 @@ def _starting_fit(model, measurements, params):
     model = for_workload(model, FIT_PASSES * len(measurements.configurations))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DoeCalibWarning)
-        return identify_point(model, measurements, params)
+        return identify_point(model, provisional(measurements), params)

@@ -1,14 +1,16 @@
 """Reading and writing the users' files: measurement CSV and design CSV (formats.md §3, §4).
 
 Files are in controller and tracker units (deg, mm, N, N·m, °C); everything
-returned is SI. Every problem raises :class:`~doe_calib.errors.DataError`
-naming the file, the physical line and the column; with ``skip_bad`` a bad
-row is dropped instead and reported in ``Measurements.dropped``.
+returned is SI. The first bad value of a file raises :class:`~doe_calib.errors.DataError`
+naming the file, the physical line and the column; with ``skip_bad`` every bad
+row is dropped instead and reported in ``Measurements.dropped``. Whole columns
+are converted and checked at once (:mod:`~doe_calib.io.configuration_columns`).
 
 Files are UTF-8 (a bad byte is reported with its line and column); fields are
 separated by commas, or by semicolons or tabs as the header shows, and then a
 number may have a decimal comma (``1,5``). Values outside a plausible range
-(:data:`PLAUSIBLE`: a temperature outside -50 … 150 °C) are errors.
+(:data:`~doe_calib.io.configuration_columns.PLAUSIBLE`: a temperature outside
+-50 … 150 °C) are errors.
 
 Approach directions (for ``backlash``): the optional columns ``approach1``
 … ``approachN`` give, for each row, the direction from which joint k reached
@@ -33,211 +35,42 @@ from __future__ import annotations
 
 import csv
 import io as _io
-import re
 import warnings
-from difflib import get_close_matches
 from pathlib import Path
 
 import numpy as np
 
 from doe_calib.errors import DataError, DataWarning
-from doe_calib.io.column_reader import Columns, read_columns
-from doe_calib.io.gc_paused import gc_paused
-from doe_calib.io.columns import PLAUSIBLE, Q_TOL, WRENCH, XYZ, approach_columns, joint_columns
-from doe_calib.io.measurements import (
-    ESTIMATED,
-    GIVEN,
-    PER_READING,
-    Configurations,
-    Measurements,
-    approach_from_order,
+from doe_calib.io.configuration_columns import (
+    LIMIT_TOLERANCE,
+    Q_TOL,
+    WRENCH,
+    XYZ,
+    approach,
+    approach_columns,
+    approach_given,
+    check_columns,
+    check_not_radians,
+    check_width,
+    codes,
+    combined,
+    derived_approach,
+    ignored_note,
+    joint_columns,
+    joints,
+    numbers,
+    texts,
 )
-from doe_calib.io.table import Table, read_table
+from doe_calib.io.design_json import read_design_json
+from doe_calib.io.measurements import ESTIMATED, GIVEN, PER_READING, Configurations, Measurements
+from doe_calib.io.row_problems import RowProblems, earlier_in_group
+from doe_calib.io.table import read_table
 
-#: σ (mm) of the readings of a file without σ, until identification estimates it.
-PROVISIONAL_SIGMA_MM = 1.0
 #: Columns ``doe-calib predict`` adds: predicted std of each coordinate (mm); ignored on reading.
 PREDICTED_STD = ("std_x", "std_y", "std_z")
 
 
-#: Columns that look like doe_calib's own (a joint or approach column of another robot).
-_OWN_PATTERN = re.compile(r"^(q|approach)\d+$")
-#: difflib similarity above which an unknown column is taken for a typo of a known one.
-TYPO_CUTOFF = 0.75
-
-
-def _check_columns(table: Table, required, optional, line) -> tuple:
-    """Refuse missing columns and typos of known ones; return the other extra columns.
-
-    An unknown column is an error when it looks like a known one (a close
-    match, e.g. ``sigam`` for ``sigma``, or a joint column the robot does not
-    have); any other (``timestamp``) is ignored and returned for a note.
-    """
-    missing = [c for c in required if c not in table.columns]
-    if missing:
-        raise DataError(f"missing column(s) {', '.join(missing)}; the header must hold "
-                        f"{', '.join(required)}", table.path, line, 1)
-    accepted = list(required) + list(optional)
-    known = {c.lower(): c for c in accepted}
-    extra = []
-    for i, c in enumerate(table.columns):
-        if c in accepted:
-            continue
-        close = get_close_matches(c.lower(), list(known), n=1, cutoff=TYPO_CUTOFF)
-        if close or _OWN_PATTERN.match(c.lower()):
-            hint = (f"did you mean {known[close[0]]!r}?" if close else
-                    "the robot has no such joint")
-            raise DataError(f"unknown column {c!r} ({hint}); accepted columns: "
-                            f"{', '.join(accepted)}", table.path, line, f"'{c}' ({i + 1})")
-        extra.append(c)
-    return tuple(extra)
-
-
-def _ignored_note(table, extra) -> str:
-    return (f"{table.path}: column(s) {', '.join(repr(c) for c in extra)} ignored (not "
-            "doe_calib columns; docs/formats.md §3 lists them)")
-
-
-def _number(table, line, fields, name, default=None) -> float:
-    if name not in table.columns:
-        return default
-    text = fields[table.columns.index(name)]
-    if text == "" and default is not None:
-        return default
-    try:
-        value = float(text.replace(",", ".") if table.decimal_comma else text)
-    except ValueError:
-        raise DataError(f"{text!r} is not a number", table.path, line, table.col(name)) from None
-    if not np.isfinite(value):
-        raise DataError(f"{text!r} is not a finite number", table.path, line, table.col(name))
-    _check_plausible(table, line, name, value)
-    return value
-
-
-def _check_plausible(table, line, name, value) -> None:
-    """Refuse a value outside the :data:`PLAUSIBLE` range of its column."""
-    if name in PLAUSIBLE:
-        low, high, unit = PLAUSIBLE[name]
-        if not low <= value <= high:
-            raise DataError(f"{value:g} {unit} is not a plausible {name}: expected {low:g} to "
-                            f"{high:g} {unit}", table.path, line, table.col(name))
-
-
-def _checkapproach_columns(table, robot, line) -> bool:
-    """Whether the file gives the approach directions (all N columns; some is an error)."""
-    names = approach_columns(robot)
-    present = [c for c in names if c in table.columns]
-    if present and len(present) < len(names):
-        missing = [c for c in names if c not in table.columns]
-        raise DataError(f"approach column(s) {', '.join(missing)} missing: give all of "
-                        f"{names[0]} … {names[-1]} or none (then they come from the "
-                        f"measurement order)", table.path, line, table.col(present[0]))
-    return bool(present)
-
-
-def _approach(table, line, fields, robot) -> tuple:
-    """Approach direction of each joint in one row: +1, −1 or 0."""
-    out = []
-    for name in approach_columns(robot):
-        text = fields[table.columns.index(name)]
-        try:
-            value = float(text)
-        except ValueError:
-            value = None
-        if value not in (-1.0, 0.0, 1.0):
-            raise DataError(f"{text!r} is not an approach direction: write 1 (joint moving up), "
-                            f"-1 (moving down) or 0 (unknown)", table.path, line, table.col(name))
-        out.append(value + 0.0)  # no -0.0
-    return tuple(out)
-
-
-def _derived_approach(q, robot) -> np.ndarray:
-    """Approach directions from the visiting order of configurations q (M, N), SI."""
-    return approach_from_order(np.asarray(q) * robot.display_factors, Q_TOL)
-
-
-#: A measured joint value past a URDF limit by at most this fraction of the joint's range
-#: is accepted with a warning (an encoder at a hard stop, a rounded limit); farther is an error.
-LIMIT_TOLERANCE = 0.02
-
-
-def _joints(table, line, fields, robot, tolerance: float = 0.0, notes=None) -> np.ndarray:
-    """q of one row in SI, checked against the limits.
-
-    A value past a limit by at most ``tolerance`` × the joint's range is kept
-    as read and described in ``notes``; farther out it is an error.
-    """
-    q = np.empty(robot.n_joints)
-    for k, (name, joint) in enumerate(zip(joint_columns(robot), robot.joints)):
-        shown = _number(table, line, fields, name)
-        q[k] = shown / joint.display_factor
-        past = max(joint.lower - q[k], q[k] - joint.upper, 0.0)
-        if past <= 1e-12:
-            continue
-        lo, hi = joint.lower * joint.display_factor, joint.upper * joint.display_factor
-        where = (f"{shown:g} {joint.display_unit} is outside the limits of joint {joint.name} "
-                 f"[{lo:g}, {hi:g}] {joint.display_unit}")
-        span = joint.upper - joint.lower
-        if not np.isfinite(span) or past > tolerance * span:
-            hint = f" (more than {tolerance:.0%} of the range past it)" if tolerance else ""
-            if joint.kind == "revolute" and joint.lower <= shown <= joint.upper:
-                hint += (f"; read as radians ({np.degrees(shown):.4g} deg) it is inside: the "
-                         f"file is likely in radians, and q must be in degrees")
-            raise DataError(where + hint, table.path, line, table.col(name))
-        notes.append(str(DataError(f"{where} by {past * joint.display_factor:.3g} "
-                                   f"{joint.display_unit}: accepted as measured",
-                                   table.path, line, table.col(name))))
-    return q
-
-
-#: Configurations a file needs before all-small angles are taken for radians.
-RADIANS_MIN_CONFIGURATIONS = 3
-
-
-def check_not_radians(q, robot, path) -> None:
-    """Refuse joint values (SI, read from degrees) that are all within ±π·1.05 *degrees*
-    while the revolute limits span far more: the file was written in radians.
-
-    Raises
-    ------
-    DataError
-        Naming radians as the likely cause, with the largest value and the span.
-    """
-    q = np.atleast_2d(np.asarray(q, float))
-    revolute = [k for k, j in enumerate(robot.joints) if j.kind == "revolute"]
-    if not revolute or len(q) < RADIANS_MIN_CONFIGURATIONS:
-        return
-    shown = np.degrees(np.abs(q[:, revolute]))
-    span = np.degrees([robot.joints[k].upper - robot.joints[k].lower for k in revolute])
-    largest = float(shown.max())
-    if 0.0 < largest <= np.pi * 1.05 and np.max(np.minimum(span, 1e6)) > 20 * np.pi:
-        raise DataError(f"every revolute joint value is within ±{largest:.3g} deg while the "
-                        f"limits span up to {np.max(np.minimum(span, 1e6)):.0f} deg: the file "
-                        f"is likely in radians; q must be in degrees (multiply by 180/π)", path)
-
-
-def _parse_rows(table, robot, row_parser, skip_bad):
-    """Apply ``row_parser`` to every row; drop and report bad rows if asked."""
-    parsed, dropped = [], []
-    for line, fields in table.rows:
-        try:
-            if len(fields) != len(table.columns):
-                hint = ("; decimal commas? separate the fields with ';' to use them"
-                        if len(fields) > len(table.columns) and not table.decimal_comma else "")
-                raise DataError(f"{len(fields)} fields where the header has "
-                                f"{len(table.columns)}{hint}", table.path, line)
-            parsed.append((line, row_parser(line, fields)))
-        except DataError as exc:
-            if not skip_bad:
-                raise
-            dropped.append(str(exc))
-    if not parsed:
-        raise DataError("no valid data rows", table.path)
-    return parsed, dropped
-
-
-@gc_paused()
-def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad: bool = False,
+def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: bool = False,
                       require_xyz: bool = True, session: str | None = None) -> Measurements:
     """Read a measurement CSV (formats.md §3).
 
@@ -248,10 +81,10 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
         Gives N (columns q1..qN, deg or mm) and the joint limits.
     tool : Tool
         Gives the marker names.
-    sigma_mm : float, optional
-        σ (mm) of rows without a ``sigma`` value. With neither (no column, no
-        σ), σ is unknown: a provisional :data:`PROVISIONAL_SIGMA_MM` is used and
-        ``sigma_estimated`` is set, so identification estimates σ from the residuals.
+    sigma : float, optional
+        σ (m) of the readings without a ``sigma`` value of their own. With
+        neither, σ is not given: ``sigma`` is NaN and ``sigma_estimated`` is
+        set; :func:`~doe_calib.estimation.sigma.resolve_sigma` decides it.
     skip_bad : bool
         Drop bad rows, reporting each in ``dropped``, instead of raising.
     require_xyz : bool
@@ -267,108 +100,101 @@ def read_measurements(path, robot, tool, sigma_mm: float | None = None, skip_bad
         the approach directions when given) in order of first appearance;
         without approach columns the directions come from that order, session
         by session (module notes). A joint value past its limit by at most
-        :data:`LIMIT_TOLERANCE` of the range is kept, with a message in
-        ``warnings``.
+        :data:`~doe_calib.io.configuration_columns.LIMIT_TOLERANCE` of the range
+        is kept, with a message in ``warnings``.
 
     Raises
     ------
     DataError
-        Naming file, line and column of a bad value; naming the file when x, y,
-        z look like metres (their spread ~1/1000 of the one the nominal robot
+        Naming file, line and column of the first bad value; naming the file when
+        x, y, z look like metres (their spread ~1/1000 of the one the nominal robot
         gives these joint values: :mod:`~doe_calib.io.reading_units`).
+
+    Examples
+    --------
+    >>> meas = read_measurements("meas.csv", robot, tool)   # doctest: +SKIP
+    >>> meas.sigma_source                                    # doctest: +SKIP
+    'per reading'
     """
     table = read_table(path)
-    default_session = session or Path(str(path)).stem
-    header_line = table.numbers[0] - 1
-    qcols = joint_columns(robot)
-    required = ["pose", *qcols, "marker", *(XYZ if require_xyz else ())]
+    required = ["pose", *joint_columns(robot), "marker", *(XYZ if require_xyz else ())]
     optional = [*WRENCH, "temperature", "sigma", "session", *approach_columns(robot),
                 *(() if require_xyz else XYZ), *PREDICTED_STD]
-    extra = _check_columns(table, required, optional, header_line)
-    explicit = _checkapproach_columns(table, robot, header_line)
-    estimated = "sigma" not in table.columns and sigma_mm is None
-    sigma_mm = PROVISIONAL_SIGMA_MM if estimated else sigma_mm
-    if sigma_mm is not None and not sigma_mm > 0:
-        raise DataError(f"σ must be positive, got {sigma_mm} mm", table.path)
-    first_q, seen, notes = {}, {}, []
-
-    def row(line, fields):
-        pose = fields[table.columns.index("pose")]
-        marker = fields[table.columns.index("marker")]
-        session = fields[table.columns.index("session")] if "session" in table.columns \
-            else default_session
-        if not pose:
-            raise DataError("empty pose id", table.path, line, table.col("pose"))
-        if not session:
-            raise DataError("empty session name", table.path, line, table.col("session"))
-        if marker not in tool.names:
-            raise DataError(f"marker {marker!r} is not in the tool file (markers: "
-                            f"{', '.join(tool.names)})", table.path, line, table.col("marker"))
-        q = _joints(table, line, fields, robot, LIMIT_TOLERANCE, notes)
-        shown = q * robot.display_factors
-        if (session, pose) in first_q:
-            ref_line, ref = first_q[session, pose]
-            bad = np.flatnonzero(np.abs(shown - ref) > Q_TOL)
-            if bad.size:
-                raise DataError(f"pose {pose!r} has q{bad[0] + 1} = {shown[bad[0]]:g} here but "
-                                f"{ref[bad[0]]:g} on line {ref_line}; all rows of a pose share q",
-                                table.path, line, table.col(qcols[bad[0]]))
-        wrench = np.array([_number(table, line, fields, c, 0.0) for c in WRENCH])
-        temp = _number(table, line, fields, "temperature", np.nan)
-        sigma = _number(table, line, fields, "sigma", sigma_mm)
-        if sigma is None or not sigma > 0:
-            raise DataError(f"σ must be positive, got {sigma}", table.path, line,
-                            table.col("sigma"))
-        xyz = np.array([_number(table, line, fields, c, np.nan if not require_xyz else None)
-                        for c in XYZ]) / 1000.0
-        approach = _approach(table, line, fields, robot) if explicit else None
-        key = (pose, tuple(wrench), temp if np.isfinite(temp) else None, approach, session)
-        if (key, marker) in seen:
-            raise DataError(f"marker {marker!r} is read twice in pose {pose!r} under the same "
-                            f"load (first on line {seen[key, marker]})", table.path, line,
-                            table.col("marker"))
-        seen[key, marker] = line
-        first_q.setdefault((session, pose), (line, shown))
-        return key, q, wrench, temp, tool.index(marker), xyz, sigma / 1000.0
-
-    cols = None if skip_bad else read_columns(table, robot, tool, sigma_mm, require_xyz,
-                                              explicit, default_session)
-    dropped = []
-    if cols is None:  # row by row, naming file, line and column of each problem
-        parsed, dropped = _parse_rows(table, robot, row, skip_bad)
-        first, index, config = {}, {}, []  # configuration key → (q, wrench, temperature)
-        for _, (key, q, wrench, temp, *_) in parsed:
-            first.setdefault(key, (q, wrench, temp))
-            config.append(index.setdefault(key, len(index)))
-        cols = Columns(list(first), np.array(config), np.array([v[0] for v in first.values()]),
-                       np.array([v[1] for v in first.values()]),
-                       np.array([v[2] for v in first.values()]),
-                       np.array([p[4] for _, p in parsed]), np.array([p[5] for _, p in parsed]),
-                       np.array([p[6] for _, p in parsed]),
-                       np.array([line for line, _ in parsed]))
-    check_not_radians(cols.q, robot, table.path)
-    session = tuple(k[4] for k in cols.keys)
-    if explicit:
-        approach = np.array([k[3] for k in cols.keys])
-    else:  # each session's own visiting order
-        approach = np.zeros_like(cols.q)
-        for name in dict.fromkeys(session):
-            mine = np.array([s == name for s in session])
-            approach[mine] = _derived_approach(cols.q[mine], robot)
-    cfg = Configurations.from_arrays(cols.q, cols.wrench, cols.temperature[:, None],
-                                     [k[0] for k in cols.keys], approach)
-    meas = Measurements(cfg, cols.config, cols.marker, cols.xyz, cols.sigma, cols.line,
-                        table.path, tuple(dropped),
-                        ((_ignored_note(table, extra),) if extra else ()) + tuple(notes),
-                        session, estimated,
-                        reading_sigma_source("sigma" in table.columns, estimated))
+    extra = check_columns(table, required, optional)
+    explicit = approach_given(table, robot)
+    if sigma is not None and not sigma > 0:
+        raise DataError(f"σ must be positive, got {sigma * 1000.0} mm", table.path)
+    table.cells(["pose", "marker", "session"])  # each kind of column in one pass
+    table.floats([*joint_columns(robot), *WRENCH, "temperature", "sigma", *XYZ,
+                  *approach_columns(robot)])
+    problems, notes = RowProblems(table), []
+    check_width(table, problems, 0)
+    pose = texts(table, problems, 1, "pose", "pose id")
+    sessions = texts(table, problems, 2, "session", "session name",
+                     session or Path(str(path)).stem)
+    names = texts(table, problems, 3, "marker")
+    index = {name: i for i, name in enumerate(tool.names)}
+    marker = np.array([index.get(m, -1) for m in names], int)
+    problems.check(3, marker < 0, lambda i: f"marker {names[i]!r} is not in the tool file "
+                                            f"(markers: {', '.join(tool.names)})", "marker")
+    q = joints(table, problems, 4, robot, LIMIT_TOLERANCE, notes)
+    wrench = numbers(table, problems, 6, WRENCH, 0.0)
+    temp = numbers(table, problems, 7, ["temperature"], np.nan)[:, 0]
+    sig = numbers(table, problems, 8, ["sigma"], None if sigma is None else np.nan)[:, 0]
+    problems.check((8, 9), ~np.isnan(sig) & ~(sig > 0), lambda i: f"σ must be positive, got "
+                                                               f"{sig[i]}", "sigma")
+    sigma_m = np.where(np.isnan(sig), np.nan if sigma is None else sigma, sig / 1000.0)
+    xyz = numbers(table, problems, 9, XYZ, None if require_xyz else np.nan) / 1000.0
+    appr = approach(table, problems, 10, robot) if explicit else None
+    pose_code, session_code = codes(pose), codes(sessions)
+    _same_q(table, problems, 5, robot, q, combined([session_code, pose_code]), pose)
+    key = combined([pose_code, *(codes(w + 0.0) for w in wrench.T),
+                    codes(np.where(np.isfinite(temp), temp + 0.0, np.inf)),
+                    *(codes(a) for a in (appr.T if explicit else ())), session_code])
+    read = ~problems.failing()
+    first = earlier_in_group(combined([key, codes(marker)]), read)
+    problems.check(11, read & (first >= 0), lambda i: (
+        f"marker {names[i]!r} is read twice in pose {pose[i]!r} under the same load (first on "
+        f"line {table.numbers[first[i]]})"), "marker")
+    if not skip_bad:
+        problems.raise_first()
+    dropped = problems.dropped()
+    rows = np.flatnonzero(~problems.failing())
+    if not rows.size:
+        raise DataError("no valid data rows", table.path)
+    _, first_row, config = np.unique(key[rows], return_index=True, return_inverse=True)
+    order = np.argsort(first_row)  # configurations in order of first appearance
+    rank = np.empty(len(order), int)
+    rank[order] = np.arange(len(order))
+    config, first_row = rank[config].reshape(-1), rows[first_row[order]]
+    check_not_radians(q[first_row], robot, table.path)
+    session = tuple(sessions[r] for r in first_row.tolist())
+    cfg = Configurations.from_arrays(q[first_row], wrench[first_row], temp[first_row, None],
+                                     [pose[r] for r in first_row.tolist()],
+                                     appr[first_row] if explicit else
+                                     derived_approach(q[first_row], robot, session))
+    given = not np.isnan(sigma_m).any()
+    kept = set(rows.tolist())
+    meas = Measurements(cfg, config, marker[rows], xyz[rows], sigma_m[rows],
+                        np.array(table.numbers)[rows], table.path, dropped,
+                        ((ignored_note(table, extra),) if extra else ())
+                        + tuple(text for i, text in notes if i in kept),
+                        session, not given,
+                        PER_READING if "sigma" in table.columns else GIVEN if given else ESTIMATED)
     return _with_unit_check(meas, robot, tool)
 
 
-def reading_sigma_source(has_column: bool, unknown: bool) -> str:
-    """The σ source of a file's readings: its ``sigma`` column, else the σ given, else none
-    (estimated; :mod:`doe_calib.estimation.sigma`)."""
-    return PER_READING if has_column else ESTIMATED if unknown else GIVEN
+def _same_q(table, problems, rank, robot, q, group, pose) -> None:
+    """Refuse a row whose q differs from that of the first good row of its pose (``group``)."""
+    shown = q * robot.display_factors
+    first = earlier_in_group(group, ~problems.failing())
+    checked = ~problems.failing(below=rank) & (first >= 0)
+    differ = np.abs(shown - shown[np.maximum(first, 0)]) > Q_TOL
+    which = np.argmax(differ, axis=1)
+    for k, name in enumerate(joint_columns(robot)):
+        problems.check((rank, k), checked & differ.any(axis=1) & (which == k), lambda i, k=k: (
+            f"pose {pose[i]!r} has q{k + 1} = {shown[i, k]:g} here but {shown[first[i], k]:g} "
+            f"on line {table.numbers[first[i]]}; all rows of a pose share q"), name)
 
 
 def _with_unit_check(meas, robot, tool) -> Measurements:
@@ -392,55 +218,49 @@ def read_design(path, robot) -> Configurations:
     JSON design must be for ``robot``'s joints.
     """
     if Path(path).suffix.lower() == ".json":
-        return _read_design_json(path, robot)
+        cfg = read_design_json(path, robot)
+        approach_ = np.where(cfg.approach != 0, cfg.approach, derived_approach(cfg.q, robot))
+        return Configurations.from_arrays(cfg.q, cfg.wrench, pose=cfg.pose, approach=approach_)
+    return read_design_csv(path, robot)[0]
+
+
+def read_design_csv(path, robot, positions: bool = False) -> tuple:
+    """A design CSV's configurations and, with ``positions``, its optional columns x, y, z.
+
+    Returns
+    -------
+    (Configurations, ndarray or None)
+        The configurations, and the positions (M, 3) in m, or None when the file has
+        no x, y, z (or ``positions`` is False).
+
+    Raises
+    ------
+    DataError
+        The first bad value, with file, line and column; some of x, y, z but not all.
+    """
     table = read_table(path)
-    header_line = table.rows[0][0] - 1
-    extra = _check_columns(table, ["pose", *joint_columns(robot)],
-                           [*WRENCH, "temperature", *approach_columns(robot)], header_line)
+    given = [c for c in XYZ if positions and c in table.columns]
+    if given and len(given) < 3:
+        missing = ", ".join(c for c in XYZ if c not in given)
+        raise DataError(f"target column(s) {', '.join(given)} without {missing}: give all "
+                        f"of x, y, z (mm, tracker frame) or none", path, table.header_line)
+    extra = check_columns(table, ["pose", *joint_columns(robot), *given],
+                          [*WRENCH, "temperature", *approach_columns(robot)])
     if extra:  # the design's configurations have no place for notes
-        warnings.warn(_ignored_note(table, extra), DataWarning, stacklevel=2)
-    explicit = _checkapproach_columns(table, robot, header_line)
-
-    def row(line, fields):
-        pose = fields[table.columns.index("pose")]
-        if not pose:
-            raise DataError("empty pose id", table.path, line, table.col("pose"))
-        return (pose, _joints(table, line, fields, robot),
-                [_number(table, line, fields, c, 0.0) for c in WRENCH],
-                _number(table, line, fields, "temperature", np.nan),
-                _approach(table, line, fields, robot) if explicit else None)
-
-    parsed, _ = _parse_rows(table, robot, row, False)
-    rows = [p for _, p in parsed]
-    q = np.array([r[1] for r in rows])
+        warnings.warn(ignored_note(table, extra), DataWarning, stacklevel=3)
+    explicit = approach_given(table, robot)
+    problems = RowProblems(table)
+    check_width(table, problems, 0)
+    pose = texts(table, problems, 1, "pose", "pose id")
+    q = joints(table, problems, 2, robot)
+    wrench = numbers(table, problems, 3, WRENCH, 0.0)
+    temp = numbers(table, problems, 4, ["temperature"], np.nan)
+    appr = approach(table, problems, 5, robot) if explicit else None
+    xyz = numbers(table, problems, 6, given) / 1000.0 if given else None
+    problems.raise_first()
     check_not_radians(q, robot, table.path)
-    approach = np.array([r[4] for r in rows]) if explicit else _derived_approach(q, robot)
-    return Configurations.from_arrays(q, [r[2] for r in rows], [[r[3]] for r in rows],
-                                      [r[0] for r in rows], approach)
-
-
-def _read_design_json(path, robot) -> Configurations:
-    """The configurations of a design JSON, checked against ``robot``'s joints and limits."""
-    from doe_calib.design.result import DesignResult
-
-    try:
-        design = DesignResult.from_json(path)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise DataError(f"not a complete doe_calib design file ({exc!r} is missing or "
-                        f"malformed)", path) from None
-    if design.robot.joint_names != robot.joint_names:
-        raise DataError(f"the design is for joints {', '.join(design.robot.joint_names)}, the "
-                        f"robot has {', '.join(robot.joint_names)}", path)
-    cfg = design.configurations
-    for c, q in enumerate(cfg.q):
-        outside = np.flatnonzero((q < robot.lower - 1e-12) | (q > robot.upper + 1e-12))
-        if outside.size:
-            joint = robot.joints[outside[0]]
-            raise DataError(f"pose {cfg.pose[c]!r}: q{outside[0] + 1} = "
-                            f"{q[outside[0]] * joint.display_factor:g} {joint.display_unit} is "
-                            f"outside the limits of joint {joint.name}", path)
-    approach = np.where(cfg.approach != 0, cfg.approach, _derived_approach(cfg.q, robot))
-    return Configurations.from_arrays(cfg.q, cfg.wrench, pose=cfg.pose, approach=approach)
+    return (Configurations.from_arrays(q, wrench, temp, pose,
+                                       appr if explicit else derived_approach(q, robot)), xyz)
 
 
 def _configuration_fields(cfg, c, robot) -> list[str]:
@@ -468,7 +288,7 @@ def _approach_needed(cfg, order, robot) -> bool:
     keys = {(cfg.pose[c], tuple(cfg.wrench[c]), np.nan_to_num(cfg.temperature[c], nan=np.inf))
             for c in order}
     return len(keys) < len(order) or \
-        not np.array_equal(approach, _derived_approach(cfg.q[order], robot))
+        not np.array_equal(approach, derived_approach(cfg.q[order], robot))
 
 
 def _approach_fields(cfg, c) -> list[str]:
@@ -480,9 +300,10 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
 
     The approach columns are written only when reading back would not derive
     the same directions from the order of the rows (module notes); the
-    ``session`` column only when the readings come from several sessions.
-    ``std`` (K, 3), m: a prediction's standard deviation of each coordinate,
-    written as the :data:`PREDICTED_STD` columns in mm (ignored on reading).
+    ``session`` column only when the readings come from several sessions; the
+    ``sigma`` column only when some reading has a σ. ``std`` (K, 3), m: a prediction's
+    standard deviation of each coordinate, written as the :data:`PREDICTED_STD` columns in
+    mm (ignored on reading).
     """
     cfg = measurements.configurations
     with_temp = bool(np.isfinite(cfg.temperature).any())
@@ -491,8 +312,9 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     with_approach = _approach_needed(cfg, order, robot)
     sessions = measurements.sessions
     with_session = len(set(sessions)) > 1
+    with_sigma = not np.isnan(measurements.sigma).all()  # none given: none written
     header = ["pose", *joint_columns(robot), *WRENCH, "marker", *XYZ,
-              *(["temperature"] if with_temp else []), "sigma",
+              *(["temperature"] if with_temp else []), *(["sigma"] if with_sigma else []),
               *(approach_columns(robot) if with_approach else []),
               *(["session"] if with_session else []), *(PREDICTED_STD if std is not None else [])]
     std_mm = None if std is None else np.asarray(std, float) * 1000.0
@@ -502,7 +324,7 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
         temp = [repr(float(cfg.env[c, 0])) if np.isfinite(cfg.env[c, 0]) else ""]
         rows.append([*_configuration_fields(cfg, c, robot), tool.names[j],
                      *map(repr, map(float, xyz * 1000.0)), *(temp if with_temp else []),
-                     repr(float(s * 1000.0)),
+                     *([repr(float(s * 1000.0)) if np.isfinite(s) else ""] if with_sigma else []),
                      *(_approach_fields(cfg, c) if with_approach else []),
                      *([sessions[c]] if with_session else []),
                      *(map(repr, map(float, std_mm[len(rows)])) if std is not None else [])])
@@ -530,25 +352,3 @@ def write_design(path, configurations, robot) -> None:
                     + (_approach_fields(cfg, c) if with_approach else []))
     _write(path, "doe_calib design: q in deg (mm for prismatic joints), forces in N, moments "
                  "in N·m", header, rows)
-
-
-def row_number(table, line, fields, name, default=None) -> float:
-    """The number in column ``name`` of one row (file units), or ``default`` when absent.
-
-    For other readers of our CSV files (formats.md): a bad value raises a
-    :class:`~doe_calib.errors.DataError` naming file, line and column.
-    """
-    return _number(table, line, fields, name, default)
-
-
-def row_joints(table, line, fields, robot, notes: list) -> np.ndarray:
-    """q of one row in SI, checked against the limits as a measurement file's are.
-
-    A value a hair past a limit (:data:`LIMIT_TOLERANCE`) is kept and described in ``notes``.
-    """
-    return _joints(table, line, fields, robot, LIMIT_TOLERANCE, notes)
-
-
-def parse_rows(table, robot, row_parser) -> list:
-    """``[(line, row_parser(line, fields)), …]`` for every row; a row of the wrong width raises."""
-    return _parse_rows(table, robot, row_parser, False)[0]

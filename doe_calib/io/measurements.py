@@ -166,7 +166,8 @@ class Measurements:
     xyz : ndarray, shape (K, 3)
         Measured marker position in the measurement-device frame, metres.
     sigma : ndarray, shape (K,)
-        Standard deviation of each coordinate of the reading, metres.
+        Standard deviation of each coordinate of the reading, metres; NaN where
+        none is given (:mod:`doe_calib.estimation.sigma` decides it).
     line : ndarray of int, shape (K,)
         Source line of each reading (0 when not from a file).
     source : str
@@ -182,10 +183,9 @@ class Measurements:
         session). Cross-validation holds out whole sessions when there are several.
     sigma_estimated : bool
         True while σ is still to be estimated: none was given (no ``sigma``
-        column, no ``--sigma``), ``sigma`` holds a provisional 1 mm, and
-        identification estimates σ from the residuals (formats.md §3);
-        :func:`~doe_calib.estimation.sigma.resolve_sigma` settles it. True
-        implies ``sigma_source`` ``"estimated"``.
+        column, no ``--sigma``); identification estimates σ from the residuals
+        (formats.md §3), :func:`~doe_calib.estimation.sigma.resolve_sigma`
+        settles it. True implies ``sigma_source`` ``"estimated"``.
     sigma_source : str
         Where ``sigma`` comes from (:data:`SIGMA_SOURCES`): ``"given"`` (an
         option or keyword; the default for readings built in code),

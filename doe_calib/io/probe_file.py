@@ -24,10 +24,22 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from doe_calib.errors import DataError
-from doe_calib.io.columns import Q_TOL, WRENCH, XYZ, joint_columns
-from doe_calib.io.csv_files import parse_rows, row_joints, row_number
-from doe_calib.io.measurements import Configurations, approach_from_order
+from doe_calib.io.configuration_columns import (
+    LIMIT_TOLERANCE,
+    WRENCH,
+    XYZ,
+    check_width,
+    codes,
+    combined,
+    derived_approach,
+    joint_columns,
+    joints,
+    numbers,
+    texts,
+)
+from doe_calib.io.measurements import Configurations
 from doe_calib.io.reading_units import metres_finding
+from doe_calib.io.row_problems import RowProblems, earlier_in_group
 from doe_calib.io.table import read_table
 
 #: Angle convention → scipy's sequence (lower case: fixed axes; upper case: intrinsic).
@@ -132,57 +144,41 @@ def read_probe(path, robot, convention: str) -> ProbeReadings:
         raise DataError(f"unknown angle convention {convention!r}; choose one of "
                         f"{', '.join(ANGLE_CONVENTIONS)}", path)
     table = read_table(path)
-    header = table.rows[0][0] - 1
     required = ["pose", *joint_columns(robot), *XYZ, *ANGLES]
     missing = [c for c in required if c not in table.columns]
     if missing:
         hint = " (a probe file has one row per pose: x, y, z in mm and angles a, b, c in deg)"
-        raise DataError(f"missing column(s) {', '.join(missing)}{hint}", table.path, header, 1)
+        raise DataError(f"missing column(s) {', '.join(missing)}{hint}", table.path,
+                        table.header_line, 1)
     known = set(required) | {*WRENCH, "temperature", "session"}
     for c in table.columns:
         if c not in known:
             raise DataError(f"unknown column {c!r}; accepted columns: {', '.join(required)}, "
-                            f"{', '.join(WRENCH)}, temperature, session", table.path, header,
-                            table.col(c))
-    notes, seen = [], {}
-    default_session = Path(str(path)).stem
-
-    def row(line, fields):
-        pose = fields[table.columns.index("pose")]
-        if not pose:
-            raise DataError("empty pose id", table.path, line, table.col("pose"))
-        session = fields[table.columns.index("session")] if "session" in table.columns \
-            else default_session
-        wrench = tuple(row_number(table, line, fields, c, 0.0) for c in WRENCH)
-        key = (session, pose, wrench)
-        if key in seen:
-            raise DataError(f"pose {pose!r} is read twice under the same load (first on line "
-                            f"{seen[key]}): a probe file has one row per pose and load",
-                            table.path, line, table.col("pose"))
-        seen[key] = line
-        return (pose, row_joints(table, line, fields, robot, notes), wrench,
-                row_number(table, line, fields, "temperature", np.nan), session,
-                [row_number(table, line, fields, c) / 1000.0 for c in XYZ],
-                [row_number(table, line, fields, c) for c in ANGLES])
-
-    parsed = parse_rows(table, robot, row)
-    rows = [p for _, p in parsed]
-    q = np.array([r[1] for r in rows])
-    session = tuple(r[4] for r in rows)
-    approach = np.zeros_like(q)
-    for name in dict.fromkeys(session):
-        mine = np.array([s == name for s in session])
-        approach[mine] = approach_from_order(q[mine] * robot.display_factors, Q_TOL)
-    cfg = Configurations.from_arrays(q, [r[2] for r in rows], [[r[3]] for r in rows],
-                                     [r[0] for r in rows], approach)
-    position = np.array([r[5] for r in rows])
+                            f"{', '.join(WRENCH)}, temperature, session", table.path,
+                            table.header_line, table.col(c))
+    problems, notes = RowProblems(table), []
+    check_width(table, problems, 0)
+    pose = texts(table, problems, 1, "pose", "pose id")
+    session = texts(table, problems, 1, "session", default=Path(str(path)).stem)
+    wrench = numbers(table, problems, 2, WRENCH, 0.0)
+    q = joints(table, problems, 4, robot, LIMIT_TOLERANCE, notes)
+    temp = numbers(table, problems, 5, ["temperature"], np.nan)
+    position = numbers(table, problems, 6, XYZ) / 1000.0
+    angles = numbers(table, problems, 7, ANGLES)
+    key = combined([codes(session), codes(pose), *(codes(w + 0.0) for w in wrench.T)])
+    first = earlier_in_group(key, ~problems.failing())
+    problems.check(3, ~problems.failing(below=3) & (first >= 0), lambda i: (
+        f"pose {pose[i]!r} is read twice under the same load (first on line "
+        f"{table.numbers[first[i]]}): a probe file has one row per pose and load"), "pose")
+    problems.raise_first()
+    session = tuple(session)
+    cfg = Configurations.from_arrays(q, wrench, temp, pose, derived_approach(q, robot, session))
     # the probe frame sits near the flange: its origin's spread is the flange's, give or take
     # the mount's lever; in metres it is a thousandth of it
     finding = metres_finding(position, robot, q, np.arange(len(q)), np.zeros_like(position),
                              np.array(session))
     if finding is not None:
         raise DataError(finding, table.path)
-    return ProbeReadings(cfg, position,
-                         angles_to_matrix([r[6] for r in rows], convention),
-                         np.array([line for line, _ in parsed]), table.path, session,
-                         convention, tuple(notes))
+    return ProbeReadings(cfg, position, angles_to_matrix(angles, convention),
+                         np.array(table.numbers), table.path, session, convention,
+                         tuple(text for _, text in notes))

@@ -42,7 +42,7 @@ def fold(model, robot, tool, files, held: int, ks, draws: int, rng) -> dict:
     n = len(files)
     pool_i = (held + 1) % n
     train_i = [i for i in range(n) if i not in (held, pool_i)]
-    read = {i: read_measurements(files[i], robot, tool, sigma_mm=SIGMA_MM) for i in range(n)}
+    read = {i: read_measurements(files[i], robot, tool, sigma=SIGMA_MM / 1000) for i in range(n)}
     train = concatenate([read[i] for i in train_i])
     pool = read_candidates(files[pool_i], robot, tool)
     out = {"held_out": files[held].stem, "pool": files[pool_i].stem,

@@ -1,6 +1,6 @@
-"""The measurement reader's fast path (one numpy.loadtxt pass over a clean table's text,
-configurations keyed by integer codes) gives the row-by-row reader's arrays to the byte, and
-the file's values as Python's csv module and float() read them."""
+"""The measurement reader converts whole columns (one numpy.loadtxt pass over a clean table's
+text, configurations keyed by integer codes) to the file's values as Python's csv module and
+float() read them, and names the first bad value of a large file with its line and column."""
 import csv
 import sys
 
@@ -9,7 +9,6 @@ import pytest
 
 from doe_calib import Robot, Tool, examples
 from doe_calib.errors import DataError
-from doe_calib.io.column_reader import read_columns
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.io.table import read_table
 
@@ -50,17 +49,6 @@ def _write(path, rows, header=HEADER, comments=True, newline="\n"):
     return path
 
 
-def _same_bytes(a, b):
-    for f in ("config", "marker", "xyz", "sigma", "line"):
-        x, y = getattr(a, f), getattr(b, f)
-        assert x.dtype == y.dtype and x.shape == y.shape and x.tobytes() == y.tobytes(), f
-    for f in ("q", "wrench", "env"):
-        x, y = getattr(a.configurations, f), getattr(b.configurations, f)
-        assert x.shape == y.shape and x.tobytes() == y.tobytes(), f
-    assert a.configurations.pose == b.configurations.pose
-    assert a.session == b.session and a.warnings == b.warnings and a.source == b.source
-
-
 def _independent(path, robot):
     """The file read with the csv module and float(): readings' xyz, σ (m) and line numbers."""
     with open(path, newline="") as fh:
@@ -79,12 +67,8 @@ def _independent(path, robot):
 def test_a_clean_file_is_read_from_its_text_the_same_as_row_by_row(rt, tmp_path, newline):
     rng = np.random.default_rng(5)
     path = _write(tmp_path / "clean.csv", _rows(rng), newline=newline)
-    table = read_table(path)
-    assert table.clean and table.split is None  # nothing split yet
-    cols = read_columns(table, *rt, None, True, True, "clean")
-    assert cols is not None and table.split is None  # the fast path ran, from the text alone
+    assert read_table(path).clean
     fast = read_measurements(path, *rt)
-    _same_bytes(fast, read_measurements(path, *rt, skip_bad=True))  # the row-by-row reader
     xyz, sigma, line, q = _independent(path, rt[0])
     assert xyz.tobytes() == fast.xyz.tobytes() and sigma.tobytes() == fast.sigma.tobytes()
     assert np.array_equal(line, fast.line)
@@ -93,23 +77,6 @@ def test_a_clean_file_is_read_from_its_text_the_same_as_row_by_row(rt, tmp_path,
     assert len(fast.configurations) == 80 and fast.configurations.pose[:3] == ("P-000",) * 2 + \
         ("P-001",)
     assert list(dict.fromkeys(fast.session)) == ["mon", "tue"]
-
-
-@pytest.mark.parametrize("spoil, clean", [
-    (lambda r: r.__setitem__(15, " " + r[15]), False),       # a space before a number
-    (lambda r: r.__setitem__(15, r[15] + "\u00a0"), False),  # a no-break space after one
-    (lambda r: r.__setitem__(0, '"' + r[0] + '"'), False),   # a quoted pose id
-    (lambda r: r.__setitem__(13, ""), True),                 # an empty temperature
-    (lambda r: r.__setitem__(7, ""), True),                  # an empty force (0)
-    (lambda r: r.__setitem__(16, "1_000.5"), True),          # float() reads it, loadtxt not
-    (lambda r: r.__setitem__(16, "\u0661\u0662"), True),     # Arabic-Indic digits: 12
-])
-def test_an_unusual_cell_is_read_the_same_both_ways(rt, tmp_path, spoil, clean):
-    rows = _rows(np.random.default_rng(6), 8)
-    spoil(rows[5])
-    path = _write(tmp_path / "odd.csv", rows)
-    assert read_table(path).clean is clean
-    _same_bytes(read_measurements(path, *rt), read_measurements(path, *rt, skip_bad=True))
 
 
 def test_a_tab_separated_file_with_decimal_commas(rt, tmp_path):
@@ -121,7 +88,6 @@ def test_a_tab_separated_file_with_decimal_commas(rt, tmp_path):
     table = read_table(path)
     assert table.decimal_comma and not table.clean
     fast = read_measurements(path, *rt)
-    _same_bytes(fast, read_measurements(path, *rt, skip_bad=True))
     assert fast.xyz[0, 0] == float(rows[0][15]) / 1000.0
 
 
@@ -151,3 +117,45 @@ def test_a_bad_cell_in_a_clean_file_is_named_with_its_line_and_column(rt, tmp_pa
         read_measurements(path, *rt)
     msg = str(err.value)
     assert "bad.csv" in msg and "line 26" in msg and "'y' (17)" in msg, msg
+
+
+@pytest.mark.parametrize("column, text, words", [
+    (16, "12x", "'12x' is not a number"),         # y, deep in a clean file
+    (13, "200", "200 °C is not a plausible temperature"),
+    (18, "-0.02", "σ must be positive"),
+])
+def test_the_first_bad_value_deep_in_a_large_file_is_named(rt, tmp_path, column, text, words):
+    """20 000 readings; the bad value on reading 15 001 and a later one: the first is named."""
+    base = _rows(np.random.default_rng(9), 2500)[:6667]
+    rows = [r[:] for _ in range(3) for r in base]  # 20 001 rows; sessions tell poses apart
+    for k, r in enumerate(rows):
+        r[19] = f"s{k // 6667}"
+    rows[15000][column], rows[17000][16] = text, "bad"
+    path = _write(tmp_path / "large.csv", rows, comments=False)
+    with pytest.raises(DataError) as err:
+        read_measurements(path, *rt)
+    name = HEADER.split(",")[column]
+    assert str(err.value) == (f"{path}, line 15003, column '{name}' ({column + 1}): "
+                              + str(err.value).split(": ", 1)[1])
+    assert words in str(err.value)
+
+
+def test_each_bad_row_is_told_by_its_first_problem(rt, tmp_path):
+    """Checked a column at a time, told as read along each row: in a row with several
+    problems the first in the row's order; a repeat against the first good reading."""
+    good = "p1,10,-90,90,0,30,0,A,1000.5,20.25,1500"
+    path = _write(tmp_path / "bad.csv", [r.split(",") for r in [
+        good,
+        good.replace(",A,", ",B,").replace(",30,", ",31,").replace("20.25", "abc"),  # q5, y
+        good.replace("1500", "1501"),                                              # A again
+        good.replace(",A,", ",Z,").replace("1000.5", "x"),                         # marker, x
+        good.replace(",A,", ",C,")]], "pose,q1,q2,q3,q4,q5,q6,marker,x,y,z", comments=False)
+    meas = read_measurements(path, *rt, sigma=2e-5, skip_bad=True)  # a comment on line 1
+    assert list(meas.line) == [3, 7]
+    q5, again, unknown = meas.dropped
+    assert "line 4, column 'q5' (6): pose 'p1' has q5 = 31 here but 30 on line 3" in q5
+    assert ("line 5, column 'marker' (8): marker 'A' is read twice in pose 'p1' under the same "
+            "load (first on line 3)") in again
+    assert "line 6, column 'marker' (8): marker 'Z' is not in the tool" in unknown
+    with pytest.raises(DataError, match=r"line 4, column 'q5' \(6\)"):
+        read_measurements(path, *rt, sigma=2e-5)
