@@ -4,12 +4,14 @@ setting, the value and the range allowed."""
 import numpy as np
 import pytest
 
-from doe_calib import Configurations, Robot, Tool, build_model, examples, identify, simulate
+from doe_calib import (Configurations, FitSettings, Robot, Tool, build_model, examples, identify,
+                       simulate)
 from doe_calib.cli import main
 from doe_calib.design.augment import augment_design
 from doe_calib.design.optimal import optimal_design
 from doe_calib.diagnosis import diagnose
 from doe_calib.diagnosis.refine import refine
+from doe_calib.diagnosis.settings import DiagnosisSettings, RefineSettings
 from doe_calib.errors import OptionError
 from doe_calib.io import setting_ranges as ranges
 from doe_calib.model.simulate import random_configurations
@@ -118,7 +120,8 @@ def _call(function, model, readings, keyword, value):
                                   keyword: value})
     if function is simulate:
         return function(model, model.nominal(), readings.configurations, **{keyword: value})
-    return function(model, readings, **{keyword: value})
+    settings = {diagnose: DiagnosisSettings, refine: RefineSettings, identify: FitSettings}
+    return function(model, readings, settings=settings[function](**{keyword: value}))
 
 
 @pytest.mark.parametrize("function, keyword, bad, allowed", API_CASES,
@@ -136,7 +139,7 @@ def test_public_functions_refuse_a_value_out_of_range(model3, readings, function
 def test_estimators_refuse_their_settings_out_of_range(model3, readings, estimator, keyword,
                                                        bad, allowed):
     with pytest.raises(OptionError, match=f"^{keyword}={bad!r}: must be .*{allowed}"):
-        identify(model3, readings, estimator=estimator, **{keyword: bad})
+        identify(model3, readings, estimator=estimator, settings=FitSettings(**{keyword: bad}))
 
 
 def test_augment_refuses_a_power_not_above_its_level(model3, readings):

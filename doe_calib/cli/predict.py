@@ -39,7 +39,7 @@ def predicted_markers(model, result, meas):
     """
     from doe_calib.estimation.predict import predict
 
-    pred = predict(result, meas, model, a_posteriori=False)
+    pred = predict(result, meas, model, apriori=True)
     return pred.xyz, pred.std
 
 
@@ -55,7 +55,7 @@ def run(args):
     result = IdentificationResult.from_json(args.result)
     model = build_model(result.robot, result.tool, result.model, registry=registry)
     meas = read_data(args.data, result.robot, result.tool, sigma_mm=1.0, require_xyz=False)
-    pred = predict(result, meas, model, a_posteriori=False, register=args.register)
+    pred = predict(result, meas, model, apriori=True, register=args.register)
     sigma = np.full(len(meas), result.sigma_mm / 1000.0)
     write_measurements(args.out, replace(meas, xyz=pred.xyz, sigma=sigma), result.robot,
                        result.tool, std=pred.std)

@@ -21,7 +21,7 @@ from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
 from doe_calib.diagnosis.outliers import gross_outliers, outlier_verdict
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
-from doe_calib.diagnosis.settings import check_settings
+from doe_calib.diagnosis.settings import DiagnosisSettings
 from doe_calib.diagnosis.sign_lead import sign_lead
 from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.design.detectability import SEPARATE
@@ -31,7 +31,6 @@ from doe_calib.estimation.load_units import kgf_finding
 from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.io.measurements import ESTIMATED, REPEATED
 from doe_calib.io.repeated_readings import copies_words
-from doe_calib.io.setting_ranges import whole
 from doe_calib.model.effects import parse_effect
 
 #: A residual "follows" a variable when its adjusted R² reaches this.
@@ -59,8 +58,8 @@ def screening_set(measurements, limit: int = SCREENING_CONFIGURATIONS, seed: int
 def candidate_batch_for(model, measurements, registry=None):
     """Every candidate effect of ``model`` (those :func:`diagnose` tests on ``measurements``)
     in one :class:`~doe_calib.diagnosis.candidate_batch.CandidateBatch`, or None when they
-    cannot be built together: what :func:`diagnose` takes as ``batch`` for ``model`` and the
-    models grown from it."""
+    cannot be built together: what :func:`diagnosis_step` takes as ``batch`` for ``model``
+    and the models grown from it."""
     screen, _ = screening_set(measurements)
     try:
         return candidate_batch(model, candidate_effects(model, screen.configurations, registry))
@@ -277,12 +276,8 @@ def _outlier_result(model, measurements, res, test, cv, split, outliers, level, 
                            notes=tuple(n for n in notes if n), outliers=outliers)
 
 
-def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
-             grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
-             tolerance: float = 0.05, progress=None, registry=None,
-             sigma_mm: float | None = None, practical_um: float = 2.0,
-             candidate_fits: dict | None = None, batch=None,
-             workers: int | None = None) -> DiagnosisResult:
+def diagnose(model, measurements, fit=None, *, settings: DiagnosisSettings | None = None,
+             sigma_mm: float | None = None, registry=None, progress=None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
 
     Parameters
@@ -294,59 +289,45 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         (:func:`~doe_calib.estimation.sigma.resolve_sigma`).
     fit : IdentificationResult, optional
         The model's fit to these data; identified here when not given.
-    level : float
-        Significance level (Bonferroni-adjusted over every candidate and shape).
-    folds : int
-        Folds of the cross-validation (``pose`` and ``region`` groupings).
-    grouping : {"auto", "pose", "session", "region"}
-        What a fold holds out (:mod:`~doe_calib.diagnosis.cross_validation`).
-    cv_top : int
-        Cross-validate every significant shape of this many (effect, joint)
-        groups with the strongest evidence.
-    min_gain : float
-        Material gain: an effect is proposed only if it lowers the
-        cross-validated RMS by at least this fraction.
-    tolerance : float
-        σ̂ within this fraction of σ, with no material candidate, is adequate
-        even when the χ² test (too sharp at large N) rejects.
-    progress : callable, optional
-        ``progress(done, total, note)`` while candidates are cross-validated.
+    settings : DiagnosisSettings, optional
+        Significance level, cross-validation, material gain, adequacy tolerances,
+        threads (:class:`~doe_calib.diagnosis.settings.DiagnosisSettings`; default its
+        defaults).
+    sigma_mm : float, optional
+        σ per coordinate, mm, for every reading (replacing the readings' own).
     registry : EffectRegistry, optional
         Its :meth:`~doe_calib.model.effects.registry.EffectRegistry.catalogue` is what
         is tested as missing (default the built-in catalogue; user effects:
         ``DEFAULT_REGISTRY.with_file(path)``).
-    sigma_mm : float, optional
-        σ per coordinate, mm, for every reading (replacing the readings' own).
-    practical_um : float
-        Practical size, µm per coordinate: a misfit beyond the noise
-        √(σ̂² − σ²) below it, with no material candidate, is adequate even when
-        the χ² test and ``tolerance`` reject (the size is stated in the verdict).
-    candidate_fits : dict, optional
-        Filled, when the candidates were fitted on every reading (no screening subset),
-        with spec → (``model`` + the effect, its fit to ``measurements`` from this fit's
-        values, the effect's parameters at nominal): what
-        :func:`~doe_calib.diagnosis.refine.refine` takes on, not fitting again.
-    batch : CandidateBatch, optional
-        The candidates of a model ``model`` grew from, built once (refine's, from
-        :func:`candidate_batch_for`): the candidates' columns and grown models come from it
-        when it holds them all, instead of from a batch built here.
-    workers : int, optional
-        Threads fitting the chosen candidates at once (default: the machine's cores, at
-        most 4; 1: one after another). The result does not depend on it
-        (:mod:`~doe_calib.diagnosis.candidate_scoring`).
+    progress : callable, optional
+        ``progress(done, total, note)`` as each chosen candidate is cross-validated:
+        candidates done, their number, the effect's spec.
 
     Returns
     -------
     DiagnosisResult
-
-    Raises
-    ------
-    OptionError
-        A setting out of its range (:func:`~doe_calib.diagnosis.settings.check_settings`;
-        ``cv_top`` a whole number ≥ 1).
     """
-    check_settings(level, folds, min_gain, tolerance, practical_um, workers)
-    whole("cv_top", cv_top, 1)
+    return diagnosis_step(model, measurements, fit, settings, sigma_mm=sigma_mm,
+                          registry=registry, progress=progress)[0]
+
+
+def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | None = None, *,
+                   sigma_mm: float | None = None, registry=None, progress=None, batch=None):
+    """:func:`diagnose` as each step of :func:`~doe_calib.diagnosis.refine.refine` runs it.
+
+    ``batch``: the candidates of a model ``model`` grew from, built once
+    (:func:`candidate_batch_for`); the candidates' columns and grown models come from it
+    when it holds them all, instead of from a batch built here.
+
+    Returns
+    -------
+    (DiagnosisResult, dict)
+        The diagnosis, and, when the candidates were fitted on every reading (no
+        screening subset), spec → (``model`` + the effect, its fit to ``measurements``
+        from this fit's values): what refine takes on, not fitting again.
+    """
+    s = DiagnosisSettings() if settings is None else settings
+    level, min_gain, tolerance, practical_um = s.level, s.min_gain, s.tolerance, s.practical_um
     settled = resolve_sigma(model, measurements, sigma_mm, fit=fit)
     if settled.measurements is not measurements:  # σ settled here: fit at that σ
         measurements, fit = settled.measurements, None
@@ -361,30 +342,28 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         settled.repeated.disagreement(sigma_mm)
     copies = copies_words(measurements, model.tool.names)
     outliers = gross_outliers(model, measurements, fit, level, tolerance, practical_um)
-    units = kgf_finding(params, fit.std(a_posteriori=True), model.robot,
+    units = kgf_finding(params, fit.std(), model.robot,
                         measurements.configurations)
     screen, screened = screening_set(measurements)
-    split = make_folds(screen, folds, grouping)
+    split = make_folds(screen, s.folds, s.grouping)
     cv = cross_validated_rms(model, screen, params, split)
     if outliers:  # no effect is tested on data an outlier pulls
         return _outlier_result(model, measurements, res, test, cv, split, outliers, level,
                                tolerance, practical_um, min_gain,
-                               (units, screened, doubt, copies), settled.repeated)
+                               (units, screened, doubt, copies), settled.repeated), {}
     tried = candidate_tests(model, screen, params, registry=registry, batch=batch)
     tests = list(tried.tests)
-    chosen = _groups_to_try(tests, level, cv_top)
-    scored = {}
+    chosen = _groups_to_try(tests, level, s.cv_top)
+    scored, fitted = {}, {}
     effects = [parse_effect(t.spec, registry=registry) for t in chosen]
     builders = grown_model_builders(model, effects, screen, params.values, batch)
-    scores = score_candidates(builders, effects, params, screen, split, workers,
-                              progress=None if progress is None else
-                              (lambda i, n: progress(i, n, chosen[i].spec)))
+    scores = score_candidates(builders, effects, params, screen, split, s.workers, progress)
     for t, score in zip(chosen, scores):
         if score is None:  # the grown model's fit failed
             scored[t.spec] = t.with_cv(float("nan"))
             continue
-        if candidate_fits is not None and screen is measurements:
-            candidate_fits[t.spec] = (score.model, score.fit)
+        if screen is measurements:
+            fitted[t.spec] = (score.model, score.fit)
         scored[t.spec] = t.with_cv(score.cv_rms_mm, score.rows, score.odd)
     ranked = sorted(scored.values(), key=lambda t: (_cv_key(t), t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]
@@ -424,4 +403,4 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
                            notes=tuple(n for n in (units, screened, tried.note(), doubt, copies)
-                                       if n))
+                                       if n)), fitted

@@ -78,10 +78,10 @@ def _variable_line(est, sigma_given: bool) -> str:
     rel = est.relative_std
     pct = ("(value 0)" if not np.isfinite(rel) else
            f"({100 * rel:.2g} %)" if rel < 1 else f"({100 * rel:.0f} %)")
-    line = (f"    {est.name:<20} = {est.value * k:>13.6g} ± {est.std_a_posteriori * k:<10.4g}"
+    line = (f"    {est.name:<20} = {est.value * k:>13.6g} ± {est.std * k:<10.4g}"
             f"{pct:<12} {u:<11} (nominal {est.nominal * k:.6g})")
     if sigma_given:
-        line += f"  a priori ± {est.std * k:.4g}"
+        line += f"  a priori ± {est.std_apriori * k:.4g}"
     if est.role == "reduced set":
         line += "  [reduced set]"
     return line

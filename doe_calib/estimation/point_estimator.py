@@ -41,8 +41,9 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
         Jacobian evaluations allowed.
     register : bool
         Start the base pose from a point-set registration.
-    progress : callable(stage, note), optional
-        Told of each iteration (weighted RMS of the residuals).
+    progress : callable, optional
+        ``progress(done, total, note)`` after each iteration: iterations done, the
+        limit, the weighted RMS of the residuals.
 
     Raises
     ------

@@ -27,8 +27,9 @@ def point_fit(model, measurements, params, max_iterations: int = 200, progress=N
         Start values (SI) and which parameters are free.
     max_iterations : int
         Jacobian evaluations allowed.
-    progress : callable(stage, note), optional
-        Told of each iteration (weighted RMS of the residuals).
+    progress : callable, optional
+        ``progress(done, total, note)`` after each iteration: iterations done, the
+        limit, the weighted RMS of the residuals.
     start : Reduction, optional
         Of ``[J | r]`` for all parameters, unscaled, at ``params.values`` (the rank
         analysis' own, :func:`~doe_calib.estimation.preparation.prepare`): the first
@@ -58,7 +59,7 @@ def point_fit(model, measurements, params, max_iterations: int = 200, progress=N
         params.free_values(), scale, max_iterations=max_iterations,
         first=None if start is None else restrict(start, np.flatnonzero(free), scale),
         progress=None if progress is None else lambda k, f: progress(
-            "Levenberg–Marquardt", f"iteration {k}, weighted RMS {np.sqrt(f / n_obs):.4g}"))
+            k, max_iterations, f"Levenberg–Marquardt: weighted RMS {np.sqrt(f / n_obs):.4g}"))
     if not np.all(np.isfinite(sol.x)):
         raise SolverError("the identification diverged (non-finite parameters); check the "
                           "tool file and the units of the measurement file")

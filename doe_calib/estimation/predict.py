@@ -22,7 +22,8 @@ class Prediction:
     xyz : ndarray, shape (K, 3)
         Predicted position of each reading's marker, m.
     std : ndarray, shape (K, 3)
-        Its std per coordinate from the parameter covariance, σ̂-scaled, m.
+        Its std per coordinate from the parameter covariance, σ̂-scaled (unless
+        predicted ``apriori``), m.
     config, marker : ndarray of int, shape (K,)
         Configuration and marker index of each reading.
     marker_names : tuple of str
@@ -139,7 +140,7 @@ def aligned_parameters(model, result):
                          f"({exc.args[0]}); was its effect file changed?") from None
 
 
-def predict(result, data, model=None, *, registry=None, a_posteriori: bool = True,
+def predict(result, data, model=None, *, registry=None, apriori: bool = False,
             register: str | None = None, tolerance: dict | None = None) -> Prediction:
     """Marker positions ``result`` predicts for readings or configurations.
 
@@ -154,9 +155,9 @@ def predict(result, data, model=None, *, registry=None, a_posteriori: bool = Tru
         not given (:func:`result_model`).
     registry : EffectRegistry, optional
         Names the model's effects when it is built here (a user effect's file).
-    a_posteriori : bool
-        Scale the covariance by (σ̂/σ)² (default); False: for the a-priori σ
-        (what ``doe-calib predict`` writes, as it always has).
+    apriori : bool
+        The covariance for the a-priori σ (what ``doe-calib predict`` writes);
+        default: scaled by (σ̂/σ)².
     register : {None, "frame", "frame+tool"}
         Re-fit the tracker frame (the 6 base parameters), or also the tool
         mounting (the marker positions), on the readings before predicting,
@@ -208,7 +209,7 @@ def predict(result, data, model=None, *, registry=None, a_posteriori: bool = Tru
         params = params.with_values(done.parameters.values)
     x, b = observation_matrix(model, params.values, cfg)
     bf = b[config, marker][..., params.free]
-    cov = result.cov_params(a_posteriori=a_posteriori)
+    cov = np.asarray(result.cov_params(apriori=apriori))
     var = np.einsum("kif,fg,kig->ki", bf, cov, bf)
     part = unseen_part(model, params, measured_markers(result), tolerance)
     notes = ()
