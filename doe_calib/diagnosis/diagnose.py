@@ -184,13 +184,6 @@ def _rivals_words(tests, proposed, level) -> str:
             f"before either is trusted away from these poses.")
 
 
-def _verdict(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross, level,
-             min_gain, tolerance, practical_um, registry=None):
-    return _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, flagged,
-                          gross, level, min_gain, tolerance, practical_um, registry) \
-        + _confounded_words(tests, proposed, level)
-
-
 def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross,
                    level, min_gain, tolerance, practical_um, registry=None):
     ratio = _adequacy_words(test)
@@ -379,8 +372,9 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
     n_poses = len(set(measurements.configurations.pose))
     gross = not adequate and proposed is None and _gross_errors(test, flagged, follow, n_poses)
-    verdict = _verdict(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
-                       gross, level, min_gain, tolerance, practical_um, registry)
+    verdict = _verdict_words(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
+                             gross, level, min_gain, tolerance, practical_um, registry) \
+        + _confounded_words(ranked, proposed, level)
     odd = next((t for t in _material(ranked, cv, level, min_gain) if t.implausible), None)
     lead = "" if odd is None else sign_lead(model, odd, proposed, cv, split,
                                             describe(odd, model.robot, registry), registry)

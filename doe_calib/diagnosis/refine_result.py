@@ -182,8 +182,3 @@ class RefineResult:
     @classmethod
     def from_json(cls, path) -> "RefineResult":
         return cls.from_dict(read_json(path, FORMAT, "refine history"))
-
-    @staticmethod
-    def steps_from_json(path) -> list[RefineStep]:
-        """The steps of a refine file (for plots and reports)."""
-        return [RefineStep.from_dict(s) for s in read_json(path, FORMAT, "refine history")["steps"]]

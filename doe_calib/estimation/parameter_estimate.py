@@ -64,11 +64,6 @@ class ParameterEstimate:
         return self.value * self.display_factor
 
     @property
-    def std_display(self) -> float:
-        """σ̂-scaled std in the display unit."""
-        return self.std * self.display_factor
-
-    @property
     def relative_std(self) -> float:
         """σ̂-scaled std over |value| (NaN when the value is 0)."""
         return self.std / abs(self.value) if self.value else float("nan")

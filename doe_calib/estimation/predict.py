@@ -78,10 +78,6 @@ class Prediction:
                 "rms_3d_mm": float(np.sqrt(np.mean(d ** 2))), "mean_3d_mm": float(d.mean()),
                 "max_3d_mm": float(d.max())}
 
-    def rms_3d(self, measurements) -> float:
-        """3-D RMS error against ``measurements``, m."""
-        return self.error(measurements)["rms_3d_mm"] / 1000.0
-
 
 def result_model(result, registry=None):
     """Build the model a result was identified with (CasADi), with its parameters in order.
