@@ -161,13 +161,14 @@ def test_cov_params_and_conf_int_are_labelled_by_name(fit):
         np.asarray(ci), index=fit.parameters.names, columns=["lower", "upper"]))
 
 
-def test_a_result_cannot_be_changed_through_its_arrays(fit):
+def test_a_result_cannot_be_changed_through_its_arrays(fit, campaign):
     """Writing ``r.parameters.values[i]`` once changed ``r[name].value``; it now raises,
     for a result identified and one read from its file."""
     for res in (fit, IdentificationResult.from_dict(json.loads(fit.to_json()))):
         before = res["dq_q2"].value
+        pred = res.predict(campaign)
         arrays = [res.parameters.values, res.parameters.free, res.covariance, res.std(),
-                  np.asarray(res.cov_params()), np.asarray(res.conf_int())]
+                  np.asarray(res.cov_params()), np.asarray(res.conf_int()), pred.xyz, pred.std]
         for a in arrays:
             with pytest.raises(ValueError, match="read-only"):
                 a[0] = 1.0

@@ -17,7 +17,8 @@ def add_arguments(c):
                    help="measurement-format CSV(s) of the poses (x,y,z used for the error if "
                         "present)")
     c.add_argument("--out", required=True, help="CSV to write with the model's x,y,z and "
-                                                "their predicted std_x,std_y,std_z (mm)")
+                                                "their predicted std_x,std_y,std_z (mm) for "
+                                                "the result's σ, written beside (a priori)")
     c.add_argument("--json", action="store_true", help="print the error figures as JSON "
                                                        "(null when the data have no x,y,z)")
     c.add_argument("--register", choices=("frame", "frame+tool"), default=None,

@@ -7,6 +7,7 @@ import numpy as np
 
 from doe_calib.errors import DataError, ModelError
 from doe_calib.io.measurements import Configurations, Measurements
+from doe_calib.estimation.labelled import read_only
 from doe_calib.estimation.measured_region import outside_joints
 from doe_calib.estimation.session import reregister, session_notes
 from doe_calib.estimation.unseen import measured_markers, unseen_notes, unseen_part
@@ -15,7 +16,7 @@ from doe_calib.model.evaluation import observation_matrix
 
 @dataclass(frozen=True, eq=False)
 class Prediction:
-    """Predicted marker positions of readings, tracker frame.
+    """Predicted marker positions of readings, tracker frame; its arrays are read-only.
 
     Attributes
     ----------
@@ -42,6 +43,10 @@ class Prediction:
     marker_names: tuple
     registration: object = None
     notes: tuple = field(default=())
+
+    def __post_init__(self):
+        for name in ("xyz", "std", "config", "marker"):
+            object.__setattr__(self, name, read_only(getattr(self, name), None))
 
     @property
     def xyz_mm(self) -> np.ndarray:
@@ -77,6 +82,10 @@ class Prediction:
         return {"rms_mm": float(np.sqrt(np.mean(e ** 2))),
                 "rms_3d_mm": float(np.sqrt(np.mean(d ** 2))), "mean_3d_mm": float(d.mean()),
                 "max_3d_mm": float(d.max())}
+
+    def rms_3d(self, measurements) -> float:
+        """3-D RMS error against ``measurements``, m."""
+        return self.error(measurements)["rms_3d_mm"] / 1000.0
 
 
 def result_model(result, registry=None):
