@@ -149,6 +149,7 @@ def test_cov_params_and_conf_int_are_labelled_by_name(fit):
     j, k = free.index("dq_q2"), free.index("base_x")
     assert cov["dq_q2", "base_x"] == np.asarray(cov)[j, k] == cov[j, k]
     assert cov["dq_j2", "base_x"] == cov["dq_q2", "base_x"]  # joints as model strings write them
+    assert cov.loc["dq_q2", "base_x"] == cov["dq_q2", "base_x"]
     i = fit.parameters.names.index("dq_q2")
     assert ci.rows == tuple(fit.parameters.names) and ci.columns == ("lower", "upper")
     assert list(ci["dq_q2"]) == [ci["dq_q2", "lower"], ci["dq_q2", "upper"]] == list(ci[i])

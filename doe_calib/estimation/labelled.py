@@ -3,8 +3,8 @@
 statsmodels answers these with a pandas DataFrame indexed by the parameter names;
 pandas is optional here, so this small object carries the names instead.
 ``np.asarray(m)`` gives the array; ``m["dq_a2", "dq_a3"]`` one element by names
-(a joint written as model strings write it, ``dq_j2``); ``m["dq_a2"]`` one row;
-``m.to_dataframe()`` the DataFrame.
+(a joint written as model strings write it, ``dq_j2``; also ``m.loc[…]``);
+``m["dq_a2"]`` one row; ``m.to_dataframe()`` the DataFrame.
 """
 from __future__ import annotations
 
@@ -55,6 +55,11 @@ class Labelled:
         if isinstance(key, tuple):
             return self.values[self._at(key[0], self.rows), self._at(key[1], self.columns)]
         return self.values[self._at(key, self.rows)]
+
+    @property
+    def loc(self) -> "Labelled":
+        """``m.loc[row, column]`` as pandas writes it: ``m[row, column]``."""
+        return self
 
     def to_dataframe(self):
         """A pandas DataFrame indexed by the names (needs pandas)."""
