@@ -13,6 +13,7 @@ from doe_calib.diagnosis import diagnose
 from doe_calib.diagnosis.refine import refine
 from doe_calib.diagnosis.settings import DiagnosisSettings, RefineSettings
 from doe_calib.errors import OptionError
+from doe_calib.estimation.covariance import predict_covariance
 from doe_calib.io import setting_ranges as ranges
 from doe_calib.model.simulate import random_configurations
 
@@ -111,6 +112,7 @@ API_CASES = [
     (optimal_design, "candidates", 0, "1 or more"),
     (optimal_design, "sigma", -2e-5, "positive m"),
     (simulate, "sigma", -1e-5, "0 m or more"),
+    (predict_covariance, "sigma", 0.0, "positive m"),
 ]
 
 
@@ -118,7 +120,7 @@ def _call(function, model, readings, keyword, value):
     if function is optimal_design:
         return function(model, **{"n_poses": 4, "candidates": 50, "refine": False,
                                   keyword: value})
-    if function is simulate:
+    if function in (simulate, predict_covariance):
         return function(model, model.nominal(), readings.configurations, **{keyword: value})
     settings = {diagnose: DiagnosisSettings, refine: RefineSettings, identify: FitSettings}
     return function(model, readings, settings=settings[function](**{keyword: value}))
