@@ -2,8 +2,8 @@
 
 - a candidate grown from the batch (diagnosis/candidate_batch.py) has the observation of
   ``model + e`` built alone: the same instruction count and the same numbers;
-- refine takes on the chosen candidate's model and fit from diagnose
-  (:func:`diagnosis_step`) instead of building and fitting it again: the same fit as doing so (independently
+- refine takes on the chosen candidate's model and fit from diagnose (``diagnosis_step``)
+  instead of building and fitting it again: the same fit as doing so (independently
   simulated readings, a hidden angle-dependent compliance);
 - the residual figure at fixed margins holds every reading of every variable, each panel
   and label inside the figure, none over its neighbour;

@@ -72,7 +72,8 @@ def refine(model, measurements, validation=None, *, settings: RefineSettings | N
     The starting model's candidates are built once, in one batch; every step takes its
     candidate columns and grown models from it
     (:meth:`~doe_calib.diagnosis.candidate_batch.CandidateBatch.within`), and the chosen
-    candidate's fit from the step's diagnosis (:func:`~doe_calib.diagnosis.diagnose.diagnosis_step`).
+    candidate's fit from the step's diagnosis
+    (:func:`~doe_calib.diagnosis.diagnose.diagnosis_step`).
     """
     s = RefineSettings() if settings is None else settings
     settled = resolve_sigma(model, measurements, sigma_mm, fit=fit)
