@@ -152,7 +152,8 @@ class IdentificationResult:
         apriori : bool
             For the a-priori σ instead (keyword only).
         """
-        out = read_only(parameter_std(self.cov_params(apriori=apriori), self.parameters.free))
+        scale = 1.0 if apriori else self.sigma_ratio
+        out = read_only(parameter_std(self.covariance, self.parameters.free) * scale)
         if name is None:
             return out
         return float(out[self.parameters.position(name)])
