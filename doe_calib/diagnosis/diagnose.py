@@ -130,26 +130,26 @@ def _adequacy_words(test):
             f"the noise √(σ̂² − σ²) = {test.misfit_um:.3g} µm")
 
 
-def _adequate_why(test, tolerance, practical_um) -> str:
+def _adequate_why(test, s) -> str:
     """Which rule found the model adequate, in words."""
     if test.adequate:
         return "consistent with the noise"
-    if test.ratio <= 1 + tolerance:
-        return f"within {tolerance:.0%} of the noise"
+    if test.ratio <= 1 + s.tolerance:
+        return f"within {s.tolerance:.0%} of the noise"
     return (f"{test.misfit_um:.3g} µm beyond the noise per coordinate, below the practical "
-            f"size of {practical_um:g} µm (--practical-um): the χ² test at this N detects a "
+            f"size of {s.practical_um:g} µm (--practical-um): the χ² test at this N detects a "
             f"misfit too small to matter — second-order effects of parameters held at "
             f"nominal, or σ a few % optimistic")
 
 
-def _is_adequate(test, proposed, tolerance, practical_um) -> bool:
+def _is_adequate(test, proposed, s) -> bool:
     """Adequate: χ² passes, or no material candidate and the misfit within the tolerance or
     the practical size. With no σ given (σ̂ of the starting model's fit, which holds its
     misfit) the χ² test cannot judge: adequate is then only that no candidate helps."""
     if test.sigma_source == ESTIMATED:
         return proposed is None
-    return test.adequate or (proposed is None and (test.ratio <= 1 + tolerance
-                                                   or test.practically_adequate(practical_um)))
+    return test.adequate or (proposed is None and (test.ratio <= 1 + s.tolerance
+                                                   or test.practically_adequate(s.practical_um)))
 
 
 def _confounded_words(tests, proposed, level) -> str:
@@ -185,7 +185,7 @@ def _rivals_words(tests, proposed, level) -> str:
 
 
 def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross,
-                   level, min_gain, tolerance, practical_um, registry=None):
+                   s, registry=None):
     ratio = _adequacy_words(test)
     cv_words = f"cross-validated RMS {cv:.3g} mm ({folds.description})"
     if proposed is not None:
@@ -207,16 +207,16 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
                      f"time while they help")
         return text + "."
     if adequate and test.sigma_source == ESTIMATED:
-        return (f"No candidate effect lowers the {cv_words} by {min_gain:.0%}: the model is "
+        return (f"No candidate effect lowers the {cv_words} by {s.min_gain:.0%}: the model is "
                 f"adequate as far as the candidates tell. σ was not given, so the residual is "
                 f"not tested against the noise: σ̂ of the starting model's fit, "
                 f"{test.sigma_mm:.3g} mm (σ̂/σ = {test.ratio:.3f} here), holds that model's "
                 f"misfit; give σ (--sigma, a sigma column) or read some poses twice for that "
                 f"test.")
     if adequate:
-        why = _adequate_why(test, tolerance, practical_um)
+        why = _adequate_why(test, s)
         return (f"The model is adequate: the residual is {why} ({ratio}); no candidate effect "
-                f"lowers the {cv_words} by {min_gain:.0%}.")
+                f"lowers the {cv_words} by {s.min_gain:.0%}.")
     where = ", ".join(p["pose"] + (f" (line {p['worst_line']})" if p["worst_line"] else "")
                       for p in flagged[:8])
     if gross:
@@ -225,9 +225,9 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
                 f"like gross errors (a reading off its target, a swapped marker, a pose typed "
                 f"wrong). Check them; to leave them out, rerun with --exclude-poses "
                 f"{','.join(p['pose'] for p in flagged)} (each exclusion is reported).")
-    sig = [t for t in tests if t.p_value < level]
+    sig = [t for t in tests if t.p_value < s.level]
     partly = "" if not sig else (f" ({len(sig)} candidates are significant, but none lowers the "
-                                 f"{cv_words} by {min_gain:.0%})")
+                                 f"{cv_words} by {s.min_gain:.0%})")
     strong = [f for f in follow if f.r2 >= FOLLOWS_R2]
     text = (f"The model is NOT adequate ({ratio}) and no catalogue effect improves "
             f"its predictions{partly}.")
@@ -244,27 +244,26 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
     return text
 
 
-def _chi2_record(test, tolerance, practical_um, repeated) -> dict:
+def _chi2_record(test, s, repeated) -> dict:
     """The χ² test for the diagnosis JSON, with the σ of repeated readings (or None)."""
     lo, hi = test.ratio_interval()
     return {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
             "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,
             "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
-            "tolerance": tolerance, "chi2_adequate": test.adequate,
-            "misfit_um": test.misfit_um, "practical_um": practical_um,
+            "tolerance": s.tolerance, "chi2_adequate": test.adequate,
+            "misfit_um": test.misfit_um, "practical_um": s.practical_um,
             "repeated": None if repeated is None else repeated.to_dict()}
 
 
-def _outlier_result(model, measurements, res, test, cv, split, outliers, level, tolerance,
-                    practical_um, min_gain, notes, repeated) -> DiagnosisResult:
+def _outlier_result(model, measurements, res, test, cv, split, outliers, s, notes,
+                    repeated) -> DiagnosisResult:
     """The diagnosis of data with gross outliers: they are named, no effect is proposed."""
     flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
     verdict = outlier_verdict(outliers, _adequacy_words(test))
     return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, False,
-                           _chi2_record(test, tolerance, practical_um, repeated), (), (),
-                           tuple(flagged),
-                           level, verdict, None, int(res.weighted.size),
-                           cv_grouping=split.description, min_gain=min_gain,
+                           _chi2_record(test, s, repeated), (), (), tuple(flagged),
+                           s.level, verdict, None, int(res.weighted.size),
+                           cv_grouping=split.description, min_gain=s.min_gain,
                            gross_errors=tuple(dict.fromkeys(o.pose for o in outliers)),
                            notes=tuple(n for n in notes if n), outliers=outliers)
 
@@ -320,7 +319,7 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
         from this fit's values): what refine takes on, not fitting again.
     """
     s = DiagnosisSettings() if settings is None else settings
-    level, min_gain, tolerance, practical_um = s.level, s.min_gain, s.tolerance, s.practical_um
+    level, min_gain = s.level, s.min_gain
     settled = resolve_sigma(model, measurements, sigma_mm, fit=fit)
     if settled.measurements is not measurements:  # σ settled here: fit at that σ
         measurements, fit = settled.measurements, None
@@ -334,15 +333,14 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     doubt = None if settled.repeated is None or test.sigma_source == REPEATED else \
         settled.repeated.disagreement(sigma_mm)
     copies = copies_words(measurements, model.tool.names)
-    outliers = gross_outliers(model, measurements, fit, level, tolerance, practical_um)
+    outliers = gross_outliers(model, measurements, fit, level, s.tolerance, s.practical_um)
     units = kgf_finding(params, fit.std(), model.robot,
                         measurements.configurations)
     screen, screened = screening_set(measurements)
     split = make_folds(screen, s.folds, s.grouping)
     cv = cross_validated_rms(model, screen, params, split)
     if outliers:  # no effect is tested on data an outlier pulls
-        return _outlier_result(model, measurements, res, test, cv, split, outliers, level,
-                               tolerance, practical_um, min_gain,
+        return _outlier_result(model, measurements, res, test, cv, split, outliers, s,
                                (units, screened, doubt, copies), settled.repeated), {}
     tried = candidate_tests(model, screen, params, registry=registry, batch=batch)
     tests = list(tried.tests)
@@ -361,7 +359,7 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     ranked = sorted(scored.values(), key=lambda t: (_cv_key(t), t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]
     proposed = _proposal(ranked, cv, level, min_gain)
-    adequate = _is_adequate(test, proposed, tolerance, practical_um)
+    adequate = _is_adequate(test, proposed, s)
     m = len(measurements.configurations)
     size = np.bincount(res.config, (res.weighted ** 2).sum(axis=1), minlength=m)
     count = np.bincount(res.config, minlength=m) * 3
@@ -373,7 +371,7 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     n_poses = len(set(measurements.configurations.pose))
     gross = not adequate and proposed is None and _gross_errors(test, flagged, follow, n_poses)
     verdict = _verdict_words(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
-                             gross, level, min_gain, tolerance, practical_um, registry) \
+                             gross, s, registry) \
         + _confounded_words(ranked, proposed, level)
     odd = next((t for t in _material(ranked, cv, level, min_gain) if t.implausible), None)
     lead = "" if odd is None else sign_lead(model, odd, proposed, cv, split,
@@ -386,7 +384,7 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     elif odd is not None and (proposed is None or odd.cv_rms_mm < proposed.cv_rms_mm):
         verdict += (f" Not proposed although it predicts better (cross-validated RMS "
                     f"{odd.cv_rms_mm:.3g} mm): {odd.spec}, {odd.implausible}.")
-    chi2 = _chi2_record(test, tolerance, practical_um, settled.repeated)
+    chi2 = _chi2_record(test, s, settled.repeated)
     spec = None if proposed is None else proposed.spec
     candidates = candidate_records(ranked, model.robot,
                                    [describe(t, model.robot, registry) for t in ranked],
