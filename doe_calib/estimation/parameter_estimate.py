@@ -76,7 +76,7 @@ class ParameterEstimate:
             pct = f" ({100 * rel:.2g} %)" if np.isfinite(rel) else ""
             head += f" ± {self.std * k:.3g}{pct} {u}"
             if self.std_apriori != self.std:
-                head += f" (a priori ± {self.std_apriori * k:.3g})"
+                head += f" (σ̂-scaled; a priori ± {self.std_apriori * k:.3g})"
         else:
             head += f" {u}, fixed: {self.fixed_reason or 'by request'}"
         lines = [head, f"  nominal {self.nominal * k:.6g} {u}; {self.block}: {self.description}"]
