@@ -45,7 +45,8 @@ class FitSettings:
         :mod:`~doe_calib.estimation.selection`); the result's ``selection`` says which
         and why. ``none``: every parameter the data can separate is fitted.
     register : bool
-        Start from the tracker frame (and markers) fitted alone.
+        Start the base pose from a point-set registration of the readings (False:
+        from the start values, e.g. those of a fit the model grew from).
     max_iterations : int, optional
         Iterations (``two-step``: alternations) allowed, ≥ 1; default the
         estimator's own (200; 500 for ``two-step``).
