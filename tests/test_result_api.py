@@ -174,6 +174,9 @@ def test_a_result_cannot_be_changed_through_its_arrays(fit, campaign):
             with pytest.raises(ValueError, match="read-only"):
                 a[0] = 1.0
         assert res["dq_q2"].value == before
+    mine = np.array(fit.cov_params())  # a copy asked for is writeable
+    mine[0, 0] = 1.0
+    assert np.asarray(fit.cov_params())[0, 0] != 1.0
     values = fit.parameters.values.copy()  # the caller's copy is theirs to change
     values[0] = 1.0
     assert fit.parameters.values[0] != 1.0

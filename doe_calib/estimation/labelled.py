@@ -34,7 +34,9 @@ class Labelled:
         self.rows, self.columns, self.joints = tuple(rows), tuple(columns), tuple(joints)
 
     def __array__(self, dtype=None, copy=None):
-        return self.values if dtype is None else self.values.astype(dtype)
+        if copy or dtype is not None:  # np.array(m), or another dtype: a writeable copy
+            return np.array(self.values, dtype)
+        return self.values
 
     @property
     def shape(self) -> tuple:
