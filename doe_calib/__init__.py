@@ -48,6 +48,7 @@ _PUBLIC = {
     "load": "doe_calib.result_files",
     # estimation
     "identify": "doe_calib.estimation.identify",
+    "FitSettings": "doe_calib.estimation.identify",
     "IdentificationResult": "doe_calib.estimation.result",
     "ParameterEstimate": "doe_calib.estimation.parameter_estimate",
     "FitStatistics": "doe_calib.estimation.fit_statistics",
@@ -69,6 +70,8 @@ _PUBLIC = {
     "Comparison": "doe_calib.design.comparison",
     # diagnosis
     "diagnose": "doe_calib.diagnosis.diagnose",
+    "DiagnosisSettings": "doe_calib.diagnosis.settings",
+    "RefineSettings": "doe_calib.diagnosis.settings",
     "DiagnosisResult": "doe_calib.diagnosis.result",
     "refine": "doe_calib.diagnosis.refine",
     "RefineResult": "doe_calib.diagnosis.refine_result",

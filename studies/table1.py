@@ -18,7 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from doe_calib import Configurations, Robot, Tool, build_model, examples, identify, simulate
+from doe_calib import (Configurations, FitSettings, Robot, Tool, build_model, examples, identify,
+                       simulate)
 from doe_calib.estimation.covariance import predict_covariance
 from doe_calib.estimation.pose_estimator import default_normalisation, predict_pose_covariance
 from doe_calib.runtime.parallel import run_tasks, task_seeds
@@ -75,8 +76,8 @@ def _monte_carlo_chunk(task):
         for k in range(reps):
             meas = simulate(model, truth, cfg, SIGMA, rng)
             for a in approaches:
-                opts = {"normalisation": lam} if a == "pose" else {}
-                res = identify(model, meas, truth, estimator=a, register=False, **opts)
+                settings = FitSettings(register=False, normalisation=lam if a == "pose" else None)
+                res = identify(model, meas, truth, estimator=a, settings=settings)
                 est[a][k] = res.parameters.values[free] * TO_UNIT
     return est
 

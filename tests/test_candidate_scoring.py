@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from doe_calib import Configurations, build_model, simulate
-from doe_calib.diagnosis.diagnose import diagnose
+from doe_calib.diagnosis.diagnose import diagnose, diagnosis_step
+from doe_calib.diagnosis.settings import DiagnosisSettings
 from doe_calib.errors import DoeCalibWarning
 from doe_calib.io.json_file import strict_json
 from doe_calib.model.loads import hanging_mass_wrench
@@ -34,11 +35,11 @@ def test_threads_give_the_result_of_one_after_another(campaign):
     results = {}
     for workers in (1, 3):
         calls = []
-        fits = {}
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            d = diagnose(model, meas, workers=workers, candidate_fits=fits,
-                         progress=lambda i, n, spec, calls=calls: calls.append((i, n, spec)))
+            d, fits = diagnosis_step(
+                model, meas, settings=DiagnosisSettings(workers=workers),
+                progress=lambda i, n, spec, calls=calls: calls.append((i, n, spec)))
         results[workers] = json.loads(strict_json(d.to_dict()))
         seen[workers] = (calls, {k: f.parameters.values for k, (_, f) in fits.items()},
                          [w for w in caught if issubclass(w.category, DoeCalibWarning)])
@@ -52,5 +53,5 @@ def test_threads_give_the_result_of_one_after_another(campaign):
         assert np.array_equal(fits1[k], fits3[k])
     assert warned1 == warned3 == []  # the candidates' fits say their trouble in words only
     before = list(warnings.filters)
-    diagnose(model, meas, workers=3)
+    diagnose(model, meas, settings=DiagnosisSettings(workers=3))
     assert warnings.filters == before  # no filter left behind by the threads

@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from doe_calib import build_model, identify, simulate
+from doe_calib import FitSettings, build_model, identify, simulate
 from doe_calib.cli import main
 from doe_calib.design import LoadCase, load_configurations
 from doe_calib.design.comparison import compare, load_source
@@ -105,7 +105,7 @@ def test_identification_result_compares_with_its_design(designs, model):
         warnings.simplefilter("ignore")
         # every parameter the design predicts for (the selection would leave some of these
         # truly-nominal ones at nominal)
-        result = identify(model, meas, params, register=False, select="none")
+        result = identify(model, meas, params, settings=FitSettings(select="none", register=False))
     c = compare([big, result], ["design", "result"], sigma=SIGMA)
     assert c.kinds == ("design", "identification")
     ok = np.isfinite(c.std[:, 0])

@@ -42,7 +42,7 @@ def test_demo_finds_the_hidden_effect_and_reaches_the_noise(demo):
     final = IdentificationResult.from_json(tmp_path / "result.json")
     assert final.model.endswith("compliance_by_angle(j2,bins=3)")
     truth = {p["name"]: p["value"] for p in truth_file["parameters"]}
-    est, std = final.parameters, final.std()
+    est, std = final.parameters, final.std(apriori=True)
     for name in ("k_a3", "k_a4"):  # compliances the design was made for, within 4σ of the truth
         i = est.names.index(name)
         k = est.parameters[i].display_factor
@@ -85,7 +85,7 @@ def test_the_demo_files_answer_questions_from_python(demo, monkeypatch):
 
     k = result["k_a3"]
     assert k.free and k.display_unit == "µrad/(N·m)" and k.std > 0
-    assert k.std_a_posteriori == pytest.approx(k.std * result.sigma_ratio)
+    assert k.std == pytest.approx(k.std_apriori * result.sigma_ratio)
     assert k.value == result.parameters.values[result.parameters.names.index("k_a3")]
     assert len(k.correlations) == 3 and all(abs(r) <= 1 for _, r in k.correlations)
     fixed = next(n for n, f in zip(result.parameters.names, result.parameters.free) if not f)

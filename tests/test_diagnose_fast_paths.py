@@ -2,7 +2,7 @@
 
 - a candidate grown from the batch (diagnosis/candidate_batch.py) has the observation of
   ``model + e`` built alone: the same instruction count and the same numbers;
-- refine takes on the chosen candidate's model and fit from diagnose (``candidate_fits``)
+- refine takes on the chosen candidate's model and fit from diagnose (``diagnosis_step``)
   instead of building and fitting it again: the same fit as doing so (independently
   simulated readings, a hidden angle-dependent compliance);
 - the residual figure at fixed margins holds every reading of every variable, each panel
@@ -21,7 +21,9 @@ from doe_calib import Configurations, build_model, examples, simulate
 from doe_calib.diagnosis.candidate_batch import grown_model_builders
 from doe_calib.diagnosis.refine import refine
 from doe_calib.diagnosis.effect_tests import augmented, candidate_effects
-from doe_calib.diagnosis.diagnose import diagnose
+from doe_calib.diagnosis.candidate_scoring import GROWN
+from doe_calib.diagnosis.diagnose import diagnose, diagnosis_step
+from doe_calib.diagnosis.settings import RefineSettings
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.model.effects import parse_effect
@@ -70,15 +72,14 @@ def test_grown_observation_is_the_one_built_alone(model6):
 def test_refine_takes_on_the_fit_diagnose_made(campaign):
     model, meas = campaign
     start = identify_quietly(model, meas)
-    fits = {}
-    diag = diagnose(model, meas, start, candidate_fits=fits)
-    assert diag.to_dict() == diagnose(model, meas, start).to_dict()  # filling it changes nothing
+    diag, fits = diagnosis_step(model, meas, start)
+    assert diag.to_dict() == diagnose(model, meas, start).to_dict()  # keeping fits changes nothing
     assert diag.best is not None and diag.best.spec.startswith("compliance_by_angle(j2")
     assert diag.best.spec in fits
     big, begin = augmented(model, start.parameters, parse_effect(diag.best.spec))
-    reference = identify_quietly(big, meas, begin, register=False)  # as refine did before
+    reference = identify_quietly(big, meas, begin, settings=GROWN)  # fitting it again
 
-    out = refine(model, meas, max_steps=1)
+    out = refine(model, meas, settings=RefineSettings(max_steps=1))
     assert out.steps[1].added == diag.best.spec
     assert out.fit.model == reference.model
     assert out.fit.parameters.names == reference.parameters.names

@@ -14,6 +14,7 @@ from test_diagnosis import SIGMA, _campaign
 from doe_calib import build_model
 from doe_calib.diagnosis import Candidate, DiagnosisResult, FittedSize, diagnose
 from doe_calib.diagnosis.refine import RefineResult, refine
+from doe_calib.diagnosis.settings import RefineSettings
 from doe_calib.model import marker_model
 from doe_calib.model.effects import DEFAULT_REGISTRY
 from doe_calib.examples import EFFECT_FILE as EXAMPLE_FILE
@@ -40,7 +41,7 @@ def case(robot6, tool6):
     train = _campaign(true, truth, robot6, 40, rng)
     start = build_model(robot6, tool6, START)
     d = diagnose(start, train, registry=registry)
-    r = refine(start, train, max_steps=1, registry=registry)
+    r = refine(start, train, settings=RefineSettings(max_steps=1), registry=registry)
     return d, r
 
 

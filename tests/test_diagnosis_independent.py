@@ -14,6 +14,7 @@ import pytest
 from doe_calib import build_model, examples
 from doe_calib.diagnosis import diagnose, validation_rms
 from doe_calib.diagnosis.refine import refine
+from doe_calib.diagnosis.settings import RefineSettings
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.model.effects import DEFAULT_REGISTRY
@@ -50,7 +51,8 @@ def _held_out(robot, tool, spec, train, valid, registry=None):
 
 
 def _refined(robot, tool, train, valid, max_steps=3):
-    out = refine(build_model(robot, tool, START), train, valid, max_steps=max_steps)
+    out = refine(build_model(robot, tool, START), train, valid,
+                 settings=RefineSettings(max_steps=max_steps))
     return out, out.steps[-1].validation_rms_mm
 
 

@@ -102,7 +102,7 @@ def test_a_negative_fitted_compliance_is_flagged_by_plausibility(robot6, tool6):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = identify(model, meas)
-    assert abs(res.parameters["k_a2"] + 2e-6) < 5 * res.std()[res.parameters.index("k_a2")[0]]
+    assert abs(res.parameters["k_a2"] + 2e-6) < 5 * res.std("k_a2", apriori=True)
     (line,) = [w for w in res.warnings if "k_a2" in w]
     assert "compliance of joint a2" in line and "physically implausible" in line
     assert "load's sign" in line

@@ -13,6 +13,7 @@ from doe_calib import (
     simulate,
 )
 from doe_calib.diagnosis import candidate_effects, diagnose
+from doe_calib.diagnosis.settings import DiagnosisSettings
 from doe_calib.errors import ModelError
 from doe_calib.model.effects import REGISTRY, parse_model, registry_with_files
 from doe_calib.model.evaluation import marker_positions
@@ -89,9 +90,9 @@ def test_diagnose_tests_the_user_effect_only_with_its_registry(tmp_path, robot6,
     assert "wobble" not in {e.name for e in candidate_effects(start)}
     assert {e.spec() for e in candidate_effects(start, registry=mine)} >= {
         f"wobble(j{k})" for k in range(1, 7)}
-    plain = diagnose(start, meas, cv_top=1)
+    plain = diagnose(start, meas, settings=DiagnosisSettings(cv_top=1))
     assert all(c.effect != "wobble" for c in plain.candidates)
-    found = diagnose(start, meas, cv_top=1, registry=mine)
+    found = diagnose(start, meas, settings=DiagnosisSettings(cv_top=1), registry=mine)
     assert found.candidates[0].spec == "wobble(j2)", found.summary()
     assert found.verdict.startswith("A wobble of the flange with joint 2 (a2) is missing")
 

@@ -140,11 +140,11 @@ def test_values_of_the_reduced_set_are_named_and_their_combinations_hold(kr270, 
     assert physical and reduced
     assert set(roles.values()) <= {"physical", "reduced set", "not separable"}
     for name in physical:
-        assert abs(result[name].value - true[name]) < 4 * result[name].std_a_posteriori, name
+        assert abs(result[name].value - true[name]) < 4 * result[name].std, name
     for c in result.combinations():
         expected = true[c.parameter] + sum(k * true[d] for d, k in c.terms)
         assert abs(c.value - expected) < 4 * c.std + 1e-9, c.expression
-    far = [n for n in reduced if abs(result[n].value - true[n]) > 20 * result[n].std_a_posteriori]
+    far = [n for n in reduced if abs(result[n].value - true[n]) > 20 * result[n].std]
     assert far
     assert "not physical" in str(result[far[0]]) and "[reduced set]" in result.fit_report()
 

@@ -16,6 +16,7 @@ from doe_calib.diagnosis import diagnose
 from doe_calib.diagnosis.refine import refine
 from doe_calib.diagnosis.outliers import gross_outliers, within_pose
 from doe_calib.diagnosis.result import DiagnosisResult
+from doe_calib.diagnosis.settings import RefineSettings
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.io.csv_files import read_measurements
@@ -68,7 +69,7 @@ def test_one_gross_reading_is_named_before_any_effect(kr270, tmp_path):
     back = DiagnosisResult.from_dict(json.loads(d.to_json()))
     assert back.outliers == d.outliers
     # refine stops at the starting model, naming the outlier instead of an effect
-    out = refine(build_model(robot, tool, START), meas, max_steps=2)
+    out = refine(build_model(robot, tool, START), meas, settings=RefineSettings(max_steps=2))
     assert len(out.steps) == 1 and out.stopped.startswith("no effect tested")
     assert f"pose {pose}, marker {marker}" in out.stopped
     # what the verdict advises works: without the pose the model fits the noise

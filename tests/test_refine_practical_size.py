@@ -11,6 +11,7 @@ import pytest
 
 from doe_calib import build_model, examples
 from doe_calib.diagnosis.refine import refine
+from doe_calib.diagnosis.settings import RefineSettings
 from doe_calib.io.csv_files import read_measurements
 
 MARKERS = {"A": [0.15, 0.0, 0.08], "B": [-0.075, 0.13, 0.08], "C": [-0.075, -0.13, 0.08],
@@ -38,7 +39,8 @@ def campaign(tmp_path_factory):
 def test_refine_default_practical_size_leaves_the_misfit_not_adequate(campaign):
     tmp, robot, tool, _ = campaign
     meas = read_measurements(tmp / "m.csv", robot, tool)
-    out = refine(build_model(robot, tool, START), meas, sigma=STATED_MM / 1000, max_steps=2)
+    out = refine(build_model(robot, tool, START), meas, sigma=STATED_MM / 1000,
+                 settings=RefineSettings(max_steps=2))
     c = out.diagnosis.chi2
     expected = 1e3 * STATED_MM * np.sqrt(1.15 ** 2 - 1)  # 2.47 µm
     assert c["misfit_um"] == pytest.approx(expected, abs=0.4), c

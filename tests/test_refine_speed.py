@@ -1,9 +1,10 @@
 """The refine fast paths against the reference ones (issue 22).
 
-A repeated evaluation in one workspace is the evaluation; the detection power's
-noncentrality (estimation/chi_square.py) is the root of SciPy's power equation; refine builds
-the starting model's candidates once and sees that batch from each grown model (the columns
-and grown models of a batch built for it, to 1e-12; the same refine to 1e-9).
+A repeated evaluation returns the buffers of the last call (the same bits as evaluating
+again); the detection power's noncentrality (estimation/chi_square.py) is
+the root of SciPy's power equation; refine builds the starting model's candidates once and sees
+that batch from each grown model (the columns and grown models of a batch built for it, to
+1e-12; the same steps as diagnosing each grown model afresh to 1e-9).
 """
 import warnings
 
@@ -16,8 +17,11 @@ from scipy import optimize, stats
 from doe_calib import Configurations, build_model, examples, simulate
 from doe_calib.diagnosis.candidate_batch import candidate_batch
 from doe_calib.diagnosis.refine import refine
-from doe_calib.diagnosis.diagnose import candidate_batch_for
-from doe_calib.diagnosis.effect_tests import candidate_effects
+from doe_calib.diagnosis.candidate_scoring import GROWN
+from doe_calib.diagnosis.diagnose import candidate_batch_for, diagnose
+from doe_calib.diagnosis.settings import RefineSettings
+from doe_calib.model.effects import parse_effect
+from doe_calib.diagnosis.effect_tests import augmented, candidate_effects
 from doe_calib.errors import DoeCalibWarning
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.chi_square import noncentrality_for_power
@@ -179,32 +183,40 @@ def hidden_campaign(tmp_path_factory):
     return build_model(robot, tool, "joint_offset+geometry"), read_measurements(path, robot, tool)
 
 
-def test_refine_from_one_batch_equals_refine_with_a_batch_per_step(hidden_campaign):
-    """The same steps, stop and candidates; every number to 1e-9 (rounding: the effects'
+def test_refine_from_one_batch_equals_diagnosing_each_step_afresh(hidden_campaign):
+    """The same steps and candidates as diagnosing each grown model with a batch of its own
+    and fitting the chosen effect again; every number to 1e-9 (rounding: the effects'
     corrections summed in another order)."""
     start, meas = hidden_campaign
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DoeCalibWarning)
         fit = identify_quietly(start, meas)
-        fast = refine(start, meas, fit=fit, max_steps=3)
-        slow = refine(start, meas, fit=fit, max_steps=3, one_batch=False)
-    assert len(fast.steps) == 4  # it grows: the comparison covers grown models
+        fast = refine(start, meas, fit=fit, settings=RefineSettings(max_steps=3))
+        model, step_fit, slow = start, fit, []
+        while True:
+            slow.append(diagnose(model, meas, step_fit))
+            if len(slow) == 4 or slow[-1].best is None:
+                break
+            model, begin = augmented(model, step_fit.parameters,
+                                     parse_effect(slow[-1].best.spec))
+            step_fit = identify_quietly(model, meas, begin, settings=GROWN)
+    assert len(fast.steps) == len(slow) == 4  # it grows: the comparison covers grown models
     final = build_model(start.robot, start.tool, fast.fit.model)
     batch = candidate_batch_for(start, meas)  # what refine saw every step from
     assert batch.within(final, candidate_effects(final, meas.configurations)) is not None
-    assert [s.added for s in fast.steps] == [s.added for s in slow.steps]
-    assert fast.stopped == slow.stopped
-    for a, b in zip(fast.steps, slow.steps):
-        assert a.cv_rms_mm == pytest.approx(b.cv_rms_mm, rel=1e-9)
-        assert a.rms_mm == pytest.approx(b.rms_mm, rel=1e-9)
-        assert [f.value for f in a.fitted] == pytest.approx([f.value for f in b.fitted],
-                                                           rel=1e-9)
-    assert fast.fit.parameters.names == slow.fit.parameters.names
-    assert np.array_equal(fast.fit.parameters.free, slow.fit.parameters.free)
+    assert [s.added for s in fast.steps[1:]] == [d.best.spec for d in slow[:-1]]
+    for a, d, before in zip(fast.steps, slow, [None] + slow[:-1]):
+        assert a.cv_rms_mm == pytest.approx(d.cv_rms_mm, rel=1e-9)
+        assert a.rms_mm == pytest.approx(d.rms_mm, rel=1e-9)
+        if before is not None:
+            assert [f.value for f in a.fitted] == pytest.approx(
+                [f.value for f in before.best.sizes], rel=1e-9)
+    assert fast.fit.parameters.names == step_fit.parameters.names
+    assert np.array_equal(fast.fit.parameters.free, step_fit.parameters.free)
     scale = fast.fit.parameters.scales
-    assert np.abs((fast.fit.parameters.values - slow.fit.parameters.values) / scale).max() \
+    assert np.abs((fast.fit.parameters.values - step_fit.parameters.values) / scale).max() \
         <= 1e-9
-    ours, theirs = fast.diagnosis.candidates, slow.diagnosis.candidates
+    ours, theirs = fast.diagnosis.candidates, slow[-1].candidates
     assert [c.spec for c in ours] == [c.spec for c in theirs]
     for a, b in zip(ours, theirs):
         assert a.log10_p == pytest.approx(b.log10_p, rel=1e-9, abs=1e-9), a.spec

@@ -72,8 +72,8 @@ def test_a_parameter_answers_value_std_unit_and_correlations(fit):
     p = fit.parameters
     i, j = p.names.index("dq_q2"), fit.free_names.index("dq_q2")
     assert est.value == p.values[i] and est.nominal == 0.0 and est.free
-    assert est.std == pytest.approx(np.sqrt(fit.covariance[j, j]), rel=1e-12)
-    assert est.std_a_posteriori == pytest.approx(est.std * fit.sigma_ratio, rel=1e-12)
+    assert est.std_apriori == pytest.approx(np.sqrt(fit.covariance[j, j]), rel=1e-12)
+    assert est.std == pytest.approx(est.std_apriori * fit.sigma_ratio, rel=1e-12)
     assert (est.unit, est.display_unit) == ("rad", "deg")
     assert est.value_display == pytest.approx(np.degrees(est.value), rel=1e-12)
     # the three strongest correlations, from the covariance itself
@@ -107,10 +107,10 @@ def test_unknown_name_suggests_close_ones(fit):
 def test_std_by_name_and_keyword_only(fit):
     i = fit.parameters.names.index("dq_q3")
     assert fit.std("dq_q3") == fit.std()[i]
-    assert fit.std("dq_q3", a_posteriori=True) == pytest.approx(
-        fit.std()[i] * fit.sigma_ratio, rel=1e-12)
+    assert fit.std("dq_q3") == pytest.approx(
+        fit.std(apriori=True)[i] * fit.sigma_ratio, rel=1e-12)
     with pytest.raises(TypeError):
-        fit.std(None, True)  # a_posteriori only by keyword: a name is never taken for it
+        fit.std(None, True)  # apriori only by keyword: a name is never taken for it
 
 
 def test_conf_int_scaled_by_default(fit):
@@ -119,8 +119,67 @@ def test_conf_int_scaled_by_default(fit):
     post = np.sqrt(np.diag(fit.covariance)) * fit.sigma_ratio
     free = fit.parameters.free
     assert np.allclose((ci[free, 1] - ci[free, 0]) / 2, z * post, rtol=1e-12)
-    prior = fit.conf_int(0.95, a_posteriori=False)
+    prior = fit.conf_int(0.95, apriori=True)
     assert np.allclose((prior[free, 1] - prior[free, 0]) / 2, z * post / fit.sigma_ratio)
+
+
+def test_scaled_std_everywhere_and_one_keyword_for_the_a_priori_one(fit, campaign):
+    """statsmodels' convention: σ̂-scaled by default in every answer, ``apriori=True`` asks
+    for the one of the a-priori σ; the file and the data frame carry both."""
+    assert fit.sigma_ratio != pytest.approx(1.0, rel=1e-6)
+    i, r = fit.parameters.names.index("dq_q2"), fit.sigma_ratio
+    scaled, prior = fit.std(), fit.std(apriori=True)
+    assert scaled[i] == pytest.approx(prior[i] * r, rel=1e-12)
+    assert fit["dq_q2"].std == scaled[i] and fit["dq_q2"].std_apriori == prior[i]
+    assert np.allclose(np.diag(fit.cov_params()), np.diag(fit.cov_params(apriori=True)) * r ** 2,
+                       rtol=1e-12)
+    pred, pred0 = fit.predict(campaign), fit.predict(campaign, apriori=True)
+    assert np.all(pred.std > pred0.std) if r > 1 else np.all(pred.std < pred0.std)
+    for res in (fit, IdentificationResult.from_dict(json.loads(fit.to_json()))):
+        row = next(x for x in res.to_dict()["parameters"] if x["name"] == "dq_q2")
+        assert row["std"] == pytest.approx(np.degrees(scaled[i]), rel=1e-12)
+        assert row["std_apriori"] == pytest.approx(np.degrees(prior[i]), rel=1e-12)
+    assert "σ̂-scaled" in fit.fit_report() and "a priori ±" in fit.fit_report()
+
+
+def test_cov_params_and_conf_int_are_labelled_by_name(fit):
+    cov, ci = fit.cov_params(), fit.conf_int()
+    free = fit.free_names
+    assert cov.rows == cov.columns == tuple(free) and cov.shape == (len(free), len(free))
+    j, k = free.index("dq_q2"), free.index("base_x")
+    assert cov["dq_q2", "base_x"] == np.asarray(cov)[j, k] == cov[j, k]
+    assert cov["dq_j2", "base_x"] == cov["dq_q2", "base_x"]  # joints as model strings write them
+    assert cov.loc["dq_q2", "base_x"] == cov["dq_q2", "base_x"]
+    i = fit.parameters.names.index("dq_q2")
+    assert ci.rows == tuple(fit.parameters.names) and ci.columns == ("lower", "upper")
+    assert list(ci["dq_q2"]) == [ci["dq_q2", "lower"], ci["dq_q2", "upper"]] == list(ci[i])
+    with pytest.raises(OptionError, match="dq_q22"):
+        cov["dq_q22"]
+    with pytest.raises(OptionError, match="level=1.5"):
+        fit.conf_int(1.5)
+    pd = pytest.importorskip("pandas")
+    assert pd.DataFrame.equals(ci.to_dataframe(), pd.DataFrame(
+        np.asarray(ci), index=fit.parameters.names, columns=["lower", "upper"]))
+
+
+def test_a_result_cannot_be_changed_through_its_arrays(fit, campaign):
+    """Writing ``r.parameters.values[i]`` once changed ``r[name].value``; it now raises,
+    for a result identified and one read from its file."""
+    for res in (fit, IdentificationResult.from_dict(json.loads(fit.to_json()))):
+        before = res["dq_q2"].value
+        pred = res.predict(campaign)
+        arrays = [res.parameters.values, res.parameters.free, res.covariance, res.std(),
+                  np.asarray(res.cov_params()), np.asarray(res.conf_int()), pred.xyz, pred.std]
+        for a in arrays:
+            with pytest.raises(ValueError, match="read-only"):
+                a[0] = 1.0
+        assert res["dq_q2"].value == before
+    mine = np.array(fit.cov_params())  # a copy asked for is writeable
+    mine[0, 0] = 1.0
+    assert np.asarray(fit.cov_params())[0, 0] != 1.0
+    values = fit.parameters.values.copy()  # the caller's copy is theirs to change
+    values[0] = 1.0
+    assert fit.parameters.values[0] != 1.0
 
 
 def test_fit_statistics_against_scipy(fit, model3, campaign):
@@ -222,7 +281,7 @@ def test_predict_equals_marker_positions_and_its_std_a_propagation(fit, model3):
         down[i] -= h
         jac[:, c] = (marker_positions(model3, up, cfg) - marker_positions(model3, down, cfg)
                      ).ravel() / (2 * h)
-    var = np.diag(jac @ fit.cov_params(a_posteriori=True) @ jac.T)
+    var = np.diag(jac @ fit.cov_params() @ jac.T)
     assert np.allclose(pred.std.ravel(), np.sqrt(var), rtol=1e-5)
 
 
@@ -324,8 +383,7 @@ def test_to_dataframe(fit):
     df = fit.to_dataframe()
     assert isinstance(df, pd.DataFrame) and list(df.index) == fit.parameters.names
     assert df.loc["dq_q2", "value"] == pytest.approx(np.degrees(fit["dq_q2"].value))
-    assert df.loc["dq_q2", "std"] == pytest.approx(np.degrees(fit.std("dq_q2",
-                                                                      a_posteriori=True)))
+    assert df.loc["dq_q2", "std"] == pytest.approx(np.degrees(fit.std("dq_q2")))
 
 
 # -- doe_calib.load: every format we write --------------------------------------------------

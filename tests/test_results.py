@@ -38,7 +38,7 @@ def test_json_round_trip(result, tmp_path):
 def test_json_holds_formats_fields(result):
     d = json.loads(result.to_json())
     row = next(r for r in d["parameters"] if r["name"] == "dq_a2")
-    assert row["unit"] == "deg" and {"nominal", "value", "std", "std_a_posteriori"} <= set(row)
+    assert row["unit"] == "deg" and {"nominal", "value", "std", "std_apriori"} <= set(row)
     assert d["fixed"] and all(f["reason"] for f in d["fixed"])
     assert set(d["residuals"]) >= {"rms_mm", "max_3d_mm", "per_marker", "per_pose"}
     assert d["model"] == "joint_offset+geometry"

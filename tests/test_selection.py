@@ -11,7 +11,7 @@ from markered_robot import markered_robot
 
 from doe_calib import build_model, examples
 from doe_calib.diagnosis import validation_rms
-from doe_calib.estimation.identify import identify
+from doe_calib.estimation.identify import FitSettings, identify
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.estimation.selection import REASON, pose_groups, propose
 from doe_calib.io.csv_files import read_measurements
@@ -47,7 +47,7 @@ def _campaign(tmp_path, kr270, seed, n, amplitude_deg, n_valid=0):
 def _fit(model, meas, params=None, **options):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return identify(model, meas, params, **options)
+        return identify(model, meas, params, settings=FitSettings(**options))
 
 
 def _brute_force_loo_mm(model, meas, params):

@@ -4,13 +4,16 @@ setting, the value and the range allowed."""
 import numpy as np
 import pytest
 
-from doe_calib import Configurations, Robot, Tool, build_model, examples, identify, simulate
-from doe_calib.cli import main
+from doe_calib import (Configurations, FitSettings, Robot, Tool, build_model, examples, identify,
+                       simulate)
+from doe_calib.cli import main, options
 from doe_calib.design.augment import augment_design
 from doe_calib.design.optimal import optimal_design
 from doe_calib.diagnosis import diagnose
 from doe_calib.diagnosis.refine import refine
+from doe_calib.diagnosis.settings import DiagnosisSettings, RefineSettings
 from doe_calib.errors import OptionError
+from doe_calib.estimation.covariance import predict_covariance
 from doe_calib.io import setting_ranges as ranges
 from doe_calib.model.simulate import random_configurations
 
@@ -109,6 +112,7 @@ API_CASES = [
     (optimal_design, "candidates", 0, "1 or more"),
     (optimal_design, "sigma", -2e-5, "positive m"),
     (simulate, "sigma", -1e-5, "0 m or more"),
+    (predict_covariance, "sigma", 0.0, "positive m"),
 ]
 
 
@@ -116,9 +120,10 @@ def _call(function, model, readings, keyword, value):
     if function is optimal_design:
         return function(model, **{"n_poses": 4, "candidates": 50, "refine": False,
                                   keyword: value})
-    if function is simulate:
+    if function in (simulate, predict_covariance):
         return function(model, model.nominal(), readings.configurations, **{keyword: value})
-    return function(model, readings, **{keyword: value})
+    settings = {diagnose: DiagnosisSettings, refine: RefineSettings, identify: FitSettings}
+    return function(model, readings, settings=settings[function](**{keyword: value}))
 
 
 @pytest.mark.parametrize("function, keyword, bad, allowed", API_CASES,
@@ -136,7 +141,7 @@ def test_public_functions_refuse_a_value_out_of_range(model3, readings, function
 def test_estimators_refuse_their_settings_out_of_range(model3, readings, estimator, keyword,
                                                        bad, allowed):
     with pytest.raises(OptionError, match=f"^{keyword}={bad!r}: must be .*{allowed}"):
-        identify(model3, readings, estimator=estimator, **{keyword: bad})
+        identify(model3, readings, estimator=estimator, settings=FitSettings(**{keyword: bad}))
 
 
 def test_augment_refuses_a_power_not_above_its_level(model3, readings):
@@ -162,3 +167,40 @@ def test_collision_model_refuses_a_negative_clearance(keyword):
     robot = Robot.from_urdf(examples.THREE_DOF_URDF)
     with pytest.raises(OptionError, match=f"^{keyword}=-0.001: must be 0 m or more"):
         build_collision_model(robot, **{keyword: -0.001})
+
+
+def _numeric_options():
+    """(command, option, its type) for every option of every command whose value is one
+    number: a numeric default or a type converter."""
+    import argparse
+
+    from doe_calib.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    return [(name, a.option_strings[-1], a.type) for name, c in sub.choices.items()
+            for a in c._actions if a.option_strings and a.nargs in (None, "?")
+            and (a.type in (int, float) or getattr(a.type, "__module__", "") == options.__name__
+                 or type(a.default) in (int, float))]
+
+
+NUMERIC_OPTIONS = _numeric_options()
+
+
+def test_every_numeric_option_has_a_checked_type():
+    assert len(NUMERIC_OPTIONS) > 40
+    unchecked = [(c, o) for c, o, t in NUMERIC_OPTIONS
+                 if getattr(t, "__module__", "") != options.__name__]
+    assert unchecked == []
+
+
+@pytest.mark.parametrize("command, option", [(c, o) for c, o, _ in NUMERIC_OPTIONS],
+                         ids=[f"{c} {o}" for c, o, _ in NUMERIC_OPTIONS])
+@pytest.mark.parametrize("bad", ["-1000000000", "nan"])
+def test_every_numeric_option_refuses_a_value_out_of_range_while_parsing(command, option, bad,
+                                                                        tmp_path, capsys,
+                                                                        monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main([command, option, bad]) == 2
+    line = capsys.readouterr().err.strip().splitlines()[-1]
+    assert line.startswith(f"error: {option} "), line
+    assert not list(tmp_path.iterdir())

@@ -63,7 +63,7 @@ def test_sigma_estimated_from_the_residuals_when_not_given(model3, no_sigma_file
     # the covariance is the one for σ = σ̂: the same as with σ̂ given
     given = identify_quietly(model3, read_measurements(no_sigma_file, model3.robot, model3.tool,
                                                        sigma=res.sigma_mm / 1000))
-    assert np.allclose(res.std(), given.std(), rtol=1e-6)
+    assert np.allclose(res.std(apriori=True), given.std(apriori=True), rtol=1e-6)
     assert not given.sigma_estimated
     words = f"σ estimated from the residuals: {res.sigma_mm:.3g} mm"
     assert words in res.warnings and "σ estimated from the residuals" in res.summary()

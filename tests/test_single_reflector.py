@@ -15,6 +15,7 @@ from doe_calib import Robot, Tool, build_model, examples
 from doe_calib.cli import main
 from doe_calib.diagnosis import validation_rms
 from doe_calib.diagnosis.refine import refine
+from doe_calib.diagnosis.settings import RefineSettings
 from doe_calib.estimation.identify import identify, identify_quietly
 from doe_calib.io.csv_files import read_measurements
 
@@ -82,7 +83,8 @@ def test_refine_from_one_reflector_adds_own_weight_compliance_on_a_ur10(tmp_path
     truth = sim.Truth.random(chain, np.array(list(SMR.values())), rng, effects=hidden)
     train, valid = _campaigns(tmp_path, chain, robot, tool, truth, rng, n=50, mass=8.0)
     reference = _held_out(robot, tool, START + "+gravity_compliance(j2)", train, valid)
-    out = refine(build_model(robot, tool, START), train, valid, max_steps=2)
+    out = refine(build_model(robot, tool, START), train, valid,
+                 settings=RefineSettings(max_steps=2))
     got = out.steps[-1].validation_rms_mm
     assert any("gravity_compliance(j2)" in s.added for s in out.steps[1:]), out.summary()
     assert got <= 1.25 * reference, (got, reference, out.summary())
@@ -96,7 +98,8 @@ def test_refine_from_one_reflector_adds_a_cyclic_error_on_the_kr270(tmp_path):
     truth = sim.Truth.random(chain, np.array(list(SMR.values())), rng, effects=hidden)
     train, valid = _campaigns(tmp_path, chain, robot, tool, truth, rng, n=50, mass=250.0)
     reference = _held_out(robot, tool, START + "+cyclic(a3,harmonics=1)", train, valid)
-    out = refine(build_model(robot, tool, START), train, valid, max_steps=2)
+    out = refine(build_model(robot, tool, START), train, valid,
+                 settings=RefineSettings(max_steps=2))
     got = out.steps[-1].validation_rms_mm
     assert any(s.added.startswith("cyclic(j3") for s in out.steps[1:]), out.summary()
     assert got <= 1.25 * reference, (got, reference, out.summary())

@@ -8,6 +8,7 @@ import pytest
 
 from doe_calib import Configurations, build_model, examples, identify, simulate
 from doe_calib.diagnosis import diagnose
+from doe_calib.diagnosis.settings import DiagnosisSettings
 from doe_calib.errors import DataError, DoeCalibError, ModelError
 from doe_calib.estimation.preparation import fix_unidentifiable, register_base
 from doe_calib.model.effects import DEFAULT_REGISTRY, parse_model
@@ -136,8 +137,8 @@ def test_diagnosis_ranks_the_hidden_user_effect_first(robot6, tool6, user_effect
     w[1::2] = hanging_mass_wrench(true, truth.values, q[1::2], 250.0, (0.0, 0.0, 0.2))
     cfg = Configurations.from_arrays(q, w, pose=np.repeat(np.arange(n) + 1, 2))
     meas = simulate(true, truth, cfg, 3e-5, rng)
-    d = diagnose(build_model(robot6, tool6, "joint_offset+joint_compliance"), meas, cv_top=2,
-                 registry=user_effects)
+    d = diagnose(build_model(robot6, tool6, "joint_offset+joint_compliance"), meas,
+                 settings=DiagnosisSettings(cv_top=2), registry=user_effects)
     assert not d.adequate
     best = d.candidates[0]
     assert (best.effect, best.spec, best.joint) == ("wobble", "wobble(j2)", 2), d.summary()
@@ -178,7 +179,7 @@ def test_identify_and_predict_commands_with_an_effect_file(tmp_path, robot6, too
     assert json.loads(out.read_text())["model"] == "joint_offset+quad_scale(j3)"
     result = IdentificationResult.from_json(out)  # reading needs no effect file
     i = result.parameters.index("quad_scale_a3_a")[0]
-    assert abs(result.parameters.values[i] - 3e-4) < 5 * result.std()[i]
+    assert abs(result.parameters.values[i] - 3e-4) < 5 * result.std(apriori=True)[i]
 
     pred = tmp_path / "pred.csv"
     assert main(["predict", "--result", str(out), "--data", str(data), "--out", str(pred)]) == 2

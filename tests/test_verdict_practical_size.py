@@ -8,6 +8,7 @@ import pytest
 
 from doe_calib import build_model, examples
 from doe_calib.diagnosis import diagnose
+from doe_calib.diagnosis.settings import DiagnosisSettings
 from doe_calib.io.csv_files import read_measurements
 
 MARKERS = {"A": [0.15, 0.0, 0.08], "B": [-0.075, 0.13, 0.08], "C": [-0.075, -0.13, 0.08],
@@ -25,7 +26,8 @@ def _diagnosis(tmp_path, effects, seed, poses, **options):
     sim.write_campaign(tmp_path / "m.csv", chain, truth, q, np.zeros((len(q), 6)),
                        list(MARKERS), NOISE_MM, rng)
     meas = read_measurements(tmp_path / "m.csv", robot, tool)
-    return diagnose(build_model(robot, tool, START), meas, sigma=STATED_MM / 1000, **options)
+    return diagnose(build_model(robot, tool, START), meas, sigma=STATED_MM / 1000,
+                    settings=DiagnosisSettings(**options))
 
 
 def test_a_correct_model_with_sigma_three_percent_small_is_adequate_by_the_practical_size(

@@ -75,7 +75,7 @@ def test_refine_with_the_approach_sign_reversed_adds_a_positive_band(reversed_fi
     assert added.startswith("backlash(j2"), history["steps"]
     result = json.loads((tmp_path / "r.json").read_text())
     row = next(p for p in result["parameters"] if p["name"] == "backlash_a2")
-    assert row["value"] == pytest.approx(WIDTH_DEG, abs=3 * row["std_a_posteriori"] + 1e-4), row
+    assert row["value"] == pytest.approx(WIDTH_DEG, abs=3 * row["std"] + 1e-4), row
 
 
 def test_reversing_twice_gives_the_readings_back(reversed_file):

@@ -13,6 +13,7 @@ from doe_calib.cli.common import (
     parse_floats,
     report_warnings,
 )
+from doe_calib.cli.options import positive
 from doe_calib.cli.program_options import program_arguments, stations, tool_payload
 from doe_calib.errors import ConvergenceWarning, DataError, OptionError
 from doe_calib.io.json_file import strict_json
@@ -49,11 +50,13 @@ def add_arguments(c):
     c.add_argument("--program-out", help="directory (or file) for --format (default: the "
                                          "folder of --out)")
     c.add_argument("--name", default="compensated", help="program name (default compensated)")
-    c.add_argument("--max-shift", type=float, default=MAX_SHIFT, metavar="DEG",
+    c.add_argument("--max-shift", type=positive("--max-shift", "deg"), default=MAX_SHIFT,
+                   metavar="DEG",
                    help=f"flag a row whose joints move more than this (deg; mm for a prismatic "
                         f"joint; default {MAX_SHIFT:g}): near a singularity, or targets of "
                         f"another TCP or frame")
     c.add_argument("--unseen-tolerance", nargs="+", default=(), metavar="[KEY:]VALUE",
+                   type=_tolerance,
                    help="stated tolerance (1σ) of the parameters the readings cannot separate, "
                         "carried in the predicted std: VALUE with its unit (mm or deg), for "
                         "all of that unit or, with KEY:, for a block (geometry:0.01deg) or a "
@@ -70,23 +73,21 @@ OUTPUTS = {"out": "file", "program_out": "folder"}
 _UNITS = {"mm": ("m", 1e-3), "deg": ("rad", math.pi / 180.0)}
 
 
-def _tolerance(items) -> dict:
-    """``--unseen-tolerance`` items as :func:`~doe_calib.estimation.unseen.tolerances` keys (SI)."""
-    out = {}
-    for item in items:
-        key, _, text = item.rpartition(":")
-        unit = next((u for u in _UNITS if text.endswith(u)), None)
-        try:
-            value = float(text[:-len(unit)]) if unit else math.nan
-        except ValueError:
-            value = math.nan
-        if unit is None or not value > 0 or not math.isfinite(value):
-            raise OptionError(f"--unseen-tolerance {item!r}: give a positive number with its "
-                              f"unit, mm or deg, optionally after a block or parameter name "
-                              f"(0.2mm, geometry:0.01deg, dq_a1:0.02deg)")
-        si, factor = _UNITS[unit]
-        out[f"{key}:{si}" if key else si] = value * factor
-    return out
+def _tolerance(item: str) -> tuple:
+    """One ``--unseen-tolerance`` item as a :func:`~doe_calib.estimation.unseen.tolerances`
+    key and its value (SI), checked while the options are parsed."""
+    key, _, text = item.rpartition(":")
+    unit = next((u for u in _UNITS if text.endswith(u)), None)
+    try:
+        value = float(text[:-len(unit)]) if unit else math.nan
+    except ValueError:
+        value = math.nan
+    if unit is None or not value > 0 or not math.isfinite(value):
+        raise OptionError(f"--unseen-tolerance {item!r}: give a positive number with its "
+                          f"unit, mm or deg, optionally after a block or parameter name "
+                          f"(0.2mm, geometry:0.01deg, dq_a1:0.02deg)")
+    si, factor = _UNITS[unit]
+    return (f"{key}:{si}" if key else si), value * factor
 
 
 def _tcp(text: str, result):
@@ -117,7 +118,7 @@ def run(args):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         out = compensate(model, result, targets, tcp, build_problem(model, args.position_only),
-                         max_shift=args.max_shift, tolerance=_tolerance(args.unseen_tolerance))
+                         max_shift=args.max_shift, tolerance=dict(args.unseen_tolerance))
     # rows not reached are listed below, and the unseen part's words end the summary
     report_warnings([w for w in caught if not issubclass(w.category, ConvergenceWarning)
                      and (args.json or str(w.message) != out.unseen)])

@@ -51,6 +51,16 @@ def measurement_arguments(c):
                         "machine's cores, at most 4); the result does not depend on it")
 
 
+def diagnosis_settings(args, kind=None, **more):
+    """The :class:`~doe_calib.diagnosis.settings.DiagnosisSettings` (or ``kind``, with
+    ``more``) the options of :func:`measurement_arguments` give."""
+    from doe_calib.diagnosis.settings import DiagnosisSettings
+
+    return (kind or DiagnosisSettings)(
+        level=args.level, folds=args.folds, grouping=args.cv_by, min_gain=args.min_gain,
+        tolerance=args.tolerance, practical_um=args.practical_um, workers=args.workers, **more)
+
+
 def add_arguments(c):
     robot_arguments(c)
     measurement_arguments(c)
@@ -80,9 +90,7 @@ def run(args):
         figures.draw("residual_scatter", plot,
                      residual_norms_mm(model, meas, fit.parameters.values),
                      reading_columns(model, meas))
-        d = diagnose(model, meas, fit, level=args.level, folds=args.folds, grouping=args.cv_by,
-                     min_gain=args.min_gain, tolerance=args.tolerance, registry=registry,
-                     practical_um=args.practical_um, workers=args.workers,
+        d = diagnose(model, meas, fit, settings=diagnosis_settings(args), registry=registry,
                      progress=lambda i, n, s: print(f"  cross-validating {s} ({i + 1}/{n})",
                                                     file=sys.stderr))
         d.to_json(args.out)

@@ -53,7 +53,7 @@ OUTPUTS = {"out": "file", "report": "file"}
 
 
 def run(args):
-    from doe_calib.estimation.identify import identify
+    from doe_calib.estimation.identify import FitSettings, identify
 
     if args.angles:
         model, meas, params = probe_model_and_measurements(args)
@@ -61,13 +61,14 @@ def run(args):
         model, meas = model_and_measurements(args, estimate_sigma=False)  # σ̂ said by identify
         params = model.nominal()
     params = fix_and_free(params, args.fix, args.free)
-    options = {"normalisation": args.normalisation} if args.estimator == "pose" else {}
-    progress = stage_progress()
+    settings = FitSettings(select=args.select, normalisation=args.normalisation
+                           if args.estimator == "pose" else None)
+    show = stage_progress()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        result = identify(model, meas, params, estimator=args.estimator, progress=progress,
-                          select=args.select, **options)
-    if progress:
+        result = identify(model, meas, params, estimator=args.estimator, settings=settings,
+                          progress=show and (lambda done, total, note: show("identify", note)))
+    if show:
         print(file=sys.stderr)
     report_warnings(caught)
     if args.verbose:

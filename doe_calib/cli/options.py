@@ -35,45 +35,39 @@ def _number(option: str, text: str, kind, what: str):
     return value
 
 
+def _converter(option: str, kind, what: str, check, *args):
+    def convert(text: str):
+        return check(option, _number(option, text, kind, what), *args)
+    return convert
+
+
 def positive(option: str, unit: str):
     """A ``type=`` converter: a finite number > 0 in ``unit`` (e.g. ``--sigma`` in mm)."""
-    def convert(text: str) -> float:
-        value = _number(option, text, float, f"a positive number in {unit}")
-        return ranges.positive(option, value, unit)
-    return convert
+    return _converter(option, float, f"a positive number in {unit}", ranges.positive, unit)
 
 
 def at_least(option: str, minimum: float, unit: str = ""):
     """A ``type=`` converter: a finite number ≥ ``minimum`` (e.g. ``--dwell`` ≥ 0 s)."""
-    def convert(text: str) -> float:
-        said = f" {unit}" if unit else ""
-        value = _number(option, text, float, f"a number of {minimum:g}{said} or more")
-        return ranges.at_least(option, value, minimum, unit)
-    return convert
+    said = f" {unit}" if unit else ""
+    return _converter(option, float, f"a number of {minimum:g}{said} or more", ranges.at_least,
+                      minimum, unit)
 
 
 def probability(option: str):
     """A ``type=`` converter: a probability strictly between 0 and 1 (e.g. ``--level``)."""
-    def convert(text: str) -> float:
-        value = _number(option, text, float, "a probability between 0 and 1")
-        return ranges.probability(option, value)
-    return convert
+    return _converter(option, float, "a probability between 0 and 1", ranges.probability)
 
 
 def fraction(option: str):
     """A ``type=`` converter: a fraction from 0 to 1, 1 excluded (e.g. ``--min-gain``)."""
-    def convert(text: str) -> float:
-        return ranges.fraction(option, _number(option, text, float, "a fraction from 0 to 1"))
-    return convert
+    return _converter(option, float, "a fraction from 0 to 1", ranges.fraction)
 
 
 def count(option: str, minimum: int = 1, what: str = ""):
     """A ``type=`` converter: an integer ≥ ``minimum`` (e.g. ``--poses``)."""
-    def convert(text: str) -> int:
-        said = f" {what}" if what else ""
-        value = _number(option, text, int, f"a whole number of {minimum}{said} or more")
-        return ranges.whole(option, value, minimum, what)
-    return convert
+    said = f" {what}" if what else ""
+    return _converter(option, int, f"a whole number of {minimum}{said} or more", ranges.whole,
+                      minimum, what)
 
 
 def _option_name(dest: str) -> str:

@@ -17,7 +17,8 @@ def add_arguments(c):
                    help="measurement-format CSV(s) of the poses (x,y,z used for the error if "
                         "present)")
     c.add_argument("--out", required=True, help="CSV to write with the model's x,y,z and "
-                                                "their predicted std_x,std_y,std_z (mm)")
+                                                "their predicted std_x,std_y,std_z (mm) for "
+                                                "the result's σ, written beside (a priori)")
     c.add_argument("--json", action="store_true", help="print the error figures as JSON "
                                                        "(null when the data have no x,y,z)")
     c.add_argument("--register", choices=("frame", "frame+tool"), default=None,
@@ -39,7 +40,7 @@ def predicted_markers(model, result, meas):
     """
     from doe_calib.estimation.predict import predict
 
-    pred = predict(result, meas, model, a_posteriori=False)
+    pred = predict(result, meas, model, apriori=True)
     return pred.xyz, pred.std
 
 
@@ -55,7 +56,7 @@ def run(args):
     result = IdentificationResult.from_json(args.result)
     model = build_model(result.robot, result.tool, result.model, registry=registry)
     meas = read_data(args.data, result.robot, result.tool, require_xyz=False)
-    pred = predict(result, meas, model, a_posteriori=False, register=args.register)
+    pred = predict(result, meas, model, apriori=True, register=args.register)
     sigma = np.full(len(meas), result.sigma_mm / 1000.0)
     write_measurements(args.out, replace(meas, xyz=pred.xyz, sigma=sigma), result.robot,
                        result.tool, std=pred.std)

@@ -11,7 +11,7 @@ from doe_calib.cli.common import (
     robot_arguments,
     sigma_option,
 )
-from doe_calib.cli.diagnose import measurement_arguments
+from doe_calib.cli.diagnose import diagnosis_settings, measurement_arguments
 from doe_calib.cli.options import count
 from doe_calib.io.json_file import strict_json
 
@@ -43,6 +43,7 @@ def run(args):
     from types import SimpleNamespace
 
     from doe_calib.diagnosis.refine import refine
+    from doe_calib.diagnosis.settings import RefineSettings
     from doe_calib.model.marker_model import build_model
     from doe_calib.report.figure_worker import FigureWorker
 
@@ -58,11 +59,9 @@ def run(args):
                             approach_sign=args.approach_sign)
         print(f"refining from {model.spec or '(base + markers)'} on {len(meas)} readings…",
               file=sys.stderr)
-        out = refine(model, meas, val, level=args.level, max_steps=args.max_steps,
-                     min_gain=args.min_gain, folds=args.folds, grouping=args.cv_by,
-                     progress=lambda i, text: print(f"  step {i}: {text}", file=sys.stderr),
-                     registry=registry, practical_um=args.practical_um,
-                     tolerance=args.tolerance, workers=args.workers)
+        settings = diagnosis_settings(args, RefineSettings, max_steps=args.max_steps)
+        out = refine(model, meas, val, settings=settings, registry=registry,
+                     progress=lambda i, _, text: print(f"  step {i}: {text}", file=sys.stderr))
         # the steps' plotted numbers only: the child need not load the diagnosis package;
         # it draws while the files are written
         figures.draw("error_falling", plot, [SimpleNamespace(

@@ -122,7 +122,7 @@ def row_accuracy(model, result, configurations, point, part: UnseenPart,
 
     jac = jacobian(configurations, frame)
     j = jac[:, :, result.parameters.free]
-    seen = np.sqrt(np.clip(np.einsum("mij,jk,mik->m", j, result.cov_params(True), j), 0, None))
+    seen = np.sqrt(np.clip(np.einsum("mij,jk,mik->m", j, result.cov_params(), j), 0, None))
     bare = type(configurations).from_arrays(configurations.q, None, configurations.env)
     unloaded = jacobian(bare, frame)
     unseen = part.std_3d(jac, unloaded)

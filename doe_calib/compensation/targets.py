@@ -21,7 +21,7 @@ from doe_calib.io.measurements import Configurations
 from doe_calib.model.frames import frame_placement, transform_points
 from doe_calib.model.rotations import rotation_vector_to_matrix
 
-#: The frame target positions are in when none is named (as they always were).
+#: The frame target positions are in when none is named: the tracker's, as the readings'.
 TRACKER = "tracker"
 
 

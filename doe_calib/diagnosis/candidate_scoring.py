@@ -23,11 +23,14 @@ from dataclasses import dataclass
 from doe_calib.diagnosis.cross_validation import cross_validated_rms
 from doe_calib.diagnosis.effect_tests import grown_parameters
 from doe_calib.errors import DoeCalibError, DoeCalibWarning
-from doe_calib.estimation.identify import identify
+from doe_calib.estimation.identify import FitSettings, identify
 from doe_calib.estimation.plausibility import beyond_plausible, out_of_bounds, value_words
 
 #: Threads at most by default: beyond, the fits' Python parts wait on each other.
 MAX_WORKERS = 4
+#: A grown model's fit, started from the fit it grew from (its frame already registered),
+#: fitted whole to compare with the others.
+GROWN = FitSettings(select="none", register=False)
 
 
 @dataclass(frozen=True)
@@ -81,7 +84,8 @@ def score_candidates(builders, effects, params, measurements, folds,
     workers : int, optional
         Threads fitting at once (default :func:`default_workers`; 1: one after another).
     progress : callable, optional
-        ``progress(i, n)`` as the i-th of n candidates is scored, in order.
+        ``progress(done, total, note)`` as each candidate is scored, in order: the
+        candidates done, their number, the effect's spec.
 
     Returns
     -------
@@ -96,16 +100,16 @@ def score_candidates(builders, effects, params, measurements, folds,
             out = []
             for i, (build, effect) in enumerate(jobs):
                 if progress:
-                    progress(i, len(jobs))
+                    progress(i, len(jobs), effect.spec())
                 out.append(_score(build(), effect, params, measurements, folds))
             return out
         with ThreadPoolExecutor(min(workers, len(jobs))) as pool:
             futures = [pool.submit(_score, build(), effect, params, measurements, folds)
                        for build, effect in jobs]  # each built while the workers fit
             out = []
-            for i, future in enumerate(futures):
+            for i, (future, (_, effect)) in enumerate(zip(futures, jobs)):
                 if progress:
-                    progress(i, len(jobs))
+                    progress(i, len(jobs), effect.spec())
                 out.append(future.result())
             return out
 
@@ -113,7 +117,7 @@ def score_candidates(builders, effects, params, measurements, folds,
 def _score(big, effect, params, measurements, folds):
     bp = grown_parameters(big, params)
     try:  # folds start from the grown model's own fit: what they hold fixed is then right
-        fit = identify(big, measurements, bp, register=False, select="none")  # fitted whole
+        fit = identify(big, measurements, bp, settings=GROWN)
     except DoeCalibError:
         return None
     new = [n for n in fit.parameters.names if n not in params.names]
@@ -126,7 +130,7 @@ def fitted_rows(fit, names, effect) -> tuple:
     """The new parameters' values ± a-posteriori std in display units, and a note on those
     beyond their bounds or plausible range (the parameters' and ``effect``'s words)."""
     ps = fit.parameters
-    std = fit.std(a_posteriori=True)
+    std = fit.std()
     rows = []
     for name in names:
         i = ps.names.index(name)

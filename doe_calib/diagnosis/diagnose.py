@@ -21,7 +21,7 @@ from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
 from doe_calib.diagnosis.outliers import gross_outliers, outlier_verdict
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
-from doe_calib.diagnosis.settings import check_settings
+from doe_calib.diagnosis.settings import DiagnosisSettings
 from doe_calib.diagnosis.sign_lead import sign_lead
 from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.design.detectability import SEPARATE
@@ -31,7 +31,6 @@ from doe_calib.estimation.load_units import kgf_finding
 from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.io.measurements import ESTIMATED, REPEATED
 from doe_calib.io.repeated_readings import copies_words
-from doe_calib.io.setting_ranges import whole
 from doe_calib.model.effects import parse_effect
 
 #: A residual "follows" a variable when its adjusted R² reaches this.
@@ -59,8 +58,8 @@ def screening_set(measurements, limit: int = SCREENING_CONFIGURATIONS, seed: int
 def candidate_batch_for(model, measurements, registry=None):
     """Every candidate effect of ``model`` (those :func:`diagnose` tests on ``measurements``)
     in one :class:`~doe_calib.diagnosis.candidate_batch.CandidateBatch`, or None when they
-    cannot be built together: what :func:`diagnose` takes as ``batch`` for ``model`` and the
-    models grown from it."""
+    cannot be built together: what :func:`diagnosis_step` takes as ``batch`` for ``model``
+    and the models grown from it."""
     screen, _ = screening_set(measurements)
     try:
         return candidate_batch(model, candidate_effects(model, screen.configurations, registry))
@@ -131,26 +130,26 @@ def _adequacy_words(test):
             f"the noise √(σ̂² − σ²) = {test.misfit_um:.3g} µm")
 
 
-def _adequate_why(test, tolerance, practical_um) -> str:
+def _adequate_why(test, s) -> str:
     """Which rule found the model adequate, in words."""
     if test.adequate:
         return "consistent with the noise"
-    if test.ratio <= 1 + tolerance:
-        return f"within {tolerance:.0%} of the noise"
+    if test.ratio <= 1 + s.tolerance:
+        return f"within {s.tolerance:.0%} of the noise"
     return (f"{test.misfit_um:.3g} µm beyond the noise per coordinate, below the practical "
-            f"size of {practical_um:g} µm (--practical-um): the χ² test at this N detects a "
+            f"size of {s.practical_um:g} µm (--practical-um): the χ² test at this N detects a "
             f"misfit too small to matter — second-order effects of parameters held at "
             f"nominal, or σ a few % optimistic")
 
 
-def _is_adequate(test, proposed, tolerance, practical_um) -> bool:
+def _is_adequate(test, proposed, s) -> bool:
     """Adequate: χ² passes, or no material candidate and the misfit within the tolerance or
     the practical size. With no σ given (σ̂ of the starting model's fit, which holds its
     misfit) the χ² test cannot judge: adequate is then only that no candidate helps."""
     if test.sigma_source == ESTIMATED:
         return proposed is None
-    return test.adequate or (proposed is None and (test.ratio <= 1 + tolerance
-                                                   or test.practically_adequate(practical_um)))
+    return test.adequate or (proposed is None and (test.ratio <= 1 + s.tolerance
+                                                   or test.practically_adequate(s.practical_um)))
 
 
 def _confounded_words(tests, proposed, level) -> str:
@@ -185,15 +184,8 @@ def _rivals_words(tests, proposed, level) -> str:
             f"before either is trusted away from these poses.")
 
 
-def _verdict(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross, level,
-             min_gain, tolerance, practical_um, registry=None):
-    return _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, flagged,
-                          gross, level, min_gain, tolerance, practical_um, registry) \
-        + _confounded_words(tests, proposed, level)
-
-
 def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, flagged, gross,
-                   level, min_gain, tolerance, practical_um, registry=None):
+                   s, registry=None):
     ratio = _adequacy_words(test)
     cv_words = f"cross-validated RMS {cv:.3g} mm ({folds.description})"
     if proposed is not None:
@@ -215,16 +207,16 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
                      f"time while they help")
         return text + "."
     if adequate and test.sigma_source == ESTIMATED:
-        return (f"No candidate effect lowers the {cv_words} by {min_gain:.0%}: the model is "
+        return (f"No candidate effect lowers the {cv_words} by {s.min_gain:.0%}: the model is "
                 f"adequate as far as the candidates tell. σ was not given, so the residual is "
                 f"not tested against the noise: σ̂ of the starting model's fit, "
                 f"{test.sigma_mm:.3g} mm (σ̂/σ = {test.ratio:.3f} here), holds that model's "
                 f"misfit; give σ (--sigma, a sigma column) or read some poses twice for that "
                 f"test.")
     if adequate:
-        why = _adequate_why(test, tolerance, practical_um)
+        why = _adequate_why(test, s)
         return (f"The model is adequate: the residual is {why} ({ratio}); no candidate effect "
-                f"lowers the {cv_words} by {min_gain:.0%}.")
+                f"lowers the {cv_words} by {s.min_gain:.0%}.")
     where = ", ".join(p["pose"] + (f" (line {p['worst_line']})" if p["worst_line"] else "")
                       for p in flagged[:8])
     if gross:
@@ -233,9 +225,9 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
                 f"like gross errors (a reading off its target, a swapped marker, a pose typed "
                 f"wrong). Check them; to leave them out, rerun with --exclude-poses "
                 f"{','.join(p['pose'] for p in flagged)} (each exclusion is reported).")
-    sig = [t for t in tests if t.p_value < level]
+    sig = [t for t in tests if t.p_value < s.level]
     partly = "" if not sig else (f" ({len(sig)} candidates are significant, but none lowers the "
-                                 f"{cv_words} by {min_gain:.0%})")
+                                 f"{cv_words} by {s.min_gain:.0%})")
     strong = [f for f in follow if f.r2 >= FOLLOWS_R2]
     text = (f"The model is NOT adequate ({ratio}) and no catalogue effect improves "
             f"its predictions{partly}.")
@@ -252,37 +244,32 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
     return text
 
 
-def _chi2_record(test, tolerance, practical_um, repeated) -> dict:
+def _chi2_record(test, s, repeated) -> dict:
     """The χ² test for the diagnosis JSON, with the σ of repeated readings (or None)."""
     lo, hi = test.ratio_interval()
     return {"statistic": test.statistic, "dof": test.dof, "p_value": test.p_value,
             "sigma_source": test.sigma_source, "sigma_hat_mm": test.sigma_hat_mm,
             "sigma_ratio": test.ratio, "sigma_ratio_interval": [lo, hi],
-            "tolerance": tolerance, "chi2_adequate": test.adequate,
-            "misfit_um": test.misfit_um, "practical_um": practical_um,
+            "tolerance": s.tolerance, "chi2_adequate": test.adequate,
+            "misfit_um": test.misfit_um, "practical_um": s.practical_um,
             "repeated": None if repeated is None else repeated.to_dict()}
 
 
-def _outlier_result(model, measurements, res, test, cv, split, outliers, level, tolerance,
-                    practical_um, min_gain, notes, repeated) -> DiagnosisResult:
+def _outlier_result(model, measurements, res, test, cv, split, outliers, s, notes,
+                    repeated) -> DiagnosisResult:
     """The diagnosis of data with gross outliers: they are named, no effect is proposed."""
     flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
     verdict = outlier_verdict(outliers, _adequacy_words(test))
     return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, False,
-                           _chi2_record(test, tolerance, practical_um, repeated), (), (),
-                           tuple(flagged),
-                           level, verdict, None, int(res.weighted.size),
-                           cv_grouping=split.description, min_gain=min_gain,
+                           _chi2_record(test, s, repeated), (), (), tuple(flagged),
+                           s.level, verdict, None, int(res.weighted.size),
+                           cv_grouping=split.description, min_gain=s.min_gain,
                            gross_errors=tuple(dict.fromkeys(o.pose for o in outliers)),
                            notes=tuple(n for n in notes if n), outliers=outliers)
 
 
-def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
-             grouping: str = "auto", cv_top: int = 5, min_gain: float = 0.02,
-             tolerance: float = 0.05, progress=None, registry=None,
-             sigma: float | None = None, practical_um: float = 2.0,
-             candidate_fits: dict | None = None, batch=None,
-             workers: int | None = None) -> DiagnosisResult:
+def diagnose(model, measurements, fit=None, *, settings: DiagnosisSettings | None = None,
+             sigma: float | None = None, registry=None, progress=None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
 
     Parameters
@@ -294,59 +281,45 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
         (:func:`~doe_calib.estimation.sigma.resolve_sigma`).
     fit : IdentificationResult, optional
         The model's fit to these data; identified here when not given.
-    level : float
-        Significance level (Bonferroni-adjusted over every candidate and shape).
-    folds : int
-        Folds of the cross-validation (``pose`` and ``region`` groupings).
-    grouping : {"auto", "pose", "session", "region"}
-        What a fold holds out (:mod:`~doe_calib.diagnosis.cross_validation`).
-    cv_top : int
-        Cross-validate every significant shape of this many (effect, joint)
-        groups with the strongest evidence.
-    min_gain : float
-        Material gain: an effect is proposed only if it lowers the
-        cross-validated RMS by at least this fraction.
-    tolerance : float
-        σ̂ within this fraction of σ, with no material candidate, is adequate
-        even when the χ² test (too sharp at large N) rejects.
-    progress : callable, optional
-        ``progress(done, total, note)`` while candidates are cross-validated.
+    settings : DiagnosisSettings, optional
+        Significance level, cross-validation, material gain, adequacy tolerances,
+        threads (:class:`~doe_calib.diagnosis.settings.DiagnosisSettings`; default its
+        defaults).
+    sigma : float, optional
+        σ per coordinate, m, for every reading (replacing the readings' own).
     registry : EffectRegistry, optional
         Its :meth:`~doe_calib.model.effects.registry.EffectRegistry.catalogue` is what
         is tested as missing (default the built-in catalogue; user effects:
         ``DEFAULT_REGISTRY.with_file(path)``).
-    sigma : float, optional
-        σ per coordinate, m, for every reading (replacing the readings' own).
-    practical_um : float
-        Practical size, µm per coordinate: a misfit beyond the noise
-        √(σ̂² − σ²) below it, with no material candidate, is adequate even when
-        the χ² test and ``tolerance`` reject (the size is stated in the verdict).
-    candidate_fits : dict, optional
-        Filled, when the candidates were fitted on every reading (no screening subset),
-        with spec → (``model`` + the effect, its fit to ``measurements`` from this fit's
-        values, the effect's parameters at nominal): what
-        :func:`~doe_calib.diagnosis.refine.refine` takes on, not fitting again.
-    batch : CandidateBatch, optional
-        The candidates of a model ``model`` grew from, built once (refine's, from
-        :func:`candidate_batch_for`): the candidates' columns and grown models come from it
-        when it holds them all, instead of from a batch built here.
-    workers : int, optional
-        Threads fitting the chosen candidates at once (default: the machine's cores, at
-        most 4; 1: one after another). The result does not depend on it
-        (:mod:`~doe_calib.diagnosis.candidate_scoring`).
+    progress : callable, optional
+        ``progress(done, total, note)`` as each chosen candidate is cross-validated:
+        candidates done, their number, the effect's spec.
 
     Returns
     -------
     DiagnosisResult
-
-    Raises
-    ------
-    OptionError
-        A setting out of its range (:func:`~doe_calib.diagnosis.settings.check_settings`;
-        ``cv_top`` a whole number ≥ 1).
     """
-    check_settings(level, folds, min_gain, tolerance, practical_um, workers)
-    whole("cv_top", cv_top, 1)
+    return diagnosis_step(model, measurements, fit, settings, sigma=sigma,
+                          registry=registry, progress=progress)[0]
+
+
+def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | None = None, *,
+                   sigma: float | None = None, registry=None, progress=None, batch=None):
+    """:func:`diagnose` as each step of :func:`~doe_calib.diagnosis.refine.refine` runs it.
+
+    ``batch``: the candidates of a model ``model`` grew from, built once
+    (:func:`candidate_batch_for`); the candidates' columns and grown models come from it
+    when it holds them all, instead of from a batch built here.
+
+    Returns
+    -------
+    (DiagnosisResult, dict)
+        The diagnosis, and, when the candidates were fitted on every reading (no
+        screening subset), spec → (``model`` + the effect, its fit to ``measurements``
+        from this fit's values): what refine takes on, not fitting again.
+    """
+    s = DiagnosisSettings() if settings is None else settings
+    level, min_gain = s.level, s.min_gain
     settled = resolve_sigma(model, measurements, sigma, fit=fit)
     if settled.measurements is not measurements:  # σ settled here: fit at that σ
         measurements, fit = settled.measurements, None
@@ -360,36 +333,33 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     doubt = None if settled.repeated is None or test.sigma_source == REPEATED else \
         settled.repeated.disagreement(sigma_mm)
     copies = copies_words(measurements, model.tool.names)
-    outliers = gross_outliers(model, measurements, fit, level, tolerance, practical_um)
-    units = kgf_finding(params, fit.std(a_posteriori=True), model.robot,
+    outliers = gross_outliers(model, measurements, fit, level, s.tolerance, s.practical_um)
+    units = kgf_finding(params, fit.std(), model.robot,
                         measurements.configurations)
     screen, screened = screening_set(measurements)
-    split = make_folds(screen, folds, grouping)
+    split = make_folds(screen, s.folds, s.grouping)
     cv = cross_validated_rms(model, screen, params, split)
     if outliers:  # no effect is tested on data an outlier pulls
-        return _outlier_result(model, measurements, res, test, cv, split, outliers, level,
-                               tolerance, practical_um, min_gain,
-                               (units, screened, doubt, copies), settled.repeated)
+        return _outlier_result(model, measurements, res, test, cv, split, outliers, s,
+                               (units, screened, doubt, copies), settled.repeated), {}
     tried = candidate_tests(model, screen, params, registry=registry, batch=batch)
     tests = list(tried.tests)
-    chosen = _groups_to_try(tests, level, cv_top)
-    scored = {}
+    chosen = _groups_to_try(tests, level, s.cv_top)
+    scored, fitted = {}, {}
     effects = [parse_effect(t.spec, registry=registry) for t in chosen]
     builders = grown_model_builders(model, effects, screen, params.values, batch)
-    scores = score_candidates(builders, effects, params, screen, split, workers,
-                              progress=None if progress is None else
-                              (lambda i, n: progress(i, n, chosen[i].spec)))
+    scores = score_candidates(builders, effects, params, screen, split, s.workers, progress)
     for t, score in zip(chosen, scores):
         if score is None:  # the grown model's fit failed
             scored[t.spec] = t.with_cv(float("nan"))
             continue
-        if candidate_fits is not None and screen is measurements:
-            candidate_fits[t.spec] = (score.model, score.fit)
+        if screen is measurements:
+            fitted[t.spec] = (score.model, score.fit)
         scored[t.spec] = t.with_cv(score.cv_rms_mm, score.rows, score.odd)
     ranked = sorted(scored.values(), key=lambda t: (_cv_key(t), t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]
     proposed = _proposal(ranked, cv, level, min_gain)
-    adequate = _is_adequate(test, proposed, tolerance, practical_um)
+    adequate = _is_adequate(test, proposed, s)
     m = len(measurements.configurations)
     size = np.bincount(res.config, (res.weighted ** 2).sum(axis=1), minlength=m)
     count = np.bincount(res.config, minlength=m) * 3
@@ -400,8 +370,9 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
     n_poses = len(set(measurements.configurations.pose))
     gross = not adequate and proposed is None and _gross_errors(test, flagged, follow, n_poses)
-    verdict = _verdict(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
-                       gross, level, min_gain, tolerance, practical_um, registry)
+    verdict = _verdict_words(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
+                             gross, s, registry) \
+        + _confounded_words(ranked, proposed, level)
     odd = next((t for t in _material(ranked, cv, level, min_gain) if t.implausible), None)
     lead = "" if odd is None else sign_lead(model, odd, proposed, cv, split,
                                             describe(odd, model.robot, registry), registry)
@@ -413,7 +384,7 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
     elif odd is not None and (proposed is None or odd.cv_rms_mm < proposed.cv_rms_mm):
         verdict += (f" Not proposed although it predicts better (cross-validated RMS "
                     f"{odd.cv_rms_mm:.3g} mm): {odd.spec}, {odd.implausible}.")
-    chi2 = _chi2_record(test, tolerance, practical_um, settled.repeated)
+    chi2 = _chi2_record(test, s, settled.repeated)
     spec = None if proposed is None else proposed.spec
     candidates = candidate_records(ranked, model.robot,
                                    [describe(t, model.robot, registry) for t in ranked],
@@ -424,4 +395,4 @@ def diagnose(model, measurements, fit=None, level: float = 0.01, folds: int = 5,
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
                            notes=tuple(n for n in (units, screened, tried.note(), doubt, copies)
-                                       if n))
+                                       if n)), fitted

@@ -178,7 +178,8 @@ class DiagnosisResult:
                  *self._candidate_lines(top)]
         best = self.best
         if best is not None:
-            lines += ["", f"Proposed: {best.spec}, {best.words or best.effect}"]
+            lines += ["", f"Proposed: {best.spec}, {best.words or best.effect} (fitted size "
+                          f"± σ̂-scaled std)"]
             if best.sizes:
                 lines += [f"  {s}" for s in best.sizes]
         if self.follows:

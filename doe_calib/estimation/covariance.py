@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from doe_calib.io.setting_ranges import positive
 from doe_calib.model.evaluation import evaluate, observation_matrix
 
 
@@ -82,9 +83,10 @@ def predict_covariance(model, params, configurations, sigma: float,
     configurations : Configurations
         Planned poses with their load cases.
     sigma : float
-        Tracker noise per coordinate, metres.
+        Tracker noise per coordinate, metres, > 0.
     """
-    info = information_matrix(model, params, configurations, sigma, markers)
+    info = information_matrix(model, params, configurations, positive("sigma", sigma, "m"),
+                              markers)
     return CovariancePrediction(params, np.linalg.pinv(info), info)
 
 

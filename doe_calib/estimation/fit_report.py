@@ -13,6 +13,7 @@ import numpy as np
 
 from doe_calib.estimation.preparation import NOT_SEPARABLE
 from doe_calib.estimation.reduced_set import combinations
+from doe_calib.io.setting_ranges import fraction
 
 #: Its warning, which the grouped note replaces.
 _FIXED_WARNING = re.compile(r"^\d+ parameters fixed as not identifiable \(see the fixed list\)$")
@@ -78,10 +79,10 @@ def _variable_line(est, sigma_given: bool) -> str:
     rel = est.relative_std
     pct = ("(value 0)" if not np.isfinite(rel) else
            f"({100 * rel:.2g} %)" if rel < 1 else f"({100 * rel:.0f} %)")
-    line = (f"    {est.name:<20} = {est.value * k:>13.6g} ± {est.std_a_posteriori * k:<10.4g}"
+    line = (f"    {est.name:<20} = {est.value * k:>13.6g} ± {est.std * k:<10.4g}"
             f"{pct:<12} {u:<11} (nominal {est.nominal * k:.6g})")
     if sigma_given:
-        line += f"  a priori ± {est.std * k:.4g}"
+        line += f"  a priori ± {est.std_apriori * k:.4g}"
     if est.role == "reduced set":
         line += "  [reduced set]"
     return line
@@ -97,7 +98,9 @@ def correlation_pairs(result, min_correl: float) -> list[tuple[str, str, float]]
 
 
 def fit_report(result, min_correl: float = 0.3) -> str:
-    """The whole text report of ``result``; correlations above ``min_correl`` in |ρ|."""
+    """The whole text report of ``result``; correlations above ``min_correl`` in |ρ|, a
+    fraction from 0 to 1."""
+    fraction("min_correl", min_correl)
     p, res, stats = result.parameters, result.residuals, result.fit_statistics
     model = result.model or "(base + markers)"
     sigma = (f"σ estimated from the residuals: {result.sigma_mm:.4g} mm"

@@ -7,7 +7,7 @@ compare); every result ends with the plausibility findings.
 from __future__ import annotations
 
 import warnings
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 from doe_calib.errors import (
     ConditioningWarning,
@@ -15,6 +15,7 @@ from doe_calib.errors import (
     DataWarning,
     DoeCalibWarning,
     MisfitWarning,
+    OptionError,
     PlausibilityWarning,
 )
 from doe_calib.estimation import plausibility
@@ -23,13 +24,87 @@ from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
 from doe_calib.estimation.selection import SELECTIONS, select as choose
 from doe_calib.estimation.sigma import provisional, resolve_sigma
 from doe_calib.io.repeated_readings import copies_words
+from doe_calib.io.setting_ranges import positive, whole
 from doe_calib.model.marker_model import for_workload
 
 ESTIMATORS = ("point", "two-step", "pose")
+#: The setting each estimator has alone.
+OWN_SETTING = {"two-step": "tol", "pose": "normalisation"}
 
 
-def identify(model, measurements, params=None, estimator: str = "point", progress=None,
-             sigma: float | None = None, select: str = "cv", **options):
+@dataclass(frozen=True)
+class FitSettings:
+    """How :func:`identify` fits, each setting checked on construction.
+
+    Attributes
+    ----------
+    select : {"cv", "none"}
+        ``cv``: when the poses are few for the free parameters, leave at nominal, one
+        at a time, the parameters the data separate least from the others, as long as
+        that lowers the predicted error at new poses (leave-one-pose-out,
+        :mod:`~doe_calib.estimation.selection`); the result's ``selection`` says which
+        and why. ``none``: every parameter the data can separate is fitted.
+    register : bool
+        Start the base pose from a point-set registration of the readings (False:
+        from the start values, e.g. those of a fit the model grew from).
+    max_iterations : int, optional
+        Iterations (``two-step``: alternations) allowed, ≥ 1; default the
+        estimator's own (200; 500 for ``two-step``).
+    tol : float, optional
+        ``two-step`` only: its convergence tolerance, > 0 (default 1e-10).
+    normalisation : float, optional
+        ``pose`` only: λ weighting orientation against position residuals, m/rad,
+        > 0 (default from the tool).
+
+    Raises
+    ------
+    OptionError
+        A setting out of its range, naming it (``max_iterations=0: …``).
+    """
+
+    select: str = "cv"
+    register: bool = True
+    max_iterations: int | None = None
+    tol: float | None = None
+    normalisation: float | None = None
+
+    def __post_init__(self):
+        if self.select not in SELECTIONS:
+            raise OptionError(f"select={self.select!r}: choose one of {', '.join(SELECTIONS)}")
+        if self.max_iterations is not None:
+            object.__setattr__(self, "max_iterations",
+                               whole("max_iterations", self.max_iterations, 1, "iteration"))
+        for name, unit in (("tol", ""), ("normalisation", "m/rad")):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, positive(name, getattr(self, name), unit))
+
+    def options(self, estimator: str) -> dict:
+        """The keyword arguments of ``estimator``'s own function.
+
+        Raises
+        ------
+        OptionError
+            An unknown estimator, or the setting of another one (``tol`` is
+            ``two-step``'s, ``normalisation`` is ``pose``'s).
+        """
+        if estimator not in ESTIMATORS:
+            raise OptionError(f"estimator={estimator!r}: choose one of {', '.join(ESTIMATORS)}")
+        for other, name in OWN_SETTING.items():
+            if other != estimator and getattr(self, name) is not None:
+                raise OptionError(f"{name}={getattr(self, name)!r}: a setting of the {other} "
+                                  f"estimator, not of {estimator}")
+        names = ("max_iterations", OWN_SETTING.get(estimator))
+        return {"register": self.register} | {n: getattr(self, n) for n in names
+                                              if n and getattr(self, n) is not None}
+
+
+#: The settings of fits run many times to compare models: every parameter kept.
+WHOLE = FitSettings(select="none")
+
+
+def identify(model, measurements, params=None, *, estimator: str = "point",
+             settings: FitSettings | None = None, sigma: float | None = None,
+             progress=None):
     """Identify the model's parameters from marker readings.
 
     Parameters
@@ -45,20 +120,17 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
         ``point``: all marker coordinates, Levenberg–Marquardt (default).
         ``two-step``: the paper's alternation of base+markers and robot
         parameters. ``pose``: full poses reconstructed from the markers, only
-        for comparison (``normalisation`` option, m/rad).
-    progress : callable(done, total, note), optional
-        Told of long steps (compiling the model, each iteration of ``point``).
+        for comparison.
+    settings : FitSettings, optional
+        Parameter selection, iterations and the estimator's own setting (default
+        ``FitSettings()``: selection ``cv``).
     sigma : float, optional
         σ per coordinate, m, for every reading (it replaces the readings' own);
         default: theirs, or, when they have none, σ̂ of this fit
         (:func:`~doe_calib.estimation.sigma.resolve_sigma`).
-    select : {"cv", "none"}
-        ``cv`` (default): when the poses are few for the free parameters, leave at
-        nominal, one at a time, the parameters the data separate least from the
-        others, as long as that lowers the predicted error at new poses
-        (leave-one-pose-out, :mod:`~doe_calib.estimation.selection`); the result's
-        ``selection`` says which and why. ``none``: every parameter the data can
-        separate is fitted.
+    progress : callable, optional
+        ``progress(done, total, note)`` told of long steps: compiling the model
+        (``total`` None), each iteration of ``point`` (``total`` its limit).
 
     Returns
     -------
@@ -70,12 +142,8 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
         The σ of repeated readings, when poses were read more than once, is reported
         beside (``sigma_repeated``), never used in place of σ.
     """
-    if select not in SELECTIONS:
-        raise ValueError(f"unknown parameter selection {select!r}; choose one of "
-                         f"{', '.join(SELECTIONS)}")
-    if estimator not in ESTIMATORS:
-        raise ValueError(f"unknown estimator {estimator!r}; choose one of "
-                         f"{', '.join(ESTIMATORS)}")
+    settings = FitSettings() if settings is None else settings
+    options = settings.options(estimator)
     settled = resolve_sigma(model, measurements, sigma, in_fit=True)
     measurements = provisional(settled.measurements)
     model = for_workload(model, FIT_PASSES * len(measurements.configurations), progress)
@@ -84,7 +152,7 @@ def identify(model, measurements, params=None, estimator: str = "point", progres
         return replace(_estimate(model, measurements, start, estimator, progress, options),
                        sigma_repeated=settled.repeated)
 
-    if select == "none":
+    if settings.select == "none":
         return with_plausibility(model, measurements, fit(params))
     said = {}  # each fit's warnings, held back: only the kept fit's are told
 
@@ -160,17 +228,17 @@ def with_plausibility(model, measurements, result):
         if issued else result
 
 
-def identify_quietly(model, measurements, params=None, **options):
+def identify_quietly(model, measurements, params=None, *, settings: FitSettings = WHOLE,
+                     sigma: float | None = None):
     """:func:`identify` for fits run many times (cross-validation, diagnosis, refinement).
 
     Identifiability, conditioning, convergence and plausibility trouble is not
     issued as warnings: it stays, in words, in the result's ``warnings``. The fit keeps
-    every parameter (``select="none"``) unless ``select`` is given, so the models these
-    callers compare are each fitted whole. Only the
+    every parameter (:data:`WHOLE`, ``select="none"``) unless ``settings`` say
+    otherwise, so the models these callers compare are each fitted whole. Only the
     toolkit's own warnings (:class:`~doe_calib.errors.DoeCalibWarning`) are
     held back; numpy's, scipy's and CasADi's still reach the caller.
     """
-    options.setdefault("select", "none")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DoeCalibWarning)
-        return identify(model, measurements, params, **options)
+        return identify(model, measurements, params, settings=settings, sigma=sigma)

@@ -19,9 +19,10 @@ class ParameterEstimate:
     value, nominal : float
         Identified and nominal value, SI.
     std : float
-        Standard deviation for the a-priori σ, SI (0 when fixed).
-    std_a_posteriori : float
-        ``std`` scaled by σ̂/σ, SI (equal to ``std`` when σ was estimated).
+        Standard deviation scaled by σ̂/σ, SI (0 when fixed).
+    std_apriori : float
+        Standard deviation for the a-priori σ, SI (equal to ``std`` when σ was
+        estimated).
     unit, display_unit : str
         SI and display unit (e.g. ``rad`` and ``deg``).
     display_factor : float
@@ -45,7 +46,7 @@ class ParameterEstimate:
     block: str
     value: float
     std: float
-    std_a_posteriori: float
+    std_apriori: float
     nominal: float
     unit: str
     display_unit: str
@@ -63,14 +64,9 @@ class ParameterEstimate:
         return self.value * self.display_factor
 
     @property
-    def std_display(self) -> float:
-        """σ̂-scaled std in the display unit."""
-        return self.std_a_posteriori * self.display_factor
-
-    @property
     def relative_std(self) -> float:
         """σ̂-scaled std over |value| (NaN when the value is 0)."""
-        return self.std_a_posteriori / abs(self.value) if self.value else float("nan")
+        return self.std / abs(self.value) if self.value else float("nan")
 
     def __str__(self) -> str:
         k, u = self.display_factor, self.display_unit
@@ -78,9 +74,9 @@ class ParameterEstimate:
         if self.free:
             rel = self.relative_std
             pct = f" ({100 * rel:.2g} %)" if np.isfinite(rel) else ""
-            head += f" ± {self.std_a_posteriori * k:.3g}{pct} {u}"
-            if self.std_a_posteriori != self.std:
-                head += f" (a priori ± {self.std * k:.3g})"
+            head += f" ± {self.std * k:.3g}{pct} {u}"
+            if self.std_apriori != self.std:
+                head += f" (σ̂-scaled; a priori ± {self.std_apriori * k:.3g})"
         else:
             head += f" {u}, fixed: {self.fixed_reason or 'by request'}"
         lines = [head, f"  nominal {self.nominal * k:.6g} {u}; {self.block}: {self.description}"]
@@ -94,7 +90,7 @@ class ParameterEstimate:
 
     def __repr__(self) -> str:
         k = self.display_factor
-        state = (f"± {self.std_a_posteriori * k:.3g}" if self.free else "fixed")
+        state = (f"± {self.std * k:.3g}" if self.free else "fixed")
         return (f"<ParameterEstimate {self.name} = {self.value * k:.6g} {state} "
                 f"{self.display_unit}>")
 
@@ -112,7 +108,7 @@ def parameter_estimate(result, name: str) -> ParameterEstimate:
     i = p.position(name)
     name = p.names[i]  # the parameter's own name, however its joint was written
     par = p.parameters[i]
-    std, post = result.std(name), result.std(name, a_posteriori=True)
+    std, prior = result.std(name), result.std(name, apriori=True)
     correlations = ()
     if p.free[i]:
         free = result.free_names
@@ -122,7 +118,7 @@ def parameter_estimate(result, name: str) -> ParameterEstimate:
         correlations = tuple((free[k], float(rho[k])) for k in order)
     return ParameterEstimate(
         name=par.name, block=par.block, value=float(p.values[i]), std=std,
-        std_a_posteriori=post, nominal=par.nominal, unit=par.unit,
+        std_apriori=prior, nominal=par.nominal, unit=par.unit,
         display_unit=par.display_unit, display_factor=par.display_factor,
         free=bool(p.free[i]), fixed_reason=p.fixed_reason[i], correlations=correlations,
         description=par.description, role=role(result, name),

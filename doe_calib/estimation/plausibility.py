@@ -215,8 +215,8 @@ def check(model, measurements, result) -> tuple:
     if bad_fit:
         found.append(angles_in_radians(measurements.configurations, robot))
     found += placement_findings(result.parameters, robot)
-    found += parameter_findings(result.parameters, result.std(a_posteriori=True))
-    found.append(kgf_finding(result.parameters, result.std(a_posteriori=True), robot,
+    found += parameter_findings(result.parameters, result.std())
+    found.append(kgf_finding(result.parameters, result.std(), robot,
                              measurements.configurations))
     found.append(marker_layout_finding(model.tool))
     return tuple(f for f in found if f)

@@ -18,7 +18,6 @@ from doe_calib.estimation.covariance import covariance_from_r_factor
 from doe_calib.estimation.point_fit import point_fit
 from doe_calib.estimation.preparation import prepare
 from doe_calib.estimation.result import IdentificationResult
-from doe_calib.io.setting_ranges import whole
 
 log = logging.getLogger(__name__)
 
@@ -41,15 +40,10 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
         Jacobian evaluations allowed.
     register : bool
         Start the base pose from a point-set registration.
-    progress : callable(done, total, note), optional
-        Told of each iteration (:mod:`doe_calib.runtime.progress`).
-
-    Raises
-    ------
-    OptionError
-        ``max_iterations`` is not a whole number ≥ 1.
+    progress : callable, optional
+        ``progress(done, total, note)`` after each iteration: iterations done, the
+        limit, the weighted RMS of the residuals.
     """
-    whole("max_iterations", max_iterations, 1, "iteration")
     params, notes, start, absorbed = prepare(model, measurements, params, register)
     sol = point_fit(model, measurements, params, max_iterations, progress, start)
     scale = params.scales[params.free]

@@ -19,7 +19,6 @@ from doe_calib.errors import ConvergenceWarning, DataError
 from doe_calib.estimation.assembly import finish
 from doe_calib.estimation.preparation import prepare
 from doe_calib.estimation.registration import register
-from doe_calib.io.setting_ranges import positive, whole
 from doe_calib.model.evaluation import evaluate
 from doe_calib.model.pose_model import build_pose_error
 from doe_calib.model.rotations import skew_matrix
@@ -83,15 +82,7 @@ def identify_pose(model, measurements, params=None, normalisation: float | None 
         default :func:`default_normalisation` of the tool.
     max_iterations : int
         Jacobian evaluations allowed (ten residual evaluations each).
-
-    Raises
-    ------
-    OptionError
-        ``normalisation`` is not positive, or ``max_iterations`` not a whole number ≥ 1.
     """
-    if normalisation is not None:
-        positive("normalisation", normalisation, "m/rad")
-    whole("max_iterations", max_iterations, 1, "iteration")
     check_tool_fixes_the_pose(model.tool.position_array, model.tool.source)
     params = model.nominal() if params is None else params
     params = params.fixed(["markers"], "the pose estimator takes the marker positions as known")

@@ -7,6 +7,7 @@ import numpy as np
 
 from doe_calib.errors import DataError, ModelError
 from doe_calib.io.measurements import Configurations, Measurements
+from doe_calib.estimation.labelled import read_only
 from doe_calib.estimation.measured_region import outside_joints
 from doe_calib.estimation.session import reregister, session_notes
 from doe_calib.estimation.unseen import measured_markers, unseen_notes, unseen_part
@@ -15,14 +16,15 @@ from doe_calib.model.evaluation import observation_matrix
 
 @dataclass(frozen=True, eq=False)
 class Prediction:
-    """Predicted marker positions of readings, tracker frame.
+    """Predicted marker positions of readings, tracker frame; its arrays are read-only.
 
     Attributes
     ----------
     xyz : ndarray, shape (K, 3)
         Predicted position of each reading's marker, m.
     std : ndarray, shape (K, 3)
-        Its std per coordinate from the parameter covariance, σ̂-scaled, m.
+        Its std per coordinate from the parameter covariance, σ̂-scaled (unless
+        predicted ``apriori``), m.
     config, marker : ndarray of int, shape (K,)
         Configuration and marker index of each reading.
     marker_names : tuple of str
@@ -41,6 +43,10 @@ class Prediction:
     marker_names: tuple
     registration: object = None
     notes: tuple = field(default=())
+
+    def __post_init__(self):
+        for name in ("xyz", "std", "config", "marker"):
+            object.__setattr__(self, name, read_only(getattr(self, name), None))
 
     @property
     def xyz_mm(self) -> np.ndarray:
@@ -139,7 +145,7 @@ def aligned_parameters(model, result):
                          f"({exc.args[0]}); was its effect file changed?") from None
 
 
-def predict(result, data, model=None, *, registry=None, a_posteriori: bool = True,
+def predict(result, data, model=None, *, registry=None, apriori: bool = False,
             register: str | None = None, tolerance: dict | None = None) -> Prediction:
     """Marker positions ``result`` predicts for readings or configurations.
 
@@ -154,9 +160,9 @@ def predict(result, data, model=None, *, registry=None, a_posteriori: bool = Tru
         not given (:func:`result_model`).
     registry : EffectRegistry, optional
         Names the model's effects when it is built here (a user effect's file).
-    a_posteriori : bool
-        Scale the covariance by (σ̂/σ)² (default); False: for the a-priori σ
-        (what ``doe-calib predict`` writes, as it always has).
+    apriori : bool
+        The covariance for the a-priori σ (what ``doe-calib predict`` writes);
+        default: scaled by (σ̂/σ)².
     register : {None, "frame", "frame+tool"}
         Re-fit the tracker frame (the 6 base parameters), or also the tool
         mounting (the marker positions), on the readings before predicting,
@@ -212,7 +218,7 @@ def predict(result, data, model=None, *, registry=None, a_posteriori: bool = Tru
         params = params.with_values(done.parameters.values)
     x, b = observation_matrix(model, params.values, cfg)
     bf = b[config, marker][..., params.free]
-    cov = result.cov_params(a_posteriori=a_posteriori)
+    cov = np.asarray(result.cov_params(apriori=apriori))
     var = np.einsum("kif,fg,kig->ki", bf, cov, bf)
     part = unseen_part(model, params, measured_markers(result), tolerance)
     notes = ()

@@ -87,7 +87,7 @@ def combinations(result) -> tuple:
         par = p.parameters[i]
         value = float(p.values[i]) + sum(c * p[d] for d, c in terms)
         out.append(Combination(name, tuple(terms), value,
-                               result.std(name, a_posteriori=True), par.unit,
+                               result.std(name), par.unit,
                                par.display_unit, par.display_factor,
                                _expression(p, name, terms)))
     return tuple(out)

@@ -1,13 +1,14 @@
 """Identification results: a plain, immutable object with ``summary()`` and a JSON round-trip."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from doe_calib.errors import DataError
 from doe_calib.estimation.fit_report import fit_report
 from doe_calib.estimation.fit_statistics import FitStatistics, fit_statistics
+from doe_calib.estimation.labelled import Labelled, read_only
 from doe_calib.estimation.repeatability import Repeatability
 from doe_calib.estimation.parameter_estimate import ParameterEstimate, parameter_estimate
 from doe_calib.estimation.predict import Prediction, predict
@@ -16,6 +17,7 @@ from doe_calib.estimation.selection import Selection
 from doe_calib.estimation.covariance import parameter_std, std_from_covariance
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import SIGMA_SOURCES
+from doe_calib.io.setting_ranges import probability
 from doe_calib.model.parameters import ParameterSet
 from doe_calib.model.robot import Robot
 from doe_calib.model.tool import Tool
@@ -38,7 +40,8 @@ class IdentificationResult:
     parameters : ParameterSet
         Identified values (SI) and which were free; fixed ones carry the reason.
     covariance : ndarray, shape (F, F)
-        Covariance of the free parameters (SI) for the a-priori σ.
+        Covariance of the free parameters (SI) for the a-priori σ; what the
+        methods answer is scaled by (σ̂/σ)² unless asked ``apriori=True``.
     sigma_ratio : float
         A-posteriori σ̂ / a-priori σ, from ‖r_w‖² / (3K − rank).
     residuals : dict
@@ -75,11 +78,18 @@ class IdentificationResult:
         (rad, m): the region the readings cover. None when not known (a result
         written before it was kept).
 
+    Every array it holds or answers is read-only. As in statsmodels, ``std``,
+    ``cov_params``, ``conf_int``, ``predict``, ``[name].std``, the data frame and the
+    JSON give the σ̂-scaled (a-posteriori) uncertainty; ``apriori=True`` (``std_apriori``
+    in the frame and the file) the one for the a-priori σ. With σ estimated the two
+    are one (σ̂/σ = 1).
+
     Examples
     --------
     >>> result["dq_a2"]                        # doctest: +SKIP
     <ParameterEstimate dq_a2 = 0.0123 ± 0.0004 deg>
-    >>> result.std("dq_a2", a_posteriori=True)  # doctest: +SKIP
+    >>> result.std("dq_j2", apriori=True)      # doctest: +SKIP
+    >>> result.cov_params()["dq_a2", "dq_a3"]  # doctest: +SKIP
     >>> print(result.fit_report(min_correl=0.5))  # doctest: +SKIP
     """
 
@@ -104,6 +114,12 @@ class IdentificationResult:
     joint_range: np.ndarray | None = None
 
     def __post_init__(self):
+        p = self.parameters
+        object.__setattr__(self, "parameters", replace(p, values=read_only(p.values),
+                                                       free=read_only(p.free, bool)))
+        object.__setattr__(self, "covariance", read_only(self.covariance))
+        if self.joint_range is not None:
+            object.__setattr__(self, "joint_range", read_only(self.joint_range))
         if not self.sigma_source:
             object.__setattr__(self, "sigma_source",
                                "estimated" if self.sigma_estimated else "given")
@@ -125,26 +141,29 @@ class IdentificationResult:
         """
         return parameter_estimate(self, name)
 
-    def std(self, name: str | None = None, *, a_posteriori: bool = False):
-        """Standard deviation (SI); 0 for fixed parameters.
+    def std(self, name: str | None = None, *, apriori: bool = False):
+        """Standard deviation (SI), σ̂-scaled; 0 for fixed parameters.
 
         Parameters
         ----------
         name : str, optional
-            One parameter: its std as a float. Default: every parameter,
-            ndarray of shape (P,).
-        a_posteriori : bool
-            Scaled by σ̂/σ (keyword only).
+            One parameter (a joint may be written ``j2``): its std as a float.
+            Default: every parameter, read-only ndarray of shape (P,).
+        apriori : bool
+            For the a-priori σ instead (keyword only).
         """
-        out = parameter_std(self.covariance, self.parameters.free) * (
-            self.sigma_ratio if a_posteriori else 1.0)
+        scale = 1.0 if apriori else self.sigma_ratio
+        out = read_only(parameter_std(self.covariance, self.parameters.free) * scale)
         if name is None:
             return out
         return float(out[self.parameters.position(name)])
 
-    def cov_params(self, a_posteriori: bool = False) -> np.ndarray:
-        """Covariance of the free parameters (SI), shape (F, F)."""
-        return self.covariance * (self.sigma_ratio ** 2 if a_posteriori else 1.0)
+    def cov_params(self, *, apriori: bool = False) -> Labelled:
+        """Covariance of the free parameters (SI), σ̂-scaled (``apriori``: for the a-priori
+        σ), (F, F) labelled by their names: ``np.asarray`` gives the array."""
+        scale = 1.0 if apriori else self.sigma_ratio ** 2
+        return Labelled(self.covariance * scale, self.free_names, self.free_names,
+                        self.parameters.joints)
 
     def correlation(self) -> np.ndarray:
         """Correlation matrix of the free parameters, shape (F, F)."""
@@ -152,16 +171,16 @@ class IdentificationResult:
         s[s == 0] = 1.0
         return self.covariance / np.outer(s, s)
 
-    def conf_int(self, level: float = 0.95, *, a_posteriori: bool = True) -> np.ndarray:
-        """Two-sided normal confidence intervals (SI), shape (P, 2); zero width when fixed.
-
-        ``a_posteriori``: from the σ̂-scaled covariance (default) or the a-priori one.
-        """
+    def conf_int(self, level: float = 0.95, *, apriori: bool = False) -> Labelled:
+        """Two-sided normal confidence intervals (SI) from the σ̂-scaled std (``apriori``:
+        the a-priori one), (P, 2) labelled by parameter and ``lower``, ``upper``; zero
+        width when fixed."""
         from scipy.stats import norm
 
-        z = norm.ppf(0.5 + level / 2)
-        s = self.std(a_posteriori=a_posteriori)
-        return np.column_stack([self.parameters.values - z * s, self.parameters.values + z * s])
+        z = norm.ppf(0.5 + probability("level", level) / 2)
+        s, v = self.std(apriori=apriori), self.parameters.values
+        return Labelled(np.column_stack([v - z * s, v + z * s]), self.parameters.names,
+                        ("lower", "upper"), self.parameters.joints)
 
     def combinations(self) -> tuple:
         """The identifiable combinations of the reduced set's values, with their std
@@ -173,16 +192,18 @@ class IdentificationResult:
         """χ², dof, p-value, σ̂/σ with its interval, evaluations (:class:`FitStatistics`)."""
         return fit_statistics(self)
 
-    def predict(self, data, model=None, registry=None, *,
-                register: str | None = None) -> Prediction:
+    def predict(self, data, model=None, registry=None, *, register: str | None = None,
+                apriori: bool = False) -> Prediction:
         """Marker positions this result predicts (:func:`doe_calib.estimation.predict.predict`).
 
         Builds the model (CasADi) from the robot, tool and model string unless
         ``model`` is given; a user effect needs a ``registry`` holding its file.
         ``register="frame"`` or ``"frame+tool"`` re-fits the tracker frame (and
-        the tool mounting) on the readings first: a new session.
+        the tool mounting) on the readings first: a new session. The std is σ̂-scaled
+        (``apriori``: for the a-priori σ).
         """
-        return predict(self, data, model, registry=registry, register=register)
+        return predict(self, data, model, registry=registry, register=register,
+                       apriori=apriori)
 
     def fit_report(self, min_correl: float = 0.3) -> str:
         """Fit statistics, variables, correlations above ``min_correl``, residuals, notes."""
@@ -199,7 +220,8 @@ class IdentificationResult:
                 f"{' (σ estimated)' if self.sigma_estimated else ''}>")
 
     def to_dataframe(self):
-        """The parameters as a pandas DataFrame (display units), one row per parameter.
+        """The parameters as a pandas DataFrame (display units), one row per parameter;
+        ``std`` σ̂-scaled, ``std_apriori`` for the a-priori σ.
 
         Raises
         ------
@@ -215,7 +237,7 @@ class IdentificationResult:
             e = self[name]
             k = e.display_factor
             rows.append({"name": name, "block": e.block, "value": e.value * k,
-                         "std": e.std_a_posteriori * k, "std_a_priori": e.std * k,
+                         "std": e.std * k, "std_apriori": e.std_apriori * k,
                          "nominal": e.nominal * k, "unit": e.display_unit, "free": e.free,
                          "fixed_reason": e.fixed_reason, "role": e.role,
                          "description": e.description})
@@ -226,12 +248,13 @@ class IdentificationResult:
         return self.fit_report()
 
     def to_dict(self) -> dict:
-        """JSON-able dict (formats.md §5): parameters in display units (mm, deg, µrad/(N·m))."""
+        """JSON-able dict (formats.md §5): parameters in display units (mm, deg, µrad/(N·m)),
+        ``std`` σ̂-scaled and ``std_apriori`` for the a-priori σ."""
         rows = self.parameters.to_list()
-        std, std_post = self.std(), self.std(a_posteriori=True)
-        for r, par, s, sp in zip(rows, self.parameters.parameters, std, std_post):
+        for r, par, s, s0 in zip(rows, self.parameters.parameters, self.std(),
+                                 self.std(apriori=True)):
             r["std"] = s * par.display_factor
-            r["std_a_posteriori"] = sp * par.display_factor
+            r["std_apriori"] = s0 * par.display_factor
             r["role"] = role(self, par.name)
         return {"format": "doe_calib.identification", "version": FORMAT_VERSION,
                 "model": self.model, "estimator": self.estimator,

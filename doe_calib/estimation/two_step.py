@@ -17,7 +17,6 @@ from doe_calib.errors import ConvergenceWarning, SolverError
 from doe_calib.estimation.assembly import finish
 from doe_calib.estimation.preparation import prepare
 from doe_calib.estimation.weighted_residuals import weighted_residual
-from doe_calib.io.setting_ranges import positive, whole
 
 _STEP1_BLOCKS = ("base", "markers")
 
@@ -32,14 +31,7 @@ def identify_two_step(model, measurements, params=None, max_iterations: int = 50
         Alternations allowed (each is one step 1 and one step 2).
     tol : float
         Stop when every free parameter moves by less than ``tol`` × its scale.
-
-    Raises
-    ------
-    OptionError
-        ``max_iterations`` is not a whole number ≥ 1, or ``tol`` is not positive.
     """
-    whole("max_iterations", max_iterations, 1, "iteration")
-    positive("tol", tol)
     params, notes, _, absorbed = prepare(model, measurements, params, register)
     blocks = np.array([p.block in _STEP1_BLOCKS for p in params.parameters])
     steps = [params.free & blocks, params.free & ~blocks]

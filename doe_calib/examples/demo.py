@@ -129,7 +129,7 @@ def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> 
 
     say("7. Refining: add the best significant effect, re-identify, repeat until adequate…")
     grown = refine(start, meas, valid, fit=fit,
-                   progress=lambda i, text: say(f"   step {i}: {text}"))
+                   progress=lambda i, _, text: say(f"   step {i}: {text}"))
     grown.fit.to_json(out / "result.json")
     grown.to_json(out / "refine.json")
     for i, s in enumerate(grown.steps):

@@ -85,7 +85,7 @@ def compensated_design(result, tool, model=None) -> DesignResult:
     """The compensated rows as a design the exporters can write, in the program's order.
 
     A pose id that appears on several rows (one pose under several loads) gets
-    ``_<k>`` appended, since each row now has its own q′. A row whose target
+    ``_<k>`` appended, since each row has its own q′. A row whose target
     was not reached keeps its programmed q (the solver's last iterate is no
     joint value to send to a robot). Each row's load is named from its wrench
     (:func:`row_loads`, with ``model`` for the centre of mass), so rows under

@@ -5,8 +5,8 @@ Each check returns the value (a float, or an int for :func:`whole`) or raises
 the range allowed. A setting named like a command-line option (``"--level"``)
 is said as the option and its text (``--level 5: …``); any other name as a
 keyword argument (``level=5: …``). The command line's ``type=`` converters
-(:mod:`doe_calib.cli.options`) and the public functions share these checks, so
-``doe-calib diagnose --level 5`` and ``diagnose(model, meas, level=5)`` refuse
+(:mod:`doe_calib.cli.options`) and the settings objects share these checks, so
+``doe-calib diagnose --level 5`` and ``DiagnosisSettings(level=5)`` refuse
 the same value in the same words.
 
 >>> probability("level", 0.01)

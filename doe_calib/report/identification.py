@@ -21,7 +21,7 @@ def parameter_rows(result) -> list[list]:
     Values in display units (mm, deg, µrad/(N·m)); fixed parameters show why.
     """
     p = result.parameters
-    std, post = result.std(), result.std(a_posteriori=True)
+    std, post = result.std(apriori=True), result.std()
     rows = []
     for par, v, s, sp, free, why in zip(p.parameters, p.values, std, post, p.free,
                                          p.fixed_reason):

@@ -21,6 +21,7 @@ import numpy as np
 from doe_calib import Robot, Tool, build_model, diagnose, read_measurements
 from doe_calib.design.augment import augment_design, diagnosis_targets
 from doe_calib.diagnosis.refine import refine
+from doe_calib.diagnosis.settings import RefineSettings
 from doe_calib.io.measurements import concatenate
 from studies.independent import independent_sim
 
@@ -39,7 +40,7 @@ def _measure(sim, chain, truth, q, robot, tool, path, rng):
 
 
 def _refined(model, meas, held, max_steps):
-    r = refine(model, meas, validation=held, max_steps=max_steps)
+    r = refine(model, meas, validation=held, settings=RefineSettings(max_steps=max_steps))
     return {"model": r.final.model, "added": [e.spec for e in r.added],
             "held_out_rms_3d_mm": r.final.validation_rms_mm * np.sqrt(3),
             "start_held_out_rms_3d_mm": r.steps[0].validation_rms_mm * np.sqrt(3),

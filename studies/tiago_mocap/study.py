@@ -44,7 +44,7 @@ def _final_fit(robot, sessions, variant: Variant) -> dict:
         sessions = [with_load(s, variant.load_kg) for s in sessions]
     res = fit(model, sessions, False, variant.fixed).result
     rows = [r for r in res.parameters.to_list() if r["block"] != "markers"]
-    std = res.std() * [p.display_factor for p in res.parameters.parameters]
+    std = res.std(apriori=True) * [p.display_factor for p in res.parameters.parameters]
     by_name = dict(zip(res.parameters.names, std))
     for r in rows:
         r["std"] = float(by_name[r["name"]]) if r["free"] else None

@@ -31,7 +31,7 @@ DEFAULT_REGISTRY = EffectRegistry([
     Cyclic, Backlash, Thermal, LinkCompliance,
 ])
 
-#: Read-only alias of :data:`DEFAULT_REGISTRY`, for code written when the registry was a dict.
+#: :data:`DEFAULT_REGISTRY` under the name scripts import it by (read-only, as it is).
 REGISTRY = DEFAULT_REGISTRY
 
 
