@@ -19,20 +19,12 @@ Exactly 6 axes are supported.
 """
 from __future__ import annotations
 
-from doe_calib.errors import ModelError
-from doe_calib.export.program import ascii_text, check_name, load_changes
+from doe_calib.export.program import check_name, declared, headline, load_changes, six_axes
 
 SUFFIXES = (".src", ".dat")
 MAX_NAME = 24  # KRL identifiers
 VEL_PTP = 10   # % of the maximum axis velocity
 ACC_PTP = 20   # % of the maximum axis acceleration
-
-
-def check_robot(robot) -> None:
-    """KRL programs here drive exactly 6 robot axes A1..A6."""
-    if robot.n_joints != 6:
-        raise ModelError(f"KRL export needs a 6-axis robot; {robot.name} has "
-                         f"{robot.n_joints} joints")
 
 
 def _axis(q) -> str:
@@ -72,15 +64,12 @@ def _target(m) -> str:
 
 def render(design, visits, settings) -> dict:
     """Text of the ``.src`` and ``.dat`` files, keyed by suffix."""
-    check_robot(design.robot)
+    six_axes(design.robot, "KRL")
     name = check_name(settings.name, MAX_NAME)
-    n_poses = len({m.index for m in visits if m.measures})
-    n_measured = sum(m.measures for m in visits)
     header = ["&ACCESS RVP", "&REL 1"]
     src = [*header, f"DEF {name}( )",
-           f"  ; doe_calib measurement program: {n_poses} poses, {n_measured} measurements",
-           "  ; " + ascii_text(f"model {design.model}, criterion {design.criterion}; axes in "
-                              f"deg (mm for linear axes)"),
+           *(f"  ; {line}" for line in headline(design, visits, "axes in deg (mm for linear "
+                                                                  "axes)")),
            "  BAS(#INITMOV, 0)",
            f"  BAS(#VEL_PTP, {VEL_PTP})",
            f"  BAS(#ACC_PTP, {ACC_PTP})",
@@ -99,18 +88,7 @@ def render(design, visits, settings) -> dict:
             src += _wait(settings)
     src += ["END", ""]
     dat = [*header, f"DEFDAT {name}"]
-    seen = set()
-    for m in visits:
-        if _target(m) not in seen:
-            seen.add(_target(m))
-            dat += ["  ; " + ascii_text(f"pose {m.pose}" if m.measures else f"{m.kind} pose"),
-                    f"  DECL E6AXIS {_target(m)}={_axis(m.q)}"]
-    for m in visits:
-        if m.pre is not None:
-            dat += ["  ; " + ascii_text(f"pre-pose of pose {m.pose}, visit {m.number}"),
-                    f"  DECL E6AXIS XA{m.number}={_axis(m.pre)}"]
-    for m in visits:
-        for k, w in enumerate(m.via, start=1):
-            dat += [f"  ; {w.why}", f"  DECL E6AXIS XV{m.number}_{k}={_axis(w.q)}"]
+    for var, q, words in declared(visits, _target, "XA", "XV"):
+        dat += [f"  ; {words}", f"  DECL E6AXIS {var}={_axis(q)}"]
     dat += ["ENDDAT", ""]
     return {".src": "\n".join(src), ".dat": "\n".join(dat)}

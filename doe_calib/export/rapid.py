@@ -19,20 +19,13 @@ to declare in the I/O configuration). Exactly 6 axes are supported.
 """
 from __future__ import annotations
 
-from doe_calib.errors import ModelError
-from doe_calib.export.program import ascii_text, check_name, load_changes
+from doe_calib.export.program import (ascii_text, check_name, declared, headline, load_changes,
+                                      six_axes)
 
 SUFFIXES = (".mod",)
 MAX_NAME = 32  # RAPID identifiers
 SPEED = "v100"
 TPWRITE_MAX = 80  # characters of a TPWrite string
-
-
-def check_robot(robot) -> None:
-    """RAPID programs here drive exactly 6 robot axes (robax)."""
-    if robot.n_joints != 6:
-        raise ModelError(f"RAPID export needs a 6-axis robot; {robot.name} has "
-                         f"{robot.n_joints} joints")
 
 
 def _target_text(q) -> str:
@@ -65,15 +58,11 @@ def _target(m) -> str:
 
 def render(design, visits, settings) -> dict:
     """Text of the ``.mod`` file, keyed by suffix."""
-    check_robot(design.robot)
+    six_axes(design.robot, "RAPID")
     name = check_name(settings.name, MAX_NAME)
-    n_poses = len({m.index for m in visits if m.measures})
-    n_measured = sum(m.measures for m in visits)
     tool = "tool0" if settings.tool.mass == 0 else "tCalib"
-    out = [f"MODULE {name}",
-           f"  ! doe_calib measurement program: {n_poses} poses, {n_measured} measurements",
-           "  ! " + ascii_text(f"model {design.model}, criterion {design.criterion}; robax in "
-                              f"deg (mm for linear axes); loads kg, mm")]
+    out = [f"MODULE {name}", *(f"  ! {line}" for line in headline(
+        design, visits, "robax in deg (mm for linear axes); loads kg, mm"))]
     if tool != "tool0":
         out.append(f"  PERS tooldata tCalib:=[TRUE,[[0,0,0],[1,0,0,0]],"
                    f"{_loaddata(settings.tool)}]; ! the tool at the flange, its mass")
@@ -83,20 +72,8 @@ def render(design, visits, settings) -> dict:
             cases[m.load] = f"ldCase{len(cases) + 1}"
             out.append(f"  PERS loaddata {cases[m.load]}:={_loaddata(m.payload)}; ! "
                        + ascii_text(m.load))
-    seen = set()
-    for m in visits:
-        if _target(m) not in seen:
-            seen.add(_target(m))
-            words = f"pose {m.pose}" if m.measures else f"{m.kind} pose"
-            out.append(f"  CONST jointtarget {_target(m)}:={_target_text(m.q)}; ! "
-                       + ascii_text(words))
-    for m in visits:
-        if m.pre is not None:
-            out.append(f"  CONST jointtarget ja{m.number}:={_target_text(m.pre)}; ! "
-                       + ascii_text(f"pre-pose of pose {m.pose}, visit {m.number}"))
-    for m in visits:
-        for k, w in enumerate(m.via, start=1):
-            out.append(f"  CONST jointtarget jv{m.number}_{k}:={_target_text(w.q)}; ! {w.why}")
+    out += [f"  CONST jointtarget {var}:={_target_text(q)}; ! {words}"
+            for var, q, words in declared(visits, _target, "ja", "jv")]
     out += ["", "  PROC main()", "    GripLoad load0; ! no load on the tool"]
     for m, change in zip(visits, load_changes(visits)):
         out.append(f"    ! {m.comment()}")

@@ -19,7 +19,7 @@ Only 6 revolute joints are supported.
 from __future__ import annotations
 
 from doe_calib.errors import ModelError
-from doe_calib.export.program import ascii_text, check_name, load_changes
+from doe_calib.export.program import check_name, headline, load_changes
 
 SUFFIXES = (".script",)
 MAX_NAME = 32
@@ -64,12 +64,8 @@ def render(design, visits, settings) -> dict:
     """Text of the ``.script`` file, keyed by suffix."""
     check_robot(design.robot)
     name = check_name(settings.name, MAX_NAME)
-    n_poses = len({m.index for m in visits if m.measures})
-    n_measured = sum(m.measures for m in visits)
-    out = [f"def {name}():",
-           f"  # doe_calib measurement program: {n_poses} poses, {n_measured} measurements",
-           "  # " + ascii_text(f"model {design.model}, criterion {design.criterion}; "
-                              f"joints in rad; payload kg, m (flange frame)"),
+    out = [f"def {name}():", *(f"  # {line}" for line in headline(
+               design, visits, "joints in rad; payload kg, m (flange frame)")),
            "  # the tool alone", _set_payload(settings.tool)]
     for m, change in zip(visits, load_changes(visits)):
         out += ["", f"  # {m.comment()}"]
