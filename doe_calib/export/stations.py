@@ -1,11 +1,7 @@
 """Where a program starts, ends and changes the load: the home and load-change poses.
 
-A measurement program starts from and ends at a **home** pose — by default
-the URDF's zero, clipped inside the joint limits (:func:`zero_home`) — and
-the operator changes the load at a **load-change** pose near home (by default
-the home pose itself), not at an outstretched measurement pose. Both are
-moves of the program (:class:`.program.Move` with ``kind`` ``"home"`` or
-``"load change"``): the collision check sees them like every other move.
+Both are moves of the program (:class:`.program.Move` of ``kind`` ``"home"`` or
+``"load change"``), collision-checked like every other.
 """
 from __future__ import annotations
 
@@ -32,15 +28,8 @@ def zero_home(robot, limits=None) -> tuple:
 
 
 def check_station(robot, q, option: str, limits=None) -> tuple:
-    """``q`` (URDF values, rad/m) if it has one value per joint inside the limits.
-
-    ``limits``: (lower, upper), rad (m), e.g. a cell file's; None: the URDF's.
-
-    Raises
-    ------
-    OptionError
-        Naming ``option``, the joint, its value and its limits (deg, mm).
-    """
+    """``q`` (URDF values, rad/m) if it has one value per joint inside ``limits`` ((lower,
+    upper), rad/m; None: the URDF's); else an OptionError naming ``option`` and the joint."""
     q = np.asarray(q, float)
     if q.shape != (robot.n_joints,) or not np.all(np.isfinite(q)):
         raise OptionError(f"{option}: give {robot.n_joints} finite joint values "
@@ -62,30 +51,11 @@ def nearest_pose(design, q) -> tuple:
 
 
 def default_home(design, is_free=None, limits=None) -> tuple:
-    """The home pose a program uses when none is given, and why, in words.
+    """The home pose (rad/m) a program uses when none is given, and why, in words.
 
-    The design's own home, when its poses were checked reachable from one
-    (``design.constraints["reachability"]["home"]``, deg/mm); else the URDF
-    zero inside the limits (:func:`zero_home`) when ``is_free`` passes it (or
-    no check is made: ``is_free`` None); otherwise the design pose nearest to
-    it (each design pose is free at the design's clearance) — a UR arm's zero,
-    stretched out level with its base, touches the floor it stands on.
-
-    Parameters
-    ----------
-    design : DesignResult
-    is_free : callable, optional
-        ``is_free(q)`` → whether the pose q (rad/m) keeps its clearances under
-        every load the program hangs.
-    limits : (lower, upper), optional
-        Joint limits, rad (m), the zero is clipped inside (a cell file's);
-        None: the URDF's.
-
-    Returns
-    -------
-    q : tuple of float
-        rad (m).
-    why : str
+    The design's own home when its poses were checked reachable from one; else the URDF
+    zero inside ``limits`` (:func:`zero_home`) if ``is_free(q)`` passes it (None: no
+    check); else the design pose nearest to it (a UR arm's zero touches its floor).
     """
     reach = (design.constraints or {}).get("reachability") or {}
     if reach.get("home") is not None:  # the design joined every pose to it by a free path
