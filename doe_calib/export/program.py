@@ -17,12 +17,11 @@ from doe_calib.export.approach import backlash_joints, default_sides, pre_pose
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.payload import Payload
 from doe_calib.export.sequence import NO_LOAD, Plan, visit_order
-from doe_calib.export.stations import check_station
+from doe_calib.export.stations import check_station, outside_limits
 from doe_calib.export.turns import periodic_joints, shortest_turns, turn_joints
 from doe_calib.io.measurements import approach_from_order
 from doe_calib.model.marker_model import build_model
 
-_LIMIT_TOL = 1e-12  # rad or m, as when a design CSV is read
 _MOVED = 1e-9  # deg or mm: a smaller change is no motion
 
 
@@ -173,13 +172,11 @@ def check_name(name: str, max_length: int) -> str:
 def check_limits(design) -> None:
     """Raise :class:`DataError` naming the pose, joint and limit of the first pose outside them."""
     robot, cfg = design.robot, design.configurations
+    lower, upper = robot.lower, robot.upper
     for pose, q in zip(cfg.pose, cfg.q):
-        for joint, v in zip(robot.joints, q):
-            if not joint.lower - _LIMIT_TOL <= v <= joint.upper + _LIMIT_TOL:
-                k, unit = joint.display_factor, joint.display_unit
-                raise DataError(f"pose {pose!r}: joint {joint.name} = {v * k:.6g} {unit} is "
-                                f"outside its limits [{joint.lower * k:g}, {joint.upper * k:g}] "
-                                f"{unit}")
+        outside = outside_limits(robot, q, lower, upper)
+        if outside:
+            raise DataError(f"pose {pose!r}: {outside}")
 
 
 def load_words(spec: str) -> str:

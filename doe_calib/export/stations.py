@@ -34,13 +34,21 @@ def check_station(robot, q, option: str, limits=None) -> tuple:
     if q.shape != (robot.n_joints,) or not np.all(np.isfinite(q)):
         raise OptionError(f"{option}: give {robot.n_joints} finite joint values "
                           f"({', '.join(robot.joint_names)}), deg (mm for prismatic joints)")
-    lower, upper = (robot.lower, robot.upper) if limits is None else limits
+    outside = outside_limits(robot, q, *((robot.lower, robot.upper) if limits is None
+                                         else limits))
+    if outside:
+        raise OptionError(f"{option}: {outside}")
+    return tuple(float(v) for v in q)
+
+
+def outside_limits(robot, q, lower, upper) -> str:
+    """The first joint of ``q`` (rad/m) outside [``lower``, ``upper``] in words, else ""."""
     for joint, v, lo, hi in zip(robot.joints, q, lower, upper):
         if not lo - _LIMIT_TOL <= v <= hi + _LIMIT_TOL:
             k, unit = joint.display_factor, joint.display_unit
-            raise OptionError(f"{option}: joint {joint.name} = {v * k:.6g} {unit} is outside its "
-                              f"limits [{lo * k:g}, {hi * k:g}] {unit}")
-    return tuple(float(v) for v in q)
+            return (f"joint {joint.name} = {v * k:.6g} {unit} is outside its limits "
+                    f"[{lo * k:g}, {hi * k:g}] {unit}")
+    return ""
 
 
 def nearest_pose(design, q) -> tuple:
