@@ -46,14 +46,6 @@ FORMATS = {
 }
 
 
-def _stem(out, name: str) -> tuple[Path, str]:
-    """Directory + file stem and program name: a path with a suffix names the file."""
-    out = Path(out)
-    if out.suffix:
-        return out.with_suffix(""), out.stem
-    return out / name, name
-
-
 def program_configurations(design, visits) -> Configurations:
     """The measured configurations in the program's order, with its joint values (turns
     chosen) and the approach directions it realises (what the ``backlash`` effect reads)."""
@@ -111,7 +103,8 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
     if handshake is not None and not (float(handshake).is_integer() and handshake >= 1):
         raise OptionError(f"the handshake (--handshake) must be a digital I/O number of 1 or "
                           f"more, got {handshake}")
-    stem, name = _stem(out, name)
+    out = Path(out)  # a path with a suffix names the file
+    stem, name = (out.with_suffix(""), out.stem) if out.suffix else (out / name, name)
     form = FORMATS[fmt]
     if form.render is None and plan is not None and plan.axis_map is not None:
         raise OptionError("--axis-map: the design CSV keeps the URDF's joint values; the axis "

@@ -116,14 +116,6 @@ def _or_opt(times, path: list, start) -> bool:
     return False
 
 
-def _improve(times, path: list, start) -> list:
-    """2-opt, then segment moves, until neither shortens the path."""
-    path = _two_opt(times, path, start)
-    while _or_opt(times, path, start):
-        path = _two_opt(times, path, start)
-    return path
-
-
 def short_path(times, start=None) -> np.ndarray:
     """A short open path through every pose (module notes): of the nearest-neighbour paths
     from every first pose, the :data:`TRIES` shortest improved by 2-opt and or-opt.
@@ -143,5 +135,8 @@ def short_path(times, start=None) -> np.ndarray:
         return np.zeros(0, dtype=int)
     paths = sorted((_nearest_neighbour(times, f) for f in range(m)),
                    key=lambda p: path_time(times, p, start))
-    paths = [_improve(times, p, start) for p in paths[:TRIES]]
+    paths = [_two_opt(times, p, start) for p in paths[:TRIES]]
+    for p in paths:  # or-opt then 2-opt until neither shortens the path
+        while _or_opt(times, p, start):
+            _two_opt(times, p, start)
     return np.array(min(paths, key=lambda p: path_time(times, p, start)), dtype=int)

@@ -207,11 +207,6 @@ def _route(cm, a, b, pair, safe, ws, planner):
     return None, None, samples, None
 
 
-def _clearance_words(cm) -> str:
-    return (f"moves keep {1000 * cm.move_clearance:g} mm, {1000 * cm.move_self_clearance:g} mm "
-            f"between links; poses {1000 * cm.clearance:g} mm")
-
-
 def check_program(visits, models, robot, axis_map: AxisMap | None = None,
                   route: bool = True, planner: PlannerSettings | bool = True,
                   workers: int | None = None) -> ProgramCheck:
@@ -300,9 +295,12 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
             blocked.append(f"{_label(m)}, {m.load}: {b}")  # beams matter where it measures
         previous, where = m.urdf_q, _label(m)
         out.append(m)
-    first = models[NO_LOAD]
+    cm = models[NO_LOAD]
     return ProgramCheck(tuple(out), n_moves, n_samples, tuple(routed), tuple(collisions),
-                        tuple(dict.fromkeys(blocked)), _clearance_words(first))
+                        tuple(dict.fromkeys(blocked)),
+                        f"moves keep {1000 * cm.move_clearance:g} mm, "
+                        f"{1000 * cm.move_self_clearance:g} mm between links; poses "
+                        f"{1000 * cm.clearance:g} mm")
 
 
 def _checked_move(shared, i: int):

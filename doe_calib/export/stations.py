@@ -51,13 +51,6 @@ def outside_limits(robot, q, lower, upper) -> str:
     return ""
 
 
-def nearest_pose(design, q) -> tuple:
-    """The design's configuration nearest ``q`` (time of the slowest axis), URDF values, rad (m)."""
-    cfg = design.configurations
-    times = move_times(np.asarray(q, float)[None, :], cfg.q, axis_speeds(design.robot))[0]
-    return tuple(float(v) for v in cfg.q[int(np.argmin(times))])
-
-
 def default_home(design, is_free=None, limits=None) -> tuple:
     """The home pose (rad/m) a program uses when none is given, and why, in words.
 
@@ -74,7 +67,9 @@ def default_home(design, is_free=None, limits=None) -> tuple:
     zero = zero_home(design.robot, limits)
     if is_free is None or is_free(np.array(zero)):
         return zero, "home: the URDF zero inside the joint limits"
-    q = nearest_pose(design, zero)
-    pose = design.configurations.pose[design.configurations.q.tolist().index(list(q))]
-    return q, (f"home: design pose {pose}, the one nearest the URDF zero (the zero is not free "
-               f"of collisions; give --home to choose another)")
+    cfg = design.configurations  # nearest: by the time of the slowest axis
+    i = int(np.argmin(move_times(np.asarray(zero, float)[None, :], cfg.q,
+                                 axis_speeds(design.robot))[0]))
+    return tuple(float(v) for v in cfg.q[i]), (
+        f"home: design pose {cfg.pose[i]}, the one nearest the URDF zero (the zero is not free "
+        f"of collisions; give --home to choose another)")

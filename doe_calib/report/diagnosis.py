@@ -158,10 +158,6 @@ def diagnosis_report(diagnosis, model, measurements, fit, path, dpi: int = 90, r
     return write_report(path, f"Diagnosis of {diagnosis.model}", sections)
 
 
-def _fitted_words(step) -> str:
-    return "; ".join(str(f) for f in step.fitted if f.free) or "–"
-
-
 def steps_section(result, dpi: int = 90):
     """Each added effect with its fitted size ± std and unit and the error it removed."""
     steps = result.steps
@@ -169,7 +165,7 @@ def steps_section(result, dpi: int = 90):
     for i, s in enumerate(steps):
         before = steps[i - 1].cv_rms_mm if i else None
         rows.append([i, "start: " + s.model if s.added is None else f"+ {s.added}",
-                     _fitted_words(s) if s.added else "–",
+                     ("; ".join(str(f) for f in s.fitted if f.free) or "–") if s.added else "–",
                      f"{s.cv_rms_mm:.4f}" if before is None else
                      f"{before:.4f} → {s.cv_rms_mm:.4f}",
                      "–" if s.validation_rms_mm is None else s.validation_rms_mm,
