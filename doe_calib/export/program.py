@@ -268,9 +268,7 @@ def moves(design, plan: Plan | None = None) -> list[Move]:
     plan = Plan() if plan is None else plan
     robot, cfg = design.robot, design.configurations
     factors = robot.display_factors
-    axis_map = plan.axis_map
-    if axis_map is None:
-        axis_map = AxisMap.identity(robot.n_joints)
+    axis_map = plan.axis_map or AxisMap.identity(robot.n_joints)
     limits = plan.limits
     home = None if plan.home is None else np.array(check_station(robot, plan.home, "--home",
                                                                  limits))
