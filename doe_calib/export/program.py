@@ -65,17 +65,8 @@ class Settings:
 
 @dataclass(frozen=True)
 class Waypoint:
-    """An intermediate position a move passes through to keep clear of collisions.
-
-    Attributes
-    ----------
-    q, q_si : ndarray, shape (N,)
-        Controller joint values, deg (mm) and rad (m).
-    urdf : ndarray, shape (N,)
-        The same as URDF values, rad (m).
-    why : str
-        In words, for the program's comment.
-    """
+    """An intermediate position a move passes through to keep clear of collisions: controller
+    values ``q`` (N,) deg (mm) and ``q_si`` rad (m), ``urdf`` rad (m), ``why`` in words."""
 
     q: np.ndarray
     q_si: np.ndarray
