@@ -348,14 +348,15 @@ def declared(visits, target, pre: str, via: str) -> list[tuple]:
     """(variable, controller q, comment) of each position a program declares: every pose
     once (``target(m)``), then the pre-poses (``<pre><number>``) and the intermediate
     positions (``<via><number>_<k>``)."""
-    out = {}
+    first = {}
     for m in visits:
-        out.setdefault(target(m), (m.q, f"pose {m.pose}" if m.measures else f"{m.kind} pose"))
-    out.update({f"{pre}{m.number}": (m.pre, f"pre-pose of pose {m.pose}, visit {m.number}")
-                for m in visits if m.pre is not None})
-    out = [(k, q, ascii_text(words)) for k, (q, words) in out.items()]
-    return out + [(f"{via}{m.number}_{k}", w.q, w.why) for m in visits
-                  for k, w in enumerate(m.via, start=1)]
+        first.setdefault(target(m), m)
+    out = [(var, m.q, f"pose {m.pose}" if m.measures else f"{m.kind} pose")
+           for var, m in first.items()]
+    out += [(f"{pre}{m.number}", m.pre, f"pre-pose of pose {m.pose}, visit {m.number}")
+            for m in visits if m.pre is not None]
+    return [(var, q, ascii_text(words)) for var, q, words in out] + [
+        (f"{via}{m.number}_{k}", w.q, w.why) for m in visits for k, w in enumerate(m.via, 1)]
 
 
 def load_changes(visits: list[Move]) -> list[bool]:
