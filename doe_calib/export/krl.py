@@ -1,21 +1,13 @@
-"""KUKA KRL: a ``.src`` program and its ``.dat`` with one E6AXIS per pose.
+"""KUKA KRL: a ``.src`` program and its ``.dat`` with one E6AXIS per pose (6 axes).
 
-Each visit is ``PTP XP<i>`` (exact positioning) to the pose's axis values,
-A1..A6 in deg (mm for a linear axis), declared in the ``.dat``; E1..E6 are 0.
-A visit whose joints must arrive from a given side is preceded by
-``PTP XA<n>``, its pre-pose (n: the visit's number in the program). A move
-routed round a collision (:mod:`.safety`) first visits ``XV<n>_<k>``.
-The home and load-change poses (:mod:`.stations`) are ``XCHOME`` and
-``XCLOAD``. The program first declares the tool's load data (``$LOAD.M``
-in kg, ``$LOAD.CM`` in mm, ``$LOAD.J`` 0: KSS's ``LOAD`` structure of the
-flange's payload). Before a visit whose load differs from the previous one
-the program HALTs with a comment telling the operator which load to hang
-(restart with Start), then declares the tool plus the new load in
-``$LOAD``. At each measurement pose it waits ``dwell`` s (``WAIT SEC``,
-which also stops the advance run so the robot is really there), writes the
-trigger line if one is given, and, with a handshake n, sets ``$OUT[n]``,
-waits for ``$IN[n]``, resets ``$OUT[n]`` and waits for ``$IN[n]`` to drop.
-Exactly 6 axes are supported.
+Each visit is ``PTP XP<i>`` (exact positioning) to A1..A6 in deg (mm for a linear
+axis), E1..E6 0; pre-poses are ``XA<n>`` (n: the visit's number), intermediate
+positions round a collision ``XV<n>_<k>``, the home and load-change poses ``XCHOME``
+and ``XCLOAD``. The tool's load is declared first (``$LOAD.M`` kg, ``$LOAD.CM`` mm,
+``$LOAD.J`` 0); before a change of load the program HALTs with the operator's
+instruction, then declares the tool plus the new load. At each measurement pose:
+``WAIT SEC dwell`` (which also stops the advance run), the trigger line, and with a
+handshake n ``$OUT[n]`` set, ``$IN[n]`` waited for, reset, its drop waited for.
 """
 from __future__ import annotations
 

@@ -1,21 +1,14 @@
-"""ABB RAPID: one MODULE with a CONST jointtarget per pose and a ``main`` procedure.
+"""ABB RAPID: one MODULE with a CONST jointtarget per pose and a ``main`` procedure (6 axes).
 
-Each visit is ``MoveAbsJ jp<i>\\NoEOffs, v100, fine, tool0;`` to robax in deg
-(mm for a linear axis), extax 9E9 (no external axes). A visit whose joints
-must arrive from a given side is preceded by ``MoveAbsJ ja<n>...`` to its
-pre-pose (n: the visit's number in the program), also ``fine``; a move
-routed round a collision (:mod:`.safety`) first by ``MoveAbsJ jv<n>_<k>``
-to its intermediate positions. Before a visit whose
-load differs from the previous one: ``TPWrite`` the load to hang, then
-``Stop;`` (restart with Start), then ``GripLoad`` of the load's ``loaddata``
-(``ldCase<k>``: mass kg, centre of mass mm in the tool frame, no inertia;
-``load0`` when the load is removed). The tool's own mass, when given, is in
-the ``tooldata`` ``tCalib`` (at the flange) the moves use instead of
-``tool0``. The home and load-change poses (:mod:`.stations`) are ``jhome``
-and ``jload``. At each measurement pose ``WaitTime dwell;``, the trigger line
-if one is given, and, with a handshake, ``SetDO doCalibReady, 1; WaitDI
-diCalibDone, 1; SetDO doCalibReady, 0; WaitDI diCalibDone, 0;`` (two signals
-to declare in the I/O configuration). Exactly 6 axes are supported.
+Each visit is ``MoveAbsJ jp<i>\\NoEOffs, v100, fine, tool0;`` to robax in deg (mm for a
+linear axis), extax 9E9; pre-poses are ``ja<n>`` (n: the visit's number), intermediate
+positions round a collision ``jv<n>_<k>``, the home and load-change poses ``jhome`` and
+``jload``. Before a change of load: ``TPWrite`` the load to hang, ``Stop;``, then
+``GripLoad`` of its ``loaddata`` ``ldCase<k>`` (kg, mm in the tool frame, no inertia;
+``load0`` unloaded). A tool's own mass goes in the ``tooldata`` ``tCalib`` the moves
+then use. At each measurement pose ``WaitTime dwell;``, the trigger line, and with a
+handshake ``SetDO doCalibReady``/``WaitDI diCalibDone`` up and down (two signals to
+declare in the I/O configuration).
 """
 from __future__ import annotations
 
