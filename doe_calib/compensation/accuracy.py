@@ -5,17 +5,13 @@ The predicted std of a row has two parts (both 3-D, 1σ, m):
 * **seen**: ``√tr(J Σ Jᵀ)``, J the TCP's Jacobian wrt the free parameters and
   Σ the result's a-posteriori covariance;
 * **unseen**: ``√tr(G diag(s²) Gᵀ)`` of the parameters the readings could not
-  separate, at their stated tolerances s (:mod:`doe_calib.estimation.unseen`).
-  It is ~0 for a measured marker reached in the tracker frame and not for a
-  TCP never measured, or for targets in a robot frame (the readings cannot
-  split the base pose from the first joint).
+  separate, at their stated tolerances s (:mod:`doe_calib.estimation.unseen`):
+  ~0 for a measured marker in the tracker frame, not for a TCP never measured or
+  targets in a robot frame (the base pose does not split from the first joint).
 
-The TCP's Jacobian includes its own marker parameters when the TCP is a
-marker; a TCP given as a point is taken rigid with the measured markers (it
-was located relative to them, as the result's flange frame is: the tolerance
-of a TCP known only on the mechanical flange is yours to add). Targets in a
-robot frame use the TCP in the robot base frame (the base pose drops out:
-what the program commands is a base-frame position).
+A TCP given as a point is taken rigid with the measured markers (the tolerance of a
+TCP known only on the mechanical flange is yours to add); targets in a robot frame use
+the TCP in the robot base frame.
 """
 from __future__ import annotations
 
@@ -26,6 +22,7 @@ import numpy as np
 from doe_calib.compensation.targets import TRACKER
 from doe_calib.estimation.unseen import UnseenPart
 from doe_calib.model.evaluation import evaluate
+from doe_calib.model.rotations import skew_matrix
 
 
 def point_jacobian(model, values, configurations, point, marker: str | None = None,
@@ -75,12 +72,8 @@ def _rigid_follow(markers, point) -> np.ndarray:
     (K, 3), all m, flange frame (``δu_j ≈ v + ω × u_j``, least squares, ω scaled by the
     markers' size; minimum norm where they do not fix the rotation)."""
     size = max(float(np.ptp(markers, axis=0).max(initial=0.0)), 1e-3)
-    rows = np.vstack([np.hstack([np.eye(3), -_skew(u) / size]) for u in markers])
-    return np.hstack([np.eye(3), -_skew(point) / size]) @ np.linalg.pinv(rows, rcond=1e-9)
-
-
-def _skew(v) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    rows = np.vstack([np.hstack([np.eye(3), -skew_matrix(u) / size]) for u in markers])
+    return np.hstack([np.eye(3), -skew_matrix(point) / size]) @ np.linalg.pinv(rows, rcond=1e-9)
 
 
 @dataclass(frozen=True)
@@ -101,20 +94,9 @@ class RowAccuracy:
 def row_accuracy(model, result, configurations, point, part: UnseenPart,
                  marker: str | None = None, frame: str = TRACKER,
                  carried_by=None) -> RowAccuracy:
-    """Seen and unseen std (m) of the TCP at each configuration (module docstring).
-
-    Parameters
-    ----------
-    result : IdentificationResult
-    configurations : Configurations
-        The compensated rows (q′, their wrenches).
-    point : array_like, shape (3,)
-        TCP, flange frame, m.
-    part : UnseenPart
-        The result's unseen parameters with their tolerances.
-    marker, frame, carried_by
-        As :func:`point_jacobian`.
-    """
+    """Seen and unseen std (m) of the TCP ``point`` (flange frame, m) at each compensated
+    configuration (module notes); ``part``: the result's unseen parameters with their
+    tolerances; ``marker``, ``frame``, ``carried_by`` as :func:`point_jacobian`."""
     values = result.parameters.values
 
     def jacobian(cfg, in_frame):
@@ -136,12 +118,8 @@ def row_accuracy(model, result, configurations, point, part: UnseenPart,
 
 def unseen_warning(accuracy: RowAccuracy, part: UnseenPart, params, frame: str,
                    tcp_marker: str | None, measured) -> str | None:
-    """Words for a warning when the unseen part dominates some row's std, None otherwise.
-
-    Names the cause (a TCP never measured; targets in a robot frame, whose split
-    from the first joint the readings cannot see), the size it reaches (mm, 1σ)
-    and the remedy.
-    """
+    """Words for a warning when the unseen part dominates some row's std (cause, size in mm
+    at 1σ, remedy), None otherwise."""
     worst = int(np.argmax(accuracy.unseen - accuracy.seen)) if len(accuracy.unseen) else 0
     if not len(accuracy.unseen) or accuracy.unseen[worst] <= accuracy.seen[worst]:
         return None

@@ -25,6 +25,7 @@ from doe_calib.estimation.registration import register
 from doe_calib.io.configuration_columns import codes, numbers, texts
 from doe_calib.io.row_problems import RowProblems, earlier_in_group
 from doe_calib.io.table import read_table
+from doe_calib.model.rotations import skew_matrix
 
 #: The columns of a base-points file (mm): robot-frame coordinates, then the tracker's reading.
 COLUMNS = ("point", "x_robot", "y_robot", "z_robot", "x", "y", "z")
@@ -34,26 +35,11 @@ ON_A_LINE = 1e-3
 MISFIT = 3.0
 
 
-def _skew(v) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
 @dataclass(frozen=True, eq=False)
 class BasePoints:
-    """Reference points of the robot's base: where they are on it and where the tracker saw them.
-
-    Attributes
-    ----------
-    names : tuple of str
-    in_robot : ndarray, shape (K, 3)
-        Coordinates in the robot frame of the targets, m.
-    measured : ndarray, shape (K, 3)
-        The tracker's readings, m.
-    sigma : ndarray, shape (K,)
-        Std of each reading per coordinate, m.
-    source : str
-        The file they were read from.
-    """
+    """Reference points of the robot's base: ``names``, their coordinates ``in_robot`` (K, 3)
+    in the targets' robot frame, the tracker's readings ``measured`` (K, 3) and their std per
+    coordinate ``sigma`` (K,), all m; ``source`` the file read."""
 
     names: tuple
     in_robot: np.ndarray
@@ -66,7 +52,7 @@ class BasePoints:
         of ``(δt (m), δω (rad))``, tracker axes."""
         w = 1.0 / self.sigma ** 2
         rot, t = register(self.in_robot, self.measured, w)
-        jac = np.stack([np.hstack([np.eye(3), -_skew(rot @ p)]) for p in self.in_robot])
+        jac = np.stack([np.hstack([np.eye(3), -skew_matrix(rot @ p)]) for p in self.in_robot])
         info = np.einsum("kij,k,kil->jl", jac, w, jac)
         return rot, t, np.linalg.inv(info)
 
@@ -75,7 +61,7 @@ class BasePoints:
         from the registration."""
         rot, t, cov = self.placement()
         points = np.atleast_2d(np.asarray(points, float))
-        jac = np.stack([np.hstack([np.eye(3), -_skew(rot @ p)]) for p in points])
+        jac = np.stack([np.hstack([np.eye(3), -skew_matrix(rot @ p)]) for p in points])
         var = np.einsum("mij,jk,mik->m", jac, cov, jac)
         return points @ rot.T + t, np.sqrt(np.clip(var, 0.0, None))
 
@@ -86,29 +72,12 @@ class BasePoints:
 
 
 def read_base_points(path, sigma: float) -> BasePoints:
-    """Read a base-points CSV (:data:`COLUMNS`, mm; optional ``sigma`` in mm).
+    """Read a base-points CSV (:data:`COLUMNS`, mm; optional ``sigma`` in mm, else ``sigma``
+    in m).
 
-    Parameters
-    ----------
-    path : path-like
-    sigma : float
-        Std of a reading per coordinate (m) where the file gives no ``sigma``.
-
-    Returns
-    -------
-    BasePoints
-
-    Raises
-    ------
-    DataError
-        A missing column, a value that is not a finite number (naming file, line,
-        column), a point named twice, fewer than 3 points or points on one line.
-
-    Warns
-    -----
-    DataWarning
-        The readings do not fit the robot-frame coordinates (RMS above
-        :data:`MISFIT` σ): a point misread, or coordinates in another frame.
+    Raises a DataError for a missing column, a value not a finite number (file, line,
+    column), a point named twice, or fewer than 3 points not on one line; warns
+    (DataWarning) when the readings lie over :data:`MISFIT` σ from the coordinates.
     """
     table = read_table(path)
     missing = [c for c in COLUMNS if c not in table.columns]

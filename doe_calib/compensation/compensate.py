@@ -29,15 +29,8 @@ _SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
 def tcp_point(parameters, tcp) -> tuple[np.ndarray, str | None]:
-    """The TCP in the flange frame (m) and its marker name, from a marker name or a point.
-
-    Parameters
-    ----------
-    parameters : ParameterSet
-        Identified parameters: a marker's position is ``marker_<name>_{x,y,z}``.
-    tcp : str or array_like, shape (3,)
-        A marker name, or a point in the flange frame, metres.
-    """
+    """The TCP in the flange frame (m) and its marker name (None for a point), from ``tcp``:
+    a marker name of ``parameters`` or a point (3,) in the flange frame, m."""
     if isinstance(tcp, str):
         names = [f"marker_{tcp}_{a}" for a in "xyz"]
         if not all(n in parameters.names for n in names):
@@ -51,12 +44,8 @@ def tcp_point(parameters, tcp) -> tuple[np.ndarray, str | None]:
 
 
 def nominal_targets(model, parameters, configurations, tcp) -> tuple[np.ndarray, np.ndarray]:
-    """Where the nominal robot, placed by the identified base, puts the TCP.
-
-    Returns x (M, 3) in m and R (M, 3, 3), tracker frame.
-
-    ``base ∘ FK_nominal(q) ∘ tcp``: every effect at its nominal value, no wrench.
-    """
+    """Where the nominal robot (no wrench), placed by the identified base, puts the TCP:
+    x (M, 3) m and R (M, 3, 3), tracker frame."""
     values = model.nominal().values.copy()
     base = parameters.index("base")
     values[base] = parameters.values[base]
@@ -106,34 +95,23 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
         Built from the result: ``build_model(result.robot, result.tool, result.model)``.
     result : IdentificationResult
     targets : Targets
-        Programmed rows (q, wrench), optional target positions (m, tracker frame),
-        the frame the file gave them in and, when base points placed them, their
-        std from that registration (added to ``predicted_std``).
     tcp : str or array_like, shape (3,)
         A marker name of the result, or a point in the flange frame (m).
     problem : CompensationProblem, optional
-        Built by :func:`~.problem.build_problem` (built here when not given).
-    position_only : bool
-        Leave the orientation free (ignored when ``problem`` is given).
+        :func:`~.nlp.build_problem` (built here, ``position_only``, when not given).
     max_shift : float
-        Largest joint move (deg; mm for a prismatic joint) of a row not flagged
-        (:mod:`.flags`).
+        Largest joint move (deg; mm for a prismatic joint) of a row not flagged.
     tolerance : dict, optional
-        Stated prior std (SI) of the parameters the readings cannot separate, by
-        name, ``block:unit`` or unit (``{"m": 2e-4, "geometry:rad": 1.7e-4}``); a
-        parameter not named keeps its scale (1 mm, 1 mrad): see
-        :func:`~doe_calib.estimation.unseen.tolerances`.
+        Stated prior std (SI) of the parameters the readings cannot separate
+        (:func:`~doe_calib.estimation.unseen.tolerances`).
 
     Returns
     -------
     CompensationResult
-        A row that is not reached keeps its best q′ with ``converged`` False
-        and the reason in its note; a :class:`ConvergenceWarning` names them.
-        ``predicted_std`` holds what the readings cannot see (``unseen_std``); an
-        :class:`IdentifiabilityWarning` names its cause, size and remedy where it
-        dominates. Rows moved beyond ``max_shift``, or whose q′ lies outside the
-        joint range the calibration measured, carry a ``flag`` and a
-        :class:`DataWarning` names them.
+        A row not reached keeps its best q′, ``converged`` False and the reason
+        (ConvergenceWarning); a dominating unseen part is an IdentifiabilityWarning; rows
+        moved beyond ``max_shift`` or outside the measured joint range are flagged
+        (DataWarning).
 
     Examples
     --------
@@ -184,7 +162,7 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
 
 
 def _solve_rows(problem, model, values, cfg, point, x_t, r_nom) -> dict:
-    """Solve each row: q′ (M, N), its errors, note, and what the flags need (module words)."""
+    """Solve each row: q′ (M, N), its errors (m, rad), note, and what the flags need."""
     robot = model.robot
     lower, upper = robot.lower, robot.upper
     m = len(cfg)

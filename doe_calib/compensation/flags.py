@@ -1,18 +1,9 @@
 """Rows worth a look although reached: a large joint move, and why it is likely large.
 
-A compensation corrects millimetres: its joint moves are a fraction of a
-degree. A row moved by more than ``max_shift`` (deg; mm for a prismatic
-joint) is flagged with its likely cause, told by how far the target was
-from where the identified model puts the TCP at the programmed q:
-
-* the target is close (within :data:`FAR_TARGET`) — a small pose change
-  needing a large joint move: near a singularity (the condition number of
-  ∂pose/∂q′ says how near);
-* the target is far — the targets were probably written for another TCP or
-  in another frame.
-
-A row whose q′ lies outside the joint range the calibration measured is
-flagged too (:func:`~doe_calib.estimation.measured_region.outside_flags`).
+A compensation corrects millimetres. A row moved by more than ``max_shift`` (deg; mm
+for a prismatic joint) is flagged: near a singularity when its target was within
+:data:`FAR_TARGET` of the TCP at the programmed q, else targets probably written for
+another TCP or frame.
 """
 from __future__ import annotations
 
@@ -26,23 +17,9 @@ FAR_TARGET = 0.01
 
 def shift_flag(joint: str, shift: float, unit: str, max_shift: float, distance: float,
                angle: float, condition: float) -> str:
-    """Words for one row, "" when its largest move is within ``max_shift``.
-
-    Parameters
-    ----------
-    joint : str
-        The joint that moved most.
-    shift : float
-        Its move, ``unit`` (deg or mm).
-    max_shift : float
-        The limit, same unit.
-    distance : float
-        Target to the model's TCP at the programmed q, m.
-    angle : float
-        Rotation from the target orientation at the programmed q, rad (0: position only).
-    condition : float
-        Condition number of ∂pose/∂q′ at q′.
-    """
+    """Words for one row, "" when the move ``shift`` (``unit``, deg or mm) of the joint that
+    moved most is within ``max_shift``; ``distance`` (m) and ``angle`` (rad) from the target
+    at the programmed q, ``condition`` that of ∂pose/∂q′ at q′."""
     if not shift > max_shift:
         return ""
     moved = f"{joint} moved {shift:.3g} {unit} (beyond {max_shift:g} {unit})"
@@ -58,18 +35,7 @@ def shift_flag(joint: str, shift: float, unit: str, max_shift: float, distance: 
 
 def row_shift_flags(robot, q, q_compensated, max_shift: float, distance, angle,
                     condition) -> tuple:
-    """:func:`shift_flag` of each row, a tuple of M strings.
-
-    Parameters
-    ----------
-    robot : Robot
-    q, q_compensated : ndarray, shape (M, N)
-        rad (m).
-    max_shift : float
-        deg (mm for a prismatic joint).
-    distance, angle, condition : ndarray, shape (M,)
-        As :func:`shift_flag`.
-    """
+    """:func:`shift_flag` of each row of ``q``, ``q_compensated`` (M, N) rad (m)."""
     moves = np.abs((np.asarray(q_compensated) - np.asarray(q)) * robot.display_factors)
     out = []
     for i, row in enumerate(moves):

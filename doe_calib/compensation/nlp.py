@@ -1,17 +1,15 @@
 """The compensation problem, built symbolically once: which q′ puts the TCP on a target pose.
 
-For a target pose ``(x_t, R_t)`` in the tracker frame, the TCP ``t`` (flange
-frame) and the row's wrench, minimise over q′ inside the joint limits::
+For a target pose ``(x_t, R_t)`` in the tracker frame, the TCP ``t`` (flange frame) and
+the row's wrench: the q′ inside the joint limits nearest the programmed q
+(``½ ‖q′ − q‖²``) with::
 
-    ½ ‖(x(q′) − x_t) / 1 mm‖² + ½ ‖L · vee(R_tᵀ R(q′)) / 1 mm‖²
+    (x(q′) − x_t) / 1 mm = 0,    L · vee(R_tᵀ R(q′)) / 1 mm = 0
 
-with ``(R, x)`` the TCP pose the *identified* model predicts (every effect,
-deflection under the wrench included) and ``vee`` the vector part of the
-rotation error (sin of the angle times the axis, rad); ``L`` (m) makes it a
-length. The orientation term is dropped for a position-only problem.
-
-Construction only: :func:`build_problem` returns named CasADi Functions and an
-IPOPT solver; :mod:`.compensate` evaluates them.
+``(R, x)`` the TCP pose the *identified* model predicts (deflection under the wrench
+included), ``vee`` the rotation error (sin θ · axis, rad) and L (m) making it a length;
+a position-only problem drops the orientation. Construction only: :mod:`.compensate`
+evaluates the Functions.
 """
 from __future__ import annotations
 
@@ -21,8 +19,11 @@ import casadi as ca
 
 from doe_calib.errors import ModelError
 
-#: Default length (m) weighting the rotation error: 1 mrad counts as 1 mm.
+#: Length L (m) weighting the rotation error: 1 mrad counts as 1 mm.
 ORIENTATION_LENGTH = 1.0
+#: IPOPT's tolerance on the target equations (mm) and on optimality, and its iterations.
+TOLERANCE_MM = 1e-10
+MAX_ITER = 200
 _MM = 1000.0  # the objective is in mm², so that IPOPT's tolerances mean something
 
 
@@ -40,11 +41,6 @@ class CompensationProblem:
     ----------
     position_only : bool
         Whether the orientation is left free.
-    orientation_length : float
-        L (m) weighting the rotation error.
-    tcp_pose : casadi.Function
-        ``tcp_pose(q, w, env, p, t) -> (x, R)``: TCP position (m) and
-        orientation in the tracker frame.
     error : casadi.Function
         ``error(q, w, env, p, t, x_t, R_t) -> (position, rotation)``: position
         error (3, m) and rotation error ``vee(R_tᵀ R)`` (3, rad).
@@ -58,8 +54,6 @@ class CompensationProblem:
     """
 
     position_only: bool
-    orientation_length: float
-    tcp_pose: ca.Function
     error: ca.Function
     jacobian: ca.Function
     solver: ca.Function
@@ -71,33 +65,9 @@ class CompensationProblem:
                           ca.DM(values), ca.DM(tcp), ca.DM(q))
 
 
-def build_problem(model, position_only: bool = False,
-                  orientation_length: float = ORIENTATION_LENGTH,
-                  tolerance_mm: float = 1e-10,
-                  max_iter: int = 200) -> CompensationProblem:
-    """Freeze the compensation NLP of ``model`` into CasADi Functions.
-
-    Parameters
-    ----------
-    model : Model
-        The identified model (:func:`~doe_calib.model.marker_model.build_model`);
-        its ``flange`` Function is called on symbols.
-    position_only : bool
-        Leave the orientation free.
-    orientation_length : float
-        L (m): a rotation error of θ rad weighs as θ·L m of position error.
-    tolerance_mm : float
-        IPOPT's tolerance on the target equations (mm) and on optimality.
-    max_iter : int
-
-    Returns
-    -------
-    CompensationProblem
-
-    Raises
-    ------
-    ModelError
-        A full pose asked of a robot with fewer than 6 joints.
+def build_problem(model, position_only: bool = False) -> CompensationProblem:
+    """Freeze the compensation NLP of the identified ``model`` into CasADi Functions; leave
+    the orientation free when ``position_only`` (a ModelError asks for it below 6 joints).
 
     Examples
     --------
@@ -122,13 +92,11 @@ def build_problem(model, position_only: bool = False,
     r_f, p_f = model.flange(q, w, env, p)
     x = p_f + r_f @ t
     e_pos, e_rot = x - x_t, rotation_error(r_t, r_f)
-    tcp_pose = ca.Function("tcp_pose", [q, w, env, p, t], [x, r_f],
-                           ["q", "w", "env", "p", "t"], ["x", "R"])
     error = ca.Function("error", [q, w, env, p, t, x_t, r_t], [e_pos, e_rot],
                         ["q", "w", "env", "p", "t", "x_t", "R_t"], ["position", "rotation"])
     residual = _MM * e_pos
     if not position_only:
-        residual = ca.vertcat(residual, _MM * orientation_length * e_rot)
+        residual = ca.vertcat(residual, _MM * ORIENTATION_LENGTH * e_rot)
     jacobian = ca.Function("jacobian", [q, w, env, p, t, x_t, r_t],
                            [ca.densify(ca.jacobian(residual, q))],
                            ["q", "w", "env", "p", "t", "x_t", "R_t"], ["J"])
@@ -136,8 +104,7 @@ def build_problem(model, position_only: bool = False,
     nlp = {"x": q, "p": ca.vertcat(x_t, ca.vec(r_t), w, env, p, t, q_0),
            "f": 0.5 * ca.sumsqr(q - q_0), "g": residual}
     opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
-            "ipopt.tol": tolerance_mm, "ipopt.constr_viol_tol": tolerance_mm,
-            "ipopt.max_iter": max_iter}
-    solver = ca.nlpsol("compensate", "ipopt", nlp, opts)
-    return CompensationProblem(position_only, orientation_length, tcp_pose, error, jacobian,
-                               solver)
+            "ipopt.tol": TOLERANCE_MM, "ipopt.constr_viol_tol": TOLERANCE_MM,
+            "ipopt.max_iter": MAX_ITER}
+    return CompensationProblem(position_only, error, jacobian,
+                               ca.nlpsol("compensate", "ipopt", nlp, opts))

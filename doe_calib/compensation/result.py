@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import csv
 import io as _io
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
@@ -46,28 +46,16 @@ class CompensationResult:
         Distance (m) from the identified model's TCP at q′ to the target.
     rotation_residual : ndarray, shape (M,)
         Rotation (rad) from the target orientation (0 when position only).
-    predicted_std : ndarray, shape (M,)
-        3-D standard deviation of the TCP position at q′ (m): the result's
-        a-posteriori covariance and, added in quadrature, ``unseen_std``
-        (:mod:`.accuracy`); in the robot base frame when the targets were given in
-        a robot frame.
+    predicted_std, unseen_std : ndarray, shape (M,)
+        3-D std of the TCP position at q′ (m; the targets' frame), and its part the
+        readings cannot see (:mod:`.accuracy`).
     converged : ndarray of bool, shape (M,)
-    note : tuple of str
-        Why a row was not reached ("" when it was).
-    unseen_std : ndarray, shape (M,)
-        The part of ``predicted_std`` the readings cannot see (the parameters they
-        could not separate, at their stated tolerances), m.
+    note, flag : tuple of str
+        Why a row was not reached, and why a reached one is worth a look (:mod:`.flags`).
     frame : str
         The frame the targets were given in (``tracker`` or a robot frame).
-    flag : tuple of str
-        Why a reached row is worth a look (a large joint move and its likely
-        cause, :mod:`.flags`); "" when it is not.
-    unseen : str
-        The warning on the unseen part (cause, size, tolerances, remedy); "" when
-        the fit's own std dominates every row.
-    tolerances : str
-        The stated tolerances ``unseen_std`` is for, in words; "" when the fit
-        left nothing unseen.
+    unseen, tolerances : str
+        The warning on the unseen part, and the stated tolerances it is for; "" if none.
     """
 
     robot: Robot
@@ -134,20 +122,13 @@ class CompensationResult:
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        """JSON-able dict (SI units)."""
-        return {"format": FORMAT, "version": 1, "model": self.model,
-                "tcp": self.tcp.tolist(), "tcp_marker": self.tcp_marker,
-                "position_only": self.position_only, "pose": list(self.pose),
-                "q": self.q.tolist(), "q_compensated": self.q_compensated.tolist(),
-                "wrench": self.wrench.tolist(), "target": self.target.tolist(),
-                "residual": self.residual.tolist(),
-                "rotation_residual": self.rotation_residual.tolist(),
-                "predicted_std": self.predicted_std.tolist(),
-                "converged": self.converged.tolist(), "note": list(self.note),
-                "unseen_std": self.unseen_std.tolist(), "frame": self.frame,
-                "flag": list(self.flag), "unseen": self.unseen,
-                "tolerances": self.tolerances,
-                "robot": self.robot.to_dict()}
+        """JSON-able dict (SI units): every field in order, the robot last."""
+        out = {"format": FORMAT, "version": 1}
+        for f in fields(self)[1:]:
+            v = getattr(self, f.name)
+            out[f.name] = v.tolist() if isinstance(v, np.ndarray) else \
+                list(v) if isinstance(v, tuple) else v
+        return {**out, "robot": self.robot.to_dict()}
 
     @classmethod
     def from_dict(cls, d: dict) -> "CompensationResult":

@@ -32,19 +32,13 @@ class Targets:
     Attributes
     ----------
     configurations : Configurations
-        One per row: the programmed q (rad/m), the wrench carried there (N,
-        N·m, base frame), temperature and approach directions.
+        The programmed q (rad/m) and the wrench carried (N, N·m, base frame) of each row.
     positions : ndarray, shape (M, 3), or None
-        Target TCP positions in the tracker frame (m); None when the file has
-        no ``x,y,z``: the targets are then where the nominal robot puts the TCP.
+        Target TCP positions, tracker frame, m; None: where the nominal robot puts the TCP.
     frame : str
-        The frame the file gave them in (``tracker``, or a robot frame: they were
-        turned into the tracker frame with the identified base pose, which the
-        readings may not fix, :mod:`.accuracy` tells what that costs; or with
-        measured base points, :mod:`.base_points`).
+        The frame the file gave them in (``tracker`` or a robot frame).
     placement_std : ndarray, shape (M,), or None
-        3-D std (m) each target has from the base points' registration; None
-        when no base points placed them.
+        3-D std (m) of each target from the base points' registration, when they placed it.
     """
 
     configurations: Configurations
@@ -64,27 +58,16 @@ def read_targets(path, robot, frame: str = TRACKER, result=None, base_points=Non
     path : path-like
     robot : Robot
     frame : str
-        The frame of ``x,y,z``: ``tracker`` (default), or a robot frame
-        (``base_link``, ``base``, a fixed URDF frame:
-        :func:`~doe_calib.model.frames.frame_placement`), turned into the
-        tracker frame with ``result``'s identified base pose.
-    result : IdentificationResult, optional
-        Needed when ``frame`` is not ``tracker`` (and no ``base_points``).
-    base_points : BasePoints, optional
-        Points known in ``frame`` and measured by the tracker
-        (:func:`~.base_points.read_base_points`): they place the robot frame in the
-        tracker frame instead of the identified base pose.
-
-    Returns
-    -------
-    Targets
+        The frame of ``x,y,z``: ``tracker``, or a robot frame
+        (:func:`~doe_calib.model.frames.frame_placement`) placed in the tracker frame by
+        ``base_points`` (:func:`~.base_points.read_base_points`) when given, else by
+        ``result``'s identified base pose.
 
     Raises
     ------
     DataError
-        Anything :func:`~doe_calib.io.csv_files.read_design` refuses (with the file's
-        own line and column), only some of ``x,y,z``, or a value there that
-        is not a finite number.
+        Anything :func:`~doe_calib.io.csv_files.read_design` refuses (the file's own line
+        and column), only some of ``x,y,z``, or a value there not a finite number.
     OptionError
         A robot ``frame`` without ``result`` or ``base_points``; ``base_points`` with
         targets in the tracker frame or without x, y, z.
@@ -111,11 +94,8 @@ def read_targets(path, robot, frame: str = TRACKER, result=None, base_points=Non
 
 
 def in_tracker(points, robot, frame: str, result) -> np.ndarray:
-    """Points (K, 3) given in the robot frame ``frame``, in the tracker frame, m.
-
-    ``p_tracker = R_b (T_frame p) + t_b`` with ``(R_b, t_b)`` the base pose
-    ``result`` identified (parameters ``base_x`` … ``base_rz``).
-    """
+    """Points (K, 3) m given in the robot frame ``frame``, in the tracker frame:
+    ``R_b (T_frame p) + t_b`` with ``(R_b, t_b)`` the base pose ``result`` identified."""
     if result is None:
         raise OptionError(f"targets in frame {frame!r} need the identification result (its base "
                           f"pose places the robot in the tracker frame)")

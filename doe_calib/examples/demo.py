@@ -1,13 +1,8 @@
-"""The main job on the built-in example, end to end, through the user's own files.
+"""The main job on the built-in example, end to end, through the files a user's commands write.
 
-Design 15 poses for the KR 270-class robot in its cell, clear of collisions
-→ export them to KRL, every move checked → simulate the campaign (tracker
-anywhere, noise, unloaded and 250 kg, and a gravity compensator on A2 that
-the starting model lacks) → identify → diagnose → add the missing effect →
-the error falls → compensate a held-out program → one HTML report, told in
-that order. Every step reads and writes the files a user would (design
-JSON/CSV, KRL, measurement CSV, result JSON, compensated CSV and KRL),
-exactly as the corresponding commands do.
+Design 15 poses for the KR 270 in its cell → KRL, every move checked → simulate the
+campaign (a gravity compensator on A2 the starting model lacks) → identify → diagnose →
+refine → compensate a held-out program → one HTML report, told in that order.
 """
 from __future__ import annotations
 
@@ -61,14 +56,8 @@ def _first_lines(path, n: int = 25):
 
 
 def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> dict:
-    """Run the whole story into folder ``out``; return its key figures.
-
-    Returns
-    -------
-    dict
-        ``d_efficiency``, ``held_out_rms_mm`` per model, ``added`` effects,
-        ``noise_floor_mm`` and the paths written.
-    """
+    """Run the whole story into folder ``out``; return its key figures: ``d_efficiency``,
+    ``held_out_rms_mm`` per model (mm), ``added`` effects, ``noise_floor_mm`` and ``report``."""
     from doe_calib.report import design_sections, refine_sections, write_report
     from doe_calib.report.diagnosis import diagnosis_sections
     from doe_calib.report.html import paragraph, section

@@ -1,16 +1,9 @@
 """Robot programs that visit a design's poses: KUKA KRL, ABB RAPID, URScript, and the design CSV.
 
-Every format visits each pose once per load case — by default grouped by
-load case and ordered for short joint travel (:class:`.sequence.Plan`), a
-joint with more than one turn of range at the equivalent angle that keeps the
-moves short (:mod:`.turns`), from and back to a home pose with the load
-changed at a load-change pose when the plan names one (:mod:`.stations`) —,
-reaches each pose from the side the design or the backlash model asks for
-through a pre-pose (:mod:`.approach`), stops for the operator where the load
-changes, declares the payload (:mod:`.payload`) and waits for the
-measurement at each pose (:class:`.program.Settings`). Joint limits are
-checked again before anything is written. :func:`.safety.check_program`
-checks every move for collisions and routes a colliding one round through intermediate positions;
+Each pose is visited once per load case in the order of a :class:`.sequence.Plan`
+(:func:`.program.moves`), limits re-checked; the program stops for the operator where
+the load changes, declares the payload and waits for the measurement at each pose
+(:class:`.program.Settings`). :func:`.safety.check_program` checks and routes the moves;
 :func:`.cycle.cycle_time` estimates how long the program runs.
 """
 from __future__ import annotations
@@ -36,12 +29,8 @@ from doe_calib.io.measurements import Configurations
 
 @dataclass(frozen=True)
 class Format:
-    """An export format: its file suffixes and how its text is made.
-
-    ``render(design, visits, settings)`` returns suffix → file text; None
-    for the design CSV, written by :func:`doe_calib.io.csv_files.write_design`
-    (:func:`program_configurations`).
-    """
+    """An export format: its file suffixes and ``render(design, visits, settings)`` → suffix →
+    file text (None: the design CSV, :func:`program_configurations`)."""
 
     description: str
     suffixes: tuple
@@ -57,23 +46,9 @@ FORMATS = {
 }
 
 
-def _stem(out, name: str) -> tuple[Path, str]:
-    """Directory + file stem and program name: a path with a suffix names the file."""
-    out = Path(out)
-    if out.suffix:
-        return out.with_suffix(""), out.stem
-    return out / name, name
-
-
 def program_configurations(design, visits) -> Configurations:
-    """The measured configurations in the program's order, with the approach directions it realises.
-
-    Their joint values are the program's: a joint with more than one turn of
-    range at the equivalent angle the program chose (:mod:`.turns`).
-
-    Read back as a design or measurement file, their order and ``approach``
-    columns give the ``backlash`` effect exactly what the program does.
-    """
+    """The measured configurations in the program's order, with its joint values (turns
+    chosen) and the approach directions it realises (what the ``backlash`` effect reads)."""
     cfg = design.configurations
     visits = list(visits)
     measured = [m for m in visits if m.measures]
@@ -95,44 +70,26 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
     design : DesignResult
     fmt : {"krl", "rapid", "urscript", "csv"}
     out : path-like
-        A directory (created if needed; files are ``name`` + suffix) or a file
-        path, whose stem is then the program name (KRL needs file and program
-        names to match).
-    name : str
-        Program name when ``out`` is a directory.
-    dwell : float
-        Seconds to wait at each pose.
-    handshake : int, optional
-        Digital I/O number of the measurement handshake (see
-        :class:`.program.Settings`); None waits ``dwell`` only.
+        A directory (files ``name`` + suffix) or a file path, whose stem is then the
+        program name (KRL needs file and program names to match).
+    dwell, handshake, trigger, tool
+        As :class:`.program.Settings` (dwell in s; tool default: mass 0).
     plan : Plan, optional
-        Grouping by load case, order, pre-poses and axis map. The design CSV
-        lists the configurations in the program's order with the approach
-        directions the program realises (:func:`program_configurations`), in
-        the URDF's joint values (no axis map). Default ``Plan()``.
+        Grouping, order, pre-poses, stations and axis map (the CSV keeps URDF values).
     visits : sequence of Move, optional
-        The program's visits made with ``plan`` (:func:`moves`), e.g. checked
-        for collisions and routed by :func:`.safety.check_program`; default
-        ``moves(design, plan)``.
-    trigger : str, optional
-        One line of the program's language written at every measurement pose
-        after the dwell (:class:`.program.Settings`).
-    tool : Payload, optional
-        The tool's own mass and centre of mass, declared at the start and
-        added to every load; default none (mass 0).
+        The visits made with ``plan``, e.g. routed by :func:`.safety.check_program`;
+        default ``moves(design, plan)``.
 
     Raises
     ------
     DataError
-        A pose outside the robot's joint limits (naming pose, joint, limit),
-        a demanded approach side a pre-pose cannot realise inside them, or a
+        A pose outside the joint limits, a demanded side a pre-pose cannot realise, or a
         bad program name.
     ModelError
-        A robot the format cannot drive (KRL, RAPID, URScript: 6 axes).
+        A robot the format cannot drive (6 axes).
     OptionError
-        A negative dwell, a handshake that is not an I/O number ≥ 1, a
-        trigger that is not one line of ASCII, or an axis map with the
-        design CSV.
+        A negative dwell, a handshake not an I/O number ≥ 1, a trigger not one line of
+        ASCII, or an axis map with the design CSV.
 
     Examples
     --------
@@ -146,7 +103,8 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
     if handshake is not None and not (float(handshake).is_integer() and handshake >= 1):
         raise OptionError(f"the handshake (--handshake) must be a digital I/O number of 1 or "
                           f"more, got {handshake}")
-    stem, name = _stem(out, name)
+    out = Path(out)  # a path with a suffix names the file
+    stem, name = (out.with_suffix(""), out.stem) if out.suffix else (out / name, name)
     form = FORMATS[fmt]
     if form.render is None and plan is not None and plan.axis_map is not None:
         raise OptionError("--axis-map: the design CSV keeps the URDF's joint values; the axis "
@@ -164,6 +122,7 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
     for path in paths:
         path.write_text(texts[path.suffix], encoding="ascii")
     return paths
+
 
 __all__ = ["FORMATS", "AxisMap", "Collision", "CycleTime", "Format", "Move", "Payload", "Plan",
            "ProgramCheck", "Settings", "Waypoint", "check_program", "cycle_time",

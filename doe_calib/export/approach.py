@@ -29,12 +29,8 @@ MIN_STEP_FRACTION = 0.5
 
 
 def backlash_joints(model: str, robot) -> tuple:
-    """Joints (0-based) whose backlash side the approach sets in ``model``.
-
-    The joints of every ``backlash`` effect in mode ``approach`` or ``both``
-    (in ``torque`` and ``gravity`` modes the approach does not enter the
-    model). Other effects of the model string, including your own, are not
-    read.
+    """Joints (0-based) of the ``backlash`` effects in mode ``approach`` or ``both`` of
+    ``model`` (in the other modes the approach does not enter the model).
 
     Examples
     --------
@@ -56,17 +52,8 @@ def backlash_joints(model: str, robot) -> tuple:
 def default_sides(planned, joints) -> np.ndarray:
     """Planned directions completed by alternating sides on ``joints``.
 
-    Parameters
-    ----------
-    planned : array_like, shape (V, N)
-        Directions the design demands for consecutive visits (0: none).
-    joints : sequence of int
-        Joints (0-based) to alternate where the design demands nothing:
-        +1 on the first visit, −1 on the second, and so on.
-
-    Returns
-    -------
-    ndarray, shape (V, N)
+    ``planned`` (V, N): the directions the design demands (0: none); ``joints`` (0-based)
+    alternate +1, −1, … where it demands nothing.
 
     Examples
     --------
@@ -83,32 +70,10 @@ def default_sides(planned, joints) -> np.ndarray:
 def pre_pose(q, approach, demanded, step, robot, pose: str) -> tuple:
     """The pre-pose that makes each joint reach ``q`` from its side.
 
-    Parameters
-    ----------
-    q : ndarray, shape (N,)
-        Target, rad (m for prismatic joints).
-    approach : ndarray, shape (N,)
-        Direction of arrival of each joint (+1 up, −1 down, 0 any).
-    demanded : ndarray of bool, shape (N,)
-        Whether the design demands the side (an error if it cannot be
-        realised) or it was chosen by default (then flipped if need be).
-    step : float
-        Pre-pose distance in controller units: deg (mm for a prismatic joint).
-    robot : Robot
-    pose : str
-        Pose id, for messages.
-
-    Returns
-    -------
-    pre : ndarray, shape (N,)
-        The pre-pose, rad (m), inside the joint limits.
-    approach : ndarray, shape (N,)
-        The directions realised (a default side may have been flipped).
-
-    Raises
-    ------
-    DataError
-        A demanded side too near a joint limit, naming pose, joint and limit.
+    ``q`` (N,) rad (m); ``approach`` (N,) +1 up, −1 down, 0 any; ``demanded`` (N,) bool:
+    a demanded side that cannot be realised is a DataError naming ``pose``, joint and
+    limit, a default one is flipped; ``step`` deg (mm). Returns the pre-pose (N,) rad (m)
+    inside the limits and the directions realised.
     """
     approach = np.array(approach, dtype=float)
     pre = np.array(q, dtype=float)

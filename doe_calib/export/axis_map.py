@@ -25,15 +25,7 @@ OPTION = "--axis-map"
 
 @dataclass(frozen=True)
 class AxisMap:
-    """Per joint, ``q_controller = sign · q_urdf + offset`` (controller units).
-
-    Attributes
-    ----------
-    sign : tuple of float, length N
-        +1 or −1.
-    offset : tuple of float, length N
-        deg (mm for a prismatic joint).
-    """
+    """Per joint, ``q_controller = sign · q_urdf + offset``: sign ±1, offset deg (mm)."""
 
     sign: tuple
     offset: tuple
@@ -45,14 +37,7 @@ class AxisMap:
 
     @classmethod
     def parse(cls, text: str, robot) -> "AxisMap":
-        """Read ``JOINT:SIGN:OFFSET,…`` for ``robot``.
-
-        Raises
-        ------
-        OptionError
-            Naming ``--axis-map`` and the item: not three fields, an unknown
-            joint, a joint twice, a sign other than 1 or -1, an offset that is
-            not a finite number.
+        """Read ``JOINT:SIGN:OFFSET,…`` for ``robot`` (an OptionError names the bad item).
 
         Examples
         --------

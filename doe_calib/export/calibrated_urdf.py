@@ -1,17 +1,10 @@
 """A calibrated robot description: the identified geometry folded into the URDF.
 
-What a URDF can hold is folded into it exactly:
-
-* ``joint_offset`` and ``geometry``: the origin ``O_k`` of each chain joint
-  becomes ``O_k · E_k · X_k(dq_k)`` — the placement correction ``E_k`` the
-  model applies after the nominal placement, then the offset as a rotation
-  about (revolute) or translation along (prismatic) the joint axis, which
-  commutes with the joint's own motion;
-* the flange correction ``E_f`` on the last fixed joint to the flange link;
-* the base: a fixed joint from a new root link ``tracker`` to the URDF's root.
-
-Everything else (compliance, and any effect of the model that a URDF cannot
-hold) goes to a YAML file beside it, with the identified marker positions.
+Folded exactly: ``joint_offset`` and ``geometry`` (the origin ``O_k`` of each chain joint
+becomes ``O_k · E_k · X_k(dq_k)``, the offset about or along the joint axis, which
+commutes with its motion), the flange correction ``E_f`` on the joint to the flange
+link, and the base (a fixed joint from a new root link ``tracker``). Everything else
+goes to a YAML file beside it, with the identified marker positions.
 """
 from __future__ import annotations
 
@@ -39,11 +32,8 @@ OWN_WEIGHT_POSES = 64
 
 
 def corrections(model) -> ca.Function:
-    """``corrections(p) -> (E_0 … E_N, dq)``: the folded effects' placements (4×4) and offsets (N).
-
-    ``E_k`` (k < N) follows joint k's nominal placement, ``E_N`` the flange's,
-    composed exactly as :mod:`doe_calib.model.kinematics` composes them.
-    """
+    """``corrections(p) -> (E_0 … E_N, dq)``: the folded effects' placements (4×4) after each
+    joint's (``E_N``: the flange's) nominal placement, and the offsets (N)."""
     robot, n = model.robot, model.robot.n_joints
     p = ca.SX.sym("p", model.n_parameters)
     by_name = {par.name: p[i] for i, par in enumerate(model.parameters)}
@@ -99,6 +89,13 @@ def _set_origin(joint_el, placement: np.ndarray) -> None:
     o.set("rpy", " ".join(repr(float(v)) for v in matrix_to_rpy(placement[:3, :3])))
 
 
+def _fixed_joint(root, name: str, parent: str, child: str, placement) -> None:
+    joint = ET.SubElement(root, "joint", name=name, type="fixed")
+    ET.SubElement(joint, "parent", link=parent)
+    ET.SubElement(joint, "child", link=child)
+    _set_origin(joint, placement)
+
+
 def _motion(joint, dq: float) -> np.ndarray:
     axis = np.asarray(joint.axis, float)
     out = np.eye(4)
@@ -110,20 +107,13 @@ def _motion(joint, dq: float) -> np.ndarray:
 
 
 def calibrated_urdf(model, parameters) -> tuple[ET.ElementTree, str]:
-    """The calibrated URDF tree and the name of its flange link.
-
-    Parameters
-    ----------
-    model : Model
-        The model of the result (its robot's ``source`` is the URDF read).
-    parameters : ParameterSet
-        Identified values (SI).
+    """The calibrated URDF tree and the name of its flange link, from ``model``'s URDF
+    (``robot.source``) and the identified ``parameters`` (SI).
 
     Raises
     ------
     ModelError
-        The original URDF cannot be read, misses a chain joint, or already
-        has a link named ``tracker``.
+        The URDF cannot be read, misses a chain joint, or has a link named ``tracker``.
     """
     robot = model.robot
     path = Path(robot.source)
@@ -152,10 +142,7 @@ def calibrated_urdf(model, parameters) -> tuple[ET.ElementTree, str]:
     root_link = next(lk.get("name") for lk in root.findall("link")
                      if lk.get("name") not in children)
     root.insert(0, ET.Element("link", name=TRACKER_LINK))
-    fixed = ET.SubElement(root, "joint", name=f"{TRACKER_LINK}_to_{root_link}", type="fixed")
-    ET.SubElement(fixed, "parent", link=TRACKER_LINK)
-    ET.SubElement(fixed, "child", link=root_link)
-    _set_origin(fixed, base)
+    _fixed_joint(root, f"{TRACKER_LINK}_to_{root_link}", TRACKER_LINK, root_link, base)
     return tree, flange
 
 
@@ -170,10 +157,7 @@ def _fold_flange(root, joints, robot, e_flange) -> str:
     # The flange is the last joint's own link: hang a calibrated flange link from it.
     name = f"{robot.flange}_calibrated"
     root.append(ET.Element("link", name=name))
-    fixed = ET.SubElement(root, "joint", name=f"{name}_joint", type="fixed")
-    ET.SubElement(fixed, "parent", link=robot.flange)
-    ET.SubElement(fixed, "child", link=name)
-    _set_origin(fixed, e_flange)
+    _fixed_joint(root, f"{name}_joint", robot.flange, name, e_flange)
     return name
 
 
@@ -208,29 +192,9 @@ def leftovers(model, parameters, std=None) -> list[dict]:
 
 
 def own_weight_deflection(model, params, q):
-    """How far the robot's own weight moves the markers and the flange, unloaded.
-
-    The effects that use the gravity torque (``gravity_compliance``) deflect
-    the arm under its own weight even with no payload; the URDF cannot hold
-    that. This is the model's unloaded shape minus the same with those
-    effects' parameters at zero.
-
-    Parameters
-    ----------
-    model : Model
-    params : ParameterSet
-        Identified values (SI).
-    q : array_like, shape (M, N)
-        Joint positions, rad/m.
-
-    Returns
-    -------
-    markers : ndarray, shape (M, n)
-        Displacement of each marker, m.
-    flange : ndarray, shape (M,)
-        Displacement of the flange origin, m.
-    effects : list of str
-        The effects responsible (empty: none in the model, both arrays zero).
+    """How far the robot's own weight moves the markers (M, n) and the flange origin (M,), m,
+    unloaded at ``q`` (M, N) rad/m: the effects that use the gravity torque against their
+    parameters at zero, which a URDF cannot hold; and those effects' specs (may be empty).
     """
     own = [e for e in model.effects if e.uses_gravity]
     blocks = {e.name for e in own}
@@ -258,20 +222,8 @@ def _own_weight(model, params) -> dict | None:
 
 
 def export_urdf(result, out, model=None) -> tuple[Path, Path]:
-    """Write the calibrated URDF and, beside it, the YAML of what it cannot hold.
-
-    Parameters
-    ----------
-    result : IdentificationResult
-    out : path-like
-        URDF file to write; the YAML is the same name with ``.yaml``.
-    model : Model, optional
-        Built from the result when not given.
-
-    Returns
-    -------
-    (Path, Path)
-        The URDF and YAML written.
+    """Write the calibrated URDF ``out`` and, beside it (``.yaml``), what it cannot hold;
+    return both paths. ``model``: built from ``result`` when not given.
 
     Examples
     --------
@@ -288,14 +240,13 @@ def export_urdf(result, out, model=None) -> tuple[Path, Path]:
     rigid_at_rest = [e.spec() for e in model.effects if e.name not in FOLDED and
                      (type(e).joint_correction is not Effect.joint_correction or
                       type(e).placement is not Effect.placement)]
+    own_weight = _own_weight(model, result.parameters)
     notes = [f"{TRACKER_LINK} is the tracker frame (the identified base placement); the joint "
              f"values are the controller's, as in the original URDF",
              "compliance and every effect listed here act on top of the URDF: the URDF alone "
-             "is the robot unloaded"]
-    own_weight = _own_weight(model, result.parameters)
+             "is the robot unloaded"
+             + (" and without its own weight's deflection" if own_weight else "")]
     if own_weight:
-        notes[1] = ("compliance and every effect listed here act on top of the URDF: the URDF "
-                    "alone is the robot unloaded and without its own weight's deflection")
         notes.append(f"the unloaded shape includes the deflection under the robot's own weight "
                      f"({', '.join(own_weight['effects'])}), which the URDF leaves out: up to "
                      f"{own_weight['max_marker_displacement_mm']:.3g} mm at the markers and "

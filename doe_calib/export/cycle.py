@@ -30,18 +30,8 @@ RAMP = 0.5
 class CycleTime:
     """Estimated duration of a program, s.
 
-    Attributes
-    ----------
-    travel : float
-        Time moving, pre-poses and intermediate positions included.
-    moves : int
-        Number of PTP moves counted.
-    dwell : float
-        Time standing at the poses.
-    load_changes : int
-        Number of times the operator changes the load.
-    load_change : float
-        Time spent on them.
+    ``travel`` moving (``moves`` PTP moves), ``dwell`` standing at the poses,
+    ``load_change`` on the ``load_changes`` changes of load.
     """
 
     travel: float
@@ -69,21 +59,8 @@ class CycleTime:
 
 
 def cycle_time(visits, robot, dwell: float, load_change: float) -> CycleTime:
-    """Estimate the duration of a program visiting ``visits`` (module notes).
-
-    Parameters
-    ----------
-    visits : list of Move
-        The program's moves (:func:`.program.moves`).
-    robot : Robot
-    dwell : float
-        Seconds standing at each pose.
-    load_change : float
-        Seconds the operator needs to change the load.
-
-    Returns
-    -------
-    CycleTime
+    """Estimate the duration of a program visiting ``visits`` (module notes), standing
+    ``dwell`` s at each pose and ``load_change`` s at each change of load.
 
     Examples
     --------

@@ -1,38 +1,22 @@
-"""KUKA KRL: a ``.src`` program and its ``.dat`` with one E6AXIS per pose.
+"""KUKA KRL: a ``.src`` program and its ``.dat`` with one E6AXIS per pose (6 axes).
 
-Each visit is ``PTP XP<i>`` (exact positioning) to the pose's axis values,
-A1..A6 in deg (mm for a linear axis), declared in the ``.dat``; E1..E6 are 0.
-A visit whose joints must arrive from a given side is preceded by
-``PTP XA<n>``, its pre-pose (n: the visit's number in the program). A move
-routed round a collision (:mod:`.safety`) first visits ``XV<n>_<k>``.
-The home and load-change poses (:mod:`.stations`) are ``XCHOME`` and
-``XCLOAD``. The program first declares the tool's load data (``$LOAD.M``
-in kg, ``$LOAD.CM`` in mm, ``$LOAD.J`` 0: KSS's ``LOAD`` structure of the
-flange's payload). Before a visit whose load differs from the previous one
-the program HALTs with a comment telling the operator which load to hang
-(restart with Start), then declares the tool plus the new load in
-``$LOAD``. At each measurement pose it waits ``dwell`` s (``WAIT SEC``,
-which also stops the advance run so the robot is really there), writes the
-trigger line if one is given, and, with a handshake n, sets ``$OUT[n]``,
-waits for ``$IN[n]``, resets ``$OUT[n]`` and waits for ``$IN[n]`` to drop.
-Exactly 6 axes are supported.
+Each visit is ``PTP XP<i>`` (exact positioning) to A1..A6 in deg (mm for a linear
+axis), E1..E6 0; pre-poses are ``XA<n>`` (n: the visit's number), intermediate
+positions round a collision ``XV<n>_<k>``, the home and load-change poses ``XCHOME``
+and ``XCLOAD``. The tool's load is declared first (``$LOAD.M`` kg, ``$LOAD.CM`` mm,
+``$LOAD.J`` 0); before a change of load the program HALTs with the operator's
+instruction, then declares the tool plus the new load. At each measurement pose:
+``WAIT SEC dwell`` (which also stops the advance run), the trigger line, and with a
+handshake n ``$OUT[n]`` set, ``$IN[n]`` waited for, reset, its drop waited for.
 """
 from __future__ import annotations
 
-from doe_calib.errors import ModelError
-from doe_calib.export.program import ascii_text, check_name, load_changes
+from doe_calib.export.program import check_name, declared, headline, load_changes, six_axes
 
 SUFFIXES = (".src", ".dat")
 MAX_NAME = 24  # KRL identifiers
 VEL_PTP = 10   # % of the maximum axis velocity
 ACC_PTP = 20   # % of the maximum axis acceleration
-
-
-def check_robot(robot) -> None:
-    """KRL programs here drive exactly 6 robot axes A1..A6."""
-    if robot.n_joints != 6:
-        raise ModelError(f"KRL export needs a 6-axis robot; {robot.name} has "
-                         f"{robot.n_joints} joints")
 
 
 def _axis(q) -> str:
@@ -72,15 +56,12 @@ def _target(m) -> str:
 
 def render(design, visits, settings) -> dict:
     """Text of the ``.src`` and ``.dat`` files, keyed by suffix."""
-    check_robot(design.robot)
+    six_axes(design.robot, "KRL")
     name = check_name(settings.name, MAX_NAME)
-    n_poses = len({m.index for m in visits if m.measures})
-    n_measured = sum(m.measures for m in visits)
     header = ["&ACCESS RVP", "&REL 1"]
     src = [*header, f"DEF {name}( )",
-           f"  ; doe_calib measurement program: {n_poses} poses, {n_measured} measurements",
-           "  ; " + ascii_text(f"model {design.model}, criterion {design.criterion}; axes in "
-                              f"deg (mm for linear axes)"),
+           *(f"  ; {line}" for line in headline(design, visits, "axes in deg (mm for linear "
+                                                                  "axes)")),
            "  BAS(#INITMOV, 0)",
            f"  BAS(#VEL_PTP, {VEL_PTP})",
            f"  BAS(#ACC_PTP, {ACC_PTP})",
@@ -99,18 +80,7 @@ def render(design, visits, settings) -> dict:
             src += _wait(settings)
     src += ["END", ""]
     dat = [*header, f"DEFDAT {name}"]
-    seen = set()
-    for m in visits:
-        if _target(m) not in seen:
-            seen.add(_target(m))
-            dat += ["  ; " + ascii_text(f"pose {m.pose}" if m.measures else f"{m.kind} pose"),
-                    f"  DECL E6AXIS {_target(m)}={_axis(m.q)}"]
-    for m in visits:
-        if m.pre is not None:
-            dat += ["  ; " + ascii_text(f"pre-pose of pose {m.pose}, visit {m.number}"),
-                    f"  DECL E6AXIS XA{m.number}={_axis(m.pre)}"]
-    for m in visits:
-        for k, w in enumerate(m.via, start=1):
-            dat += [f"  ; {w.why}", f"  DECL E6AXIS XV{m.number}_{k}={_axis(w.q)}"]
+    for var, q, words in declared(visits, _target, "XA", "XV"):
+        dat += [f"  ; {words}", f"  DECL E6AXIS {var}={_axis(q)}"]
     dat += ["ENDDAT", ""]
     return {".src": "\n".join(src), ".dat": "\n".join(dat)}

@@ -1,17 +1,9 @@
 """Visiting order of poses for short joint travel: nearest neighbour, then 2-opt and or-opt.
 
-The cost of going from pose a to pose b is the time the slowest axis needs,
-
-    t(a, b) = max_j |q_j(b) − q_j(a)| / v_j,
-
-with v_j the joint's speed (a PTP move is synchronous: every axis arrives
-together, so the axis that needs longest sets the time). The order is an
-open path — the robot does not return to the first pose — optionally
-starting from a fixed configuration (the last pose of the previous load
-case). Nearest-neighbour paths are improved by 2-opt segment reversals and
-by moving segments of 1–3 poses (or-opt) until neither shortens them. This
-is a heuristic; on a few poses it is within a few per cent of the
-exhaustive optimum (``tests/test_export_ordering.py``).
+The cost of a synchronous PTP move a → b is the time of the slowest axis,
+``t(a, b) = max_j |q_j(b) − q_j(a)| / v_j``. The order is an open path, optionally from
+a fixed start; a heuristic within a few per cent of the optimum on a few poses
+(``tests/test_export_ordering.py``).
 """
 from __future__ import annotations
 
@@ -59,18 +51,8 @@ def move_times(a, b, speed) -> np.ndarray:
 
 
 def path_time(times, order, start=None) -> float:
-    """Length of the open path visiting ``order``.
-
-    Parameters
-    ----------
-    times : ndarray, shape (M, M)
-        Move times between the poses (:func:`move_times`).
-    order : sequence of int
-        Visiting order, a permutation of 0 … M−1.
-    start : ndarray, shape (M,), optional
-        Move time from the starting configuration to each pose; None: the
-        path starts at its first pose.
-    """
+    """Length (s) of the open path visiting ``order`` with move ``times`` (M, M); ``start``
+    (M,): the move time from the start to each pose (None: start at the first pose)."""
     order = list(order)
     total = float(sum(times[i, j] for i, j in zip(order[:-1], order[1:])))
     return total + (float(start[order[0]]) if start is not None and order else 0.0)
@@ -134,33 +116,12 @@ def _or_opt(times, path: list, start) -> bool:
     return False
 
 
-def _improve(times, path: list, start) -> list:
-    """2-opt, then segment moves, until neither shortens the path."""
-    path = _two_opt(times, path, start)
-    while _or_opt(times, path, start):
-        path = _two_opt(times, path, start)
-    return path
-
-
 def short_path(times, start=None) -> np.ndarray:
-    """A short open path through every pose: nearest neighbour, then 2-opt and or-opt.
+    """A short open path through every pose (module notes): of the nearest-neighbour paths
+    from every first pose, the :data:`TRIES` shortest improved by 2-opt and or-opt.
 
-    The nearest-neighbour path from every possible first pose is built
-    (its length counting the move from ``start``); the :data:`TRIES` shortest
-    are improved by 2-opt and or-opt and the shortest result is returned.
-
-    Parameters
-    ----------
-    times : ndarray, shape (M, M)
-        Symmetric move times between the poses, s (:func:`move_times`).
-    start : ndarray, shape (M,), optional
-        Move time from the configuration the robot starts at to each pose;
-        None: the path may start anywhere.
-
-    Returns
-    -------
-    ndarray of int, shape (M,)
-        The visiting order.
+    ``times`` (M, M): symmetric move times, s; ``start`` (M,): the move time from the
+    start to each pose (None: start anywhere). Returns the visiting order, (M,).
 
     Examples
     --------
@@ -174,5 +135,8 @@ def short_path(times, start=None) -> np.ndarray:
         return np.zeros(0, dtype=int)
     paths = sorted((_nearest_neighbour(times, f) for f in range(m)),
                    key=lambda p: path_time(times, p, start))
-    paths = [_improve(times, p, start) for p in paths[:TRIES]]
+    paths = [_two_opt(times, p, start) for p in paths[:TRIES]]
+    for p in paths:  # or-opt then 2-opt until neither shortens the path
+        while _or_opt(times, p, start):
+            _two_opt(times, p, start)
     return np.array(min(paths, key=lambda p: path_time(times, p, start)), dtype=int)

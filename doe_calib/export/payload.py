@@ -17,15 +17,7 @@ from doe_calib.errors import OptionError
 
 @dataclass(frozen=True)
 class Payload:
-    """A mass on the flange.
-
-    Attributes
-    ----------
-    mass : float
-        kg, ≥ 0.
-    com : tuple of float
-        Centre of mass in the flange frame, m.
-    """
+    """A mass on the flange: ``mass`` kg ≥ 0, ``com`` its centre in the flange frame, m."""
 
     mass: float = 0.0
     com: tuple = (0.0, 0.0, 0.0)

@@ -1,14 +1,9 @@
 """What every robot program shares: the moves of a design, checked, with load-case words.
 
-A design is turned into an ordered list of :class:`Move` — one per
-(pose, load case), in the order of :func:`.sequence.visit_order` — with joint
-values in controller units (deg; mm for prismatic joints) re-checked against
-the robot's joint limits, and a pre-pose where a joint must reach the pose
-from a given side (:mod:`.approach`). Joints with more than one turn of range
-take the equivalent angles that keep the moves short (:mod:`.turns`). With a
-home pose (:attr:`.sequence.Plan.home`) the list starts and ends with a move
-to it and has a move to the load-change pose before each load change
-(:mod:`.stations`). The format modules only render these moves.
+:func:`moves` turns a design into :class:`Move` s — one per (pose, load case) in the
+order of :func:`.sequence.visit_order`, limits re-checked, with pre-poses
+(:mod:`.approach`), equivalent turns (:mod:`.turns`) and the home and load-change
+moves (:mod:`.stations`). The format modules only render them.
 """
 from __future__ import annotations
 
@@ -17,17 +12,16 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.errors import DataError, DoeCalibError, OptionError
+from doe_calib.errors import DataError, DoeCalibError, ModelError, OptionError
 from doe_calib.export.approach import backlash_joints, default_sides, pre_pose
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.payload import Payload
 from doe_calib.export.sequence import NO_LOAD, Plan, visit_order
-from doe_calib.export.stations import check_station
+from doe_calib.export.stations import check_station, outside_limits
 from doe_calib.export.turns import periodic_joints, shortest_turns, turn_joints
 from doe_calib.io.measurements import approach_from_order
 from doe_calib.model.marker_model import build_model
 
-_LIMIT_TOL = 1e-12  # rad or m, as when a design CSV is read
 _MOVED = 1e-9  # deg or mm: a smaller change is no motion
 
 
@@ -40,23 +34,16 @@ class Settings:
     name : str
         Program (module) name; a letter then letters, digits or ``_``.
     dwell : float
-        Seconds to stand still at each pose before (``handshake``) or while
-        (no handshake) the tracker measures.
+        Seconds to stand still at each pose.
     handshake : int or None
-        None: the program only waits ``dwell`` s at each pose (the tracker
-        measures on a timer). An integer n: after the dwell the program sets
-        digital output n ("in position"), waits for digital input n
-        ("measured") to go high, resets the output and waits for the input to
-        drop again. RAPID uses the named signals ``doCalibReady`` and
-        ``diCalibDone`` instead of the number.
+        None: wait ``dwell`` only. n: after the dwell set digital output n, wait for input
+        n, reset the output, wait for the input to drop (RAPID: the signals
+        ``doCalibReady``, ``diCalibDone``).
     trigger : str or None
-        One line of the program's language written at every measurement
-        pose after the dwell (before the handshake), e.g. URScript
-        ``set_digital_out(2, True)``: what makes the tracker measure. None:
-        nothing.
+        One line of the program's language written at every measurement pose after the
+        dwell, e.g. URScript ``set_digital_out(2, True)``.
     tool : Payload
-        The tool's own mass and centre of mass, declared at the start and
-        added to each load (:mod:`.payload`); default none.
+        The tool's own mass, declared at the start and added to each load.
     """
 
     name: str = "doe_calib"
@@ -78,17 +65,8 @@ class Settings:
 
 @dataclass(frozen=True)
 class Waypoint:
-    """An intermediate position a move passes through to keep clear of collisions.
-
-    Attributes
-    ----------
-    q, q_si : ndarray, shape (N,)
-        Controller joint values, deg (mm) and rad (m).
-    urdf : ndarray, shape (N,)
-        The same as URDF values, rad (m).
-    why : str
-        In words, for the program's comment.
-    """
+    """An intermediate position a move passes through to keep clear of collisions: controller
+    values ``q`` (N,) deg (mm) and ``q_si`` rad (m), ``urdf`` rad (m), ``why`` in words."""
 
     q: np.ndarray
     q_si: np.ndarray
@@ -100,45 +78,30 @@ class Waypoint:
 class Move:
     """One visit of a pose under one load case, with its pre-pose.
 
-    Joint values ``q``, ``q_si``, ``pre``, ``pre_si`` are the controller's
-    (the plan's axis map applied); ``urdf_q`` and ``urdf_pre`` the URDF's.
-
     Attributes
     ----------
     pose : str
-        Pose id of the design.
-    index : int
-        1-based position of the pose in the design (names its variable).
-    number : int
-        1-based position of the visit in the program (names its pre-pose).
-    row : int
-        The visit's row of the design's configurations.
-    q : ndarray, shape (N,)
-        Joint values, deg (mm for prismatic joints).
-    q_si : ndarray, shape (N,)
-        The same in rad (m).
+    index, number, row : int
+        1-based place of the pose in the design and of the visit in the program (they name
+        its variables); the design row (−1 for a station).
+    q, q_si : ndarray, shape (N,)
+        Controller joint values (axis map applied), deg (mm) and rad (m).
     case, n_cases : int
         1-based load case of this visit and the number of load cases of the pose.
     load : str
-        The load to hang, in words ("no load", "250 kg at 0,0,200 mm ...").
+        The load hung, in words.
     approach : tuple of int, length N
         Side each joint arrives from (URDF sense: +1 moving up, −1 down; 0 any).
     pre, pre_si : ndarray, shape (N,), or None
-        The pre-pose visited just before, deg (mm) and rad (m); None when no
-        joint has a side to arrive from.
+        The pre-pose, controller values, deg (mm) and rad (m); None without one.
     urdf_q, urdf_pre : ndarray, shape (N,), or None
         Target and pre-pose as URDF values, rad (m).
     via : tuple of Waypoint
-        Intermediate positions visited first, on the way from the previous
-        position (:mod:`.safety`: a move that would collide, routed); empty
-        when the move goes straight.
+        Intermediate positions round a collision (:mod:`.safety`).
     kind : {"visit", "home", "load change"}
-        A measurement at a design pose, or a move to the home or the
-        load-change pose (:mod:`.stations`; ``row`` −1, ``index``, ``case``
-        and ``n_cases`` 0, ``load`` the load hung during the move).
+        A measurement, or a move to a station (:mod:`.stations`).
     payload : Payload or None
-        The load hung during the move (no load: mass 0); None when only its
-        wrench is known.
+        The load hung (mass 0: none); None when only its wrench is known.
     """
 
     pose: str
@@ -200,13 +163,11 @@ def check_name(name: str, max_length: int) -> str:
 def check_limits(design) -> None:
     """Raise :class:`DataError` naming the pose, joint and limit of the first pose outside them."""
     robot, cfg = design.robot, design.configurations
+    lower, upper = robot.lower, robot.upper
     for pose, q in zip(cfg.pose, cfg.q):
-        for joint, v in zip(robot.joints, q):
-            if not joint.lower - _LIMIT_TOL <= v <= joint.upper + _LIMIT_TOL:
-                k, unit = joint.display_factor, joint.display_unit
-                raise DataError(f"pose {pose!r}: joint {joint.name} = {v * k:.6g} {unit} is "
-                                f"outside its limits [{joint.lower * k:g}, {joint.upper * k:g}] "
-                                f"{unit}")
+        outside = outside_limits(robot, q, lower, upper)
+        if outside:
+            raise DataError(f"pose {pose!r}: {outside}")
 
 
 def load_words(spec: str) -> str:
@@ -227,10 +188,8 @@ def _wrench_words(wrench) -> str:
 def _load_specs(design) -> list:
     """The load of each configuration as ``KG@X,Y,Z`` (mm), "" unloaded, None unknown.
 
-    ``constraints["row_loads"]`` when given (one per row: a compensated
-    program's, ``KG@`` for a mass whose centre of mass is not known); else
-    from the design's load cases (``constraints["loads"]``) when the pose
-    has one unloaded visit followed by one per load case.
+    ``constraints["row_loads"]`` when given (a compensated program's; ``KG@``: centre of
+    mass not known); else the load cases when the pose has one unloaded visit then one each.
     """
     cfg = design.configurations
     if "row_loads" in design.constraints:
@@ -246,10 +205,7 @@ def _load_specs(design) -> list:
 
 
 def _loads(design) -> tuple:
-    """The load of each configuration in words (:func:`load_words`) and as a Payload (or None).
-
-    Named from the load specs (:func:`_load_specs`); otherwise from its wrench.
-    """
+    """The load of each configuration in words and as a Payload (None: not known)."""
     words, payloads = [], []
     for spec, w in zip(_load_specs(design), design.configurations.wrench):
         if spec and spec.endswith("@"):  # a mass whose centre of mass is not known
@@ -263,12 +219,8 @@ def _loads(design) -> tuple:
 
 
 def _turned(design, q, loads, plan: Plan, home, load_pose) -> np.ndarray:
-    """``q`` (visits in order, rad/m) with multi-turn joints at their shortest equivalents.
-
-    ``loads``: each visit's load in words; with a home pose the program
-    passes the load-change pose ``load_pose`` before each change of load
-    (:func:`_with_stations`), a fixed point of the path.
-    """
+    """``q`` (visits in order, rad/m) with multi-turn joints at their shortest equivalents;
+    with a home pose, ``load_pose`` before each change of ``loads`` is a fixed point."""
     robot = design.robot
     joints = turn_joints(robot) if plan.turns else ()
     if not joints:
@@ -294,30 +246,20 @@ def _turned(design, q, loads, plan: Plan, home, load_pose) -> np.ndarray:
 
 
 def moves(design, plan: Plan | None = None) -> list[Move]:
-    """Every (pose, load case) of ``design`` in program order, limits checked.
-
-    Parameters
-    ----------
-    design : DesignResult
-        Its configurations' approach directions are the sides the design
-        demands (0: none).
-    plan : Plan, optional
-        Grouping, order, pre-pose step, default sides and axis map (default
-        ``Plan()``).
+    """Every (pose, load case) of ``design`` in program order under ``plan`` (default
+    ``Plan()``), limits checked.
 
     Raises
     ------
     DataError
-        A pose outside the joint limits, or a demanded side that a pre-pose
+        A pose outside the joint limits, or a side the design demands that a pre-pose
         cannot realise inside them (naming pose and joint).
     """
     check_limits(design)
     plan = Plan() if plan is None else plan
     robot, cfg = design.robot, design.configurations
     factors = robot.display_factors
-    axis_map = plan.axis_map
-    if axis_map is None:
-        axis_map = AxisMap.identity(robot.n_joints)
+    axis_map = plan.axis_map or AxisMap.identity(robot.n_joints)
     limits = plan.limits
     home = None if plan.home is None else np.array(check_station(robot, plan.home, "--home",
                                                                  limits))
@@ -359,10 +301,8 @@ def _station(kind: str, q, last: Move | None, axis_map, factors) -> Move:
 
 
 def _with_stations(visits: list, home, load_pose, axis_map, factors) -> list:
-    """``visits`` from and back to ``home``, through ``load_pose`` before each load change.
-
-    Moves are renumbered in program order (their ``number``).
-    """
+    """``visits`` from and back to ``home``, through ``load_pose`` before each load change,
+    renumbered."""
     out = [_station("home", home, None, axis_map, factors)]
     for m in visits:
         if m.load != out[-1].load and not np.allclose(out[-1].urdf_q, load_pose):
@@ -373,21 +313,9 @@ def _with_stations(visits: list, home, load_pose, axis_map, factors) -> list:
 
 
 def realised_approach(visits: list[Move], robot) -> np.ndarray:
-    """The side from which each joint reaches each visit's pose when the program runs.
-
-    The sign of the last motion of each joint into the target, through the
-    intermediate positions and pre-poses
-    (:func:`doe_calib.io.measurements.approach_from_order`; 0 for a joint that has not
-    moved since the program started), in the URDF's sense, as
-    a measurement file's ``approach`` columns and the ``backlash`` effect
-    read it.
-
-    Returns
-    -------
-    ndarray, shape (V, N)
-        +1, −1 or 0 per measuring visit (home and load-change moves are passed
-        through, not listed) and joint.
-    """
+    """The side each joint reaches each measuring visit from, shape (V, N): the sign of its
+    last motion through intermediate positions and pre-poses, URDF sense (0: not moved yet),
+    as the ``approach`` columns and the ``backlash`` effect read it."""
     path, target = [], []
     for m in visits:
         path += [w.urdf for w in m.via]
@@ -399,6 +327,36 @@ def realised_approach(visits: list[Move], robot) -> np.ndarray:
     if not target:
         return np.zeros((0, robot.n_joints))
     return approach_from_order(np.array(path) * robot.display_factors, _MOVED)[target]
+
+
+def headline(design, visits, units: str) -> list[str]:
+    """The two comment lines a program opens with: what it measures, model and ``units``."""
+    poses = len({m.index for m in visits if m.measures})
+    return [f"doe_calib measurement program: {poses} poses, "
+            f"{sum(m.measures for m in visits)} measurements",
+            ascii_text(f"model {design.model}, criterion {design.criterion}; {units}")]
+
+
+def six_axes(robot, language: str) -> None:
+    """Raise :class:`ModelError` unless ``robot`` has the 6 axes a ``language`` program drives."""
+    if robot.n_joints != 6:
+        raise ModelError(f"{language} export needs a 6-axis robot; {robot.name} has "
+                         f"{robot.n_joints} joints")
+
+
+def declared(visits, target, pre: str, via: str) -> list[tuple]:
+    """(variable, controller q, comment) of each position a program declares: every pose
+    once (``target(m)``), then the pre-poses (``<pre><number>``) and the intermediate
+    positions (``<via><number>_<k>``)."""
+    first = {}
+    for m in visits:
+        first.setdefault(target(m), m)
+    out = [(var, m.q, f"pose {m.pose}" if m.measures else f"{m.kind} pose")
+           for var, m in first.items()]
+    out += [(f"{pre}{m.number}", m.pre, f"pre-pose of pose {m.pose}, visit {m.number}")
+            for m in visits if m.pre is not None]
+    return [(var, q, ascii_text(words)) for var, q, words in out] + [
+        (f"{via}{m.number}_{k}", w.q, w.why) for m in visits for k, w in enumerate(m.via, 1)]
 
 
 def load_changes(visits: list[Move]) -> list[bool]:

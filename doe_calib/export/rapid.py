@@ -1,38 +1,24 @@
-"""ABB RAPID: one MODULE with a CONST jointtarget per pose and a ``main`` procedure.
+"""ABB RAPID: one MODULE with a CONST jointtarget per pose and a ``main`` procedure (6 axes).
 
-Each visit is ``MoveAbsJ jp<i>\\NoEOffs, v100, fine, tool0;`` to robax in deg
-(mm for a linear axis), extax 9E9 (no external axes). A visit whose joints
-must arrive from a given side is preceded by ``MoveAbsJ ja<n>...`` to its
-pre-pose (n: the visit's number in the program), also ``fine``; a move
-routed round a collision (:mod:`.safety`) first by ``MoveAbsJ jv<n>_<k>``
-to its intermediate positions. Before a visit whose
-load differs from the previous one: ``TPWrite`` the load to hang, then
-``Stop;`` (restart with Start), then ``GripLoad`` of the load's ``loaddata``
-(``ldCase<k>``: mass kg, centre of mass mm in the tool frame, no inertia;
-``load0`` when the load is removed). The tool's own mass, when given, is in
-the ``tooldata`` ``tCalib`` (at the flange) the moves use instead of
-``tool0``. The home and load-change poses (:mod:`.stations`) are ``jhome``
-and ``jload``. At each measurement pose ``WaitTime dwell;``, the trigger line
-if one is given, and, with a handshake, ``SetDO doCalibReady, 1; WaitDI
-diCalibDone, 1; SetDO doCalibReady, 0; WaitDI diCalibDone, 0;`` (two signals
-to declare in the I/O configuration). Exactly 6 axes are supported.
+Each visit is ``MoveAbsJ jp<i>\\NoEOffs, v100, fine, tool0;`` to robax in deg (mm for a
+linear axis), extax 9E9; pre-poses are ``ja<n>`` (n: the visit's number), intermediate
+positions round a collision ``jv<n>_<k>``, the home and load-change poses ``jhome`` and
+``jload``. Before a change of load: ``TPWrite`` the load to hang, ``Stop;``, then
+``GripLoad`` of its ``loaddata`` ``ldCase<k>`` (kg, mm in the tool frame, no inertia;
+``load0`` unloaded). A tool's own mass goes in the ``tooldata`` ``tCalib`` the moves
+then use. At each measurement pose ``WaitTime dwell;``, the trigger line, and with a
+handshake ``SetDO doCalibReady``/``WaitDI diCalibDone`` up and down (two signals to
+declare in the I/O configuration).
 """
 from __future__ import annotations
 
-from doe_calib.errors import ModelError
-from doe_calib.export.program import ascii_text, check_name, load_changes
+from doe_calib.export.program import (ascii_text, check_name, declared, headline, load_changes,
+                                      six_axes)
 
 SUFFIXES = (".mod",)
 MAX_NAME = 32  # RAPID identifiers
 SPEED = "v100"
 TPWRITE_MAX = 80  # characters of a TPWrite string
-
-
-def check_robot(robot) -> None:
-    """RAPID programs here drive exactly 6 robot axes (robax)."""
-    if robot.n_joints != 6:
-        raise ModelError(f"RAPID export needs a 6-axis robot; {robot.name} has "
-                         f"{robot.n_joints} joints")
 
 
 def _target_text(q) -> str:
@@ -65,15 +51,11 @@ def _target(m) -> str:
 
 def render(design, visits, settings) -> dict:
     """Text of the ``.mod`` file, keyed by suffix."""
-    check_robot(design.robot)
+    six_axes(design.robot, "RAPID")
     name = check_name(settings.name, MAX_NAME)
-    n_poses = len({m.index for m in visits if m.measures})
-    n_measured = sum(m.measures for m in visits)
     tool = "tool0" if settings.tool.mass == 0 else "tCalib"
-    out = [f"MODULE {name}",
-           f"  ! doe_calib measurement program: {n_poses} poses, {n_measured} measurements",
-           "  ! " + ascii_text(f"model {design.model}, criterion {design.criterion}; robax in "
-                              f"deg (mm for linear axes); loads kg, mm")]
+    out = [f"MODULE {name}", *(f"  ! {line}" for line in headline(
+        design, visits, "robax in deg (mm for linear axes); loads kg, mm"))]
     if tool != "tool0":
         out.append(f"  PERS tooldata tCalib:=[TRUE,[[0,0,0],[1,0,0,0]],"
                    f"{_loaddata(settings.tool)}]; ! the tool at the flange, its mass")
@@ -83,20 +65,8 @@ def render(design, visits, settings) -> dict:
             cases[m.load] = f"ldCase{len(cases) + 1}"
             out.append(f"  PERS loaddata {cases[m.load]}:={_loaddata(m.payload)}; ! "
                        + ascii_text(m.load))
-    seen = set()
-    for m in visits:
-        if _target(m) not in seen:
-            seen.add(_target(m))
-            words = f"pose {m.pose}" if m.measures else f"{m.kind} pose"
-            out.append(f"  CONST jointtarget {_target(m)}:={_target_text(m.q)}; ! "
-                       + ascii_text(words))
-    for m in visits:
-        if m.pre is not None:
-            out.append(f"  CONST jointtarget ja{m.number}:={_target_text(m.pre)}; ! "
-                       + ascii_text(f"pre-pose of pose {m.pose}, visit {m.number}"))
-    for m in visits:
-        for k, w in enumerate(m.via, start=1):
-            out.append(f"  CONST jointtarget jv{m.number}_{k}:={_target_text(w.q)}; ! {w.why}")
+    out += [f"  CONST jointtarget {var}:={_target_text(q)}; ! {words}"
+            for var, q, words in declared(visits, _target, "ja", "jv")]
     out += ["", "  PROC main()", "    GripLoad load0; ! no load on the tool"]
     for m, change in zip(visits, load_changes(visits)):
         out.append(f"    ! {m.comment()}")

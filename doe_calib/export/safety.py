@@ -1,40 +1,19 @@
 """Programs that move safely: every move checked for collisions, routed round them when it can be.
 
-A program is the chain of positions its moves reach: for each visit its
-intermediate positions, its pre-pose and its pose. Each move — straight in
-joint space, as ``PTP``, ``MoveAbsJ`` and ``movej`` move — is checked from
-where the previous one ended at joint steps of at most 1°
-(:func:`doe_calib.collision.check_segment`), with the collision model of the
-load hung during it: a payload is on the flange only while its load case
-runs, and the move after a load change starts from the previous position
-with the new load on (the robot stands there while the operator changes it).
-The program is taken to start at its first position: the move to it, from
-wherever the robot stands, is not checked; the first position itself is.
+Each move of the chain of positions (intermediate positions, pre-pose, pose of each
+visit) is checked straight in joint space at ≤ 1° steps
+(:func:`doe_calib.collision.check_segment`) with the collision model of the load hung
+during it (after a load change: the new load, from the previous position). The move to
+the first position is not checked; the position itself is.
 
-A move into a visit that collides is routed through one or two
-intermediate positions when some pass the check: the wrist joints (4 on)
-turned first or last; one of the program's own poses (each free at the
-design's clearance); a retract–swing–extend, the previous position and the
-next with the arm joints (2 and 3) of such a pose; or the wrist turned as at
-such a pose for the move.
-Before any is tried, a proof that no path can make the move is looked for
-(:func:`doe_calib.collision.blocked_passage`: a joint value every path passes
-where one pair is always too close); a move so proven is neither routed nor
-searched, and its :class:`Collision` says why. The candidates (the pairs
-already found too close on the move looked at first) are tried in order of
-their joint travel, at most :data:`MAX_ROUTES`; when none passes, the joint-space planner
-(:func:`doe_calib.collision.plan_move`: OMPL RRT-Connect, shortened, every
-segment re-checked at ≤ 1°) looks for a path, written as its intermediate
-positions like a route. A move from a pre-pose into its pose is never routed
-(the side it arrives from is its purpose).
-
-Moves keep the collision model's *move* clearance
-(:attr:`~doe_calib.collision.CollisionModel.move_margins`, by default half
-the pose clearance the design kept), so that a pose designed on the boundary
-of its clearance can always be left. With a tracker in the collision model
-(the constraints' line of sight), the beam to every marker is checked at
-every pose (:func:`doe_calib.collision.blocked_beams`); a blocked beam is
-reported with the pose, marker and body, and refused as a collision is.
+A colliding move into a visit is first tested for a proof that no path exists
+(:func:`doe_calib.collision.blocked_passage`); else routed through one or two
+intermediate positions (wrist first or last, through a pose of the program, retract with
+the arm joints or turn the wrist as at such a pose; shortest joint travel first, at most
+:data:`MAX_ROUTES`), else planned (:func:`doe_calib.collision.plan_move`). A move from a
+pre-pose into its pose is never routed. Moves keep the *move* clearance
+(:attr:`~doe_calib.collision.CollisionModel.move_margins`); with a tracker in the model
+the beam to every marker is checked at every measuring pose and a blocked one refused.
 """
 from __future__ import annotations
 
@@ -42,15 +21,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.collision import (
-                        PlannerSettings,
-                        Workspace,
-                        blocked_beams,
-                        blocked_passage,
-                        check_path,
-                        check_segment,
-                        plan_move,
-)
+from doe_calib.collision import (PlannerSettings, Workspace, blocked_beams, blocked_passage,
+                                 check_path, check_segment, plan_move)
 from doe_calib.errors import CollisionError
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.program import Waypoint, ascii_text, load_words
@@ -63,7 +35,6 @@ MAX_ROUTES = 40
 ARM = (1, 2)
 
 
-
 @dataclass(frozen=True)
 class Collision:
     """A move of a program that collides.
@@ -71,9 +42,7 @@ class Collision:
     Attributes
     ----------
     move : int
-        1-based number of the move among those checked: the first position is
-        move 1, each move into a pre-pose or a pose one more (a routed move
-        counts once).
+        1-based number among the moves checked (the first position is move 1).
     words : str
         Where from and where to, under which load.
     fraction : float
@@ -84,8 +53,7 @@ class Collision:
         The pair found too close, ``"upper_arm_link vs floor"``.
     joint_names : tuple of str
     proof : str
-        Why no route can exist, in words, when that is proven
-        (:func:`~doe_calib.collision.blocked_passage`; no route was tried then); else "".
+        Why no route can exist, when proven (no route was tried then); else "".
     """
 
     move: int
@@ -110,19 +78,15 @@ class ProgramCheck:
     Attributes
     ----------
     visits : tuple of Move
-        The program's visits, routed moves with their intermediate positions
-        (:attr:`.program.Move.via`).
-    moves : int
-        Moves checked (the first position counts as one).
-    samples : int
-        Poses checked along them.
+        The program's visits, routed ones with their :attr:`.program.Move.via`.
+    moves, samples : int
+        Moves checked (the first position counts as one) and poses checked along them.
     routed : tuple of str
         Each routed move in words.
     collisions : tuple of Collision
         Moves that still collide.
     blocked : tuple of str
-        Each pose whose tracker beam to a marker is blocked, in words
-        (``"pose 3, no load: beam to marker A blocked by upper_arm_link"``).
+        Each pose whose tracker beam to a marker is blocked, in words.
     clearance : str
         The clearances the moves kept, in words.
     """
@@ -168,22 +132,8 @@ class ProgramCheck:
 
 
 def program_models(loads, build) -> dict:
-    """The collision model of each load case of a program, keyed by the load in words.
-
-    Parameters
-    ----------
-    loads : sequence of LoadCase
-        The design's load cases (``design.constraints["loads"]``).
-    build : callable
-        ``build(loads)`` → :class:`~doe_calib.collision.CollisionModel` with
-        those payloads on the flange.
-
-    Returns
-    -------
-    dict
-        :data:`.sequence.NO_LOAD` → the model without payload; each load's
-        words (:func:`.program.load_words`) → the model with that payload only.
-    """
+    """The collision model of each load case (``loads``: LoadCase), keyed by the load in words
+    (:data:`.sequence.NO_LOAD`: without payload); ``build(loads)`` → CollisionModel."""
     models = {NO_LOAD: build(())}
     models.update({load_words(load.spec()): build((load,)) for load in loads})
     return models
@@ -227,13 +177,9 @@ def _margins(cm):
 
 
 def _route(cm, a, b, pair, safe, ws, planner):
-    """The first candidate route whose every move passes, else a planned path; the poses checked.
-
-    ``pair``: the pair the straight move a → b is too close on, in words.
-    ``(words, intermediate positions, samples, proof)``; words and positions None when none
-    passes; proof the :class:`~doe_calib.collision.passage.Blockage` when none can (then no
-    route is tried), else None.
-    """
+    """``(words, intermediate positions, samples, proof)`` of the first candidate route a → b
+    that passes, else of a planned path; words and positions None when none passes; proof
+    the Blockage when none can (then none is tried). ``pair``: the straight move's pair."""
     poses = np.array([a, b, *(p for _, p in safe)])
     lower = np.minimum(np.asarray(cm.lower, float), poses.min(axis=0))
     upper = np.maximum(np.asarray(cm.upper, float), poses.max(axis=0))
@@ -261,11 +207,6 @@ def _route(cm, a, b, pair, safe, ws, planner):
     return None, None, samples, None
 
 
-def _clearance_words(cm) -> str:
-    return (f"moves keep {1000 * cm.move_clearance:g} mm, {1000 * cm.move_self_clearance:g} mm "
-            f"between links; poses {1000 * cm.clearance:g} mm")
-
-
 def check_program(visits, models, robot, axis_map: AxisMap | None = None,
                   route: bool = True, planner: PlannerSettings | bool = True,
                   workers: int | None = None) -> ProgramCheck:
@@ -276,28 +217,17 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
     visits : sequence of Move
         The program (:func:`.program.moves`).
     models : dict
-        Load in words → :class:`~doe_calib.collision.CollisionModel`
-        (:func:`program_models`); a load it does not name (a wrench given
-        without its shape, as a compensated program's) is checked with the
-        :data:`.sequence.NO_LOAD` model, without a payload shape.
+        Load in words → CollisionModel (:func:`program_models`); a load it does not name
+        is checked with the :data:`.sequence.NO_LOAD` model.
     robot : Robot
     axis_map : AxisMap, optional
         Controller values of the intermediate positions from the URDF's.
     route : bool
         Look for intermediate positions round a colliding move.
     planner : PlannerSettings or bool
-        How the motion planner searches for a move no simple route clears:
-        True (default) as each collision model says
-        (:attr:`~doe_calib.collision.CollisionModel.planner`), False: simple
-        routes only, or these settings.
+        True: as each collision model says; False: simple routes only; or these settings.
     workers : int, optional
-        Processes checking and routing the moves at once (default: the CPUs; 1: in this
-        process). Each move's check and route are its own (the planner is seeded per
-        search): the result does not depend on it.
-
-    Returns
-    -------
-    ProgramCheck
+        Processes (default: the CPUs); the result does not depend on it.
 
     Examples
     --------
@@ -320,7 +250,8 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
         if m.urdf_pre is not None:
             jobs.append((cm, m.urdf_pre, m.urdf_q, False, None))
         previous = m.urdf_q
-    done = iter(_checked_moves(jobs, safe, workspaces, workers))
+    # the collision models are not picklable: forked children see them
+    done = iter(forked_map(_checked_move, (jobs, safe, workspaces), len(jobs), workers))
     out, routed, collisions, blocked = [], [], [], []
     n_moves = n_samples = 0
     previous, where = None, None
@@ -364,25 +295,18 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
             blocked.append(f"{_label(m)}, {m.load}: {b}")  # beams matter where it measures
         previous, where = m.urdf_q, _label(m)
         out.append(m)
-    first = models[NO_LOAD]
+    cm = models[NO_LOAD]
     return ProgramCheck(tuple(out), n_moves, n_samples, tuple(routed), tuple(collisions),
-                        tuple(dict.fromkeys(blocked)), _clearance_words(first))
+                        tuple(dict.fromkeys(blocked)),
+                        f"moves keep {1000 * cm.move_clearance:g} mm, "
+                        f"{1000 * cm.move_self_clearance:g} mm between links; poses "
+                        f"{1000 * cm.clearance:g} mm")
 
 
-def _checked_moves(jobs, safe, workspaces, workers) -> list:
-    """Each job's (straight check, (route words, intermediate positions, route samples,
-    proof)), in order; in ``workers`` forked processes (:func:`~doe_calib.runtime.forked.
-    forked_map`: the collision models are not picklable, the children see them)."""
-    return forked_map(_job, (jobs, safe, workspaces), len(jobs), workers)
-
-
-def _job(shared, i: int):
+def _checked_move(shared, i: int):
+    """Job ``i``'s straight check and (route words, intermediate positions, samples, proof)."""
     jobs, safe, workspaces = shared
-    return _checked_move(jobs[i], safe, workspaces)
-
-
-def _checked_move(job, safe, workspaces):
-    cm, qa, qb, routable, settings = job
+    cm, qa, qb, routable, settings = jobs[i]
     ws = workspaces[id(cm)]
     result = check_segment(cm, qa, qb, _margins(cm), workspace=ws)
     if result.free or not routable:

@@ -1,12 +1,7 @@
 """In which order a program visits a design's (pose, load case) configurations.
 
-By default the visits are grouped by load case — every unloaded visit, then
-every visit under the first load, and so on, so the operator changes the
-load once per load case, not once per pose — and within a group ordered for
-short joint travel (:mod:`.ordering`), each group starting near where the
-previous one ended. ``group_by="none"`` keeps each pose's load cases
-together (one load change per pose and load case, as a design lists them);
-``order="design"`` keeps the design's order of the poses.
+By default grouped by load case, unloaded first (one load change per load case), each
+group ordered for short joint travel (:mod:`.ordering`) from where the previous ended.
 """
 from __future__ import annotations
 
@@ -33,41 +28,29 @@ class Plan:
     Attributes
     ----------
     group_by : {"load", "none"}
-        ``load``: all visits under one load case together, unloaded first.
-        ``none``: each pose's load cases one after the other.
+        ``load``: each load case's visits together, unloaded first; ``none``: each pose's
+        load cases one after the other.
     order : {"travel", "design"}
-        Order within a group: short joint travel (nearest neighbour + 2-opt
-        on the time of the slowest axis), or the design's.
+        Within a group: short joint travel, or the design's order.
     approach_step : float
-        Distance of a pre-pose before its target, deg (mm for a prismatic
-        joint), > 0 (:mod:`.approach`).
+        Distance of a pre-pose before its target, deg (mm for a prismatic joint), > 0.
     alternate : bool
-        Whether joints whose backlash the model's approach sets
-        (:func:`.approach.backlash_joints`) reach consecutive poses of a group
-        from alternate sides where the design plans no direction.
+        Joints whose backlash the approach sets (:func:`.approach.backlash_joints`) reach
+        consecutive poses from alternate sides where the design plans none.
     axis_map : AxisMap or None
         Controller values from the URDF's (None: the same).
-    home : tuple of float or None
-        URDF joint values, rad (m), of the home pose the program starts from
-        and ends at (:func:`.stations.zero_home`: the URDF zero inside the
-        limits; ``doe-calib export`` uses it by default); None: the program
-        starts at its first visit and ends at its last.
-    load_pose : tuple of float or None
-        URDF joint values, rad (m), of the pose where the operator changes the
-        load; None: the home pose. Only with ``home``.
+    home, load_pose : tuple of float or None
+        URDF values, rad (m), of the pose the program starts and ends at (None: its first
+        and last visit) and of the one the load is changed at (None: home; needs home).
     limits : tuple of two tuples, or None
-        ``(lower, upper)`` joint limits, rad (m), that the home and
-        load-change poses and the equivalent angles stay inside: a cell
-        file's (:class:`~doe_calib.design.DesignConstraints`); None: the
-        URDF's.
+        ``(lower, upper)``, rad (m), the stations and turned angles stay inside (a cell
+        file's); None: the URDF's.
     turns : bool
-        Whether joints with more than one turn of range take, at each visit,
-        the equivalent angle (q ± 2π) that keeps the moves short
-        (:mod:`.turns`; ``doe-calib export`` does by default); False: the
-        design's angles.
+        Joints with more than one turn of range take the equivalent angle (q ± 2π) that
+        keeps the moves short (:mod:`.turns`).
     blocked : tuple of (int, tuple of float)
-        Joint (0-based) and the values (rad) no move of it may pass, where the
-        turns are chosen (:func:`.turns.blocked_turns`); () when none are known.
+        Joint (0-based) and the values (rad) no move of it may pass
+        (:func:`.turns.blocked_turns`).
     """
 
     group_by: str = GROUPINGS[0]
@@ -102,24 +85,9 @@ def _ordered(q, speed, rows: list, after, by_travel: bool) -> list:
 
 
 def visit_order(design, loads, plan: Plan) -> list:
-    """The rows of ``design.configurations`` in program order, as groups.
-
-    Parameters
-    ----------
-    design : DesignResult
-    loads : sequence of str
-        The load of each row in words; rows with the same words are one load
-        case (a load's wrench changes with the pose's orientation), and
-        :data:`NO_LOAD` is the unloaded one.
-    plan : Plan
-
-    Returns
-    -------
-    list of list of int
-        One list per load case (``group_by="load"``; unloaded first, then in
-        order of first appearance) or a single list (``"none"``; poses in
-        order, each with its rows in the design's order).
-    """
+    """The rows of ``design.configurations`` in program order: one list per load case
+    (``loads``: each row's load in words; :data:`NO_LOAD` first), or a single list when
+    ``plan.group_by`` is ``"none"``."""
     cfg = design.configurations
     speed = axis_speeds(design.robot)
     by_travel = plan.order == "travel"

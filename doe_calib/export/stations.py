@@ -1,11 +1,7 @@
 """Where a program starts, ends and changes the load: the home and load-change poses.
 
-A measurement program starts from and ends at a **home** pose — by default
-the URDF's zero, clipped inside the joint limits (:func:`zero_home`) — and
-the operator changes the load at a **load-change** pose near home (by default
-the home pose itself), not at an outstretched measurement pose. Both are
-moves of the program (:class:`.program.Move` with ``kind`` ``"home"`` or
-``"load change"``): the collision check sees them like every other move.
+Both are moves of the program (:class:`.program.Move` of ``kind`` ``"home"`` or
+``"load change"``), collision-checked like every other.
 """
 from __future__ import annotations
 
@@ -32,60 +28,35 @@ def zero_home(robot, limits=None) -> tuple:
 
 
 def check_station(robot, q, option: str, limits=None) -> tuple:
-    """``q`` (URDF values, rad/m) if it has one value per joint inside the limits.
-
-    ``limits``: (lower, upper), rad (m), e.g. a cell file's; None: the URDF's.
-
-    Raises
-    ------
-    OptionError
-        Naming ``option``, the joint, its value and its limits (deg, mm).
-    """
+    """``q`` (URDF values, rad/m) if it has one value per joint inside ``limits`` ((lower,
+    upper), rad/m; None: the URDF's); else an OptionError naming ``option`` and the joint."""
     q = np.asarray(q, float)
     if q.shape != (robot.n_joints,) or not np.all(np.isfinite(q)):
         raise OptionError(f"{option}: give {robot.n_joints} finite joint values "
                           f"({', '.join(robot.joint_names)}), deg (mm for prismatic joints)")
-    lower, upper = (robot.lower, robot.upper) if limits is None else limits
-    for joint, v, lo, hi in zip(robot.joints, q, lower, upper):
-        if not lo - _LIMIT_TOL <= v <= hi + _LIMIT_TOL:
-            k, unit = joint.display_factor, joint.display_unit
-            raise OptionError(f"{option}: joint {joint.name} = {v * k:.6g} {unit} is outside its "
-                              f"limits [{lo * k:g}, {hi * k:g}] {unit}")
+    outside = outside_limits(robot, q, *((robot.lower, robot.upper) if limits is None
+                                         else limits))
+    if outside:
+        raise OptionError(f"{option}: {outside}")
     return tuple(float(v) for v in q)
 
 
-def nearest_pose(design, q) -> tuple:
-    """The design's configuration nearest ``q`` (time of the slowest axis), URDF values, rad (m)."""
-    cfg = design.configurations
-    times = move_times(np.asarray(q, float)[None, :], cfg.q, axis_speeds(design.robot))[0]
-    return tuple(float(v) for v in cfg.q[int(np.argmin(times))])
+def outside_limits(robot, q, lower, upper) -> str:
+    """The first joint of ``q`` (rad/m) outside [``lower``, ``upper``] in words, else ""."""
+    for joint, v, lo, hi in zip(robot.joints, q, lower, upper):
+        if not lo - _LIMIT_TOL <= v <= hi + _LIMIT_TOL:
+            k, unit = joint.display_factor, joint.display_unit
+            return (f"joint {joint.name} = {v * k:.6g} {unit} is outside its limits "
+                    f"[{lo * k:g}, {hi * k:g}] {unit}")
+    return ""
 
 
 def default_home(design, is_free=None, limits=None) -> tuple:
-    """The home pose a program uses when none is given, and why, in words.
+    """The home pose (rad/m) a program uses when none is given, and why, in words.
 
-    The design's own home, when its poses were checked reachable from one
-    (``design.constraints["reachability"]["home"]``, deg/mm); else the URDF
-    zero inside the limits (:func:`zero_home`) when ``is_free`` passes it (or
-    no check is made: ``is_free`` None); otherwise the design pose nearest to
-    it (each design pose is free at the design's clearance) — a UR arm's zero,
-    stretched out level with its base, touches the floor it stands on.
-
-    Parameters
-    ----------
-    design : DesignResult
-    is_free : callable, optional
-        ``is_free(q)`` → whether the pose q (rad/m) keeps its clearances under
-        every load the program hangs.
-    limits : (lower, upper), optional
-        Joint limits, rad (m), the zero is clipped inside (a cell file's);
-        None: the URDF's.
-
-    Returns
-    -------
-    q : tuple of float
-        rad (m).
-    why : str
+    The design's own home when its poses were checked reachable from one; else the URDF
+    zero inside ``limits`` (:func:`zero_home`) if ``is_free(q)`` passes it (None: no
+    check); else the design pose nearest to it (a UR arm's zero touches its floor).
     """
     reach = (design.constraints or {}).get("reachability") or {}
     if reach.get("home") is not None:  # the design joined every pose to it by a free path
@@ -96,7 +67,9 @@ def default_home(design, is_free=None, limits=None) -> tuple:
     zero = zero_home(design.robot, limits)
     if is_free is None or is_free(np.array(zero)):
         return zero, "home: the URDF zero inside the joint limits"
-    q = nearest_pose(design, zero)
-    pose = design.configurations.pose[design.configurations.q.tolist().index(list(q))]
-    return q, (f"home: design pose {pose}, the one nearest the URDF zero (the zero is not free "
-               f"of collisions; give --home to choose another)")
+    cfg = design.configurations  # nearest: by the time of the slowest axis
+    i = int(np.argmin(move_times(np.asarray(zero, float)[None, :], cfg.q,
+                                 axis_speeds(design.robot))[0]))
+    return tuple(float(v) for v in cfg.q[i]), (
+        f"home: design pose {cfg.pose[i]}, the one nearest the URDF zero (the zero is not free "
+        f"of collisions; give --home to choose another)")

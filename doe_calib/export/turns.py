@@ -1,33 +1,19 @@
 """Equivalent angles of joints with more than one turn: q + 2πk chosen for short moves.
 
-A revolute joint whose limits span more than one turn (a UR arm's ±360°)
-stands in the same place at q and at q ± 2π. Once the visiting order is
-fixed, each such joint's angle at each visit is chosen among its
-equivalents inside the limits, for each joint separately and exactly, by
-dynamic programming over the visits (a shortest path through the layers of
-equivalents), for a lexicographic cost:
+A revolute joint whose limits span more than one turn (a UR arm's ±360°) stands in the
+same place at q and q ± 2π. For the fixed visiting order, each such joint's angle at
+each visit is chosen among its equivalents, per joint and exactly, by dynamic
+programming over the visits, for a lexicographic cost:
 
-0. fewest moves across a value no path can pass (``blocked``: a UR's
-   shoulder pointing into its table at every base angle), when the
-   collision model says so;
-1. least total **excess** Σ_i (|Δq_i| − d_i), with d_i the shortest move of
-   the joint that any equivalent of visit i allows from where the joint
-   is: every move is as short as its equivalents allow, unless the limits
-   force a longer one (a joint turning one way runs into its limit), and
-   then the fewest radians of detour over the program;
-2. then least total **travel** Σ_i |Δq_i|, from the start position to the
-   end one (the home pose, when the program has one).
+0. fewest moves across a value no path can pass (``blocked``);
+1. least total **excess** Σ_i (|Δq_i| − d_i), d_i the shortest move any equivalent of
+   visit i allows: every move as short as the limits let it be;
+2. least total **travel** Σ_i |Δq_i|, start to end (the home pose).
 
-The cost is the joint's own, not the time of the slowest axis: it separates
-over the joints, so the optimum is exact, and a move whose every joint is as
-short as it can be is as short in time as it can be.
-
-An equivalent other than the design's own angle must stay ``margin`` inside
-the limits (the pre-pose step), and is used only on joints on which the
-model's marker positions are the same a full turn away
-(:func:`periodic_joints`): geometry, compliances, cyclic errors with whole
-harmonics are; a gear-ratio error or a compliance by angle in bins is not,
-and those joints keep the design's angles.
+The cost separates over the joints, so the optimum is exact. An equivalent other than
+the design's angle keeps ``margin`` inside the limits and is used only on joints on
+which the model's markers have period 2π (:func:`periodic_joints`: not a gear-ratio
+error or a compliance by angle in bins).
 """
 from __future__ import annotations
 
@@ -48,22 +34,8 @@ def turn_joints(robot) -> tuple:
 
 
 def periodic_joints(model, joints, rng=None) -> tuple:
-    """Those of ``joints`` on which ``model``'s marker positions have period 2π.
-
-    Checked numerically: marker positions at 8 random configurations (inside
-    the limits, with a random wrench) and random parameter values (nominal ±
-    3 scales) compared with the same one turn up and one turn down.
-
-    Parameters
-    ----------
-    model : Model
-    joints : sequence of int
-    rng : numpy.random.Generator, optional
-
-    Returns
-    -------
-    tuple of int
-    """
+    """Those of ``joints`` on which ``model``'s marker positions have period 2π: checked at 8
+    random configurations and parameter values (nominal ± 3 scales), one turn up and down."""
     rng = np.random.default_rng(0) if rng is None else rng
     robot = model.robot
     lower, upper = np.clip(robot.lower, -np.pi, None), np.clip(robot.upper, None, np.pi)
@@ -73,29 +45,20 @@ def periodic_joints(model, joints, rng=None) -> tuple:
     values = nominal.values + 3.0 * rng.standard_normal(len(nominal.values)) * np.array(
         [p.scale for p in nominal.parameters])
     here = evaluate(model.markers, Configurations.from_arrays(q, wrench), values)[0]
-    out = []
-    for k in joints:
-        same = True
-        for turn in (TURN, -TURN):
-            moved = q.copy()
-            moved[:, k] += turn
-            there = evaluate(model.markers, Configurations.from_arrays(moved, wrench), values)[0]
-            same = same and bool(np.max(np.abs(there - here)) <= SAME_POSITION)
-        if same:
-            out.append(k)
-    return tuple(out)
+
+    def same(k, turn):
+        moved = q.copy()
+        moved[:, k] += turn
+        there = evaluate(model.markers, Configurations.from_arrays(moved, wrench), values)[0]
+        return bool(np.max(np.abs(there - here)) <= SAME_POSITION)
+
+    return tuple(k for k in joints if same(k, TURN) and same(k, -TURN))
 
 
 def blocked_turns(cm, robot) -> tuple:
-    """Each multi-turn joint's values no path can pass in collision model ``cm``.
-
-    Returns
-    -------
-    tuple of (int, tuple of float)
-        Joint (0-based) and its values, rad (:func:`~doe_calib.collision.blocked_values`,
-        at the move clearance), for the :attr:`.sequence.Plan.blocked` of a program; joints
-        with none are left out.
-    """
+    """Each multi-turn joint (0-based) with the values (rad) no path can pass in collision
+    model ``cm`` (:func:`~doe_calib.collision.blocked_values`), for
+    :attr:`.sequence.Plan.blocked`."""
     from doe_calib.collision import Workspace, blocked_values
 
     ws = Workspace(cm)
@@ -121,24 +84,14 @@ def shortest_turns(q, joints, lower, upper, margin, start=None, end=None,
         Joint values of the visits in program order, rad (m).
     joints : sequence of int
         Joints whose angles may be turned by 2πk.
-    lower, upper : array_like, shape (N,)
-        Joint limits, rad.
-    margin : array_like, shape (N,)
-        Distance a turned angle keeps from the limits, rad.
+    lower, upper, margin : array_like, shape (N,)
+        Joint limits and the distance a turned angle keeps from them, rad.
     start, end : array_like, shape (N,), optional
-        Fixed positions before the first and after the last visit (the home
-        pose); None: the path starts (ends) at its first (last) visit.
+        Fixed positions before the first and after the last visit (None: none).
     fixed : array_like of bool, shape (V,), optional
-        Rows of ``q`` passed through as they are (a load-change pose).
+        Rows passed through as they are (a load-change pose).
     blocked : dict, optional
-        Joint → values (rad) no move of that joint may pass
-        (:func:`~doe_calib.collision.blocked_values`: no path crosses them):
-        the fewest moves across one come first, before excess and travel.
-
-    Returns
-    -------
-    ndarray, shape (V, N)
-        The chosen angles; joints not in ``joints`` unchanged.
+        Joint → values (rad) no move of it may pass.
 
     Examples
     --------

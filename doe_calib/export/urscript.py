@@ -1,25 +1,18 @@
 """Universal Robots URScript: ``def <name>():`` with one ``movej`` per move, then ``<name>()``.
 
-The file defines the program function and calls it on its last line, so
-pasted into a Script node (or sent to the controller as a script file) it
-runs; there is no other top-level code. Joint positions are in rad
-(URScript's unit), written to 1e-10 rad. The function first declares the
-tool's payload (``set_payload(mass, [cx, cy, cz])``, kg and m in the flange
-frame). Before a visit whose load differs from the previous one a blocking
-``popup`` tells the operator which load to hang (at the load-change pose
-when the program has one, :mod:`.stations`) and ``set_payload`` declares the
-tool plus the new load. A visit whose joints must arrive from a given side is
-preceded by a ``movej`` to its pre-pose, a move routed round a collision
-(:mod:`.safety`) by ``movej`` to its intermediate positions. At each
-measurement pose ``sleep(dwell)``, the trigger line if one is given, and,
-with a handshake n, standard digital output n is set, the program waits for
-standard digital input n, resets the output and waits for the input to drop.
-Only 6 revolute joints are supported.
+The file defines the program function and calls it on its last line (a Script node or
+a script file runs it). Joint positions in rad, to 1e-10 rad; 6 revolute joints. The
+tool's payload is declared first (``set_payload(mass, [cx, cy, cz])``, kg, m, flange
+frame); before a change of load a blocking ``popup`` tells the operator which load to
+hang and ``set_payload`` declares the tool plus it. Pre-poses and intermediate
+positions are ``movej`` too. At each measurement pose ``sleep(dwell)``, the trigger
+line, and with a handshake n standard digital output n set, input n waited for, the
+output reset, the input's drop waited for.
 """
 from __future__ import annotations
 
 from doe_calib.errors import ModelError
-from doe_calib.export.program import ascii_text, check_name, load_changes
+from doe_calib.export.program import check_name, headline, load_changes
 
 SUFFIXES = (".script",)
 MAX_NAME = 32
@@ -64,12 +57,8 @@ def render(design, visits, settings) -> dict:
     """Text of the ``.script`` file, keyed by suffix."""
     check_robot(design.robot)
     name = check_name(settings.name, MAX_NAME)
-    n_poses = len({m.index for m in visits if m.measures})
-    n_measured = sum(m.measures for m in visits)
-    out = [f"def {name}():",
-           f"  # doe_calib measurement program: {n_poses} poses, {n_measured} measurements",
-           "  # " + ascii_text(f"model {design.model}, criterion {design.criterion}; "
-                              f"joints in rad; payload kg, m (flange frame)"),
+    out = [f"def {name}():", *(f"  # {line}" for line in headline(
+               design, visits, "joints in rad; payload kg, m (flange frame)")),
            "  # the tool alone", _set_payload(settings.tool)]
     for m, change in zip(visits, load_changes(visits)):
         out += ["", f"  # {m.comment()}"]

@@ -5,33 +5,16 @@ import numpy as np
 
 from doe_calib.diagnosis.added_variable import strongest_added_variables
 from doe_calib.diagnosis.residuals import residuals
-from doe_calib.report import figures
-from doe_calib.report.diagnosis_figures import (
-    added_variable_panels,
-    candidate_bars,
-    error_falling,
-    residuals_by_direction,
-)
-from doe_calib.report.html import (
-    Html,
-    collapsible,
-    escape,
-    figure,
-    paragraph,
-    preformatted,
-    section,
-    table,
-    write_report,
-)
 from doe_calib.diagnosis.residual_plot_data import reading_columns
+from doe_calib.report.diagnosis_figures import (added_variable_panels, candidate_bars,
+                                                error_falling, residuals_by_direction)
+from doe_calib.report.figures import residual_scatter, to_png
+from doe_calib.report.html import (Html, collapsible, escape, figure, paragraph, preformatted,
+                                   section, table, write_report)
 from doe_calib.report.identification import parameters_section
 
 #: Candidates drawn as added-variable plots, strongest evidence first.
 ADDED_VARIABLE_PLOTS = 4
-
-
-def _png(fig, dpi):
-    return figures.to_png(fig, dpi)
 
 
 def _candidates_table(diagnosis, top: int = 15):
@@ -60,7 +43,7 @@ def failure_sections(diagnosis, model, measurements, fit, dpi: int = 90,
     error = residuals(model, measurements, fit.parameters.values).error * 1e3
     columns = reading_columns(model, measurements)
     strongest = _by_direction(diagnosis, columns)
-    by_direction = [figure(_png(residuals_by_direction(error, strongest), dpi),
+    by_direction = [figure(to_png(residuals_by_direction(error, strongest), dpi),
                            "signed residual components against the strongest variables",
                            "Residual x, y, z (mm, tracker frame) of each reading against the "
                            "variables its size follows most: signed, so a step or a sine keeps "
@@ -71,7 +54,7 @@ def failure_sections(diagnosis, model, measurements, fit, dpi: int = 90,
         [[diagnosis.model, diagnosis.rms_mm, diagnosis.cv_rms_mm, diagnosis.noise_floor_mm,
           diagnosis.chi2.get("sigma_ratio", float("nan"))]], 4), paragraph(
         f"The residual size follows: {follow or 'nothing in particular'}."), *by_direction,
-        figure(_png(figures.residual_scatter(norms, columns), dpi),
+        figure(to_png(residual_scatter(norms, columns), dpi),
                "residual of each reading against every variable",
                "3-D residual norm (mm) of each reading against the joint positions, loads, "
                "joint torques, temperature and measurement order."))]
@@ -92,7 +75,7 @@ def evidence_section(diagnosis, model, measurements, fit, dpi: int = 90, title: 
                                       registry)
     plots = found.plots
     failed = [paragraph(f"Not shown: {found.note()}.")] if found.failed else []
-    shapes = [figure(_png(added_variable_panels(plots), dpi),
+    shapes = [figure(to_png(added_variable_panels(plots), dpi),
                      "added-variable plots of the strongest candidates",
                      "For each of the strongest candidates: the residual of each configuration "
                      "(blue), reduced to the candidate's own direction (an equivalent joint error "
@@ -102,7 +85,7 @@ def evidence_section(diagnosis, model, measurements, fit, dpi: int = 90, title: 
                      "correlation.")] if plots else []
     return section(f"{title}Which effect is missing", *shapes, *failed,
                    _candidates_table(diagnosis),
-                   figure(_png(candidate_bars(diagnosis), dpi),
+                   figure(to_png(candidate_bars(diagnosis), dpi),
                           "share of the residual each candidate explains",
                           "Share of the remaining residual (after projecting out what the "
                           "model already absorbs) each candidate effect explains; green ones "
@@ -122,7 +105,7 @@ def diagnosis_html(diagnosis, dpi: int = 72) -> str:
                                                                  diagnosis.adequacy_lines()]),
               _candidates_table(diagnosis, 10)]
     if diagnosis.candidates:
-        blocks.append(figure(_png(candidate_bars(diagnosis), dpi),
+        blocks.append(figure(to_png(candidate_bars(diagnosis), dpi),
                              "share of the residual each candidate explains"))
     if diagnosis.notes:
         blocks.append(_notes(diagnosis.notes))
@@ -175,10 +158,6 @@ def diagnosis_report(diagnosis, model, measurements, fit, path, dpi: int = 90, r
     return write_report(path, f"Diagnosis of {diagnosis.model}", sections)
 
 
-def _fitted_words(step) -> str:
-    return "; ".join(str(f) for f in step.fitted if f.free) or "–"
-
-
 def steps_section(result, dpi: int = 90):
     """Each added effect with its fitted size ± std and unit and the error it removed."""
     steps = result.steps
@@ -186,13 +165,13 @@ def steps_section(result, dpi: int = 90):
     for i, s in enumerate(steps):
         before = steps[i - 1].cv_rms_mm if i else None
         rows.append([i, "start: " + s.model if s.added is None else f"+ {s.added}",
-                     _fitted_words(s) if s.added else "–",
+                     ("; ".join(str(f) for f in s.fitted if f.free) or "–") if s.added else "–",
                      f"{s.cv_rms_mm:.4f}" if before is None else
                      f"{before:.4f} → {s.cv_rms_mm:.4f}",
                      "–" if s.validation_rms_mm is None else s.validation_rms_mm,
                      "yes" if s.adequate else "no", s.reason])
     return section("Each added effect and the error it removed", figure(
-        _png(error_falling(steps, result.noise_floor_mm, result.noise_words), dpi),
+        to_png(error_falling(steps, result.noise_floor_mm, result.noise_words), dpi),
         "fit, cross-validated and validation RMS at each step",
         f"RMS per coordinate (mm) after each added effect; dashed: {result.noise_words}."
     ), table(

@@ -21,18 +21,9 @@ def candidate_bars(diagnosis, top: int = 12):
 
 
 def error_falling(steps, noise_floor_mm: float, noise_words: str = "noise floor"):
-    """Fit, cross-validated and validation RMS (mm) at each refinement step, log scale.
-
-    Parameters
-    ----------
-    steps : sequence of RefineStep
-        Or of any objects with its ``added``, ``rms_mm``, ``cv_rms_mm`` and
-        ``validation_rms_mm`` (mm; ``None`` without a validation file).
-    noise_floor_mm : float
-        Drawn as a dashed line, mm.
-    noise_words : str
-        Its legend (:attr:`RefineResult.noise_words`).
-    """
+    """Fit, cross-validated and validation RMS (mm) at each refinement step (``added``,
+    ``rms_mm``, ``cv_rms_mm``, ``validation_rms_mm`` or None), log scale, with the noise floor
+    (mm) dashed and labelled ``noise_words``."""
     fig = new_figure(8, 4)
     ax = fig.subplots()
     x = np.arange(len(steps))
@@ -75,15 +66,8 @@ def added_variable_panels(plots, ncols: int = 2):
 
 
 def residuals_by_direction(error_mm, columns):
-    """Signed residual components (mm, tracker x, y, z; rows) against a few variables
-    (columns): a step or a sine keeps its sign here.
-
-    Parameters
-    ----------
-    error_mm : ndarray, shape (K, 3)
-    columns : sequence of (str, ndarray of shape (K,))
-        Axis label with unit and the variable at each reading.
-    """
+    """Signed residual components ``error_mm`` (K, 3), mm, tracker x, y, z (rows) against a
+    few variables (columns: label with unit, values (K,)): a step or a sine keeps its sign."""
     ncols = max(1, len(columns))
     fig = new_figure(3.2 * ncols, 6.6)
     axes = fig.subplots(3, ncols, squeeze=False, sharey="row")

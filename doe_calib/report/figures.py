@@ -62,15 +62,7 @@ def to_png(fig: Figure, dpi: int = 90) -> bytes:
 
 
 def correlation_heatmap(names, correlation) -> Figure:
-    """Heat map of a correlation matrix.
-
-    Parameters
-    ----------
-    names : sequence of str, length F
-        Free parameter names.
-    correlation : array_like, shape (F, F)
-        Correlations in [−1, 1].
-    """
+    """Heat map of a correlation matrix (F, F) in [−1, 1] of the F parameters ``names``."""
     c = np.asarray(correlation, float)
     f = len(names)
     size = min(max(4.0, 0.18 * f + 2.0), 16.0)
@@ -86,17 +78,8 @@ def correlation_heatmap(names, correlation) -> Figure:
 
 
 def residual_scatter(norm_mm, columns, ncols: int = 4) -> Figure:
-    """A grid of scatter plots: residual norm (mm) of each reading against each variable.
-
-    Parameters
-    ----------
-    norm_mm : array_like, shape (K,)
-        3-D residual norm of each reading, mm.
-    columns : sequence of (str, array_like of shape (K,))
-        Axis label (with unit) and the value of the variable at each reading.
-    ncols : int
-        Plots per row.
-    """
+    """A grid of scatter plots (``ncols`` a row): the 3-D residual norm (K,) mm of each
+    reading against each variable of ``columns``, (label with unit, values (K,))."""
     norm_mm = np.asarray(norm_mm, float)
     n = len(columns)
     nrows = max(1, -(-n // ncols))
@@ -114,16 +97,8 @@ def residual_scatter(norm_mm, columns, ncols: int = 4) -> Figure:
 
 
 def residual_bars(stats: dict, what: str) -> Figure:
-    """RMS (per coordinate) and max 3-D residual per group, mm, as bars.
-
-    Parameters
-    ----------
-    stats : dict
-        Group name → ``{"rms_mm": float, "max_3d_mm": float, ...}`` (as in
-        :func:`doe_calib.estimation.assembly.residual_statistics`).
-    what : str
-        What the groups are, e.g. ``marker`` or ``pose``.
-    """
+    """RMS (per coordinate) and max 3-D residual per group, mm, as bars: ``stats`` group →
+    ``{"rms_mm", "max_3d_mm", ...}``; ``what`` the groups are (``marker``, ``pose``)."""
     names = list(stats)
     x = np.arange(len(names))
     fig = new_figure(min(max(4.0, 0.3 * len(names) + 2.0), 16.0), 3.2)
@@ -139,17 +114,8 @@ def residual_bars(stats: dict, what: str) -> Figure:
 
 
 def joint_angle_chart(joint_names, q, lower, upper, units) -> Figure:
-    """Joint positions of the chosen poses, one marker set per joint, limits shaded.
-
-    Parameters
-    ----------
-    joint_names : sequence of str, length N
-    q : array_like, shape (M, N)
-        Joint positions of the M poses, deg (mm for prismatic joints).
-    lower, upper : array_like, shape (N,)
-        Joint limits in the same units; non-finite values are not shaded.
-    units : sequence of str, length N
-    """
+    """Joint positions ``q`` (M, N) of the chosen poses, deg (mm), one marker set per joint,
+    the limits ``lower``, ``upper`` (N,) shaded where finite."""
     q = np.atleast_2d(np.asarray(q, float))
     m, n = q.shape
     fig = new_figure(max(5.0, 1.2 * n + 2.0), 4.0)
@@ -168,18 +134,8 @@ def joint_angle_chart(joint_names, q, lower, upper, units) -> Figure:
 
 
 def poses_3d(flange_mm, markers_mm, marker_names, tracker_mm=None) -> Figure:
-    """3-D view of the flange and the markers at each pose, robot base frame, mm.
-
-    Parameters
-    ----------
-    flange_mm : array_like, shape (M, 3)
-        Flange origin at each pose.
-    markers_mm : array_like, shape (M, n, 3)
-        Marker positions at each pose.
-    marker_names : sequence of str, length n
-    tracker_mm : array_like, shape (3,), optional
-        Tracker position, drawn when given.
-    """
+    """3-D view of the flange origin (M, 3) and the markers (M, n, 3) at each pose, and the
+    tracker (3,) when given; robot base frame, mm."""
     f = np.asarray(flange_mm, float)
     x = np.asarray(markers_mm, float)
     fig = new_figure(7.0, 6.0)
@@ -205,16 +161,8 @@ def poses_3d(flange_mm, markers_mm, marker_names, tracker_mm=None) -> Figure:
 
 
 def std_bars(names, std, units, title: str = "predicted standard deviation") -> Figure:
-    """Standard deviation of each parameter as bars on a log scale.
-
-    Parameters
-    ----------
-    names : sequence of str, length P
-    std : array_like, shape (P,)
-        Standard deviations in display units (mm, deg, µrad/(N·m)).
-    units : sequence of str, length P
-        Unit of each, shown in the tick label.
-    """
+    """Standard deviation (P,) of each parameter in display units as bars on a log scale,
+    each tick labelled with its name and unit."""
     s = np.asarray(std, float)
     fig = new_figure(min(max(5.0, 0.22 * len(s) + 2.0), 16.0), 3.8)
     ax = fig.add_subplot()
@@ -244,20 +192,9 @@ def robot_poses(skeletons_mm, markers_mm, titles, tracker_mm=None, floor_mm=0.0,
 
     Every panel has the same equal-scaled axes and view, so that poses compare at a glance.
 
-    Parameters
-    ----------
-    skeletons_mm : array_like, shape (M, K, 3)
-        Points of each pose's stick figure, base to flange, robot base frame, mm.
-    markers_mm : array_like, shape (M, n, 3)
-        Marker positions, drawn with a line from the flange.
-    titles : sequence of str, length M
-        Each panel's title (pose id, closest pair).
-    tracker_mm : array_like, shape (3,), optional
-        Tracker position (red triangle).
-    floor_mm : float
-        Height of the floor, drawn as a grey square.
-    boxes : sequence of (lower, upper)
-        Keep-out boxes, mm, drawn as red wireframes.
+    ``skeletons_mm`` (M, K, 3): each pose's stick figure, base to flange; ``markers_mm``
+    (M, n, 3); ``titles`` (M,); the tracker (3,), the floor's height and keep-out
+    ``boxes`` ((lower, upper) each) drawn when given; robot base frame, mm.
     """
     s = np.asarray(skeletons_mm, float)
     x = np.asarray(markers_mm, float)

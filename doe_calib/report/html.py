@@ -50,14 +50,8 @@ def _cell(value, tag: str, digits: int) -> str:
 
 
 def table(header, rows, digits: int = 6) -> Html:
-    """A table from a header and rows; floats shown with ``digits`` significant digits.
-
-    Parameters
-    ----------
-    header : sequence of str
-    rows : iterable of sequence
-        One sequence per row; numbers are right-aligned, text left-aligned.
-    digits : int
+    """A table of ``rows`` under ``header``: numbers right-aligned (floats to ``digits``
+    significant digits), text left-aligned.
 
     Examples
     --------
@@ -90,15 +84,8 @@ def section(heading, *blocks) -> Html:
 
 
 def document(title, sections) -> Html:
-    """A complete HTML document: the title, the CSS, then the sections in order.
-
-    Parameters
-    ----------
-    title : str
-    sections : iterable
-        Each an :class:`Html` fragment (e.g. from :func:`section`) or a pair
-        ``(heading, blocks)`` with ``blocks`` a sequence of fragments or text.
-    """
+    """A complete HTML document: the title, the CSS, then the ``sections``, each an
+    :class:`Html` fragment or a pair ``(heading, blocks)`` of fragments or text."""
     parts = [s if isinstance(s, Html) else section(s[0], *s[1]) for s in sections]
     return Html("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
                 f"<title>{escape(title)}</title><style>{CSS}</style></head>\n"
@@ -106,15 +93,7 @@ def document(title, sections) -> Html:
 
 
 def write_report(path, title, sections) -> Path:
-    """Write a self-contained HTML report; returns the path.
-
-    Parameters
-    ----------
-    path : str or Path
-        File to write (UTF-8).
-    title : str
-    sections : iterable
-        As for :func:`document`.
+    """Write the :func:`document` of ``title`` and ``sections`` to ``path`` (UTF-8); return it.
 
     Examples
     --------

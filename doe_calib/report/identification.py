@@ -1,18 +1,10 @@
 """The identification report: parameters, correlations and residuals of one fit, as HTML."""
 from __future__ import annotations
 
-
 from doe_calib.diagnosis.residual_plot_data import reading_columns, residual_norms_mm
 from doe_calib.report import figures
-from doe_calib.report.html import (
-    collapsible,
-    figure,
-    paragraph,
-    preformatted,
-    section,
-    table,
-    write_report,
-)
+from doe_calib.report.html import (collapsible, figure, paragraph, preformatted, section, table,
+                                   write_report)
 
 
 def parameter_rows(result) -> list[list]:
@@ -54,9 +46,16 @@ def parameters_section(result, heading: str = "Identified parameters"):
     return section(heading, *blocks)
 
 
-def _stats_table(stats: dict, what: str):
-    return table([what, "readings", "RMS per coordinate (mm)", "max 3-D (mm)"],
-                 [[k, s["n"], s["rms_mm"], s["max_3d_mm"]] for k, s in stats.items()], 4)
+def _stats(stats: dict, what: str, dpi: int) -> list:
+    """The residual statistics per ``what`` (marker, pose) as a table and as bars."""
+    return [table([what, "readings", "RMS per coordinate (mm)", "max 3-D (mm)"],
+                  [[k, s["n"], s["rms_mm"], s["max_3d_mm"]] for k, s in stats.items()], 4),
+            _bars(stats, what, dpi)]
+
+
+def _bars(stats: dict, what: str, dpi: int):
+    return figure(figures.to_png(figures.residual_bars(stats, what), dpi),
+                  f"residual RMS and maximum per {what}", f"Residual per {what} (mm).")
 
 
 def fit_table(result):
@@ -107,9 +106,7 @@ def result_html(result, dpi: int = 72) -> str:
     parameter is free), and the text report folded.
     """
     key = (correlation_figure(result, dpi) if result.free_names else
-           figure(figures.to_png(figures.residual_bars(result.residuals["per_marker"], "marker"),
-                                 dpi), "residual RMS and maximum per marker",
-                  "Residual per marker (mm)."))
+           _bars(result.residuals["per_marker"], "marker", dpi))
     blocks = [section("Fit", fit_table(result)), parameters_section(result, "Parameters"),
               warnings_section(result), section("Key figure", key),
               collapsible("text report", preformatted(result.fit_report()))]
@@ -117,51 +114,29 @@ def result_html(result, dpi: int = 72) -> str:
 
 
 def identification_report(result, model, measurements, path, dpi: int = 90):
-    """Write an HTML report of an identification.
-
-    Parameters
-    ----------
-    result : IdentificationResult
-    model : Model
-        The model ``result`` was identified with (same parameters).
-    measurements : Measurements
-        The readings it was identified from (SI).
-    path : str or Path
-        HTML file to write; self-contained (figures embedded as PNG).
-    dpi : int
-        Resolution of the figures.
-
-    Returns
-    -------
-    Path
-        The file written.
+    """Write a self-contained HTML report of an identification ``result`` of ``model`` from
+    ``measurements`` to ``path`` (figures at ``dpi``); return the path.
 
     Examples
     --------
     >>> identification_report(result, model, meas, "report.html")  # doctest: +SKIP
     """
-    png = figures.to_png
-    res, p = result.residuals, result.parameters
+    res = result.residuals
     sections = [section("Fit", fit_table(result)), parameters_section(result, "Parameters"),
                 warnings_section(result)]
     if result.free_names:
         sections.append(section("Correlation", correlation_figure(result, dpi)))
     cols = reading_columns(model, measurements)
-    norms = residual_norms_mm(model, measurements, p.values)
+    norms = residual_norms_mm(model, measurements, result.parameters.values)
     sections.append(section("Residuals per reading", figure(
-        png(figures.residual_scatter(norms, cols), dpi),
+        figures.to_png(figures.residual_scatter(norms, cols), dpi),
         "residual norm of each reading against joint positions, wrench, temperature and order",
         "3-D residual norm (mm) of each reading against every joint position, the wrench "
         "components and joint torques of the applied loads, the temperature when measured, "
         "and the measuring order.")))
-    sections.append(section(
-        "Residuals per marker and per pose",
-        _stats_table(res["per_marker"], "marker"),
-        figure(png(figures.residual_bars(res["per_marker"], "marker"), dpi),
-               "residual RMS and maximum per marker", "Residual per marker (mm)."),
-        _stats_table(res["per_pose"], "pose"),
-        figure(png(figures.residual_bars(res["per_pose"], "pose"), dpi),
-               "residual RMS and maximum per pose", "Residual per pose (mm).")))
+    sections.append(section("Residuals per marker and per pose",
+                            *_stats(res["per_marker"], "marker", dpi),
+                            *_stats(res["per_pose"], "pose", dpi)))
     sections.append(section("Summary", preformatted(result.summary())))
     title = f"Identification of {result.robot.name}: {result.model or 'base + markers'}"
     return write_report(path, title, sections)
