@@ -145,11 +145,11 @@ def test_augmenting_a_one_branch_campaign_reveals_the_own_weight_deflection(tmp_
         assert r.std_after[name][0] < r.std_before[name][0] / factor
     # the value after, recomputed from the combined campaign's information
     big = build_model(model.robot, model.tool, MODEL + "+gravity_compliance(j2)+gear_ratio(j2)")
-    from doe_calib.design.augment import with_new_free
+    from doe_calib.estimation.effect_signature import grown_parameters
     from doe_calib.design.effect_detection import design_readings
     from doe_calib.io.measurements import concatenate
 
-    params = with_new_free(big, model.nominal()).fixed(
+    params = grown_parameters(big, model.nominal()).fixed(
         [n for n in big.nominal().names if n not in r.std_after], "fixed")
     both = concatenate([meas, design_readings(big, params.values, r.configurations, 2e-5)])
     m = measured_information(big, params, both)

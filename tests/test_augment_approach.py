@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from doe_calib import Robot, Tool, build_model, examples, simulate
-from doe_calib.design.augment import augment_design, measured_information, with_new_free
+from doe_calib.design.augment import augment_design, measured_information
+from doe_calib.estimation.effect_signature import grown_parameters
 from doe_calib.design.augment_result import AugmentResult
 from doe_calib.design.criteria import log_det
 from doe_calib.design.effect_detection import design_readings
@@ -43,7 +44,7 @@ def test_an_augment_for_an_approach_backlash_picks_both_sides(tmp_path):
     assert not before.detectable and after.detectable
     # the value after, recomputed from the combined readings; the sides matter
     big = build_model(robot, tool, MODEL + "+" + TARGET)
-    params = with_new_free(big, model.nominal()).fixed(
+    params = grown_parameters(big, model.nominal()).fixed(
         [n for n in big.nominal().names if n not in r.std_after], "fixed")
     assert _ds(big, model, params, measured, r.configurations) == pytest.approx(r.value_after,
                                                                                abs=1e-6)

@@ -205,5 +205,5 @@ def run(args):
     print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
     if args.report:
         from doe_calib.report import design_report
-        design_report(result, args.report, registry=effect_registry(args))
+        design_report(result, args.report)
         print(f"report: {args.report}", file=sys.stderr)

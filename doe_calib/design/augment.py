@@ -10,7 +10,7 @@ candidates), to separate them: the D criterion of their information after
 the model's parameters are projected out, the Schur complement
 ``M_ee − M_em M_mm⁻¹ M_me`` (whose log det is ``log det M − log det M_mm``):
 the information of ``Z⊥``, their columns orthogonal to the model's
-(:func:`doe_calib.diagnosis.effect_tests.projected_columns`).
+(:func:`doe_calib.estimation.effect_signature.projected_columns`).
 """
 from __future__ import annotations
 
@@ -43,6 +43,7 @@ from doe_calib.design.reachability import (
 )
 from doe_calib.design.updates import regularised
 from doe_calib.errors import SolverError
+from doe_calib.estimation.effect_signature import grown_parameters
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.io.measurements import concatenate
 from doe_calib.io.setting_ranges import level_and_power, positive, whole
@@ -229,7 +230,7 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
                          for e in detect_effects(model, spec, None, registry)]
         design_model = build_model(model.robot, model.tool,
                                    tuple(model.effects) + tuple(added_effects))
-        design_params = identifiable(design_model, with_new_free(design_model, params))
+        design_params = identifiable(design_model, grown_parameters(design_model, params))
         free_names = np.array(design_params.names)[design_params.free]
         own = np.flatnonzero(np.isin(free_names, np.array(params.names)[params.free]))
         crit = Separation(tuple(int(i) for i in own))
@@ -280,13 +281,3 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
         measured_configurations=len(measured.configurations), sigma_mm=1000.0 * sigma,
         robot=model.robot, model=model.spec, reachability=reach)
 
-
-def with_new_free(big, params):
-    """``big``'s parameter set: ``params``' values and free flags, its new parameters free at 0
-    (as :func:`doe_calib.diagnosis.effect_tests.augmented`, for several effects)."""
-    start = big.nominal()
-    values, free, reasons = start.values.copy(), start.free.copy(), list(start.fixed_reason)
-    for i, name in enumerate(params.names):
-        k = start.names.index(name)
-        values[k], free[k], reasons[k] = params.values[i], params.free[i], params.fixed_reason[i]
-    return replace(start, values=values, free=free, fixed_reason=tuple(reasons))

@@ -17,7 +17,7 @@ import numpy as np
 from doe_calib.design.batch import map_poses
 from doe_calib.design.detectability import own_directions
 from doe_calib.design.feasibility import build_feasibility
-from doe_calib.diagnosis.effect_tests import augmented
+from doe_calib.estimation.effect_signature import augmented
 from doe_calib.errors import OptionError
 from doe_calib.estimation.identifiability import analyse
 from doe_calib.estimation.noncentral_chi_square import noncentrality_for_power

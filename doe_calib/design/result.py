@@ -11,6 +11,7 @@ from doe_calib.errors import DataError
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.robot import Robot
+from doe_calib.model.skeleton import flange_poses
 from doe_calib.model.tool import Tool
 
 FORMAT = "doe_calib.design"
@@ -123,10 +124,29 @@ class DesignResult:
     def __str__(self) -> str:
         return self.summary()
 
-    def _repr_html_(self) -> str:
-        """The design report's content for a notebook: summary, std table and bars."""
-        from doe_calib.report.design import design_fragment
-        return str(design_fragment(self))
+    def first_configurations(self) -> np.ndarray:
+        """Index of each pose's first configuration (its unloaded one), in measuring order."""
+        cfg = self.configurations
+        return np.array(sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values()),
+                        int)
+
+    def nominal_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """Flange and marker positions at each pose's first configuration, mm, robot base frame.
+
+        The robot's nominal chain and the tool's nominal markers (no effect at
+        all, as unloaded with every effect at zero): what a design file holds is
+        enough, whatever effects its model names.
+
+        Returns
+        -------
+        flange : ndarray, shape (M, 3)
+        markers : ndarray, shape (M, n, 3)
+        """
+        rotation, translation = flange_poses(self.robot, self.configurations.q[
+            self.first_configurations()])
+        markers = translation[:, None, :] + np.einsum("mij,nj->mni", rotation,
+                                                      np.asarray(self.tool.positions, float))
+        return translation * 1000.0, markers * 1000.0
 
     def poses(self) -> list[dict]:
         """One entry per pose: id, q in deg (mm for prismatic joints), its wrenches, approach
