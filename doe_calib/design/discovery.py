@@ -20,6 +20,7 @@ design (:func:`.effect_detection.with_detectability`).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import ClassVar
 
 import numpy as np
 
@@ -40,12 +41,7 @@ from doe_calib.design.discovery_refinement import chosen_variants, refine_discov
 from doe_calib.design.effect_detection import detect_effects, with_detectability
 from doe_calib.design.exchange import exact_design
 from doe_calib.design.load_directions import directed_loads, horizontal
-from doe_calib.design.reachability import (
-    free_home,
-    home_pose,
-    reachability_note,
-    reachable_choice,
-)
+from doe_calib.design.predicted_std import design_std
 from doe_calib.design.relaxation import information, relax
 from doe_calib.design.result import DesignResult
 from doe_calib.errors import OptionError, SolverError
@@ -89,6 +85,209 @@ class DiscoveryGoal:
         if not 0 < self.alpha < self.power < 1:
             raise OptionError(f"--alpha {self.alpha:g} and --min-power {self.power:g}: give "
                               f"0 < alpha < power < 1")
+    #: Each candidate is judged with its own load case
+    #: (:func:`.discovery_candidates.within_torque_limits`).
+    own_load_case: ClassVar[bool] = True
+
+    def information(self, setting, candidates, stage) -> DiscoveryInformation:
+        """The variants of the candidate poses (load case × approach sides), their blocks,
+        each effect's columns and detection target, and which effects they can reveal."""
+        model, params, n_poses = setting.model, setting.params, setting.n_poses
+        q = candidates.poses.q
+        if len(q) < n_poses:
+            raise SolverError(f"only {len(q)} feasible candidates for {n_poses} poses")
+        effects = detect_effects(model, self.effects, Configurations.from_arrays(q),
+                                 self.registry)
+        cases = directed_loads(setting.loads, self.directions)
+        cand = variants(q, cases, approach_joints(model, effects), model.robot.n_joints)
+        within = within_torque_limits(model, params.values, setting.constraints, cand)
+        drawn = candidates.poses.to_dict()
+        if not within.all():
+            cand = cand.subset(within)
+            removed = {**drawn.get("removed", {}),
+                       "load torque (the variant's own load case)": int((~within).sum())}
+            drawn = {**drawn, "removed": removed}
+        stage("information", f"{len(cand)} candidates ({len(q)} poses × {max(len(cases), 1)} "
+                             f"load case(s) × {2 ** len(cand.approach_joints)} approach "
+                             f"side(s))")
+        raw = observation_rows(model, params.values, cand) / setting.sigma
+        params = free_parameters(params, raw, cand)
+        blocks = raw[..., params.free] * params.scales[params.free]
+        p = blocks.shape[2]
+        columns = [effect_columns(model, params, e, cand, setting.sigma) for e in effects]
+        zblocks = [z for z, _ in columns]
+        targets = np.array([] if self.size is None else
+                           [detection_target(e, model, own, self.size, self.alpha, self.power)
+                            for e, (_, own) in zip(effects, columns)])
+        # what every candidate together reveals: an effect they cannot is left out of the bounds
+        m_all = information(blocks, np.ones(len(cand)))
+        everything = projected_information(
+            m_all, [np.einsum("kri,krj->ij", blocks, z) for z in zblocks],
+            [np.einsum("kri,krj->ij", z, z) for z in zblocks])
+        reach = [np.sqrt(max(lam, 0.0)) * min(p_.scale for p_ in e.parameters(model.robot))
+                 >= INVISIBLE for lam, e in zip(everything, effects)]
+        keep = [i for i, ok in enumerate(reach) if ok and self.size is not None]
+        return DiscoveryInformation(params, effects, cases, cand, blocks, zblocks, targets,
+                                    tuple(reach), tuple(keep), drawn, q, cand.pose)
+
+    def relaxation(self, setting, info, stage):
+        stage("relaxation", f"D criterion over {len(info.cand)} candidates")
+        return relax(info.blocks, DOptimal())
+
+    def exchange(self, setting, info, relaxed, allowed, stage) -> Found:
+        """The unconstrained D-optimal choice of distinct poses among the ``allowed``, then
+        the constrained exchange that meets the detection bounds from it."""
+        n_poses, blocks, cand = setting.n_poses, info.blocks, info.cand
+        ok = allowed[cand.pose]
+        sub = np.flatnonzero(ok)
+        start = sub[exact_design(blocks[sub], n_poses, "D", relaxed.weights[sub]).indices]
+        pool = _pool(relaxed, info.zblocks)
+        pool = pool[ok[pool]]
+        stage("exchange", f"{n_poses} poses, distinct")
+        free = constrained_exchange(blocks, [], [], _dedupe(start, blocks, cand.pose, ok),
+                                    cand.pose, pool)
+        found = free
+        if info.keep:
+            stage("exchange", f"discovery: {len(info.keep)} detection bound(s)")
+            found = constrained_exchange(blocks, [info.zblocks[i] for i in info.keep],
+                                         info.targets[list(info.keep)], free.indices,
+                                         cand.pose, pool)
+        return Found(free, found)
+
+    def refinement(self, setting, candidates, info, choice, stage):
+        """IPOPT on the chosen poses, each keeping its load case and approach sides, no
+        detection bound lost (:func:`.discovery_refinement.refine_discovery`)."""
+        stage("refinement", f"IPOPT on {setting.n_poses} poses, each keeping its load case")
+        keep = list(info.keep)
+        return refine_discovery(setting.model, info.params, _reached(info, choice),
+                                choice.chosen, setting.sigma, candidates.feasibility,
+                                [info.effects[i] for i in keep], info.targets[keep],
+                                setting.collision,
+                                None if choice.reachability is None
+                                else choice.reachability.home, setting.constraints)
+
+    def bound(self, setting, info, relaxed, refined, stage):
+        if refined is None or not refined.outcome.accepted:
+            return relaxed
+        stage("bound", "relaxation with the refined poses as candidates")
+        return relax(np.concatenate([info.blocks, refined.blocks]), DOptimal(),
+                     start=np.r_[relaxed.weights, np.zeros(setting.n_poses)])
+
+    def assessment(self, setting, candidates, info, relaxed, choice, refined, bound,
+                   stage) -> DesignResult:
+        model, n_poses, params = setting.model, setting.n_poses, info.params
+        free, found, chosen = choice.made.free, choice.made.found, choice.chosen
+        design_blocks = info.blocks[chosen] if refined is None else refined.blocks
+        m = information(design_blocks, np.ones(n_poses))
+        value = log_det(m)
+        if not np.isfinite(value):
+            raise SolverError(f"the {n_poses} poses chosen cannot identify every parameter of "
+                              f"the model; ask for more poses")
+        stages = {"relaxation": relaxed.to_dict(), "exchange": free.to_dict()}
+        if refined is not None:
+            stages["refinement"] = refined.to_dict()
+        limit = bound.bound(n_poses)
+        p = info.blocks.shape[2]
+        d_eff = DOptimal().efficiency(value, limit, p)
+        # against the unconstrained exchange, both before any refinement
+        versus = float(np.exp(((value if refined is None else found.value) - free.value) / p))
+        cand = _reached(info, choice)
+        final = chosen_variants(cand, chosen, None if refined is None else refined.q)
+        cfg = final.configurations(model, params.values, None,
+                                   [str(i + 1) for i in range(n_poses)])
+        used = setting.constraints.to_dict(model.robot, model.tool)
+        used["loads"] = [ld.spec() for ld in info.cases]
+        result = DesignResult(
+            robot=model.robot, tool=model.tool, model=model.spec, configurations=cfg,
+            criterion="D", value=value, bound=limit, efficiency=d_eff,
+            predicted_std=design_std(params, m), constraints=used, efficiencies={"D": d_eff},
+            criteria={c.name: c.value(m) for c in (DOptimal(), AOptimal(), EOptimal())},
+            candidates={**info.candidates, "variants": len(cand)},
+            refinement={} if refined is None else refined.to_dict(),
+            sigma_mm=1000.0 * setting.sigma, stages=stages)
+        if choice.reachability is not None:
+            result = _with_reachability(result, model, setting.collision, cfg,
+                                        choice.reachability, refined)
+        result = with_detectability(result, model, self.effects, self.alpha, self.power,
+                                    self.registry)
+        return _with_outcome(result, self, info.effects, info.reach, cand, free, found, versus,
+                             setting.loads, refined)
+
+
+@dataclass(frozen=True, eq=False)
+class DiscoveryInformation:
+    """The information stage of a discovery design.
+
+    Attributes
+    ----------
+    params : ParameterSet
+        Those no variant identifies fixed.
+    effects : list of Effect
+        The effects to reveal.
+    cases : tuple of DirectedLoad
+        Every load case a pose may be measured under.
+    cand : Variants
+        The candidates: each pose in each load case and approach sides, within the
+        load torques.
+    blocks : ndarray, shape (K, r, p)
+    zblocks : list of ndarray, shape (K, r, q_e)
+        Each effect's weighted columns per candidate.
+    targets : ndarray
+        Each effect's detection bound on λ_min of its projected information (empty
+        without a size).
+    reach : tuple of bool
+        Whether all candidates together reveal each effect.
+    keep : tuple of int
+        The effects bounded (revealable, a size given).
+    candidates : dict
+        Poses drawn and removed, the variants' load torques among the reasons.
+    q : ndarray, shape (P, N)
+        The candidate poses, rad (m).
+    pose_of : ndarray of int, shape (K,)
+    """
+
+    params: object
+    effects: list
+    cases: tuple
+    cand: object
+    blocks: np.ndarray
+    zblocks: list
+    targets: np.ndarray
+    reach: tuple
+    keep: tuple
+    candidates: dict
+    q: np.ndarray
+    pose_of: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Found:
+    """The exchange stage of a discovery design: the unconstrained choice and the one that
+    meets the detection bounds (the same without bounds)."""
+
+    free: object
+    found: object
+
+    @property
+    def indices(self) -> np.ndarray:
+        return self.found.indices
+
+
+def _reached(info, choice):
+    """The variants with each checked pose at the angles it is reached at."""
+    return info.cand if choice.reachability is None else replace(info.cand, q=choice.q)
+
+
+def _with_reachability(result, model, collision, cfg, reach, refined):
+    """``result`` with the clearances, the collision summary and the reachability note."""
+    first = sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())
+    clearances = pose_clearances(collision, cfg.q[first])
+    reach = replace(reach, reverted=0 if refined is None else refined.unreachable)
+    used = {**result.constraints, "collision": collision.summary(),
+            "reachability": reach.to_dict(model.robot)}
+    return replace(result, constraints=used, notes=result.notes + (reach.note(model.robot),),
+                   clearances=clearances)
+
 
 
 def _dedupe(start, blocks, pose_of, allowed):
@@ -111,169 +310,6 @@ def _pool(relaxed, zblocks):
     for z in zblocks:
         order += list(np.argsort(-(z ** 2).sum(axis=(1, 2)))[:POOL_PER_EFFECT])
     return np.unique(order)
-
-
-def discovery_design(model, params, q, loads, n_poses: int, sigma: float, goal: DiscoveryGoal,
-                     constraints, candidates: dict, progress=None, refine: bool = False,
-                     feasibility=None, collision=None, home=None) -> DesignResult:
-    """The D-optimal discovery design of ``n_poses`` poses from candidate poses ``q``.
-
-    Parameters
-    ----------
-    model : Model
-    params : ParameterSet
-        Expected values (SI); parameters no variant identifies are fixed here.
-    q : ndarray, shape (P, N)
-        Feasible candidate poses, rad/m.
-    loads : sequence of LoadCase
-        The payloads (``--load``); each becomes one load case per allowed direction.
-    n_poses : int
-    sigma : float
-        Tracker σ per coordinate, m.
-    goal : DiscoveryGoal
-    constraints : DesignConstraints
-    candidates : dict
-        What drawing ``q`` removed (:meth:`.candidate_poses.CandidateSet.to_dict`).
-    progress : callable(stage, note), optional
-    refine : bool
-        Refine the chosen poses with IPOPT, each keeping its load case and approach
-        sides, without breaking a detection bound (:mod:`.discovery_refinement`).
-    feasibility : Feasibility
-        The pose constraints, for the refinement, without the load torques
-        (:func:`.optimal.optimal_design` builds it so): each variant's own load case is
-        judged here (:func:`.discovery_candidates.within_torque_limits`).
-    collision : CollisionModel, optional
-        With it, only poses joined to ``home`` by a free path are chosen
-        (:func:`.reachability.reachable_choice`), and refined poses stay so.
-    home : ndarray, shape (N,), optional
-        The home pose, rad/m (:func:`.reachability.home_pose`); checked free.
-
-    Returns
-    -------
-    DesignResult
-        Criterion D; ``stages["discovery"]`` holds, per effect, the size asked, the
-        size reached and whether the bound is met; ``detectability`` every effect's
-        ``min_detectable`` in the design.
-    """
-    say = progress or (lambda stage, note="": None)
-    effects = detect_effects(model, goal.effects, Configurations.from_arrays(q), goal.registry)
-    cases = directed_loads(loads, goal.directions)
-    cand = variants(q, cases, approach_joints(model, effects), model.robot.n_joints)
-    within = within_torque_limits(model, params.values, constraints, cand)
-    if not within.all():
-        cand = cand.subset(within)
-        removed = {**candidates.get("removed", {}),
-                   "load torque (the variant's own load case)": int((~within).sum())}
-        candidates = {**candidates, "removed": removed}
-    say("information", f"{len(cand)} candidates ({len(q)} poses × {max(len(cases), 1)} load "
-                       f"case(s) × {2 ** len(cand.approach_joints)} approach side(s))")
-    raw = observation_rows(model, params.values, cand) / sigma
-    params = free_parameters(params, raw, cand)
-    blocks = raw[..., params.free] * params.scales[params.free]
-    p = blocks.shape[2]
-    columns = [effect_columns(model, params, e, cand, sigma) for e in effects]
-    zblocks = [z for z, _ in columns]
-    targets = np.array([] if goal.size is None else
-                       [detection_target(e, model, own, goal.size, goal.alpha, goal.power)
-                        for e, (_, own) in zip(effects, columns)])
-    # what every candidate together reveals: an effect they cannot is left out of the bounds
-    m_all = information(blocks, np.ones(len(cand)))
-    everything = projected_information(
-        m_all, [np.einsum("kri,krj->ij", blocks, z) for z in zblocks],
-        [np.einsum("kri,krj->ij", z, z) for z in zblocks])
-    reach = [np.sqrt(max(lam, 0.0)) * min(p_.scale for p_ in e.parameters(model.robot))
-             >= INVISIBLE for lam, e in zip(everything, effects)]
-    say("relaxation", f"D criterion over {len(cand)} candidates")
-    relaxed = relax(blocks, DOptimal())
-    keep = [i for i, ok in enumerate(reach) if ok and goal.size is not None]
-    outcomes = {}
-
-    def choose(allowed):
-        ok = allowed[cand.pose]
-        sub = np.flatnonzero(ok)
-        start = sub[exact_design(blocks[sub], n_poses, "D", relaxed.weights[sub]).indices]
-        pool = _pool(relaxed, zblocks)
-        pool = pool[ok[pool]]
-        say("exchange", f"{n_poses} poses, distinct")
-        free = constrained_exchange(blocks, [], [], _dedupe(start, blocks, cand.pose, ok),
-                                    cand.pose, pool)
-        found = free
-        if keep:
-            say("discovery", f"{len(keep)} detection bound(s)")
-            found = constrained_exchange(blocks, [zblocks[i] for i in keep], targets[keep],
-                                         free.indices, cand.pose, pool)
-        outcomes.update(free=free, found=found)
-        return found.indices
-
-    reachability = None
-    if collision is None:
-        chosen = choose(np.ones(len(q), bool))
-    else:
-        start, moved = free_home(collision, home_pose(model.robot, constraints, home),
-                                 model.robot, home is not None, q)
-        chosen, q_used, replaced = reachable_choice(choose, q, cand.pose, collision, start,
-                                                    model.robot, *constraints.bounds(model.robot))
-        cand, reachability = replace(cand, q=q_used), (start, replaced, moved)
-    free, found = outcomes["free"], outcomes["found"]
-    polished = None
-    if refine:
-        say("refinement", f"IPOPT on {n_poses} poses, each keeping its load case")
-        polished = refine_discovery(model, params, cand, chosen, sigma, feasibility,
-                                    [effects[i] for i in keep], targets[keep], collision,
-                                    None if reachability is None else reachability[0],
-                                    constraints)
-        design_blocks = polished.blocks
-    else:
-        design_blocks = blocks[chosen]
-    m = information(design_blocks, np.ones(n_poses))
-    value = log_det(m)
-    if not np.isfinite(value):
-        raise SolverError(f"the {n_poses} poses chosen cannot identify every parameter of the "
-                          f"model; ask for more poses")
-    stages = {"relaxation": relaxed.to_dict(), "exchange": free.to_dict()}
-    if polished is not None and polished.outcome.accepted:
-        say("bound", "relaxation with the refined poses as candidates")
-        relaxed = relax(np.concatenate([blocks, design_blocks]), DOptimal(),
-                        start=np.r_[relaxed.weights, np.zeros(n_poses)])
-    if polished is not None:
-        stages["refinement"] = polished.to_dict()
-    bound = relaxed.bound(n_poses)
-    d_eff = DOptimal().efficiency(value, bound, p)
-    # against the unconstrained exchange, both before any refinement
-    versus = float(np.exp(((value if polished is None else found.value) - free.value) / p))
-    final = chosen_variants(cand, chosen, None if polished is None else polished.q)
-    cfg = final.configurations(model, params.values, None, [str(i + 1) for i in range(n_poses)])
-    std = np.sqrt(np.diag(np.linalg.inv(m))) * params.scales[params.free]
-    free_pars = [par for par, f in zip(params.parameters, params.free) if f]
-    used = constraints.to_dict(model.robot, model.tool)
-    used["loads"] = [ld.spec() for ld in cases]
-    result = DesignResult(
-        model.robot, model.tool, model.spec, cfg, "D", value, bound, d_eff,
-        {par.name: (float(s * par.display_factor), par.display_unit)
-         for par, s in zip(free_pars, std)}, used, (),
-        {"D": d_eff}, {c.name: c.value(m) for c in (DOptimal(), AOptimal(), EOptimal())},
-        {}, {**candidates, "variants": len(cand)},
-        {} if polished is None else polished.to_dict(), {}, {}, sigma_mm=1000.0 * sigma,
-        stages=stages)
-    if reachability is not None:
-        result = _with_reachability(result, model, collision, cfg, reachability, polished)
-    result = with_detectability(result, model, goal.effects, goal.alpha, goal.power,
-                                goal.registry)
-    return _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads,
-                         polished)
-
-
-def _with_reachability(result, model, collision, cfg, reachability, polished):
-    """``result`` with the clearances, the collision summary and the reachability note."""
-    start, replaced, moved = reachability
-    first = sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())
-    clearances = pose_clearances(collision, cfg.q[first])
-    back = 0 if polished is None else polished.unreachable
-    used = {**result.constraints, "collision": collision.summary(),
-            "reachability": {"home": [float(v) for v in start * model.robot.display_factors],
-                             "replaced": dict(replaced), "refined_reverted": back}}
-    notes = result.notes + (reachability_note(start, model.robot, replaced, back, moved),)
-    return replace(result, constraints=used, notes=notes, clearances=clearances)
 
 
 def _hint(loads, goal) -> str:

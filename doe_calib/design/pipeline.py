@@ -1,0 +1,255 @@
+"""One design pipeline, seven stages, and the goals that plug into it.
+
+candidates → information → relaxation → exchange (poses a program can reach) →
+refinement → bound → assessment. The pipeline (:func:`run`) owns the order,
+the candidates (:func:`draw_candidates`), the reachability of the chosen poses
+(:func:`reachable_exchange`) and the progress; a goal owns what differs
+between designs, each stage a method of it that takes the stage results before
+and returns its own:
+
+- :class:`.optimal.CriterionGoal`: the D, A, E or task criterion of N poses;
+- :class:`.discovery.DiscoveryGoal`: D subject to effects being detectable,
+  each pose choosing its load case and approach sides;
+- :class:`.augment.AugmentGoal`: the K poses that add most to a campaign.
+
+A goal implements ``information(setting, candidates, stage)``,
+``relaxation(setting, information, stage)``,
+``exchange(setting, information, relaxed, allowed, stage)``,
+``refinement(setting, candidates, information, choice, stage)``,
+``bound(setting, information, relaxed, refined, stage)`` and
+``assessment(setting, candidates, information, relaxed, choice, refined, bound, stage)``;
+a stage a goal does not have returns None (the augmentation relaxes nothing).
+"""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from doe_calib.design.candidate_file import CandidatePoses, screened_candidates
+from doe_calib.design.candidate_poses import CandidateSet, feasible_candidates
+from doe_calib.design.feasibility import build_feasibility
+from doe_calib.design.reachability import (
+    free_home,
+    home_pose,
+    reachability_note,
+    reachable_choice,
+)
+
+log = logging.getLogger(__name__)
+
+#: The stages, in order: ``progress(done, total, note)`` counts them.
+STAGES = ("candidates", "information", "relaxation", "exchange", "refinement", "bound",
+          "assessment")
+
+
+@dataclass(frozen=True, eq=False)
+class Setting:
+    """What every goal designs with.
+
+    Attributes
+    ----------
+    model : Model
+    params : ParameterSet
+        Expected values (SI); the goal fixes what its candidates cannot identify.
+    n_poses : int
+        Poses to choose.
+    loads : tuple of LoadCase
+    sigma : float
+        Tracker σ per coordinate, m.
+    constraints : DesignConstraints
+    collision : CollisionModel or None
+    home : ndarray, shape (N,), or None
+        The home pose asked for, rad (m); None: the URDF zero clipped inside the bounds.
+    rng : numpy.random.Generator
+    refine : bool
+        Run the continuous refinement (only over random candidates).
+    """
+
+    model: object
+    params: object
+    n_poses: int
+    loads: tuple
+    sigma: float
+    constraints: object
+    collision: object = None
+    home: np.ndarray | None = None
+    rng: object = None
+    refine: bool = True
+
+
+@dataclass(frozen=True, eq=False)
+class Candidates:
+    """The candidates stage: the pose constraints and the feasible poses.
+
+    Attributes
+    ----------
+    feasibility : Feasibility
+        The pose constraints (:func:`.feasibility.build_feasibility`).
+    poses : CandidateSet
+    refinable : bool
+        False for poses read from a file: designed over as they are.
+    """
+
+    feasibility: object
+    poses: CandidateSet
+    refinable: bool
+
+
+@dataclass(frozen=True)
+class Reachability:
+    """How the chosen poses were kept reachable from the home pose.
+
+    Attributes
+    ----------
+    home : ndarray, shape (N,)
+        The home pose, rad (m).
+    replaced : dict
+        Reason → chosen poses replaced from the candidates for it.
+    reverted : int
+        Refined poses kept at their candidate (their refined angles unreachable).
+    moved : str
+        Why the home pose is not the one asked for ("" when it is).
+    """
+
+    home: np.ndarray
+    replaced: dict
+    reverted: int = 0
+    moved: str = ""
+
+    def note(self, robot) -> str:
+        """One sentence: the home pose, and what was replaced or reverted."""
+        return reachability_note(self.home, robot, self.replaced, self.reverted, self.moved)
+
+    def to_dict(self, robot) -> dict:
+        """``home`` (deg, mm), ``replaced`` and ``refined_reverted``, as design files hold."""
+        return {"home": [float(v) for v in self.home * robot.display_factors],
+                "replaced": dict(self.replaced), "refined_reverted": self.reverted}
+
+
+@dataclass(frozen=True, eq=False)
+class Choice:
+    """The exchange stage: the chosen candidates, reachable from home.
+
+    Attributes
+    ----------
+    made : object
+        The goal's exchange of the last round (its outcome, with ``indices``).
+    chosen : ndarray of int, shape (n,)
+        The chosen candidates.
+    q : ndarray, shape (P, N)
+        The candidate poses, each checked one at the angles it is reached at, rad (m).
+    reachability : Reachability or None
+        None without a collision model.
+    """
+
+    made: object
+    chosen: np.ndarray
+    q: np.ndarray
+    reachability: Reachability | None
+
+
+class Stages:
+    """Reports each stage as ``progress(done, total, note)`` and logs its duration.
+
+    ``done`` counts the stages begun of :data:`STAGES`, ``total`` is their number,
+    ``note`` reads ``stage: what it does``; a stage's iterations report
+    ``progress(iteration, None, note)``.
+    """
+
+    def __init__(self, progress=None):
+        self.progress, self.name, self.start = progress, None, time.perf_counter()
+
+    def __call__(self, name: str, note: str = "") -> None:
+        now = time.perf_counter()
+        if self.name is not None and name != self.name:
+            log.info("design stage %s: %.2f s", self.name, now - self.start)
+        if name != self.name:
+            self.name, self.start = name, now
+        if self.progress is not None:
+            done = STAGES.index(name) + 1 if name in STAGES else len(STAGES)
+            self.progress(done, len(STAGES), f"{name}: {note}" if note else name)
+
+    def iterations(self, name):
+        """The ``progress(iteration, gap)`` of an iterative solver, reported under ``name``."""
+        if self.progress is None:
+            return None
+        return lambda it, gap: self.progress(it, None, f"{name}: iteration {it}, gap {gap:.3g}")
+
+
+def draw_candidates(setting: Setting, candidates, own_load_case: bool,
+                    stage: Stages) -> Candidates:
+    """The candidates stage: ``candidates`` random feasible poses, or the poses of a file
+    screened by the same constraints.
+
+    ``own_load_case``: each candidate is later judged with its own load case (a goal that
+    chooses one per pose), so the constraints here leave the load torques out.
+    """
+    model, constraints = setting.model, setting.constraints
+    feasibility = build_feasibility(model, setting.params.values,
+                                    replace(constraints, torque_limits=None) if own_load_case
+                                    else constraints, setting.loads)
+    if isinstance(candidates, CandidatePoses):
+        stage("candidates", f"screening the {len(candidates)} poses of {candidates.source}")
+        poses = screened_candidates(feasibility, model.robot, candidates, setting.collision)
+        return Candidates(feasibility, poses, False)
+    stage("candidates", f"drawing {candidates} feasible poses")
+    poses = feasible_candidates(feasibility, model.robot, candidates, setting.rng,
+                                setting.collision)
+    return Candidates(feasibility, poses, True)
+
+
+def reachable_exchange(exchange, q, pose_of, setting: Setting) -> Choice:
+    """The exchange stage: ``exchange(allowed)`` (the goal's, returning an outcome with
+    ``indices``) until every chosen pose is joined to the home pose.
+
+    Without a collision model one exchange over every candidate; with it,
+    :func:`.reachability.reachable_choice` removes an unreachable chosen pose and asks
+    again. ``q`` (P, N): the candidate poses, rad (m); ``pose_of`` (K,): the pose of each
+    candidate the exchange chooses among.
+    """
+    made = []
+
+    def choose(allowed):
+        made.append(exchange(allowed))
+        return made[-1].indices
+
+    collision, robot = setting.collision, setting.model.robot
+    if collision is None:
+        chosen = choose(np.ones(len(q), bool))
+        return Choice(made[-1], np.asarray(chosen), q, None)
+    start = home_pose(robot, setting.constraints, setting.home)
+    start, moved = free_home(collision, start, robot, setting.home is not None, q)
+    chosen, used, replaced = reachable_choice(choose, q, pose_of, collision, start, robot,
+                                              *setting.constraints.bounds(robot))
+    return Choice(made[-1], np.asarray(chosen), used, Reachability(start, replaced, 0, moved))
+
+
+def run(goal, setting: Setting, candidates, progress=None):
+    """The design of ``goal``: every stage in order, each given the results before it.
+
+    Parameters
+    ----------
+    goal : CriterionGoal, DiscoveryGoal or AugmentGoal
+    setting : Setting
+    candidates : int or CandidatePoses
+        Random feasible candidates to draw, or poses read from a file.
+    progress : callable(done, total, note), optional
+
+    Returns
+    -------
+    The goal's result (:class:`.result.DesignResult`, :class:`.augment_result.AugmentResult`).
+    """
+    stage = Stages(progress)
+    drawn = draw_candidates(setting, candidates, goal.own_load_case, stage)
+    info = goal.information(setting, drawn, stage)
+    relaxed = goal.relaxation(setting, info, stage)
+    choice = reachable_exchange(
+        lambda allowed: goal.exchange(setting, info, relaxed, allowed, stage),
+        info.q, info.pose_of, setting)
+    refined = (goal.refinement(setting, drawn, info, choice, stage)
+               if setting.refine and drawn.refinable else None)
+    bound = goal.bound(setting, info, relaxed, refined, stage)
+    return goal.assessment(setting, drawn, info, relaxed, choice, refined, bound, stage)
