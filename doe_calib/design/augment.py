@@ -20,8 +20,7 @@ from typing import ClassVar
 import numpy as np
 
 from doe_calib.design.augment_result import AugmentResult, parameter_std
-from doe_calib.design.candidate_file import CandidatePoses, screened_candidates
-from doe_calib.design.candidate_poses import feasible_candidates
+from doe_calib.design.candidate_file import CandidatePoses
 from doe_calib.design.constraints import DesignConstraints
 from doe_calib.design.criteria import Criterion, DOptimal, log_det
 from doe_calib.design.discovery_candidates import (
@@ -32,15 +31,9 @@ from doe_calib.design.discovery_candidates import (
     within_torque_limits,
 )
 from doe_calib.design.effect_detection import design_readings, detect_effects, detectability
-from doe_calib.design.feasibility import build_feasibility
 from doe_calib.design.load_directions import directed_loads
 from doe_calib.design.problem import blocks_for, design_parameters, load_configurations
-from doe_calib.design.reachability import (
-    free_home,
-    home_pose,
-    reachability_note,
-    reachable_choice,
-)
+from doe_calib.design.pipeline import Setting, run
 from doe_calib.design.updates import regularised
 from doe_calib.errors import SolverError
 from doe_calib.estimation.effect_signature import grown_parameters
@@ -195,89 +188,170 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     if not isinstance(candidates, CandidatePoses):
         whole("candidates", candidates, 1)
     level_and_power(alpha, power)
-    rng = np.random.default_rng() if rng is None else rng
-    params = model.nominal() if params is None else params
-    constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints
-    # with load directions each pose's load torques are judged with its own load case
-    feasibility = build_feasibility(model, params.values, constraints if directions is None
-                                    else replace(constraints, torque_limits=None), loads)
-    if isinstance(candidates, CandidatePoses):
-        cands = screened_candidates(feasibility, model.robot, candidates, collision)
-    else:
-        cands = feasible_candidates(feasibility, model.robot, candidates, rng, collision)
-    targets = tuple(targets)
-    before = detect or "+".join(targets)
-    effects = detect_effects(model, before, None, registry) if before else []
-    joints = approach_joints(model, effects)
-    cand = None
-    if directions is not None or joints:
-        cand = variants(cands.q, directed_loads(loads, directions or (DOWN,)), joints,
-                        model.robot.n_joints, every=directions is None)
-        cand = cand.subset(within_torque_limits(model, params.values, constraints, cand))
+    setting = Setting(model, model.nominal() if params is None else params, n_poses,
+                      tuple(loads), sigma,
+                      DesignConstraints.from_robot(model.robot) if constraints is None
+                      else constraints, collision,
+                      None if home is None else np.asarray(home, float),
+                      np.random.default_rng() if rng is None else rng, refine=False)
+    goal = AugmentGoal(measured, Criterion.from_name(criterion), tuple(targets), detect, alpha,
+                       power, registry, directions)
+    return run(goal, setting, candidates)
 
-    def identifiable(mdl, start):
-        """``start`` with what the candidates (each variant of them, or, without variants,
-        they and the campaign's poses) cannot identify fixed."""
+
+@dataclass(frozen=True, eq=False)
+class AugmentInformation:
+    """The information stage of an augmentation.
+
+    Attributes
+    ----------
+    params : ParameterSet
+        The model's parameters, what the candidates cannot identify fixed.
+    design_model, design_params :
+        The model (with the targets' effects when there are targets) and the parameters
+        the information is of.
+    criterion : Criterion
+        The goal's, or :class:`Separation` of the targets.
+    effects : list of Effect
+        Whose detectability is reported before and after.
+    cand : Variants or None
+        The variants of the candidates (approach sides, load case), or None.
+    m0 : ndarray, shape (p, p)
+        The measured campaign's information.
+    blocks : ndarray, shape (K, r, p)
+    q : ndarray, shape (P, N)
+        The candidate poses, rad (m).
+    pose_of : ndarray of int, shape (K,)
+    """
+
+    params: object
+    design_model: object
+    design_params: object
+    criterion: Criterion
+    effects: list
+    cand: object
+    m0: np.ndarray
+    blocks: np.ndarray
+    q: np.ndarray
+    pose_of: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Added:
+    """The exchange stage of an augmentation: the candidates added (:func:`exchange_from`)."""
+
+    indices: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class AugmentGoal:
+    """The K poses that add most to a measured campaign (the settings of
+    :func:`augment_design`)."""
+
+    measured: object
+    criterion: Criterion
+    targets: tuple = ()
+    detect: str = ""
+    alpha: float = 0.05
+    power: float = 0.8
+    registry: object = None
+    directions: tuple | None = None
+
+    @property
+    def own_load_case(self) -> bool:
+        """With load directions each pose's load torques are judged with its own load case."""
+        return self.directions is not None
+
+    def information(self, setting, candidates, stage) -> AugmentInformation:
+        model, loads, sigma, rng = setting.model, setting.loads, setting.sigma, setting.rng
+        q, measured = candidates.poses.q, self.measured
+        before = self.detect or "+".join(self.targets)
+        effects = detect_effects(model, before, None, self.registry) if before else []
+        joints = approach_joints(model, effects)
+        cand = None
+        if self.directions is not None or joints:
+            cand = variants(q, directed_loads(loads, self.directions or (DOWN,)), joints,
+                            model.robot.n_joints, every=self.directions is None)
+            cand = cand.subset(within_torque_limits(model, setting.params.values,
+                                                    setting.constraints, cand))
+
+        def identifiable(mdl, start):
+            """``start`` with what the candidates (each variant of them, or, without variants,
+            they and the campaign's poses) cannot identify fixed."""
+            if cand is None:
+                return design_parameters(mdl, start, np.r_[q, measured.configurations.q],
+                                         loads, rng=rng)
+            return free_parameters(start, observation_rows(mdl, start.values, cand) / sigma,
+                                   cand)
+
+        params = identifiable(model, setting.params)
+        design_model, design_params, crit = model, params, self.criterion
+        if self.targets:
+            added_effects = [e for spec in self.targets
+                             for e in detect_effects(model, spec, None, self.registry)]
+            design_model = build_model(model.robot, model.tool,
+                                       tuple(model.effects) + tuple(added_effects))
+            design_params = identifiable(design_model, grown_parameters(design_model, params))
+            free_names = np.array(design_params.names)[design_params.free]
+            own = np.flatnonzero(np.isin(free_names, np.array(params.names)[params.free]))
+            crit = Separation(tuple(int(i) for i in own))
+        m0 = measured_information(design_model, design_params, measured)
         if cand is None:
-            return design_parameters(mdl, start, np.r_[cands.q, measured.configurations.q],
-                                     loads, rng=rng)
-        return free_parameters(start, observation_rows(mdl, start.values, cand) / sigma, cand)
+            blocks = blocks_for(design_model, design_params, q, loads, sigma)
+            pose_of = np.arange(len(q))
+        else:
+            free = design_params.free
+            blocks = (observation_rows(design_model, design_params.values, cand)[..., free]
+                      * design_params.scales[free] / sigma)
+            pose_of = cand.pose
+        return AugmentInformation(params, design_model, design_params, crit, effects, cand, m0,
+                                  blocks, q, pose_of)
 
-    params = identifiable(model, params)
-    design_model, design_params, crit = model, params, Criterion.from_name(criterion)
-    if targets:
-        added_effects = [e for spec in targets
-                         for e in detect_effects(model, spec, None, registry)]
-        design_model = build_model(model.robot, model.tool,
-                                   tuple(model.effects) + tuple(added_effects))
-        design_params = identifiable(design_model, grown_parameters(design_model, params))
-        free_names = np.array(design_params.names)[design_params.free]
-        own = np.flatnonzero(np.isin(free_names, np.array(params.names)[params.free]))
-        crit = Separation(tuple(int(i) for i in own))
-    m0 = measured_information(design_model, design_params, measured)
-    if cand is None:
-        blocks = blocks_for(design_model, design_params, cands.q, loads, sigma)
-        pose_of = np.arange(len(cands.q))
-    else:
-        free = design_params.free
-        blocks = (observation_rows(design_model, design_params.values, cand)[..., free]
-                  * design_params.scales[free] / sigma)
-        pose_of = cand.pose
+    def relaxation(self, setting, info, stage):
+        return None
 
-    def choose(allowed):
-        sub = np.flatnonzero(allowed[pose_of])
-        return sub[exchange_from(m0, blocks[sub], n_poses, crit, pose_of=pose_of[sub])]
+    def exchange(self, setting, info, relaxed, allowed, stage) -> Added:
+        sub = np.flatnonzero(allowed[info.pose_of])
+        return Added(sub[exchange_from(info.m0, info.blocks[sub], setting.n_poses,
+                                       info.criterion, pose_of=info.pose_of[sub])])
 
-    q_used, reach = cands.q, {}
-    if collision is None:
-        chosen = choose(np.ones(len(cands.q), bool))
-    else:
-        start = home_pose(model.robot, constraints, home)
-        start, moved = free_home(collision, start, model.robot, home is not None, cands.q)
-        chosen, q_used, replaced = reachable_choice(choose, cands.q, pose_of, collision, start,
-                                                    model.robot,
-                                                    *constraints.bounds(model.robot))
-        reach = {"home": [float(v) for v in start * model.robot.display_factors],
-                 "replaced": dict(replaced),
-                 "note": reachability_note(start, model.robot, replaced, 0, moved)}
-    poses = pose_of[chosen]
-    added = blocks[chosen]
-    m1 = m0 + np.einsum("kri,krj->ij", added, added)
-    names = [cands.names[k] for k in poses] if cands.names else \
-        [f"new{i + 1}" for i in range(n_poses)]
-    cfg = (load_configurations(model, params.values, q_used[chosen], loads, names)
-           if cand is None else
-           replace(cand, q=q_used).configurations(model, params.values, chosen, names))
-    detected = ((), ())
-    if before:
-        after = concatenate([measured, design_readings(model, params.values, cfg, sigma)])
-        detected = tuple(detectability(model, params, m, effects, alpha, power)
-                         for m in (measured, after))
-    return AugmentResult(
-        configurations=cfg, criterion=crit.name, targets=targets,
-        value_before=float(crit.value(m0)), value_after=float(crit.value(m1)),
-        std_before=parameter_std(design_params, m0), std_after=parameter_std(design_params, m1),
-        detect_before=detected[0], detect_after=detected[1], candidates=cands.to_dict(),
-        measured_configurations=len(measured.configurations), sigma_mm=1000.0 * sigma,
-        robot=model.robot, model=model.spec, reachability=reach)
+    def refinement(self, setting, candidates, info, choice, stage):
+        return None
 
+    def bound(self, setting, info, relaxed, refined, stage):
+        return None
+
+    def assessment(self, setting, candidates, info, relaxed, choice, refined, bound,
+                   stage) -> AugmentResult:
+        model, n_poses, params, crit = setting.model, setting.n_poses, info.params, info.criterion
+        cands, chosen, measured = candidates.poses, choice.chosen, self.measured
+        poses = info.pose_of[chosen]
+        added = info.blocks[chosen]
+        m1 = info.m0 + np.einsum("kri,krj->ij", added, added)
+        names = [cands.names[k] for k in poses] if cands.names else \
+            [f"new{i + 1}" for i in range(n_poses)]
+        cfg = (load_configurations(model, params.values, choice.q[chosen], setting.loads, names)
+               if info.cand is None else
+               replace(info.cand, q=choice.q).configurations(model, params.values, chosen,
+                                                             names))
+        detected = ((), ())
+        if self.detect or self.targets:
+            after = concatenate([measured, design_readings(model, params.values, cfg,
+                                                           setting.sigma)])
+            detected = tuple(detectability(model, params, m, info.effects, self.alpha,
+                                           self.power) for m in (measured, after))
+        reach = {}
+        if choice.reachability is not None:
+            r = choice.reachability
+            reach = {"home": r.to_dict(model.robot)["home"], "replaced": dict(r.replaced),
+                     "note": r.note(model.robot)}
+        design_params = info.design_params
+        return AugmentResult(
+            configurations=cfg, criterion=crit.name, targets=self.targets,
+            value_before=float(crit.value(info.m0)), value_after=float(crit.value(m1)),
+            std_before=parameter_std(design_params, info.m0),
+            std_after=parameter_std(design_params, m1), detect_before=detected[0],
+            detect_after=detected[1], candidates=cands.to_dict(),
+            measured_configurations=len(measured.configurations),
+            sigma_mm=1000.0 * setting.sigma, robot=model.robot, model=model.spec,
+            reachability=reach)
