@@ -26,7 +26,6 @@ from scipy.spatial.transform import Rotation
 
 from doe_calib.errors import DataError
 from doe_calib.io.measurements import GIVEN, Measurements
-from doe_calib.model.skeleton import flange_poses
 from doe_calib.model.tool import Tool
 
 #: Virtual point names and their directions in the probe frame.
@@ -77,7 +76,7 @@ def probe_mounting(robot, readings) -> tuple[np.ndarray, np.ndarray]:
     vectors relative to the first pose), then the translations by linear
     least squares. A start value: the fit refines it through the flange placement.
     """
-    rf, tf = flange_poses(robot, readings.configurations.q)
+    rf, tf = robot.flange_poses(readings.configurations.q)
     rp, tp = readings.rotation, readings.position
     a = Rotation.from_matrix(np.einsum("ji,mjk->mik", rf[0], rf)).as_rotvec()
     b = Rotation.from_matrix(np.einsum("ji,mjk->mik", rp[0], rp)).as_rotvec()

@@ -47,9 +47,7 @@ def nominal_points(robot, q, config, offsets) -> np.ndarray:
     -------
     ndarray, shape (K, 3)
     """
-    from doe_calib.model.skeleton import flange_poses
-
-    rot, trans = flange_poses(robot, q)
+    rot, trans = robot.flange_poses(q)
     return np.einsum("kij,kj->ki", rot[config], offsets) + trans[config]
 
 

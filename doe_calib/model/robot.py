@@ -138,6 +138,34 @@ class Robot:
         """Per-joint factors SI → controller units (deg, mm), shape (N,)."""
         return np.array([j.display_factor for j in self.joints])
 
+    def flange_poses(self, q) -> tuple[np.ndarray, np.ndarray]:
+        """Nominal flange pose at each configuration, robot base frame (Pinocchio).
+
+        Parameters
+        ----------
+        q : array_like, shape (M, N)
+            Joint values, rad (m for prismatic joints).
+
+        Returns
+        -------
+        rotation : ndarray, shape (M, 3, 3)
+        translation : ndarray, shape (M, 3)
+            Metres.
+        """
+        import pinocchio as pin
+
+        from doe_calib.model.skeleton import chain_model
+
+        model = chain_model(self)
+        data = model.createData()
+        flange = model.getFrameId("flange")
+        rot, trans = [], []
+        for pose in np.atleast_2d(np.asarray(q, float)):
+            pin.framesForwardKinematics(model, data, pose)
+            rot.append(data.oMf[flange].rotation.copy())
+            trans.append(data.oMf[flange].translation.copy())
+        return np.array(rot), np.array(trans)
+
     def to_dict(self) -> dict:
         """Plain JSON-able description (SI units)."""
         return {"name": self.name, "flange": self.flange, "source": self.source,

@@ -58,30 +58,3 @@ def skeleton_points(robot, q) -> np.ndarray:
                                     range(1, model.njoints)] + [data.oMf[flange].translation])
     return np.array(out)
 
-
-def flange_poses(robot, q) -> tuple[np.ndarray, np.ndarray]:
-    """Nominal flange pose at each configuration, robot base frame.
-
-    Parameters
-    ----------
-    robot : Robot
-    q : array_like, shape (M, N)
-        Joint values, rad (m for prismatic joints).
-
-    Returns
-    -------
-    rotation : ndarray, shape (M, 3, 3)
-    translation : ndarray, shape (M, 3)
-        Metres.
-    """
-    import pinocchio as pin
-
-    model = chain_model(robot)
-    data = model.createData()
-    flange = model.getFrameId("flange")
-    rot, trans = [], []
-    for pose in np.atleast_2d(np.asarray(q, float)):
-        pin.framesForwardKinematics(model, data, pose)
-        rot.append(data.oMf[flange].rotation.copy())
-        trans.append(data.oMf[flange].translation.copy())
-    return np.array(rot), np.array(trans)
