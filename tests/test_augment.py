@@ -1,4 +1,4 @@
-"""Candidates from a file and sequential design (design/candidate_file.py, design/augment.py):
+"""Candidates from a file and sequential design (design/candidates/from_file.py, design/augment.py):
 the chosen poses are the file's, with their ids; the poses added to a measured campaign are
 worth more than random ones by an information computed here independently; on a campaign in
 one IK branch (UR10, own-weight deflection simulated with Pinocchio) the new poses leave the
@@ -16,7 +16,7 @@ from doe_calib.design.augment import (
     measured_information,
 )
 from doe_calib.design.augment_result import AugmentResult
-from doe_calib.design.candidate_file import read_candidates
+from doe_calib.design.candidates.from_file import read_candidates
 from doe_calib.design.criteria import log_det
 from doe_calib.design.optimal import optimal_design
 from doe_calib.design.problem import blocks_for
@@ -146,7 +146,7 @@ def test_augmenting_a_one_branch_campaign_reveals_the_own_weight_deflection(tmp_
     # the value after, recomputed from the combined campaign's information
     big = build_model(model.robot, model.tool, MODEL + "+gravity_compliance(j2)+gear_ratio(j2)")
     from doe_calib.estimation.effect_signature import grown_parameters
-    from doe_calib.design.effect_detection import design_readings
+    from doe_calib.design.discovery.detection import design_readings
     from doe_calib.io.measurements import concatenate
 
     params = grown_parameters(big, model.nominal()).fixed(

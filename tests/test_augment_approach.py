@@ -1,5 +1,5 @@
 """Approach sides of augmented poses are design variables (design/augment.py with
-design/discovery_candidates.py): to separate an approach backlash of A2 from a campaign
+design/discovery/variants.py): to separate an approach backlash of A2 from a campaign
 measured without approach sides (0: not known), the new poses come from both sides, and
 their Ds value, recomputed from the combined readings, beats the same poses all from one."""
 import numpy as np
@@ -10,7 +10,7 @@ from doe_calib.design.augment import augment_design, measured_information
 from doe_calib.estimation.effect_signature import grown_parameters
 from doe_calib.design.augment_result import AugmentResult
 from doe_calib.design.criteria import log_det
-from doe_calib.design.effect_detection import design_readings
+from doe_calib.design.discovery.detection import design_readings
 from doe_calib.io.csv_files import read_design, write_design
 from doe_calib.io.measurements import Configurations, concatenate
 from doe_calib.model.simulate import random_configurations

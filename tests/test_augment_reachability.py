@@ -1,5 +1,5 @@
 """Augmented poses are reachable from ``--home`` (design/augment.py with
-design/reachability.py's reachable_choice): in the example cell with a screen and no motion
+design/candidates/reachability.py's reachable_choice): in the example cell with a screen and no motion
 planner, the poses no straight free move joins to home, which an augment without the check
 chooses, are replaced; the home and the replacements are recorded and said."""
 import numpy as np
@@ -10,10 +10,10 @@ from doe_calib.collision import build_collision_model, check_segment
 from doe_calib.design import read_constraints
 from doe_calib.design.augment import augment_design
 from doe_calib.design.augment_result import AugmentResult
-from doe_calib.design.candidate_file import read_candidates
-from doe_calib.design.candidate_poses import feasible_candidates
-from doe_calib.design.feasibility import build_feasibility
-from doe_calib.design.reachability import NO_PATH, unreachable
+from doe_calib.design.candidates.from_file import read_candidates
+from doe_calib.design.candidates.draw import feasible_candidates
+from doe_calib.design.candidates.feasibility import build_feasibility
+from doe_calib.design.candidates.reachability import NO_PATH, unreachable
 from doe_calib.io.csv_files import write_design
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.simulate import random_configurations

@@ -6,7 +6,7 @@ import pytest
 
 from doe_calib import examples
 from doe_calib.design import LoadCase, read_constraints
-from doe_calib.design.feasibility import build_feasibility
+from doe_calib.design.candidates.feasibility import build_feasibility
 from doe_calib.design.optimal import optimal_design
 from doe_calib.errors import DataError
 from doe_calib.model.loads import GRAVITY

@@ -16,7 +16,7 @@ from doe_calib.design import (
 )
 from doe_calib.design.criteria import sensitivity
 from doe_calib.design.optimal import optimal_design
-from doe_calib.design.updates import added_values
+from doe_calib.design.solvers.updates import added_values
 from doe_calib.io.csv_files import write_design
 from doe_calib.model.simulate import random_configurations
 

@@ -6,7 +6,7 @@ import pytest
 
 from doe_calib.design import LoadCase, blocks_for, design_parameters, information, log_det, relax
 from doe_calib.design.optimal import optimal_design
-from doe_calib.design.symbolic import log_criterion, pose_information
+from doe_calib.design.solvers.symbolic import log_criterion, pose_information
 from doe_calib.model.simulate import random_configurations
 
 SIGMA = 2e-5

@@ -20,21 +20,21 @@ from typing import ClassVar
 import numpy as np
 
 from doe_calib.design.augment_result import AugmentResult, parameter_std
-from doe_calib.design.candidate_file import CandidatePoses
-from doe_calib.design.constraints import DesignConstraints
+from doe_calib.design.candidates.from_file import CandidatePoses
+from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.criteria import Criterion, DOptimal, log_det
-from doe_calib.design.discovery_candidates import (
+from doe_calib.design.discovery.variants import (
     approach_joints,
     free_parameters,
     observation_rows,
     variants,
     within_torque_limits,
 )
-from doe_calib.design.effect_detection import design_readings, detect_effects, detectability
-from doe_calib.design.load_directions import directed_loads
+from doe_calib.design.discovery.detection import design_readings, detect_effects, detectability
+from doe_calib.design.discovery.load_directions import directed_loads
 from doe_calib.design.problem import blocks_for, design_parameters, load_configurations
 from doe_calib.design.pipeline import Setting, run
-from doe_calib.design.updates import regularised
+from doe_calib.design.solvers.updates import regularised
 from doe_calib.errors import SolverError
 from doe_calib.estimation.effect_signature import grown_parameters
 from doe_calib.estimation.weighted_residuals import weighted_residual
@@ -140,7 +140,7 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     """K new poses (each unloaded and under every load) that add most to ``measured``.
 
     The approach side of every joint whose approach backlash is among the targets or
-    ``detect`` is chosen per pose, as in a discovery design (:mod:`.discovery_candidates`);
+    ``detect`` is chosen per pose, as in a discovery design (:mod:`.variants`);
     with ``directions`` each pose also picks the one load case it is measured under.
 
     Parameters
@@ -154,7 +154,7 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     loads : sequence of LoadCase
     candidates : int or CandidatePoses
         Random feasible candidates, or named poses (e.g. another session's
-        measured postures, :func:`.candidate_file.read_candidates`).
+        measured postures, :func:`.from_file.read_candidates`).
     sigma : float
         σ of the new readings per coordinate, m.
     criterion : {"D", "A", "E"} or Criterion
@@ -171,7 +171,7 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
         joined to the home pose by a free path, their tracker beams free, are chosen
         (:func:`.reachability.reachable_choice`).
     alpha, power : float
-        Of the detectability (:mod:`.effect_detection`).
+        Of the detectability (:mod:`.detection`).
     registry : EffectRegistry, optional
     directions : tuple of tuple, optional
         Unit force directions each load may pull along

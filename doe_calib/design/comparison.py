@@ -1,6 +1,6 @@
 """Side-by-side precision of designs and identification results.
 
-For each source — a design (:class:`~doe_calib.design.result.DesignResult`,
+For each source — a design (:class:`.result.DesignResult`,
 whose covariance is predicted as σ²(BᵀB)⁻¹ at its configurations) or an
 identification result (which carries its covariance) — the standard
 deviation of every parameter (display units: mm, deg, µrad/(N·m)) and,

@@ -12,9 +12,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.design.candidate_file import CandidatePoses
-from doe_calib.design.clearances import collision_note, pose_clearances
-from doe_calib.design.constraints import DesignConstraints
+from doe_calib.design.candidates.from_file import CandidatePoses
+from doe_calib.design.candidates.clearances import collision_note, pose_clearances
+from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.criteria import (
     AOptimal,
     Criterion,
@@ -24,9 +24,9 @@ from doe_calib.design.criteria import (
     check,
     log_det,
 )
-from doe_calib.design.exchange import exact_design
+from doe_calib.design.solvers.exchange import exact_design
 from doe_calib.design.pipeline import Setting, run
-from doe_calib.design.pose_refinement import refine as refine_poses
+from doe_calib.design.solvers.pose_refinement import refine as refine_poses
 from doe_calib.design.problem import (
     blocks_for,
     check_enough_poses,
@@ -34,8 +34,8 @@ from doe_calib.design.problem import (
     load_configurations,
     task_matrix,
 )
-from doe_calib.design.reachability import unreachable
-from doe_calib.design.relaxation import (
+from doe_calib.design.candidates.reachability import unreachable
+from doe_calib.design.solvers.relaxation import (
     equivalence_ratio,
     information,
     packed_information,
@@ -308,7 +308,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     loads : sequence of LoadCase
     candidates : int or CandidatePoses
         Feasible candidate poses, drawn uniformly inside the joint bounds; or
-        named poses (:func:`.candidate_file.read_candidates`: taught, known-safe
+        named poses (:func:`.from_file.read_candidates`: taught, known-safe
         or measured ones) screened by the same constraints, designed over as
         they are (no continuous refinement), the chosen ones keeping their names.
     sigma : float
@@ -347,7 +347,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
         (:func:`.reachability.free_home`); recorded in the result's
         ``constraints["reachability"]["home"]`` (deg, mm).
     discovery : DiscoveryGoal, optional
-        Design to discover effects (:mod:`.discovery`), D criterion only.
+        Design to discover effects (:mod:`.goal`), D criterion only.
     """
     if isinstance(criterion, TaskOptimal):
         raise OptionError("ask for the task criterion by name, criterion=\"task\", with task= "

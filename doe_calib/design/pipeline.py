@@ -8,7 +8,7 @@ between designs, each stage a method of it that takes the stage results before
 and returns its own:
 
 - :class:`.optimal.CriterionGoal`: the D, A, E or task criterion of N poses;
-- :class:`.discovery.DiscoveryGoal`: D subject to effects being detectable,
+- :class:`.goal.DiscoveryGoal`: D subject to effects being detectable,
   each pose choosing its load case and approach sides;
 - :class:`.augment.AugmentGoal`: the K poses that add most to a campaign.
 
@@ -28,10 +28,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.design.candidate_file import CandidatePoses, screened_candidates
-from doe_calib.design.candidate_poses import CandidateSet, feasible_candidates
-from doe_calib.design.feasibility import build_feasibility
-from doe_calib.design.reachability import (
+from doe_calib.design.candidates.from_file import CandidatePoses, screened_candidates
+from doe_calib.design.candidates.draw import CandidateSet, feasible_candidates
+from doe_calib.design.candidates.feasibility import build_feasibility
+from doe_calib.design.candidates.reachability import (
     free_home,
     home_pose,
     reachability_note,

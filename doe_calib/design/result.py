@@ -11,7 +11,6 @@ from doe_calib.errors import DataError
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.robot import Robot
-from doe_calib.model.skeleton import flange_poses
 from doe_calib.model.tool import Tool
 
 FORMAT = "doe_calib.design"
@@ -142,7 +141,7 @@ class DesignResult:
         flange : ndarray, shape (M, 3)
         markers : ndarray, shape (M, n, 3)
         """
-        rotation, translation = flange_poses(self.robot, self.configurations.q[
+        rotation, translation = self.robot.flange_poses(self.configurations.q[
             self.first_configurations()])
         markers = translation[:, None, :] + np.einsum("mij,nj->mni", rotation,
                                                       np.asarray(self.tool.positions, float))

@@ -26,7 +26,7 @@ class CandidateSet:
         violate several).
     names : tuple of str
         Pose id of each candidate when they come from a file
-        (:mod:`.candidate_file`); empty for random candidates.
+        (:mod:`.from_file`); empty for random candidates.
     source : str
         The file they come from ("" for random candidates).
     """

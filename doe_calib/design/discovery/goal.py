@@ -2,12 +2,12 @@
 listed effect being detectable at a given size.
 
 ``doe-calib design --criterion D --detect EFFECTS --min-power P --detect-size S``.
-Each candidate is a pose in one variant (:mod:`.discovery_candidates`):
+Each candidate is a pose in one variant (:mod:`.variants`):
 measured unloaded and under one allowed load case (``--load`` ×
 ``--load-directions``, :mod:`.load_directions`), with the approach side of
 every joint whose approach backlash is listed. Effect e is detectable at
 size S with power P (χ² score test at level α, the model's own parameters
-estimated too, :mod:`.effect_detection`) when the smallest eigenvalue of its
+estimated too, :mod:`.detection`) when the smallest eigenvalue of its
 projected information ``N_e = Z⊥ᵀZ⊥`` reaches ``λ*(P)/S²``. The method is a
 constrained exchange (:mod:`.constrained_exchange`), started from the
 unconstrained D-optimal choice among the same variants: first lower the
@@ -15,7 +15,7 @@ shortfall of the bounds, then raise log det M among the designs that meet
 them. An effect that no candidate (all of them together) reveals is left out
 of the bounds and said so; one that the n poses cannot reveal at S gets the
 best size reached. Each effect's ``min_detectable`` is then recomputed on the
-design (:func:`.effect_detection.with_detectability`).
+design (:func:`.detection.with_detectability`).
 """
 from __future__ import annotations
 
@@ -24,10 +24,11 @@ from typing import ClassVar
 
 import numpy as np
 
-from doe_calib.design.constrained_exchange import constrained_exchange, projected_information
+from doe_calib.design.solvers.constrained_exchange import (constrained_exchange,
+                                                          projected_information)
 from doe_calib.design.criteria import AOptimal, DOptimal, EOptimal, log_det
 from doe_calib.design.detectability import INVISIBLE
-from doe_calib.design.discovery_candidates import (
+from doe_calib.design.discovery.variants import (
     approach_joints,
     detection_target,
     effect_columns,
@@ -36,13 +37,13 @@ from doe_calib.design.discovery_candidates import (
     variants,
     within_torque_limits,
 )
-from doe_calib.design.clearances import pose_clearances
-from doe_calib.design.discovery_refinement import chosen_variants, refine_discovery
-from doe_calib.design.effect_detection import detect_effects, with_detectability
-from doe_calib.design.exchange import exact_design
-from doe_calib.design.load_directions import directed_loads, horizontal
+from doe_calib.design.candidates.clearances import pose_clearances
+from doe_calib.design.discovery.refinement import chosen_variants, refine_discovery
+from doe_calib.design.discovery.detection import detect_effects, with_detectability
+from doe_calib.design.solvers.exchange import exact_design
+from doe_calib.design.discovery.load_directions import directed_loads, horizontal
 from doe_calib.design.predicted_std import design_std
-from doe_calib.design.relaxation import information, relax
+from doe_calib.design.solvers.relaxation import information, relax
 from doe_calib.design.result import DesignResult
 from doe_calib.errors import OptionError, SolverError
 from doe_calib.io.measurements import Configurations
@@ -86,7 +87,7 @@ class DiscoveryGoal:
             raise OptionError(f"--alpha {self.alpha:g} and --min-power {self.power:g}: give "
                               f"0 < alpha < power < 1")
     #: Each candidate is judged with its own load case
-    #: (:func:`.discovery_candidates.within_torque_limits`).
+    #: (:func:`.variants.within_torque_limits`).
     own_load_case: ClassVar[bool] = True
 
     def information(self, setting, candidates, stage) -> DiscoveryInformation:
@@ -156,7 +157,7 @@ class DiscoveryGoal:
 
     def refinement(self, setting, candidates, info, choice, stage):
         """IPOPT on the chosen poses, each keeping its load case and approach sides, no
-        detection bound lost (:func:`.discovery_refinement.refine_discovery`)."""
+        detection bound lost (:func:`.refinement.refine_discovery`)."""
         stage("refinement", f"IPOPT on {setting.n_poses} poses, each keeping its load case")
         keep = list(info.keep)
         return refine_discovery(setting.model, info.params, _reached(info, choice),

@@ -8,14 +8,14 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.design.criteria import Criterion, DOptimal
-from doe_calib.design.outcome import DesignOutcome
-from doe_calib.design.relaxation import (
+from doe_calib.design.solvers.outcome import DesignOutcome
+from doe_calib.design.solvers.relaxation import (
     information,
     packed_information,
     packed_weights,
     traces,
 )
-from doe_calib.design.updates import added_values, best_added, regularised
+from doe_calib.design.solvers.updates import added_values, best_added, regularised
 from doe_calib.errors import SolverError
 from doe_calib.runtime.split import matvec
 

@@ -22,7 +22,7 @@ from functools import lru_cache
 import numpy as np
 
 from doe_calib.design.criteria import Criterion
-from doe_calib.design.outcome import DesignOutcome
+from doe_calib.design.solvers.outcome import DesignOutcome
 from doe_calib.errors import OptionError
 from doe_calib.runtime.split import matvec, run_parts, split_workers
 
