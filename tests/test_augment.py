@@ -56,9 +56,9 @@ def test_candidates_from_a_file_keep_their_ids_and_values(kr270, tmp_path):
     assert len(chosen) == 8 and set(chosen) <= set(names[3:])  # the 3 outside the margin go
     for pose, qc in zip(d.configurations.pose, d.configurations.q):
         assert np.allclose(qc, q[names.index(pose)], atol=1e-9)  # not refined
-    assert d.candidates["drawn"] == 120 and d.candidates["kept"] == 117
-    assert d.candidates["removed"]["joint limits (with margin)"] == 3
-    assert d.candidates["source"] == "taught.csv"
+    assert d.candidates.drawn == 120 and d.candidates.kept == 117
+    assert d.candidates.removed["joint limits (with margin)"] == 3
+    assert d.candidates.source == "taught.csv"
     # better than random subsets of the same file, by the information computed directly
     params = kr270.nominal().fixed(
         [n for n in kr270.nominal().names if n not in d.predicted_std], "fixed")
@@ -205,5 +205,5 @@ def test_design_candidates_from_the_command_line(kr270, tmp_path, capsys):
     d = DesignResult.from_json(out)
     chosen = set(d.configurations.pose)
     assert len(chosen) == 6 and chosen <= set(names[3:])
-    assert d.candidates["removed"]["joint limits (with margin)"] == 3
+    assert d.candidates.removed["joint limits (with margin)"] == 3
     assert set(read_candidates(out.with_suffix(".csv"), kr270.robot).names) == chosen

@@ -91,5 +91,5 @@ def test_design_command_writes_json_and_csv(tmp_path):
     assert np.allclose(loaded[:, 2], -250.0 * 9.80665)
     # an optimal design beats the median random design of its size, and the file keeps it
     vs = design.versus_random
-    assert vs["designs"] == 100 and 0 <= vs["singular_fraction"] < 0.5
-    assert vs["equivalent_poses"] >= 6
+    assert vs.designs == 100 and 0 <= vs.singular_fraction < 0.5
+    assert vs.equivalent_poses >= 6

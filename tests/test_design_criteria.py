@@ -122,9 +122,9 @@ def test_each_design_wins_on_its_own_criterion(model6, robot6):
         r = d[name]
         assert 0.9 < r.efficiency <= 1.0 and r.efficiencies[name] == r.efficiency
         assert 0 < r.efficiencies["D"] <= 1.0
-        assert r.equivalence["criterion"] == name
-        assert r.equivalence["relaxation"] / r.equivalence["target"] < 1.01
-        assert r.equivalence["design"] >= r.equivalence["target"] * (1 - 1e-9)
+        assert r.equivalence.criterion == name
+        assert r.equivalence.relaxation / r.equivalence.target < 1.01
+        assert r.equivalence.design >= r.equivalence.target * (1 - 1e-9)
         assert "equivalence theorem" in r.summary()
 
 

@@ -63,7 +63,7 @@ def test_a_discovery_design_keeps_every_pull_within_the_limit(kr270):
                          parse_directions("z,x"))
     d = optimal_design(model, 12, [LOAD], candidates=200, sigma=3e-5, refine=True,
                        constraints=constraints, rng=np.random.default_rng(3), discovery=goal)
-    assert d.candidates["removed"]["load torque (the variant's own load case)"] > 0
+    assert d.candidates.removed["load torque (the variant's own load case)"] > 0
     cfg = d.configurations
     tau = sim.joint_torques(chain, cfg.q, cfg.wrench)[:, 5]
     assert np.abs(tau).max() <= 150.0 * (1 + 1e-6)

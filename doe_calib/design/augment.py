@@ -351,7 +351,7 @@ class AugmentGoal:
             value_before=float(crit.value(info.m0)), value_after=float(crit.value(m1)),
             std_before=parameter_std(design_params, info.m0),
             std_after=parameter_std(design_params, m1), detect_before=detected[0],
-            detect_after=detected[1], candidates=cands.to_dict(),
+            detect_after=detected[1], candidates=cands.count(),
             measured_configurations=len(measured.configurations),
             sigma_mm=1000.0 * setting.sigma, robot=model.robot, model=model.spec,
             reachability=reach)

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from doe_calib.design.detectability import Detectability
+from doe_calib.design.result import CandidateCount
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.robot import Robot
@@ -48,7 +49,7 @@ class AugmentResult:
         too when there are targets. ``inf`` where not separable.
     detect_before, detect_after : tuple of Detectability
         Of the targets (or the effects asked for) in the campaign, and with the new poses.
-    candidates : dict
+    candidates : CandidateCount
         How many candidates were drawn or read, kept and removed by which constraint.
     measured_configurations : int
     sigma_mm : float
@@ -70,7 +71,7 @@ class AugmentResult:
     std_after: dict
     detect_before: tuple
     detect_after: tuple
-    candidates: dict
+    candidates: CandidateCount
     measured_configurations: int
     sigma_mm: float
     robot: Robot
@@ -85,10 +86,8 @@ class AugmentResult:
                  f"configurations ({aim})",
                  f"  criterion {self.criterion}: {self.value_before:.4g} → "
                  f"{self.value_after:.4g}",
-                 f"  candidates: {self.candidates.get('kept')} kept of "
-                 f"{self.candidates.get('drawn')}"
-                 + (f" from {self.candidates['source']}" if self.candidates.get("source")
-                    else ""),
+                 f"  candidates: {self.candidates.kept} kept of {self.candidates.drawn}"
+                 + (f" from {self.candidates.source}" if self.candidates.source else ""),
                  "  poses: " + ", ".join(dict.fromkeys(self.configurations.pose)),
                  *([f"  {self.reachability['note']}"] if self.reachability.get("note")
                    else []),
@@ -117,7 +116,7 @@ class AugmentResult:
                 "std_after": {n: [_num(s), u] for n, (s, u) in self.std_after.items()},
                 "detectability_before": [d.to_dict() for d in self.detect_before],
                 "detectability_after": [d.to_dict() for d in self.detect_after],
-                "candidates": self.candidates,
+                "candidates": self.candidates.to_dict(),
                 "measured_configurations": self.measured_configurations,
                 "sigma_mm": self.sigma_mm, "robot": self.robot.to_dict(),
                 "reachability": self.reachability,
@@ -144,7 +143,7 @@ class AugmentResult:
                    float(d["value_after"]), std["std_before"], std["std_after"],
                    tuple(Detectability.from_dict(r) for r in d["detectability_before"]),
                    tuple(Detectability.from_dict(r) for r in d["detectability_after"]),
-                   dict(d["candidates"]), int(d["measured_configurations"]),
+                   CandidateCount(**d["candidates"]), int(d["measured_configurations"]),
                    float(d["sigma_mm"]), robot, d["model"], dict(d.get("reachability", {})))
 
     @classmethod

@@ -43,7 +43,7 @@ from doe_calib.design.solvers.relaxation import (
     relax,
 )
 from doe_calib.design.predicted_std import design_std
-from doe_calib.design.result import DesignResult
+from doe_calib.design.result import Coverage, DesignResult, Equivalence, RandomDesigns
 from doe_calib.errors import OptionError, SolverError
 from doe_calib.io.setting_ranges import positive, whole
 
@@ -228,15 +228,11 @@ class CriterionGoal:
             criterion=crit.name, value=value, bound=limit, efficiency=efficiencies[crit.name],
             predicted_std=design_std(params, m), constraints=constraints, notes=notes,
             efficiencies=efficiencies, criteria={c.name: c.value(m) for c in reported},
-            equivalence={"criterion": crit.name, "statistic": crit.statistic,
-                         "target": target, "relaxation": target * bound.relaxed.ratio,
-                         "design": target * ratio, "design_efficiency_at_least": 1.0 / ratio},
-            candidates=cands.to_dict(),
-            refinement={} if refined is None else refined.outcome.to_dict(),
-            coverage=_coverage(setting, q),
-            versus_random={"designs": RANDOM_DESIGNS, "singular_fraction": singular,
-                           "equivalent_poses": None if equivalent is None
-                           else float(equivalent)},
+            equivalence=Equivalence(crit.name, crit.statistic, target,
+                                    target * bound.relaxed.ratio, target * ratio, 1.0 / ratio),
+            candidates=cands.count(), coverage=_coverage(setting, q),
+            versus_random=RandomDesigns(RANDOM_DESIGNS, singular,
+                                        None if equivalent is None else float(equivalent)),
             sigma_mm=1000.0 * setting.sigma, clearances=clearances, stages=stages)
 
 
@@ -281,14 +277,14 @@ def _constraints(setting, reach) -> dict:
     return used
 
 
-def _coverage(setting, q) -> dict:
-    """Bins of the coverage joint used by the poses (empty without a coverage constraint)."""
+def _coverage(setting, q) -> Coverage | None:
+    """Bins of the coverage joint used by the poses (None without a coverage constraint)."""
     cov = setting.constraints.coverage
     if cov is None:
-        return {}
+        return None
     used = cov.used(q)
-    return {"joint": setting.model.robot.joints[cov.joint].name, "bins_used": used,
-            "min_bins": cov.min_bins, "met": len(used) >= cov.min_bins}
+    return Coverage(setting.model.robot.joints[cov.joint].name, used, cov.min_bins,
+                    len(used) >= cov.min_bins)
 
 
 def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePoses = 20000,

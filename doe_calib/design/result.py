@@ -1,7 +1,7 @@
 """A design: chosen poses with their load cases, what they promise, and its JSON form."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -14,6 +14,73 @@ from doe_calib.model.robot import Robot
 from doe_calib.model.tool import Tool
 
 FORMAT = "doe_calib.design"
+
+
+@dataclass(frozen=True)
+class CandidateCount:
+    """The candidate poses: how many were drawn (or read), kept, and removed by which
+    constraint (a pose may violate several: the counts overlap); ``source`` the file they
+    were read from, ``variants`` the candidates of a discovery design (pose × load case ×
+    approach sides)."""
+
+    drawn: int
+    kept: int
+    removed: dict
+    note: str = "removed counts overlap: a pose may violate several constraints"
+    source: str = ""
+    variants: int | None = None
+
+    def to_dict(self) -> dict:
+        return {k: v for k, v in asdict(self).items()
+                if not (k == "source" and not v or k == "variants" and v is None)}
+
+
+@dataclass(frozen=True)
+class Equivalence:
+    """The equivalence-theorem check of the criterion ``criterion``: its ``statistic``, the
+    ``target`` it reaches at the approximate optimum, its value at the ``relaxation``
+    (certifies the bound) and at the ``design``, and the design's efficiency against the
+    approximate optimum it guarantees."""
+
+    criterion: str
+    statistic: str
+    target: float
+    relaxation: float
+    design: float
+    design_efficiency_at_least: float
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """The bins of ``joint`` the poses use and how many were asked for."""
+
+    joint: str
+    bins_used: list
+    min_bins: int
+    met: bool
+
+
+@dataclass(frozen=True)
+class RandomDesigns:
+    """The design against ``designs`` random designs of its size drawn from the candidates:
+    the share of them that cannot identify every parameter, and how many random poses are as
+    precise (D criterion, against their median; None when that median is singular)."""
+
+    designs: int
+    singular_fraction: float
+    equivalent_poses: float | None
+
+
+def _typed(cls, d):
+    """``cls(**d)`` of a design file's section, None for an empty or missing one."""
+    return cls(**d) if d else None
+
+
+def _plain(x):
+    """A typed section as the design file writes it (an empty dict when absent)."""
+    if x is None:
+        return {}
+    return x.to_dict() if hasattr(x, "to_dict") else asdict(x)
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,21 +116,11 @@ class DesignResult:
         (the design's criterion, and D).
     criteria : dict
         Criterion → value of the design (D, A, E, and task when given).
-    equivalence : dict
-        The equivalence-theorem check: the statistic, its target, its value
-        at the relaxation (certifies the bound) and at the design.
-    candidates : dict
-        Poses drawn, kept, and removed by each constraint.
-    refinement : dict
-        The continuous refinement's outcome (empty when not run).
-    coverage : dict
-        Bins used by the poses and how many were asked for (empty when none).
-    versus_random : dict
-        ``designs`` (random designs of the same size drawn from the feasible
-        candidates), ``singular_fraction`` (share of them that cannot identify
-        every parameter) and ``equivalent_poses`` (how many random poses are as
-        precise, D criterion, against their median; None when that median is
-        singular).
+    equivalence : Equivalence or None
+    candidates : CandidateCount or None
+    coverage : Coverage or None
+        None without a coverage constraint.
+    versus_random : RandomDesigns or None
     sigma_mm : float or None
         The tracker σ per coordinate (mm) the predicted std are for (None in
         design files written before it was stored).
@@ -73,8 +130,9 @@ class DesignResult:
         checked.
     stages : dict
         Each solver's outcome (:meth:`.outcome.DesignOutcome.to_dict`) by stage:
-        ``relaxation``, ``exchange`` and, when run, ``refinement`` (empty in
-        design files written before it was stored).
+        ``relaxation``, ``exchange`` and, when run, ``refinement`` (in design files
+        written before the stages were stored, the refinement alone); a discovery
+        design's ``discovery`` or ``load_choice``.
 
     Examples
     --------
@@ -96,15 +154,19 @@ class DesignResult:
     notes: tuple = field(default=())
     efficiencies: dict = field(default_factory=dict)
     criteria: dict = field(default_factory=dict)
-    equivalence: dict = field(default_factory=dict)
-    candidates: dict = field(default_factory=dict)
-    refinement: dict = field(default_factory=dict)
-    coverage: dict = field(default_factory=dict)
-    versus_random: dict = field(default_factory=dict)
+    equivalence: Equivalence | None = None
+    candidates: CandidateCount | None = None
+    coverage: Coverage | None = None
+    versus_random: RandomDesigns | None = None
     sigma_mm: float | None = None
     clearances: tuple = ()
     stages: dict = field(default_factory=dict)
     detectability: tuple = ()
+
+    @property
+    def refinement(self) -> dict:
+        """The continuous refinement's outcome, ``stages["refinement"]`` (empty when not run)."""
+        return self.stages.get("refinement", {})
 
     @property
     def std(self) -> StdMapping:
@@ -186,14 +248,14 @@ class DesignResult:
             lines.append("criteria: " + ", ".join(f"{k} {v:.6g}" for k, v in self.criteria.items()))
         if self.equivalence:
             e = self.equivalence
-            lines.append(f"equivalence theorem: {e['statistic']} = {e['relaxation']:.4g} at the "
-                         f"relaxation, {e['design']:.4g} at the design (target {e['target']:g}; "
+            lines.append(f"equivalence theorem: {e.statistic} = {e.relaxation:.4g} at the "
+                         f"relaxation, {e.design:.4g} at the design (target {e.target:g}; "
                          f"design efficiency against the approximate optimum ≥ "
-                         f"{e['design_efficiency_at_least']:.3f})")
+                         f"{e.design_efficiency_at_least:.3f})")
         if self.candidates:
             c = self.candidates
-            lines.append(f"candidates: {c['kept']} kept of {c['drawn']} drawn" + "".join(
-                f"; {k} removed {v}" for k, v in c["removed"].items()))
+            lines.append(f"candidates: {c.kept} kept of {c.drawn} drawn" + "".join(
+                f"; {k} removed {v}" for k, v in c.removed.items()))
         if self.refinement:
             r = self.refinement
             lines.append(f"refinement: {'kept' if r['accepted'] else 'not kept'}, "
@@ -201,8 +263,8 @@ class DesignResult:
                          f"IPOPT iterations ({r['status']})")
         if self.coverage:
             c = self.coverage
-            lines.append(f"coverage of joint {c['joint']}: bins {c['bins_used']} used, "
-                         f"{c['min_bins']} required: {'met' if c['met'] else 'NOT met'}")
+            lines.append(f"coverage of joint {c.joint}: bins {c.bins_used} used, "
+                         f"{c.min_bins} required: {'met' if c.met else 'NOT met'}")
         if self.clearances:
             mm, pair = min(self.clearances)
             lines.append(f"clearance: every pose keeps ≥ {mm:.1f} mm ({pair} the closest)")
@@ -223,9 +285,9 @@ class DesignResult:
                                   for n, (s, u) in self.predicted_std.items()],
                 "constraints": self.constraints, "notes": list(self.notes),
                 "efficiencies": self.efficiencies, "criteria": self.criteria,
-                "equivalence": self.equivalence, "candidates": self.candidates,
-                "refinement": self.refinement, "coverage": self.coverage,
-                "versus_random": self.versus_random, "sigma_mm": self.sigma_mm,
+                "equivalence": _plain(self.equivalence), "candidates": _plain(self.candidates),
+                "refinement": self.refinement, "coverage": _plain(self.coverage),
+                "versus_random": _plain(self.versus_random), "sigma_mm": self.sigma_mm,
                 "stages": self.stages,
                 "detectability": [d.to_dict() for d in self.detectability],
                 "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
@@ -243,19 +305,24 @@ class DesignResult:
                                          np.array([r[2] for r in rows]),
                                          pose=[r[0] for r in rows],
                                          approach=np.array([r[3] for r in rows], float))
-        return cls(robot, Tool.from_dict(d["tool"]), d["model"], cfg, d["criterion"],
-                   float(d["value"]), float(d["bound"]), float(d["efficiency"]),
-                   {r["name"]: (r["std"], r["unit"]) for r in d["predicted_std"]},
-                   d.get("constraints", {}), tuple(d.get("notes", ())),
-                   *(d.get(k, {}) for k in ("efficiencies", "criteria", "equivalence",
-                                            "candidates", "refinement", "coverage",
-                                            "versus_random")),
+        stages = d.get("stages") or {}
+        if d.get("refinement") and "refinement" not in stages:
+            stages = {**stages, "refinement": d["refinement"]}
+        return cls(robot=robot, tool=Tool.from_dict(d["tool"]), model=d["model"],
+                   configurations=cfg, criterion=d["criterion"], value=float(d["value"]),
+                   bound=float(d["bound"]), efficiency=float(d["efficiency"]),
+                   predicted_std={r["name"]: (r["std"], r["unit"]) for r in d["predicted_std"]},
+                   constraints=d.get("constraints", {}), notes=tuple(d.get("notes", ())),
+                   efficiencies=d.get("efficiencies", {}), criteria=d.get("criteria", {}),
+                   equivalence=_typed(Equivalence, d.get("equivalence")),
+                   candidates=_typed(CandidateCount, d.get("candidates")),
+                   coverage=_typed(Coverage, d.get("coverage")),
+                   versus_random=_typed(RandomDesigns, d.get("versus_random")),
                    sigma_mm=None if d.get("sigma_mm") is None else float(d["sigma_mm"]),
                    clearances=tuple((float(p["clearance_mm"]), p["clearance_pair"])
                                     for p in d["poses"] if "clearance_mm" in p),
-                   stages=d.get("stages", {}),
-                   detectability=tuple(Detectability.from_dict(r)
-                                       for r in d.get("detectability", ())))
+                   stages=stages, detectability=tuple(Detectability.from_dict(r)
+                                                      for r in d.get("detectability", ())))
 
     @classmethod
     def from_json(cls, path) -> "DesignResult":

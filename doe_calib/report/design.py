@@ -1,6 +1,8 @@
 """The design report: chosen poses, where they put the markers, what they promise, as HTML."""
 from __future__ import annotations
 
+from dataclasses import asdict
+
 import numpy as np
 
 from doe_calib.report import figures
@@ -124,9 +126,9 @@ def design_sections(design, dpi: int = 90) -> list:
     met = [table(["constraint", "value"], flatten(design.constraints))]
     if design.candidates:
         met += ["Candidate poses drawn and removed by each constraint:",
-                table(["candidates", "value"], flatten(design.candidates))]
+                table(["candidates", "value"], flatten(design.candidates.to_dict()))]
     if design.coverage:
-        met.append(table(["coverage", "value"], flatten(design.coverage)))
+        met.append(table(["coverage", "value"], flatten(asdict(design.coverage))))
     sections.append(section("Constraints met", *met))
     sections += [efficiency_section(design), std_section(design, dpi)]
     if design.detectability:
@@ -145,7 +147,7 @@ def efficiency_section(design):
     if design.equivalence:
         blocks += ["Equivalence-theorem check (the statistic is at most its target at the "
                    "approximate optimum):", table(["equivalence", "value"],
-                                                  flatten(design.equivalence))]
+                                                  flatten(asdict(design.equivalence)))]
     if design.refinement:
         blocks.append(table(["refinement", "value"], flatten(design.refinement)))
     return section("Efficiency against the bound", *blocks)

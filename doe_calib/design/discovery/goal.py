@@ -44,7 +44,7 @@ from doe_calib.design.solvers.exchange import exact_design
 from doe_calib.design.discovery.load_directions import directed_loads, horizontal
 from doe_calib.design.predicted_std import design_std
 from doe_calib.design.solvers.relaxation import information, relax
-from doe_calib.design.result import DesignResult
+from doe_calib.design.result import CandidateCount, DesignResult
 from doe_calib.errors import OptionError, SolverError
 from doe_calib.io.measurements import Configurations
 
@@ -102,12 +102,12 @@ class DiscoveryGoal:
         cases = directed_loads(setting.loads, self.directions)
         cand = variants(q, cases, approach_joints(model, effects), model.robot.n_joints)
         within = within_torque_limits(model, params.values, setting.constraints, cand)
-        drawn = candidates.poses.to_dict()
+        drawn = candidates.poses.count()
         if not within.all():
             cand = cand.subset(within)
-            removed = {**drawn.get("removed", {}),
-                       "load torque (the variant's own load case)": int((~within).sum())}
-            drawn = {**drawn, "removed": removed}
+            drawn = replace(drawn, removed={
+                **drawn.removed,
+                "load torque (the variant's own load case)": int((~within).sum())})
         stage("information", f"{len(cand)} candidates ({len(q)} poses × {max(len(cases), 1)} "
                              f"load case(s) × {2 ** len(cand.approach_joints)} approach "
                              f"side(s))")
@@ -203,8 +203,7 @@ class DiscoveryGoal:
             criterion="D", value=value, bound=limit, efficiency=d_eff,
             predicted_std=design_std(params, m), constraints=used, efficiencies={"D": d_eff},
             criteria={c.name: c.value(m) for c in (DOptimal(), AOptimal(), EOptimal())},
-            candidates={**info.candidates, "variants": len(cand)},
-            refinement={} if refined is None else refined.to_dict(),
+            candidates=replace(info.candidates, variants=len(cand)),
             sigma_mm=1000.0 * setting.sigma, stages=stages)
         if choice.reachability is not None:
             result = _with_reachability(result, model, setting.collision, cfg,
@@ -240,7 +239,7 @@ class DiscoveryInformation:
         Whether all candidates together reveal each effect.
     keep : tuple of int
         The effects bounded (revealable, a size given).
-    candidates : dict
+    candidates : CandidateCount
         Poses drawn and removed, the variants' load torques among the reasons.
     q : ndarray, shape (P, N)
         The candidate poses, rad (m).
@@ -256,7 +255,7 @@ class DiscoveryInformation:
     targets: np.ndarray
     reach: tuple
     keep: tuple
-    candidates: dict
+    candidates: CandidateCount
     q: np.ndarray
     pose_of: np.ndarray
 
