@@ -20,26 +20,19 @@ from typing import ClassVar
 import numpy as np
 
 from doe_calib.design.augment_result import AugmentResult, parameter_std
-from doe_calib.design.candidates.from_file import CandidatePoses
-from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.criteria import Criterion, DOptimal, log_det
-from doe_calib.design.discovery.variants import (
-    approach_joints,
-    free_parameters,
-    observation_rows,
-    variants,
-    within_torque_limits,
-)
 from doe_calib.design.discovery.detection import design_readings, detect_effects, detectability
 from doe_calib.design.discovery.load_directions import directed_loads
+from doe_calib.design.discovery.variants import (approach_joints, free_parameters,
+                                                 observation_rows, variants, within_torque_limits)
+from doe_calib.design.pipeline import Goal, Setting, run
 from doe_calib.design.problem import blocks_for, design_parameters, load_configurations
-from doe_calib.design.pipeline import Setting, run
 from doe_calib.design.solvers.updates import regularised
 from doe_calib.errors import SolverError
 from doe_calib.estimation.effect_signature import grown_parameters
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.io.measurements import concatenate
-from doe_calib.io.setting_ranges import level_and_power, positive, whole
+from doe_calib.io.setting_ranges import level_and_power
 from doe_calib.model.marker_model import build_model
 
 #: Targets taken from a diagnosis: its top candidate and its confounded ones, at most this many.
@@ -183,17 +176,9 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     -------
     AugmentResult
     """
-    whole("n_poses", n_poses, 1, "new pose")
-    positive("sigma", sigma, "m")
-    if not isinstance(candidates, CandidatePoses):
-        whole("candidates", candidates, 1)
     level_and_power(alpha, power)
-    setting = Setting(model, model.nominal() if params is None else params, n_poses,
-                      tuple(loads), sigma,
-                      DesignConstraints.from_robot(model.robot) if constraints is None
-                      else constraints, collision,
-                      None if home is None else np.asarray(home, float),
-                      np.random.default_rng() if rng is None else rng, refine=False)
+    setting = Setting.checked(model, n_poses, loads, candidates, sigma, constraints, collision,
+                              home, rng, False, params, "new pose")
     goal = AugmentGoal(measured, Criterion.from_name(criterion), tuple(targets), detect, alpha,
                        power, registry, directions)
     return run(goal, setting, candidates)
@@ -201,28 +186,12 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
 
 @dataclass(frozen=True, eq=False)
 class AugmentInformation:
-    """The information stage of an augmentation.
-
-    Attributes
-    ----------
-    params : ParameterSet
-        The model's parameters, what the candidates cannot identify fixed.
-    design_model, design_params :
-        The model (with the targets' effects when there are targets) and the parameters
-        the information is of.
-    criterion : Criterion
-        The goal's, or :class:`Separation` of the targets.
-    effects : list of Effect
-        Whose detectability is reported before and after.
-    cand : Variants or None
-        The variants of the candidates (approach sides, load case), or None.
-    m0 : ndarray, shape (p, p)
-        The measured campaign's information.
-    blocks : ndarray, shape (K, r, p)
-    q : ndarray, shape (P, N)
-        The candidate poses, rad (m).
-    pose_of : ndarray of int, shape (K,)
-    """
+    """The information stage of an augmentation: the model's parameters (what the candidates
+    cannot identify fixed); the model and parameters the information is of (with the
+    targets' effects when there are targets) and its criterion (or :class:`Separation`); the
+    effects whose detectability is reported; the variants of the candidates (approach sides,
+    load case) or None; the campaign's information ``m0`` (p, p), the candidates' ``blocks``
+    (K, r, p), the candidate poses ``q`` (P, N), rad (m), and the pose of each candidate."""
 
     params: object
     design_model: object
@@ -244,7 +213,7 @@ class Added:
 
 
 @dataclass(frozen=True, eq=False)
-class AugmentGoal:
+class AugmentGoal(Goal):
     """The K poses that add most to a measured campaign (the settings of
     :func:`augment_design`)."""
 
@@ -307,19 +276,10 @@ class AugmentGoal:
         return AugmentInformation(params, design_model, design_params, crit, effects, cand, m0,
                                   blocks, q, pose_of)
 
-    def relaxation(self, setting, info, stage):
-        return None
-
     def exchange(self, setting, info, relaxed, allowed, stage) -> Added:
         sub = np.flatnonzero(allowed[info.pose_of])
         return Added(sub[exchange_from(info.m0, info.blocks[sub], setting.n_poses,
                                        info.criterion, pose_of=info.pose_of[sub])])
-
-    def refinement(self, setting, candidates, info, choice, stage):
-        return None
-
-    def bound(self, setting, info, relaxed, refined, stage):
-        return None
 
     def assessment(self, setting, candidates, info, relaxed, choice, refined, bound,
                    stage) -> AugmentResult:

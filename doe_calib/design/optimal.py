@@ -12,40 +12,20 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.design.candidates.from_file import CandidatePoses
 from doe_calib.design.candidates.clearances import collision_note, pose_clearances
-from doe_calib.design.candidates.constraints import DesignConstraints
-from doe_calib.design.criteria import (
-    AOptimal,
-    Criterion,
-    DOptimal,
-    EOptimal,
-    TaskOptimal,
-    check,
-    log_det,
-)
-from doe_calib.design.solvers.exchange import exact_design
-from doe_calib.design.pipeline import Setting, run
-from doe_calib.design.solvers.pose_refinement import refine as refine_poses
-from doe_calib.design.problem import (
-    blocks_for,
-    check_enough_poses,
-    design_parameters,
-    load_configurations,
-    task_matrix,
-)
 from doe_calib.design.candidates.reachability import unreachable
-from doe_calib.design.solvers.relaxation import (
-    equivalence_ratio,
-    information,
-    packed_information,
-    packed_size,
-    relax,
-)
+from doe_calib.design.criteria import (AOptimal, Criterion, DOptimal, EOptimal, TaskOptimal,
+                                       check, log_det)
+from doe_calib.design.pipeline import Goal, Setting, run
 from doe_calib.design.predicted_std import design_std
+from doe_calib.design.problem import (blocks_for, check_enough_poses, design_parameters,
+                                      load_configurations, task_matrix)
 from doe_calib.design.result import Coverage, DesignResult, Equivalence, RandomDesigns
+from doe_calib.design.solvers.exchange import exact_design
+from doe_calib.design.solvers.pose_refinement import refine as refine_poses
+from doe_calib.design.solvers.relaxation import (equivalence_ratio, information,
+                                                 packed_information, packed_size, relax)
 from doe_calib.errors import OptionError, SolverError
-from doe_calib.io.setting_ranges import positive, whole
 
 #: Random designs of the same size the design is compared with.
 RANDOM_DESIGNS = 100
@@ -53,27 +33,12 @@ RANDOM_DESIGNS = 100
 
 @dataclass(frozen=True, eq=False)
 class CriterionInformation:
-    """The information stage of a criterion design.
-
-    Attributes
-    ----------
-    params : ParameterSet
-        The parameters designed for (those no candidate identifies fixed).
-    criterion : Criterion
-    task : ndarray or None
-        The task matrix T of the task criterion.
-    blocks : ndarray, shape (K, r, p)
-        Each candidate's scaled, weighted observation rows.
-    packed : ndarray, shape (K, p(p+1)/2)
-        Each candidate's information, packed (:func:`.relaxation.packed_information`):
-        every sweep over the candidates reads it.
-    room : ndarray
-        ``packed`` with room for the refined poses' rows after it, so that the bound's
-        relaxation over candidates and refined poses copies none of it.
-    q : ndarray, shape (K, N)
-        The candidate poses, rad (m).
-    pose_of : ndarray of int, shape (K,)
-    """
+    """The information stage of a criterion design: the parameters designed for (those no
+    candidate identifies fixed), the criterion, the task matrix T (or None), each
+    candidate's scaled, weighted rows ``blocks`` (K, r, p) and its information ``packed``
+    (:func:`.relaxation.packed_information`: every sweep over the candidates reads it),
+    kept at the start of ``room``, which holds the refined poses' rows after it so that the
+    bound's relaxation copies none of it; the candidate poses ``q`` (K, N), rad (m)."""
 
     params: object
     criterion: Criterion
@@ -87,11 +52,8 @@ class CriterionInformation:
 
 @dataclass(frozen=True, eq=False)
 class Refined:
-    """The refinement stage: IPOPT's outcome and the poses kept.
-
-    ``q`` (n, N), rad (m): the refined poses, those unreachable from home back at their
-    candidate (``reverted`` of them).
-    """
+    """The refinement stage: IPOPT's outcome and the poses kept, rad (m), those unreachable
+    from home back at their candidate (``reverted`` of them)."""
 
     outcome: object
     q: np.ndarray
@@ -100,8 +62,8 @@ class Refined:
 
 @dataclass(frozen=True, eq=False)
 class Bound:
-    """The bound stage: the relaxation that certifies the bound, over the information it
-    read (``packed``), and the design's blocks when they were computed for it."""
+    """The bound stage: the relaxation that certifies the bound, the information it read
+    (``packed``), and the design's blocks when they were computed for it."""
 
     relaxed: object
     packed: np.ndarray
@@ -109,14 +71,12 @@ class Bound:
 
 
 @dataclass(frozen=True)
-class CriterionGoal:
+class CriterionGoal(Goal):
     """Maximise a criterion of the N poses' information (D, A, E or task)."""
 
     criterion: object = "D"
     task: object = None
     task_point: tuple = (0.0, 0.0, 0.0)
-    #: The candidates are judged with every load case.
-    own_load_case = False
 
     def information(self, setting, candidates, stage) -> CriterionInformation:
         model, n_poses, loads = setting.model, setting.n_poses, setting.loads
@@ -349,18 +309,10 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
         raise OptionError("ask for the task criterion by name, criterion=\"task\", with task= "
                           "poses: its matrix depends on the parameters designed for")
     check(criterion, task)
-    whole("n_poses", n_poses, 1, "pose")
-    positive("sigma", sigma, "m")
-    if not isinstance(candidates, CandidatePoses):
-        whole("candidates", candidates, 1)
     if discovery is not None and criterion != "D":
         raise OptionError(f"--detect-size and --load-directions designs maximise the D "
                           f"criterion; got --criterion {criterion}")
-    setting = Setting(model, model.nominal() if params is None else params, n_poses,
-                      tuple(loads), sigma,
-                      DesignConstraints.from_robot(model.robot) if constraints is None
-                      else constraints, collision,
-                      None if home is None else np.asarray(home, float),
-                      np.random.default_rng() if rng is None else rng, refine)
+    setting = Setting.checked(model, n_poses, loads, candidates, sigma, constraints, collision,
+                              home, rng, refine, params)
     goal = CriterionGoal(criterion, task, task_point) if discovery is None else discovery
     return run(goal, setting, candidates, progress)

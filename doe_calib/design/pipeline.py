@@ -1,24 +1,14 @@
 """One design pipeline, seven stages, and the goals that plug into it.
 
 candidates → information → relaxation → exchange (poses a program can reach) →
-refinement → bound → assessment. The pipeline (:func:`run`) owns the order,
-the candidates (:func:`draw_candidates`), the reachability of the chosen poses
-(:func:`reachable_exchange`) and the progress; a goal owns what differs
-between designs, each stage a method of it that takes the stage results before
-and returns its own:
-
-- :class:`.optimal.CriterionGoal`: the D, A, E or task criterion of N poses;
-- :class:`.goal.DiscoveryGoal`: D subject to effects being detectable,
-  each pose choosing its load case and approach sides;
-- :class:`.augment.AugmentGoal`: the K poses that add most to a campaign.
-
-A goal implements ``information(setting, candidates, stage)``,
-``relaxation(setting, information, stage)``,
-``exchange(setting, information, relaxed, allowed, stage)``,
-``refinement(setting, candidates, information, choice, stage)``,
-``bound(setting, information, relaxed, refined, stage)`` and
-``assessment(setting, candidates, information, relaxed, choice, refined, bound, stage)``;
-a stage a goal does not have returns None (the augmentation relaxes nothing).
+refinement → bound → assessment. :func:`run` owns the order, the candidates
+(:func:`draw_candidates`), the reachability of the chosen poses
+(:func:`reachable_exchange`) and the progress; a :class:`Goal` owns what
+differs between designs, each stage a method that takes the stage results
+before it and returns its own: :class:`.optimal.CriterionGoal` (the D, A, E
+or task criterion), :class:`.discovery.goal.DiscoveryGoal` (D with effects
+detectable, each pose choosing its load case and approach sides) and
+:class:`.augment.AugmentGoal` (the poses that add most to a campaign).
 """
 from __future__ import annotations
 
@@ -28,15 +18,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.design.candidates.from_file import CandidatePoses, screened_candidates
+from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.candidates.draw import CandidateSet, feasible_candidates
 from doe_calib.design.candidates.feasibility import build_feasibility
-from doe_calib.design.candidates.reachability import (
-    free_home,
-    home_pose,
-    reachability_note,
-    reachable_choice,
-)
+from doe_calib.design.candidates.from_file import CandidatePoses, screened_candidates
+from doe_calib.design.candidates.reachability import (free_home, home_pose, reachability_note,
+                                                      reachable_choice)
+from doe_calib.io.setting_ranges import positive, whole
 
 log = logging.getLogger(__name__)
 
@@ -47,26 +35,10 @@ STAGES = ("candidates", "information", "relaxation", "exchange", "refinement", "
 
 @dataclass(frozen=True, eq=False)
 class Setting:
-    """What every goal designs with.
-
-    Attributes
-    ----------
-    model : Model
-    params : ParameterSet
-        Expected values (SI); the goal fixes what its candidates cannot identify.
-    n_poses : int
-        Poses to choose.
-    loads : tuple of LoadCase
-    sigma : float
-        Tracker σ per coordinate, m.
-    constraints : DesignConstraints
-    collision : CollisionModel or None
-    home : ndarray, shape (N,), or None
-        The home pose asked for, rad (m); None: the URDF zero clipped inside the bounds.
-    rng : numpy.random.Generator
-    refine : bool
-        Run the continuous refinement (only over random candidates).
-    """
+    """What every goal designs with: the model and its expected values ``params`` (SI),
+    ``n_poses`` to choose, the load cases, the tracker σ per coordinate (m), the
+    constraints, the collision model (or None), the home pose asked for (rad, m; None: the
+    URDF zero clipped inside the bounds), the random generator and whether to refine."""
 
     model: object
     params: object
@@ -79,18 +51,26 @@ class Setting:
     rng: object = None
     refine: bool = True
 
+    @classmethod
+    def checked(cls, model, n_poses, loads, candidates, sigma, constraints=None,
+                collision=None, home=None, rng=None, refine=True, params=None,
+                pose: str = "pose") -> "Setting":
+        """The setting of a design asked for, its numbers checked and its defaults filled:
+        nominal values, the URDF joint limits with their margin, a fresh generator."""
+        whole("n_poses", n_poses, 1, pose)
+        positive("sigma", sigma, "m")
+        if not isinstance(candidates, CandidatePoses):
+            whole("candidates", candidates, 1)
+        return cls(model, model.nominal() if params is None else params, n_poses, tuple(loads),
+                   sigma, DesignConstraints.from_robot(model.robot) if constraints is None
+                   else constraints, collision, None if home is None else np.asarray(home, float),
+                   np.random.default_rng() if rng is None else rng, refine)
+
 
 @dataclass(frozen=True, eq=False)
 class Candidates:
-    """The candidates stage: the pose constraints and the feasible poses.
-
-    Attributes
-    ----------
-    feasibility : Feasibility
-        The pose constraints (:func:`.feasibility.build_feasibility`).
-    poses : CandidateSet
-    refinable : bool
-        False for poses read from a file: designed over as they are.
+    """The candidates stage: the pose constraints (:mod:`.feasibility`), the feasible poses,
+    and whether they may be refined (not poses read from a file: designed over as they are).
     """
 
     feasibility: object
@@ -100,19 +80,9 @@ class Candidates:
 
 @dataclass(frozen=True)
 class Reachability:
-    """How the chosen poses were kept reachable from the home pose.
-
-    Attributes
-    ----------
-    home : ndarray, shape (N,)
-        The home pose, rad (m).
-    replaced : dict
-        Reason → chosen poses replaced from the candidates for it.
-    reverted : int
-        Refined poses kept at their candidate (their refined angles unreachable).
-    moved : str
-        Why the home pose is not the one asked for ("" when it is).
-    """
+    """How the chosen poses were kept reachable from the ``home`` pose (rad, m): chosen poses
+    ``replaced`` (reason → count), refined ones ``reverted`` to their candidate, and why the
+    home pose ``moved`` from the one asked for ("" when it did not)."""
 
     home: np.ndarray
     replaced: dict
@@ -131,24 +101,37 @@ class Reachability:
 
 @dataclass(frozen=True, eq=False)
 class Choice:
-    """The exchange stage: the chosen candidates, reachable from home.
-
-    Attributes
-    ----------
-    made : object
-        The goal's exchange of the last round (its outcome, with ``indices``).
-    chosen : ndarray of int, shape (n,)
-        The chosen candidates.
-    q : ndarray, shape (P, N)
-        The candidate poses, each checked one at the angles it is reached at, rad (m).
-    reachability : Reachability or None
-        None without a collision model.
+    """The exchange stage: the goal's last exchange (``made``, with its ``indices``), the
+    ``chosen`` candidates, the candidate poses ``q`` (P, N), each checked one at the angles
+    it is reached at (rad, m), and the :class:`Reachability` (None without a collision model).
     """
 
     made: object
     chosen: np.ndarray
     q: np.ndarray
     reachability: Reachability | None
+
+
+class Goal:
+    """What a design maximises, one method per stage; a stage it lacks returns None.
+
+    ``information(setting, candidates, stage)`` holds ``q`` (the candidate poses) and
+    ``pose_of`` (the pose of each candidate it chooses among);
+    ``exchange(setting, information, relaxed, allowed, stage)`` chooses among the candidates
+    whose pose is ``allowed``; ``assessment(...)`` returns the result.
+    """
+
+    #: Each candidate is judged with its own load case (the goal chooses one per pose).
+    own_load_case = False
+
+    def relaxation(self, setting, information, stage):
+        return None
+
+    def refinement(self, setting, candidates, information, choice, stage):
+        return None
+
+    def bound(self, setting, information, relaxed, refined, stage):
+        return None
 
 
 class Stages:
@@ -227,20 +210,12 @@ def reachable_exchange(exchange, q, pose_of, setting: Setting) -> Choice:
     return Choice(made[-1], np.asarray(chosen), used, Reachability(start, replaced, 0, moved))
 
 
-def run(goal, setting: Setting, candidates, progress=None):
+def run(goal: Goal, setting: Setting, candidates, progress=None):
     """The design of ``goal``: every stage in order, each given the results before it.
 
-    Parameters
-    ----------
-    goal : CriterionGoal, DiscoveryGoal or AugmentGoal
-    setting : Setting
-    candidates : int or CandidatePoses
-        Random feasible candidates to draw, or poses read from a file.
-    progress : callable(done, total, note), optional
-
-    Returns
-    -------
-    The goal's result (:class:`.result.DesignResult`, :class:`.augment_result.AugmentResult`).
+    ``candidates``: random feasible candidates to draw, or the poses of a file
+    (:class:`.from_file.CandidatePoses`); ``progress(done, total, note)``, optional. Returns
+    the goal's result (:class:`.result.DesignResult`, :class:`.augment_result.AugmentResult`).
     """
     stage = Stages(progress)
     drawn = draw_candidates(setting, candidates, goal.own_load_case, stage)

@@ -24,27 +24,23 @@ from typing import ClassVar
 
 import numpy as np
 
-from doe_calib.design.solvers.constrained_exchange import (constrained_exchange,
-                                                          projected_information)
+from doe_calib.design.candidates.clearances import pose_clearances
 from doe_calib.design.criteria import AOptimal, DOptimal, EOptimal, log_det
 from doe_calib.design.detectability import INVISIBLE
-from doe_calib.design.discovery.variants import (
-    approach_joints,
-    detection_target,
-    effect_columns,
-    free_parameters,
-    observation_rows,
-    variants,
-    within_torque_limits,
-)
-from doe_calib.design.candidates.clearances import pose_clearances
-from doe_calib.design.discovery.refinement import chosen_variants, refine_discovery
 from doe_calib.design.discovery.detection import detect_effects, with_detectability
-from doe_calib.design.solvers.exchange import exact_design
 from doe_calib.design.discovery.load_directions import directed_loads, horizontal
+from doe_calib.design.discovery.refinement import chosen_variants, refine_discovery
+from doe_calib.design.discovery.variants import (approach_joints, detection_target,
+                                                 effect_columns, free_parameters,
+                                                 observation_rows, variants,
+                                                 within_torque_limits)
+from doe_calib.design.pipeline import Goal
 from doe_calib.design.predicted_std import design_std
-from doe_calib.design.solvers.relaxation import information, relax
 from doe_calib.design.result import CandidateCount, DesignResult
+from doe_calib.design.solvers.constrained_exchange import (constrained_exchange,
+                                                          projected_information)
+from doe_calib.design.solvers.exchange import exact_design
+from doe_calib.design.solvers.relaxation import information, relax
 from doe_calib.errors import OptionError, SolverError
 from doe_calib.io.measurements import Configurations
 
@@ -53,7 +49,7 @@ POOL, POOL_PER_EFFECT = 1500, 300
 
 
 @dataclass(frozen=True)
-class DiscoveryGoal:
+class DiscoveryGoal(Goal):
     """What a discovery design must be able to reveal.
 
     Attributes
@@ -216,35 +212,14 @@ class DiscoveryGoal:
 
 @dataclass(frozen=True, eq=False)
 class DiscoveryInformation:
-    """The information stage of a discovery design.
-
-    Attributes
-    ----------
-    params : ParameterSet
-        Those no variant identifies fixed.
-    effects : list of Effect
-        The effects to reveal.
-    cases : tuple of DirectedLoad
-        Every load case a pose may be measured under.
-    cand : Variants
-        The candidates: each pose in each load case and approach sides, within the
-        load torques.
-    blocks : ndarray, shape (K, r, p)
-    zblocks : list of ndarray, shape (K, r, q_e)
-        Each effect's weighted columns per candidate.
-    targets : ndarray
-        Each effect's detection bound on λ_min of its projected information (empty
-        without a size).
-    reach : tuple of bool
-        Whether all candidates together reveal each effect.
-    keep : tuple of int
-        The effects bounded (revealable, a size given).
-    candidates : CandidateCount
-        Poses drawn and removed, the variants' load torques among the reasons.
-    q : ndarray, shape (P, N)
-        The candidate poses, rad (m).
-    pose_of : ndarray of int, shape (K,)
-    """
+    """The information stage of a discovery design: the parameters (those no variant
+    identifies fixed), the effects to reveal, every load case a pose may take, the
+    candidates ``cand`` (each pose in each load case and approach sides, within the load
+    torques), their ``blocks`` (K, r, p) and each effect's columns ``zblocks`` (K, r, q_e),
+    each effect's bound on λ_min of its projected information (``targets``, empty without a
+    size), whether all candidates together reveal it (``reach``), the effects bounded
+    (``keep``), the candidates drawn and removed, the candidate poses ``q`` (P, N), rad (m),
+    and the pose of each candidate."""
 
     params: object
     effects: list
