@@ -72,9 +72,7 @@ def compare_sections(comparison, dpi: int = 90) -> list:
         paragraph("Display units (mm, deg, µrad/(N·m)); “—”: fixed, or not in that source's "
                   "model."),
         table(["parameter", "unit", *labels], std_rows, 4),
-        figure(to_png(grouped_bars([f"{n} [{u}]" for n, u in zip(c.names, c.units)], c.std,
-                                   labels, "std (unit in brackets)",
-                                   "predicted / identified standard deviation", log=True), dpi),
+        figure(to_png(std_bars(c), dpi),
                "standard deviation of every parameter for each source, log scale",
                "Std of each parameter, one bar per source (log scale).")))
     if c.task_poses:
@@ -129,26 +127,14 @@ def compare_report(comparison, path, dpi: int = 90):
     return write_report(path, title, compare_sections(comparison, dpi))
 
 
+def std_bars(comparison):
+    """Every parameter's std, one bar per source (log scale, display units): a Figure."""
+    c = comparison
+    return grouped_bars([f"{n} [{u}]" for n, u in zip(c.names, c.units)], c.std, list(c.labels),
+                        "std (unit in brackets)", "predicted / identified standard deviation",
+                        log=True)
+
+
 def plot_std(comparison, path) -> None:
-    """Grouped bars of every parameter's std (log scale, display units) saved to ``path``.
-
-    Drawn on a bare matplotlib Figure (Agg canvas): no pyplot state, no display.
-    """
-    from matplotlib.figure import Figure
-
-    std = np.where(np.isfinite(comparison.std), comparison.std, 0.0)
-    n, s = std.shape
-    width = 0.8 / s
-    fig = Figure(figsize=(max(6.0, 0.45 * n * max(s, 2)), 4.5))
-    ax = fig.add_subplot()
-    for j, label in enumerate(comparison.labels):
-        ax.bar(np.arange(n) + (j - (s - 1) / 2) * width, std[:, j], width, label=label)
-    ax.set_yscale("log")
-    ax.set_xticks(np.arange(n))
-    ax.set_xticklabels([f"{a} [{u}]" for a, u in zip(comparison.names, comparison.units)],
-                       rotation=90, fontsize=7)
-    ax.set_ylabel("standard deviation (parameter's unit)")
-    ax.set_title("Predicted / identified parameter std")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    """:func:`std_bars` saved to ``path`` (PNG, PDF or SVG by its suffix)."""
+    std_bars(comparison).savefig(path, dpi=120)
