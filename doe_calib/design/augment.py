@@ -20,6 +20,7 @@ from typing import ClassVar
 import numpy as np
 
 from doe_calib.design.augment_result import AugmentResult, parameter_std
+from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.criteria import Criterion, DOptimal, log_det
 from doe_calib.design.discovery.detection import design_readings, detect_effects, detectability
 from doe_calib.design.discovery.load_directions import directed_loads

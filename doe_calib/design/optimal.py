@@ -13,6 +13,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from doe_calib.design.candidates.clearances import collision_note, pose_clearances
+from doe_calib.design.candidates.constraints import DesignConstraints
+from doe_calib.design.candidates.from_file import CandidatePoses
 from doe_calib.design.candidates.reachability import unreachable
 from doe_calib.design.criteria import (AOptimal, Criterion, DOptimal, EOptimal, TaskOptimal,
                                        check, log_det)
@@ -162,14 +164,14 @@ class CriterionGoal(Goal):
                                                            else [TaskOptimal(info.task)])
         ratio = equivalence_ratio(None, m / n_poses, crit, packed=bound.packed)
         target = crit.target(p)
-        randoms = [log_det(information(
+        versus = RandomDesigns.of([log_det(information(
             info.blocks[setting.rng.choice(len(info.q), n_poses, replace=False)],
-            np.ones(n_poses))) for _ in range(RANDOM_DESIGNS)]
+            np.ones(n_poses))) for _ in range(RANDOM_DESIGNS)], log_det(m), n_poses, p)
         reach = choice.reachability
         if reach is not None and refined is not None:
             reach = replace(reach, reverted=refined.reverted)
         cands, constraints = candidates.poses, _constraints(setting, reach)
-        clearances, notes = (), _notes(setting, info, bound, randoms, m)
+        clearances, notes = (), (versus.words(n_poses), *_notes(setting, info, bound, m))
         if setting.collision is not None:
             stage("assessment", f"clearances at the {n_poses} poses")
             clearances = pose_clearances(setting.collision, q)
@@ -179,9 +181,6 @@ class CriterionGoal(Goal):
         stages = {"relaxation": relaxed.to_dict(), "exchange": choice.made.to_dict()}
         if refined is not None:
             stages["refinement"] = refined.outcome.to_dict()
-        singular = float(np.mean(~np.isfinite(randoms)))
-        equivalent = (n_poses * np.exp((log_det(m) - np.median(randoms)) / p)
-                      if np.isfinite(np.median(randoms)) else None)
         return DesignResult(
             robot=model.robot, tool=model.tool, model=model.spec,
             configurations=load_configurations(model, params.values, q, setting.loads, names),
@@ -191,28 +190,15 @@ class CriterionGoal(Goal):
             equivalence=Equivalence(crit.name, crit.statistic, target,
                                     target * bound.relaxed.ratio, target * ratio, 1.0 / ratio),
             candidates=cands.count(), coverage=_coverage(setting, q),
-            versus_random=RandomDesigns(RANDOM_DESIGNS, singular,
-                                        None if equivalent is None else float(equivalent)),
+            versus_random=versus,
             sigma_mm=1000.0 * setting.sigma, clearances=clearances, stages=stages)
 
 
-def _notes(setting, info, bound, randoms, m) -> tuple:
-    """The design's comparisons in words: with random designs, the criterion, the relaxation
-    and, for the task criterion, the task poses' predicted RMS std."""
-    n_poses, crit, params, relaxed = setting.n_poses, info.criterion, info.params, bound.relaxed
-    p = m.shape[0]
-    singular = float(np.mean(~np.isfinite(randoms)))
-    if np.isfinite(np.median(randoms)):
-        equivalent = n_poses * np.exp((log_det(m) - np.median(randoms)) / p)
-        versus_random = (f"{n_poses} optimal poses are as precise (D criterion) as "
-                         f"{equivalent:.0f} random ones (median of {RANDOM_DESIGNS} random "
-                         f"designs of {n_poses} feasible poses)")
-        if singular:
-            versus_random += f"; {singular:.0%} of those cannot identify every parameter"
-    else:
-        versus_random = (f"{singular:.0%} of {RANDOM_DESIGNS} random designs of {n_poses} "
-                         f"feasible poses cannot identify every parameter; these {n_poses} can")
-    notes = (versus_random, f"{crit.name} criterion: {crit.words}",
+def _notes(setting, info, bound, m) -> tuple:
+    """The criterion, the relaxation and, for the task criterion, the task poses' predicted
+    RMS std, in words."""
+    crit, params, relaxed, p = info.criterion, info.params, bound.relaxed, m.shape[0]
+    notes = (f"{crit.name} criterion: {crit.words}",
              f"relaxation over {len(bound.packed)} candidates: equivalence ratio "
              f"{relaxed.ratio:.4g} after {relaxed.iterations} iterations; {p} parameters "
              f"designed for, {int((~params.free).sum())} fixed as not identifiable by any "

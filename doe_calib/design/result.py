@@ -70,6 +70,27 @@ class RandomDesigns:
     singular_fraction: float
     equivalent_poses: float | None
 
+    @classmethod
+    def of(cls, log_dets, log_det: float, n_poses: int, p: int) -> "RandomDesigns":
+        """From log det M of each random design and of the design (p parameters)."""
+        singular = float(np.mean(~np.isfinite(log_dets)))
+        median = np.median(log_dets)
+        return cls(len(log_dets), singular, float(n_poses * np.exp((log_det - median) / p))
+                   if np.isfinite(median) else None)
+
+    def words(self, n_poses: int) -> str:
+        """The comparison in one sentence, for the design's ``n_poses``."""
+        if self.equivalent_poses is None:
+            return (f"{self.singular_fraction:.0%} of {self.designs} random designs of "
+                    f"{n_poses} feasible poses cannot identify every parameter; these "
+                    f"{n_poses} can")
+        text = (f"{n_poses} optimal poses are as precise (D criterion) as "
+                f"{self.equivalent_poses:.0f} random ones (median of {self.designs} random "
+                f"designs of {n_poses} feasible poses)")
+        if self.singular_fraction:
+            text += f"; {self.singular_fraction:.0%} of those cannot identify every parameter"
+        return text
+
 
 def _typed(cls, d):
     """``cls(**d)`` of a design file's section, None for an empty or missing one."""
