@@ -1,7 +1,7 @@
 """Augmented poses are reachable from ``--home`` (design/augment.py with
-design/candidates/reachability.py's reachable_choice): in the example cell with a screen and no motion
-planner, the poses no straight free move joins to home, which an augment without the check
-chooses, are replaced; the home and the replacements are recorded and said."""
+design/candidates/reachability.py's reachable_choice): in the example cell with a screen and
+no motion planner, the poses no straight free move joins to home, which an augment without the
+check chooses, are replaced; the home and the replacements are recorded and said."""
 import numpy as np
 import pytest
 

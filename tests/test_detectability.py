@@ -1,5 +1,5 @@
-"""Detectability (design/discovery/detection.py) against Monte Carlo on independently simulated data,
-and the words when an effect cannot be seen."""
+"""Detectability (design/discovery/detection.py) against Monte Carlo on independently simulated
+data, and the words when an effect cannot be seen."""
 import warnings
 
 import numpy as np

@@ -1,5 +1,5 @@
-"""Designs that can discover (design/discovery/goal.py): load cases and approach sides chosen so that
-listed effects are detectable at a size, checked by detectability on the result and by Monte
+"""Designs that can discover (design/discovery/goal.py): load cases and approach sides chosen so
+that listed effects are detectable at a size, checked by detectability on the result and by Monte
 Carlo on an independently simulated torque-sign backlash."""
 import json
 import warnings
