@@ -64,7 +64,8 @@ class DiscoveryGoal(Goal):
     power, alpha : float
         Power asked (``--min-power``) of the χ² score test at level ``alpha``.
     directions : tuple of tuple
-        Allowed unit force directions of the load cases (:func:`.load_directions.parse_directions`).
+        Allowed unit force directions of the load cases
+        (:func:`.load_directions.parse_directions`).
     registry : EffectRegistry, optional
     """
 
@@ -82,6 +83,7 @@ class DiscoveryGoal(Goal):
         if not 0 < self.alpha < self.power < 1:
             raise OptionError(f"--alpha {self.alpha:g} and --min-power {self.power:g}: give "
                               f"0 < alpha < power < 1")
+
     #: Each candidate is judged with its own load case
     #: (:func:`.variants.within_torque_limits`).
     own_load_case: ClassVar[bool] = True
@@ -202,8 +204,8 @@ class DiscoveryGoal(Goal):
             candidates=replace(info.candidates, variants=len(cand)),
             sigma_mm=1000.0 * setting.sigma, stages=stages)
         if choice.reachability is not None:
-            result = _with_reachability(result, model, setting.collision, cfg,
-                                        choice.reachability, refined)
+            result = _with_reachability(result, model, setting.collision, choice.reachability,
+                                        refined)
         result = with_detectability(result, model, self.effects, self.alpha, self.power,
                                     self.registry)
         return _with_outcome(result, self, info.effects, info.reach, cand, free, found, versus,
@@ -253,16 +255,15 @@ def _reached(info, choice):
     return info.cand if choice.reachability is None else replace(info.cand, q=choice.q)
 
 
-def _with_reachability(result, model, collision, cfg, reach, refined):
+def _with_reachability(result, model, collision, reach, refined):
     """``result`` with the clearances, the collision summary and the reachability note."""
-    first = sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())
-    clearances = pose_clearances(collision, cfg.q[first])
+    clearances = pose_clearances(collision,
+                                 result.configurations.q[result.first_configurations()])
     reach = replace(reach, reverted=0 if refined is None else refined.unreachable)
     used = {**result.constraints, "collision": collision.summary(),
             "reachability": reach.to_dict(model.robot)}
     return replace(result, constraints=used, notes=result.notes + (reach.note(model.robot),),
                    clearances=clearances)
-
 
 
 def _dedupe(start, blocks, pose_of, allowed):
