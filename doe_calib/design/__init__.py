@@ -23,13 +23,13 @@ _HOMES = {"read_constraints": "candidates.constraint_file", "Box": "candidates.c
           "EOptimal": "criteria", "TaskOptimal": "criteria", "criterion": "criteria",
           "d_efficiency": "criteria", "efficiency": "criteria",
           "evaluate_criterion": "criteria", "log_det": "criteria",
-          "exact_d_design": "solvers.exchange", "exact_design": "solvers.exchange",
+          "exact_design": "solvers.exchange",
           "LoadCase": "problem", "blocks_for": "problem", "design_parameters": "problem",
           "load_configurations": "problem", "task_matrix": "problem",
           "DesignOutcome": "solvers.outcome", "PredictedStd": "predicted_std",
           "StdMapping": "predicted_std", "convex_relaxation": "solvers.relaxation",
           "equivalence_ratio": "solvers.relaxation", "information": "solvers.relaxation",
-          "relax": "solvers.relaxation", "relax_d": "solvers.relaxation",
+          "relax": "solvers.relaxation",
           "variances": "solvers.relaxation"}
 
 __all__ = list(_HOMES)

@@ -177,8 +177,3 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
     return DesignOutcome("exchange", crit, selected, float(current), sweeps, status,
                          blocks.shape[2], indices=indices)
 
-
-def exact_d_design(blocks: np.ndarray, n: int, weights: np.ndarray | None = None,
-                   pool: int = 2000, max_sweeps: int = 50) -> np.ndarray:
-    """Indices of the D-optimal :func:`exact_design` (kept for callers of the first release)."""
-    return exact_design(blocks, n, "D", weights, pool=pool, max_sweeps=max_sweeps).indices

@@ -279,13 +279,6 @@ def relax(blocks: np.ndarray | None, criterion="D", task: np.ndarray | None = No
                          ratio=ratio)
 
 
-def relax_d(blocks: np.ndarray, tol: float = 2e-3, max_iterations: int = 20000,
-            working_set: int = 1500, progress=None) -> DesignOutcome:
-    """D-optimal approximate design over candidates (:func:`relax` with ``criterion="D"``)."""
-    return relax(blocks, "D", tol=tol, max_iterations=max_iterations, working_set=working_set,
-                 progress=progress)
-
-
 def convex_relaxation(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,
                       solver: str = "CLARABEL") -> DesignOutcome:
     """The relaxation solved by cvxpy (interior point) on the criterion's cvxpy expression.
