@@ -152,8 +152,7 @@ class Stages:
         if name != self.name:
             self.name, self.start = name, now
         if self.progress is not None:
-            done = STAGES.index(name) + 1 if name in STAGES else len(STAGES)
-            self.progress(done, len(STAGES), f"{name}: {note}" if note else name)
+            self.progress(STAGES.index(name) + 1, len(STAGES), f"{name}: {note}" if note else name)
 
     def iterations(self, name):
         """The ``progress(iteration, gap)`` of an iterative solver, reported under ``name``."""
