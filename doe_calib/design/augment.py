@@ -177,9 +177,9 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     -------
     AugmentResult
     """
-    level_and_power(alpha, power)
     setting = Setting.checked(model, n_poses, loads, candidates, sigma, constraints, collision,
                               home, rng, False, params, "new pose")
+    level_and_power(alpha, power)
     goal = AugmentGoal(measured, Criterion.from_name(criterion), tuple(targets), detect, alpha,
                        power, registry, directions)
     return run(goal, setting, candidates)
