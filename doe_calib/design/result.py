@@ -93,8 +93,8 @@ class RandomDesigns:
 
 
 def _typed(cls, d):
-    """``cls(**d)`` of a design file's section, None for an empty or missing one."""
-    return cls(**d) if d else None
+    """``cls`` of a design file's section (its known keys), None for an empty or missing one."""
+    return cls(**{k: v for k, v in d.items() if k in cls.__dataclass_fields__}) if d else None
 
 
 def _plain(x):
