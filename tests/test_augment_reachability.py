@@ -61,8 +61,8 @@ def test_augmented_poses_are_joined_to_home_by_a_free_move(cell):
     assert len(poses) == 6 and not any(p.startswith("far") for p in poses)
     for q in r.configurations.q:  # every new pose: the straight move from home is free
         assert check_segment(collision, home, q, collision.move_margins or None).free
-    assert sum(r.reachability["replaced"].values()) >= 1
-    assert set(r.reachability["replaced"]) == {NO_PATH}
-    np.testing.assert_allclose(r.reachability["home"], np.degrees(home), atol=1e-9)
+    assert sum(r.reachability.replaced.values()) >= 1
+    assert set(r.reachability.replaced) == {NO_PATH}
+    np.testing.assert_allclose(r.reachability.home, np.degrees(home), atol=1e-9)
     assert "reachability: every pose joined to the home pose" in r.summary()
     assert AugmentResult.from_dict(r.to_dict()).reachability == r.reachability

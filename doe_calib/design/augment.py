@@ -19,7 +19,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from doe_calib.design.augment_result import AugmentResult, parameter_std
+from doe_calib.design.augment_result import AugmentResult, Reached, parameter_std
 from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.criteria import Criterion, DOptimal, log_det
 from doe_calib.design.discovery.detection import design_readings, detect_effects, detectability
@@ -301,11 +301,9 @@ class AugmentGoal(Goal):
                                                            setting.sigma)])
             detected = tuple(detectability(model, params, m, info.effects, self.alpha,
                                            self.power) for m in (measured, after))
-        reach = {}
-        if choice.reachability is not None:
-            r = choice.reachability
-            reach = {"home": r.to_dict(model.robot)["home"], "replaced": dict(r.replaced),
-                     "note": r.note(model.robot)}
+        reach, r = None, choice.reachability
+        if r is not None:
+            reach = Reached(r.to_dict(model.robot)["home"], dict(r.replaced), r.note(model.robot))
         design_params = info.design_params
         return AugmentResult(
             configurations=cfg, criterion=crit.name, targets=self.targets,

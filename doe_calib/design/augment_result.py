@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import textwrap
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -25,6 +25,17 @@ def parameter_std(params, m: np.ndarray) -> dict:
     free = [p for p, f in zip(params.parameters, params.free) if f]
     return {p.name: (float(np.sqrt(s) * p.scale * p.display_factor), p.display_unit)
             for p, s in zip(free, var)}
+
+
+@dataclass(frozen=True)
+class Reached:
+    """The new poses kept reachable: the ``home`` pose (deg, mm), the chosen poses
+    ``replaced`` (reason → count) because no free path joins them to home or a tracker beam
+    is blocked, and that in a ``note``."""
+
+    home: list
+    replaced: dict
+    note: str
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,10 +67,8 @@ class AugmentResult:
         σ of the new readings, mm.
     robot : Robot
     model : str
-    reachability : dict
-        With a collision model: ``home`` (deg, mm), ``replaced`` (reason → chosen
-        poses replaced because no free path joins them to home, or a beam is
-        blocked) and ``note``, in words; empty without.
+    reachability : Reached or None
+        None without a collision model.
     """
 
     configurations: Configurations
@@ -76,7 +85,7 @@ class AugmentResult:
     sigma_mm: float
     robot: Robot
     model: str
-    reachability: dict = field(default_factory=dict)
+    reachability: Reached | None = None
 
     def summary(self) -> str:
         k = len(dict.fromkeys(self.configurations.pose))
@@ -89,8 +98,7 @@ class AugmentResult:
                  f"  candidates: {self.candidates.kept} kept of {self.candidates.drawn}"
                  + (f" from {self.candidates.source}" if self.candidates.source else ""),
                  "  poses: " + ", ".join(dict.fromkeys(self.configurations.pose)),
-                 *([f"  {self.reachability['note']}"] if self.reachability.get("note")
-                   else []),
+                 *([f"  {self.reachability.note}"] if self.reachability else []),
                  "", "Predicted std (before → after)"]
         for name, (after, unit) in self.std_after.items():
             lines.append(f"  {name:<28} {self.std_before[name][0]:>10.4g} → {after:<10.4g} "
@@ -119,7 +127,7 @@ class AugmentResult:
                 "candidates": self.candidates.to_dict(),
                 "measured_configurations": self.measured_configurations,
                 "sigma_mm": self.sigma_mm, "robot": self.robot.to_dict(),
-                "reachability": self.reachability,
+                "reachability": {} if self.reachability is None else asdict(self.reachability),
                 "configurations": [{"pose": p, "q": list(q * f), "wrench": list(w),
                                     "approach": [int(s) for s in a]}
                                    for p, q, w, a in zip(cfg.pose, cfg.q, cfg.wrench,
@@ -139,12 +147,17 @@ class AugmentResult:
                               float).reshape(len(rows), robot.n_joints))
         std = {k: {n: (np.inf if s is None else float(s), u) for n, (s, u) in d[k].items()}
                for k in ("std_before", "std_after")}
-        return cls(cfg, d["criterion"], tuple(d["targets"]), float(d["value_before"]),
-                   float(d["value_after"]), std["std_before"], std["std_after"],
-                   tuple(Detectability.from_dict(r) for r in d["detectability_before"]),
-                   tuple(Detectability.from_dict(r) for r in d["detectability_after"]),
-                   CandidateCount(**d["candidates"]), int(d["measured_configurations"]),
-                   float(d["sigma_mm"]), robot, d["model"], dict(d.get("reachability", {})))
+        return cls(configurations=cfg, criterion=d["criterion"], targets=tuple(d["targets"]),
+                   value_before=float(d["value_before"]), value_after=float(d["value_after"]),
+                   std_before=std["std_before"], std_after=std["std_after"],
+                   detect_before=tuple(Detectability.from_dict(r)
+                                       for r in d["detectability_before"]),
+                   detect_after=tuple(Detectability.from_dict(r)
+                                      for r in d["detectability_after"]),
+                   candidates=CandidateCount(**d["candidates"]),
+                   measured_configurations=int(d["measured_configurations"]),
+                   sigma_mm=float(d["sigma_mm"]), robot=robot, model=d["model"],
+                   reachability=Reached(**d["reachability"]) if d.get("reachability") else None)
 
     @classmethod
     def from_json(cls, path) -> "AugmentResult":
