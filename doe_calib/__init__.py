@@ -61,7 +61,7 @@ _PUBLIC = {
     "CovariancePrediction": "doe_calib.estimation.covariance",
     # design
     "LoadCase": "doe_calib.design.problem",
-    "read_constraints": "doe_calib.design.constraint_file",
+    "read_constraints": "doe_calib.design.candidates.constraint_file",
     "optimal_design": "doe_calib.design.optimal",
     "DesignResult": "doe_calib.design.result",
     "Criterion": "doe_calib.design.criteria",

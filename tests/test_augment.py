@@ -1,4 +1,4 @@
-"""Candidates from a file and sequential design (design/candidate_file.py, design/augment.py):
+"""Candidates from a file and sequential design (design/candidates/from_file.py, design/augment.py):
 the chosen poses are the file's, with their ids; the poses added to a measured campaign are
 worth more than random ones by an information computed here independently; on a campaign in
 one IK branch (UR10, own-weight deflection simulated with Pinocchio) the new poses leave the
@@ -16,7 +16,7 @@ from doe_calib.design.augment import (
     measured_information,
 )
 from doe_calib.design.augment_result import AugmentResult
-from doe_calib.design.candidate_file import read_candidates
+from doe_calib.design.candidates.from_file import read_candidates
 from doe_calib.design.criteria import log_det
 from doe_calib.design.optimal import optimal_design
 from doe_calib.design.problem import blocks_for
@@ -56,9 +56,9 @@ def test_candidates_from_a_file_keep_their_ids_and_values(kr270, tmp_path):
     assert len(chosen) == 8 and set(chosen) <= set(names[3:])  # the 3 outside the margin go
     for pose, qc in zip(d.configurations.pose, d.configurations.q):
         assert np.allclose(qc, q[names.index(pose)], atol=1e-9)  # not refined
-    assert d.candidates["drawn"] == 120 and d.candidates["kept"] == 117
-    assert d.candidates["removed"]["joint limits (with margin)"] == 3
-    assert d.candidates["source"] == "taught.csv"
+    assert d.candidates.drawn == 120 and d.candidates.kept == 117
+    assert d.candidates.removed["joint limits (with margin)"] == 3
+    assert d.candidates.source == "taught.csv"
     # better than random subsets of the same file, by the information computed directly
     params = kr270.nominal().fixed(
         [n for n in kr270.nominal().names if n not in d.predicted_std], "fixed")
@@ -145,11 +145,11 @@ def test_augmenting_a_one_branch_campaign_reveals_the_own_weight_deflection(tmp_
         assert r.std_after[name][0] < r.std_before[name][0] / factor
     # the value after, recomputed from the combined campaign's information
     big = build_model(model.robot, model.tool, MODEL + "+gravity_compliance(j2)+gear_ratio(j2)")
-    from doe_calib.design.augment import with_new_free
-    from doe_calib.design.effect_detection import design_readings
+    from doe_calib.estimation.effect_signature import grown_parameters
+    from doe_calib.design.discovery.detection import design_readings
     from doe_calib.io.measurements import concatenate
 
-    params = with_new_free(big, model.nominal()).fixed(
+    params = grown_parameters(big, model.nominal()).fixed(
         [n for n in big.nominal().names if n not in r.std_after], "fixed")
     both = concatenate([meas, design_readings(big, params.values, r.configurations, 2e-5)])
     m = measured_information(big, params, both)
@@ -205,5 +205,5 @@ def test_design_candidates_from_the_command_line(kr270, tmp_path, capsys):
     d = DesignResult.from_json(out)
     chosen = set(d.configurations.pose)
     assert len(chosen) == 6 and chosen <= set(names[3:])
-    assert d.candidates["removed"]["joint limits (with margin)"] == 3
+    assert d.candidates.removed["joint limits (with margin)"] == 3
     assert set(read_candidates(out.with_suffix(".csv"), kr270.robot).names) == chosen

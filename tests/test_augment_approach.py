@@ -1,15 +1,16 @@
 """Approach sides of augmented poses are design variables (design/augment.py with
-design/discovery_candidates.py): to separate an approach backlash of A2 from a campaign
+design/discovery/variants.py): to separate an approach backlash of A2 from a campaign
 measured without approach sides (0: not known), the new poses come from both sides, and
 their Ds value, recomputed from the combined readings, beats the same poses all from one."""
 import numpy as np
 import pytest
 
 from doe_calib import Robot, Tool, build_model, examples, simulate
-from doe_calib.design.augment import augment_design, measured_information, with_new_free
+from doe_calib.design.augment import augment_design, measured_information
+from doe_calib.estimation.effect_signature import grown_parameters
 from doe_calib.design.augment_result import AugmentResult
 from doe_calib.design.criteria import log_det
-from doe_calib.design.effect_detection import design_readings
+from doe_calib.design.discovery.detection import design_readings
 from doe_calib.io.csv_files import read_design, write_design
 from doe_calib.io.measurements import Configurations, concatenate
 from doe_calib.model.simulate import random_configurations
@@ -43,7 +44,7 @@ def test_an_augment_for_an_approach_backlash_picks_both_sides(tmp_path):
     assert not before.detectable and after.detectable
     # the value after, recomputed from the combined readings; the sides matter
     big = build_model(robot, tool, MODEL + "+" + TARGET)
-    params = with_new_free(big, model.nominal()).fixed(
+    params = grown_parameters(big, model.nominal()).fixed(
         [n for n in big.nominal().names if n not in r.std_after], "fixed")
     assert _ds(big, model, params, measured, r.configurations) == pytest.approx(r.value_after,
                                                                                abs=1e-6)

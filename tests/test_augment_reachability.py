@@ -1,7 +1,7 @@
 """Augmented poses are reachable from ``--home`` (design/augment.py with
-design/reachability.py's reachable_choice): in the example cell with a screen and no motion
-planner, the poses no straight free move joins to home, which an augment without the check
-chooses, are replaced; the home and the replacements are recorded and said."""
+design/candidates/reachability.py's reachable_choice): in the example cell with a screen and
+no motion planner, the poses no straight free move joins to home, which an augment without the
+check chooses, are replaced; the home and the replacements are recorded and said."""
 import numpy as np
 import pytest
 
@@ -10,10 +10,10 @@ from doe_calib.collision import build_collision_model, check_segment
 from doe_calib.design import read_constraints
 from doe_calib.design.augment import augment_design
 from doe_calib.design.augment_result import AugmentResult
-from doe_calib.design.candidate_file import read_candidates
-from doe_calib.design.candidate_poses import feasible_candidates
-from doe_calib.design.feasibility import build_feasibility
-from doe_calib.design.reachability import NO_PATH, unreachable
+from doe_calib.design.candidates.from_file import read_candidates
+from doe_calib.design.candidates.draw import feasible_candidates
+from doe_calib.design.candidates.feasibility import build_feasibility
+from doe_calib.design.candidates.reachability import NO_PATH, unreachable
 from doe_calib.io.csv_files import write_design
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.simulate import random_configurations
@@ -61,8 +61,8 @@ def test_augmented_poses_are_joined_to_home_by_a_free_move(cell):
     assert len(poses) == 6 and not any(p.startswith("far") for p in poses)
     for q in r.configurations.q:  # every new pose: the straight move from home is free
         assert check_segment(collision, home, q, collision.move_margins or None).free
-    assert sum(r.reachability["replaced"].values()) >= 1
-    assert set(r.reachability["replaced"]) == {NO_PATH}
-    np.testing.assert_allclose(r.reachability["home"], np.degrees(home), atol=1e-9)
+    assert sum(r.reachability.replaced.values()) >= 1
+    assert set(r.reachability.replaced) == {NO_PATH}
+    np.testing.assert_allclose(r.reachability.home, np.degrees(home), atol=1e-9)
     assert "reachability: every pose joined to the home pose" in r.summary()
     assert AugmentResult.from_dict(r.to_dict()).reachability == r.reachability

@@ -11,8 +11,8 @@ from doe_calib import Robot, Tool, examples
 from doe_calib.collision import build_collision_model, check_segment, clearance, contacts, too_close
 from doe_calib.collision.shapes import load_radius
 from doe_calib.design import LoadCase, read_constraints
-from doe_calib.design.candidate_poses import feasible_candidates
-from doe_calib.design.feasibility import build_feasibility
+from doe_calib.design.candidates.draw import feasible_candidates
+from doe_calib.design.candidates.feasibility import build_feasibility
 from doe_calib.design.optimal import optimal_design
 from doe_calib.errors import SolverError
 from doe_calib.model.marker_model import build_model

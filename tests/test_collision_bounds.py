@@ -16,7 +16,7 @@ import pytest
 from doe_calib import Robot, Tool, examples
 from doe_calib.collision import SEGMENT_STEP, Workspace, build_collision_model, check_segment
 from doe_calib.collision.bounds import body_radius, motion_weights
-from doe_calib.design.constraint_file import read_constraints
+from doe_calib.design.candidates.constraint_file import read_constraints
 from doe_calib.design.problem import LoadCase
 
 

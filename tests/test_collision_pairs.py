@@ -6,7 +6,7 @@ import pinocchio as pin
 from doe_calib import Robot, Tool, examples
 from doe_calib.collision import build_collision_model
 from doe_calib.collision.pairs import CONSTANT, never_moving
-from doe_calib.design.constraint_file import read_constraints
+from doe_calib.design.candidates.constraint_file import read_constraints
 
 
 def test_never_moving_pairs_are_those_constant_over_every_sample():

@@ -6,7 +6,7 @@ import pytest
 
 from doe_calib import examples
 from doe_calib.design import LoadCase, read_constraints
-from doe_calib.design.feasibility import build_feasibility
+from doe_calib.design.candidates.feasibility import build_feasibility
 from doe_calib.design.optimal import optimal_design
 from doe_calib.errors import DataError
 from doe_calib.model.loads import GRAVITY
@@ -146,10 +146,10 @@ def test_every_designed_pose_satisfies_every_constraint(cell, model6, robot6, to
         assert margins["keep_in"] >= -1e-9 and margins["floor"] >= -1e-9
         assert margins["line_of_sight"] >= -1e-9 and margins["load_torque"] >= -1e-6
     bins = np.digitize(np.degrees(q[:, 1]), np.linspace(-128, -17, 6)[1:-1])
-    assert len(set(bins)) == 5 and d.coverage["met"] and d.coverage["bins_used"] == [0, 1, 2, 3, 4]
+    assert len(set(bins)) == 5 and d.coverage.met and d.coverage.bins_used == [0, 1, 2, 3, 4]
     c = d.candidates
-    assert c["kept"] == 3000 and c["drawn"] - c["kept"] <= sum(c["removed"].values())
-    assert set(c["removed"]) == {"keep_out:table", "keep_in", "floor", "line_of_sight",
+    assert c.kept == 3000 and c.drawn - c.kept <= sum(c.removed.values())
+    assert set(c.removed) == {"keep_out:table", "keep_in", "floor", "line_of_sight",
                                  "load_torque"}
     assert d.constraints["joint_limits"]["a2"] == pytest.approx([-130, -15])
     assert d.constraints["coverage"]["joint"] == "a2" and d.constraints["loads"] == ["250@0,0,200"]

@@ -7,11 +7,11 @@ from doe_calib.design import (
     LoadCase,
     blocks_for,
     design_parameters,
-    exact_d_design,
+    exact_design,
     information,
     load_configurations,
     log_det,
-    relax_d,
+    relax,
     variances,
 )
 from doe_calib.model.simulate import random_configurations
@@ -31,7 +31,7 @@ def problem(robot6, tool6):
 
 def test_relaxation_meets_equivalence_theorem(problem):
     *_, blocks = problem
-    rel = relax_d(blocks, tol=1e-4)
+    rel = relax(blocks, "D", tol=1e-4)
     p = blocks.shape[2]
     assert rel.weights.sum() == pytest.approx(1.0)
     d = variances(blocks, information(blocks, rel.weights))
@@ -43,10 +43,10 @@ def test_relaxation_meets_equivalence_theorem(problem):
 
 def test_no_exact_design_beats_the_bound(problem):
     *_, blocks = problem
-    rel = relax_d(blocks)
+    rel = relax(blocks, "D")
     rng = np.random.default_rng(0)
     bound = rel.bound(N)
-    chosen = exact_d_design(blocks, N, rel.weights)
+    chosen = exact_design(blocks, N, "D", rel.weights).indices
     assert len(set(chosen)) == N
     best = log_det(information(blocks[chosen], np.ones(N)))
     assert best <= bound
@@ -91,5 +91,5 @@ def test_design_command_writes_json_and_csv(tmp_path):
     assert np.allclose(loaded[:, 2], -250.0 * 9.80665)
     # an optimal design beats the median random design of its size, and the file keeps it
     vs = design.versus_random
-    assert vs["designs"] == 100 and 0 <= vs["singular_fraction"] < 0.5
-    assert vs["equivalent_poses"] >= 6
+    assert vs.designs == 100 and 0 <= vs.singular_fraction < 0.5
+    assert vs.equivalent_poses >= 6

@@ -16,7 +16,7 @@ from doe_calib.design import (
 )
 from doe_calib.design.criteria import sensitivity
 from doe_calib.design.optimal import optimal_design
-from doe_calib.design.updates import added_values
+from doe_calib.design.solvers.updates import added_values
 from doe_calib.io.csv_files import write_design
 from doe_calib.model.simulate import random_configurations
 
@@ -122,9 +122,9 @@ def test_each_design_wins_on_its_own_criterion(model6, robot6):
         r = d[name]
         assert 0.9 < r.efficiency <= 1.0 and r.efficiencies[name] == r.efficiency
         assert 0 < r.efficiencies["D"] <= 1.0
-        assert r.equivalence["criterion"] == name
-        assert r.equivalence["relaxation"] / r.equivalence["target"] < 1.01
-        assert r.equivalence["design"] >= r.equivalence["target"] * (1 - 1e-9)
+        assert r.equivalence.criterion == name
+        assert r.equivalence.relaxation / r.equivalence.target < 1.01
+        assert r.equivalence.design >= r.equivalence.target * (1 - 1e-9)
         assert "equivalence theorem" in r.summary()
 
 

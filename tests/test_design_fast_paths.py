@@ -13,8 +13,8 @@ import pytest
 from doe_calib.design import LoadCase, blocks_for, design_parameters, load_configurations
 from doe_calib.design.batch import CHUNK, map_poses
 from doe_calib.design.criteria import DOptimal
-from doe_calib.design.exchange import exact_design
-from doe_calib.design.relaxation import (
+from doe_calib.design.solvers.exchange import exact_design
+from doe_calib.design.solvers.relaxation import (
     convex_relaxation,
     equivalence_ratio,
     information,
@@ -24,7 +24,7 @@ from doe_calib.design.relaxation import (
     traces,
     unpack,
 )
-from doe_calib.design.updates import added_values, best_added
+from doe_calib.design.solvers.updates import added_values, best_added
 from doe_calib.errors import OptionError
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 from doe_calib.model.simulate import random_configurations

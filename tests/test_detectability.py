@@ -1,5 +1,5 @@
-"""Detectability (design/effect_detection.py) against Monte Carlo on independently simulated data,
-and the words when an effect cannot be seen."""
+"""Detectability (design/discovery/detection.py) against Monte Carlo on independently simulated
+data, and the words when an effect cannot be seen."""
 import warnings
 
 import numpy as np
@@ -9,7 +9,7 @@ from scipy import stats
 from doe_calib import Configurations, Robot, Tool, build_model, examples, identify
 from doe_calib.design.detectability import Detectability
 from doe_calib.estimation.chi_square import noncentrality_for_power
-from doe_calib.design.effect_detection import design_readings, detect_effects, detectability
+from doe_calib.design.discovery.detection import design_readings, detect_effects, detectability
 from doe_calib.diagnosis.effect_tests import projected_columns
 from doe_calib.estimation.preparation import fix_unidentifiable
 from doe_calib.estimation.weighted_residuals import weighted_residual

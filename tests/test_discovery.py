@@ -1,5 +1,5 @@
-"""Designs that can discover (design/discovery.py): load cases and approach sides chosen so that
-listed effects are detectable at a size, checked by detectability on the result and by Monte
+"""Designs that can discover (design/discovery/goal.py): load cases and approach sides chosen so
+that listed effects are detectable at a size, checked by detectability on the result and by Monte
 Carlo on an independently simulated torque-sign backlash."""
 import json
 import warnings
@@ -10,10 +10,10 @@ from scipy import stats
 
 from doe_calib import Robot, Tool, build_model, examples, identify
 from doe_calib.design import LoadCase
-from doe_calib.design.constrained_exchange import constrained_exchange
+from doe_calib.design.solvers.constrained_exchange import constrained_exchange
 from doe_calib.design.discovery import DiscoveryGoal
-from doe_calib.design.effect_detection import detect_effects, with_detectability
-from doe_calib.design.load_directions import DirectedLoad, parse_directions
+from doe_calib.design.discovery.detection import detect_effects, with_detectability
+from doe_calib.design.discovery.load_directions import DirectedLoad, parse_directions
 from doe_calib.design.optimal import optimal_design
 from doe_calib.diagnosis.effect_tests import projected_columns
 from doe_calib.errors import OptionError

@@ -1,5 +1,5 @@
-"""Discovery designs are refined by IPOPT and reached from home (design/discovery.py,
-design/discovery_refinement.py): each refined pose keeps its load case (the pull computed here
+"""Discovery designs are refined by IPOPT and reached from home (design/discovery/goal.py,
+design/discovery/refinement.py): each refined pose keeps its load case (the pull computed here
 with Pinocchio at the refined angles), D does not fall, the size asked stays detectable, a bound
 held at its start value is never lowered (explicit QR projection), and every pose is joined to
 home by a free move."""
@@ -10,19 +10,19 @@ import independent_sim as sim
 from doe_calib import Robot, Tool, build_model, examples
 from doe_calib.collision import build_collision_model, check_segment
 from doe_calib.design import LoadCase, read_constraints
-from doe_calib.design.constraints import DesignConstraints
+from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.discovery import DiscoveryGoal
-from doe_calib.design.discovery_candidates import (
+from doe_calib.design.discovery.variants import (
     detection_target,
     effect_columns,
     free_parameters,
     observation_rows,
     variants,
 )
-from doe_calib.design.discovery_refinement import chosen_variants, refine_discovery
-from doe_calib.design.effect_detection import detect_effects, with_detectability
-from doe_calib.design.feasibility import build_feasibility
-from doe_calib.design.load_directions import directed_loads, parse_directions
+from doe_calib.design.discovery.refinement import chosen_variants, refine_discovery
+from doe_calib.design.discovery.detection import detect_effects, with_detectability
+from doe_calib.design.candidates.feasibility import build_feasibility
+from doe_calib.design.discovery.load_directions import directed_loads, parse_directions
 from doe_calib.design.optimal import optimal_design
 from doe_calib.model.simulate import random_configurations
 

@@ -6,7 +6,7 @@ from test_collision_bounds import _ur5
 from doe_calib import Robot, Tool, examples
 from doe_calib.collision import PlannerSettings, build_collision_model, too_close
 from doe_calib.design import read_constraints
-from doe_calib.design.reachability import unreachable
+from doe_calib.design.candidates.reachability import unreachable
 from doe_calib.runtime.forked import forked_map
 
 

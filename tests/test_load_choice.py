@@ -1,4 +1,4 @@
-"""``--load-directions`` without ``--detect-size`` (design/discovery.py with no size, and
+"""``--load-directions`` without ``--detect-size`` (design/discovery/goal.py with no size, and
 design/augment.py with ``directions``): each pose picks the one load case it is measured
 under for the D criterion; the pulls it picks are the forces and moments computed here with
 Pinocchio, they make the compliance of A1 designable and its torque backlash detectable,
@@ -13,8 +13,8 @@ from doe_calib import Robot, Tool, build_model, examples, simulate
 from doe_calib.design import LoadCase
 from doe_calib.design.augment import augment_design
 from doe_calib.design.discovery import DiscoveryGoal
-from doe_calib.design.effect_detection import with_detectability
-from doe_calib.design.load_directions import parse_directions
+from doe_calib.design.discovery.detection import with_detectability
+from doe_calib.design.discovery.load_directions import parse_directions
 from doe_calib.design.optimal import optimal_design
 from doe_calib.design.problem import load_configurations
 from doe_calib.estimation.weighted_residuals import weighted_residual
@@ -72,7 +72,7 @@ def test_each_pose_picks_its_load_case_for_d_and_the_pulls_reveal_a1(kr270):
     # D is the log det of the design's information, recomputed from its readings
     free = [n for n in kr270.nominal().names if n in d.predicted_std]
     params = kr270.nominal().fixed([n for n in kr270.nominal().names if n not in free], "x")
-    from doe_calib.design.effect_detection import design_readings
+    from doe_calib.design.discovery.detection import design_readings
 
     _, jac = weighted_residual(kr270, design_readings(kr270, params.values, d.configurations,
                                                       SIGMA), params.values)

@@ -1,4 +1,4 @@
-"""Load torques judged with each load case's whole wrench (design/discovery_candidates.py
+"""Load torques judged with each load case's whole wrench (design/discovery/variants.py
 within_torque_limits, used by discovery designs and augments with load directions): on the
 flange joint A6 only the moment of a load's centre offset puts a torque (its force acts on the
 axis); where the weight's moment about A6 is small and a sideways pull's is large, a limit
@@ -11,10 +11,10 @@ import pytest
 import independent_sim as sim
 from doe_calib import Robot, Tool, build_model, examples
 from doe_calib.design import LoadCase
-from doe_calib.design.constraints import DesignConstraints
+from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.discovery import DiscoveryGoal
-from doe_calib.design.discovery_candidates import variants, within_torque_limits
-from doe_calib.design.load_directions import directed_loads, parse_directions
+from doe_calib.design.discovery.variants import variants, within_torque_limits
+from doe_calib.design.discovery.load_directions import directed_loads, parse_directions
 from doe_calib.design.optimal import optimal_design
 from doe_calib.model.simulate import random_configurations
 
@@ -63,7 +63,7 @@ def test_a_discovery_design_keeps_every_pull_within_the_limit(kr270):
                          parse_directions("z,x"))
     d = optimal_design(model, 12, [LOAD], candidates=200, sigma=3e-5, refine=True,
                        constraints=constraints, rng=np.random.default_rng(3), discovery=goal)
-    assert d.candidates["removed"]["load torque (the variant's own load case)"] > 0
+    assert d.candidates.removed["load torque (the variant's own load case)"] > 0
     cfg = d.configurations
     tau = sim.joint_torques(chain, cfg.q, cfg.wrench)[:, 5]
     assert np.abs(tau).max() <= 150.0 * (1 + 1e-6)

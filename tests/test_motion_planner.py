@@ -18,7 +18,7 @@ from doe_calib.collision import (
     plan_move,
 )
 from doe_calib.design import read_constraints
-from doe_calib.design.reachability import nearest_equivalent
+from doe_calib.design.candidates.reachability import nearest_equivalent
 from doe_calib.errors import ModelError
 
 ONE_DEG = math.radians(1.0)

@@ -13,7 +13,7 @@ import pytest
 from numpy.testing import assert_array_equal
 
 from doe_calib.design.batch import CHUNK, map_poses
-from doe_calib.design.relaxation import packed_information, relax
+from doe_calib.design.solvers.relaxation import packed_information, relax
 from doe_calib.runtime.parallel import default_workers
 from doe_calib.runtime.split import run_parts, split_workers
 from doe_calib.runtime.threads import BLAS_THREADS

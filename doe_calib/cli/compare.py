@@ -40,7 +40,7 @@ def _labels(files) -> list[str]:
 
 
 def run(args):
-    from doe_calib.design.comparison import compare, load_source, plot_std
+    from doe_calib.design.comparison import compare, load_source
     from doe_calib.io.csv_files import read_design
 
     registry = effect_registry(args)
@@ -56,6 +56,7 @@ def run(args):
         Path(args.out).write_text(result.summary() + "\n", encoding="utf-8")
         written.append(args.out)
     if args.plot:
+        from doe_calib.report.compare import plot_std
         plot_std(result, args.plot)
         written.append(args.plot)
     if args.report:

@@ -118,7 +118,7 @@ def _check_level_and_power(args):
 
 
 def _discovery_goal(args):
-    """The :class:`~doe_calib.design.discovery.DiscoveryGoal` of ``--detect-size``, or of
+    """The :class:`~doe_calib.design.discovery.goal.DiscoveryGoal` of ``--detect-size``, or of
     ``--load-directions`` with plain ``--detect`` (no size: each pose picks its load case for
     the D criterion), or None."""
     if args.detect_size is None:
@@ -135,7 +135,7 @@ def _discovery_goal(args):
         raise OptionError("--detect-size S: give the effects to discover with --detect EFFECTS")
     # imported only for a discovery design: its statistics (the diagnosis) load slowly
     from doe_calib.design.discovery import DiscoveryGoal
-    from doe_calib.design.load_directions import parse_directions
+    from doe_calib.design.discovery.load_directions import parse_directions
 
     return DiscoveryGoal(args.detect, args.detect_size,
                          args.power if args.min_power is None else args.min_power, args.alpha,
@@ -169,7 +169,7 @@ def run(args):
         parse_floats(args.home, robot.n_joints, "--home") / robot.display_factors
     if args.diagnosis and not args.augment:
         raise OptionError("--diagnosis is read with --augment M.csv (the campaign it diagnosed)")
-    from doe_calib.design.candidate_file import read_candidates
+    from doe_calib.design.candidates.from_file import read_candidates
 
     candidates = args.candidates if not args.candidates_from else \
         read_candidates(args.candidates_from, robot, tool)
@@ -185,7 +185,9 @@ def run(args):
         return run_augment(args, model, loads, candidates, constraints, collision,
                            effect_registry(args), csv_path, home)
     discovery = _discovery_goal(args)
-    progress = stage_progress()
+    show = stage_progress()
+    progress = None if show is None else (lambda done, total, note: show(
+        "design" if total is None else f"design {done}/{total}", note))
     result = optimal_design(model, args.poses, loads, candidates=candidates,
                             sigma=args.sigma / 1000.0, criterion=args.criterion, task=task,
                             task_point=parse_floats(args.task_point, 3, "--task-point") / 1000.0,
@@ -195,7 +197,7 @@ def run(args):
     if progress:
         print(file=sys.stderr)
     if args.detect and discovery is None:
-        from doe_calib.design.effect_detection import with_detectability
+        from doe_calib.design.discovery.detection import with_detectability
 
         result = with_detectability(result, model, args.detect, args.alpha, args.power,
                                     effect_registry(args))
@@ -205,5 +207,5 @@ def run(args):
     print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
     if args.report:
         from doe_calib.report import design_report
-        design_report(result, args.report, registry=effect_registry(args))
+        design_report(result, args.report)
         print(f"report: {args.report}", file=sys.stderr)

@@ -6,7 +6,7 @@ import sys
 import numpy as np
 
 from doe_calib.design.augment import augment_design, diagnosis_targets
-from doe_calib.design.load_directions import parse_directions
+from doe_calib.design.discovery.load_directions import parse_directions
 from doe_calib.errors import OptionError
 from doe_calib.io.csv_files import read_measurements, write_design
 from doe_calib.io.json_file import read_json, strict_json

@@ -107,8 +107,8 @@ def _poses_in_cell(args, model, truth, robot, tool, rng):
     """``--poses`` random poses (m, N), rad/m, that satisfy the ``--constraints`` cell and keep
     clear of collisions (unless ``--no-collision``), drawn as design draws its candidates."""
     from doe_calib.design import LoadCase, read_constraints
-    from doe_calib.design.candidate_poses import feasible_candidates
-    from doe_calib.design.feasibility import build_feasibility
+    from doe_calib.design.candidates.draw import feasible_candidates
+    from doe_calib.design.candidates.feasibility import build_feasibility
 
     constraints = read_constraints(args.constraints, robot, tool)
     loads = [LoadCase(kg, com, r) for kg, com, r in [args.load] if kg > 0] if args.load else []

@@ -10,7 +10,7 @@ bodies the marker always touches (fixed to the flange and overlapping it,
 as a marker inside the sphere a heavy payload is drawn as, or never
 checked as always in contact). The
 incidence angle at the marker is a separate, smooth design constraint
-(:mod:`doe_calib.design.feasibility`).
+(:mod:`doe_calib.design.candidates.feasibility`).
 """
 from __future__ import annotations
 

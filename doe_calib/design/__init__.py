@@ -1,36 +1,36 @@
 """Experiment design: choose the measurement poses that make the parameters most precise.
 
-Per-candidate information blocks (:mod:`.problem`), the criterion objects
-D, A, E and task (:mod:`.criteria`: ``criterion("D")``), the constraints on
-a pose (:mod:`.constraints`, read from a file by :mod:`.constraint_file`, evaluated by
-:mod:`.feasibility` on candidates drawn by :mod:`.candidates`), the convex
-relaxation with its certified bound (:mod:`.relaxation`), the exact N-pose
-exchange (:mod:`.exchange`, :mod:`.updates`), the continuous IPOPT
-refinement (:mod:`.pose_refinement`, on the expressions of :mod:`.symbolic`)
-— three solvers that each return a :class:`.outcome.DesignOutcome` — and the
-pipeline (:mod:`.optimal`) behind ``doe-calib design`` with its result
-(:mod:`.result`, predicted std by name from :mod:`.predicted_std`). A design
-to discover effects (:mod:`.discovery`) chooses load cases (:mod:`.load_directions`)
-and approach sides per pose (:mod:`.discovery_candidates`) by a constrained
-exchange (:mod:`.constrained_exchange`).
+One pipeline (:mod:`.pipeline`) runs every design: candidates → information →
+relaxation → exchange (reachable from home) → refinement → bound → assessment.
+The goals that plug into it: a criterion of the poses' information
+(:mod:`.optimal`, the criteria D, A, E and task of :mod:`.criteria`), a design
+that can discover effects (:mod:`.discovery`) and the poses that add most to a
+measured campaign (:mod:`.augment`). The candidates and what they must satisfy
+live in :mod:`.candidates`, the solvers in :mod:`.solvers`; the information
+blocks in :mod:`.problem`; the results in :mod:`.result` (predicted std by name
+from :mod:`.predicted_std`) and :mod:`.augment_result`; :mod:`.comparison` sets
+designs and identification results side by side.
 """
 from doe_calib.runtime.lazy_exports import lazy_exports
 
 #: Public name → the module of this package that defines it. Each is imported on first
 #: use, so that a diagnosis's detectability (:mod:`.detectability`) does not load the
 #: solvers, the criteria and CasADi's design expressions first.
-_HOMES = {"read_constraints": "constraint_file", "Box": "constraints", "Coverage": "constraints",
-          "DesignConstraints": "constraints", "LineOfSight": "constraints",
-          "CRITERIA": "criteria", "AOptimal": "criteria", "Criterion": "criteria",
-          "DOptimal": "criteria", "EOptimal": "criteria", "TaskOptimal": "criteria",
-          "criterion": "criteria", "d_efficiency": "criteria", "efficiency": "criteria",
-          "evaluate_criterion": "criteria", "log_det": "criteria", "exact_d_design": "exchange",
-          "exact_design": "exchange", "LoadCase": "problem", "blocks_for": "problem",
-          "design_parameters": "problem", "load_configurations": "problem",
-          "task_matrix": "problem", "DesignOutcome": "outcome", "PredictedStd": "predicted_std",
-          "StdMapping": "predicted_std", "convex_relaxation": "relaxation",
-          "equivalence_ratio": "relaxation", "information": "relaxation", "relax": "relaxation",
-          "relax_d": "relaxation", "variances": "relaxation"}
+_HOMES = {"read_constraints": "candidates.constraint_file", "Box": "candidates.constraints",
+          "Coverage": "candidates.constraints", "DesignConstraints": "candidates.constraints",
+          "LineOfSight": "candidates.constraints", "CRITERIA": "criteria",
+          "AOptimal": "criteria", "Criterion": "criteria", "DOptimal": "criteria",
+          "EOptimal": "criteria", "TaskOptimal": "criteria", "criterion": "criteria",
+          "d_efficiency": "criteria", "efficiency": "criteria",
+          "evaluate_criterion": "criteria", "log_det": "criteria",
+          "exact_design": "solvers.exchange",
+          "LoadCase": "problem", "blocks_for": "problem", "design_parameters": "problem",
+          "load_configurations": "problem", "task_matrix": "problem",
+          "DesignOutcome": "solvers.outcome", "PredictedStd": "predicted_std",
+          "StdMapping": "predicted_std", "convex_relaxation": "solvers.relaxation",
+          "equivalence_ratio": "solvers.relaxation", "information": "solvers.relaxation",
+          "relax": "solvers.relaxation",
+          "variances": "solvers.relaxation"}
 
 __all__ = list(_HOMES)
 

@@ -10,7 +10,7 @@ candidates), to separate them: the D criterion of their information after
 the model's parameters are projected out, the Schur complement
 ``M_ee − M_em M_mm⁻¹ M_me`` (whose log det is ``log det M − log det M_mm``):
 the information of ``Z⊥``, their columns orthogonal to the model's
-(:func:`doe_calib.diagnosis.effect_tests.projected_columns`).
+(:func:`doe_calib.estimation.effect_signature.projected_columns`).
 """
 from __future__ import annotations
 
@@ -19,33 +19,21 @@ from typing import ClassVar
 
 import numpy as np
 
-from doe_calib.design.augment_result import AugmentResult, parameter_std
-from doe_calib.design.candidate_file import CandidatePoses, screened_candidates
-from doe_calib.design.candidate_poses import feasible_candidates
-from doe_calib.design.constraints import DesignConstraints
+from doe_calib.design.augment_result import AugmentResult, Reached, parameter_std
+from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.criteria import Criterion, DOptimal, log_det
-from doe_calib.design.discovery_candidates import (
-    approach_joints,
-    free_parameters,
-    observation_rows,
-    variants,
-    within_torque_limits,
-)
-from doe_calib.design.effect_detection import design_readings, detect_effects, detectability
-from doe_calib.design.feasibility import build_feasibility
-from doe_calib.design.load_directions import directed_loads
+from doe_calib.design.discovery.detection import design_readings, detect_effects, detectability
+from doe_calib.design.discovery.load_directions import directed_loads
+from doe_calib.design.discovery.variants import (approach_joints, free_parameters,
+                                                 observation_rows, variants, within_torque_limits)
+from doe_calib.design.pipeline import Goal, Setting, run
 from doe_calib.design.problem import blocks_for, design_parameters, load_configurations
-from doe_calib.design.reachability import (
-    free_home,
-    home_pose,
-    reachability_note,
-    reachable_choice,
-)
-from doe_calib.design.updates import regularised
+from doe_calib.design.solvers.updates import regularised
 from doe_calib.errors import SolverError
+from doe_calib.estimation.effect_signature import grown_parameters
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.io.measurements import concatenate
-from doe_calib.io.setting_ranges import level_and_power, positive, whole
+from doe_calib.io.setting_ranges import level_and_power
 from doe_calib.model.marker_model import build_model
 
 #: Targets taken from a diagnosis: its top candidate and its confounded ones, at most this many.
@@ -146,7 +134,7 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     """K new poses (each unloaded and under every load) that add most to ``measured``.
 
     The approach side of every joint whose approach backlash is among the targets or
-    ``detect`` is chosen per pose, as in a discovery design (:mod:`.discovery_candidates`);
+    ``detect`` is chosen per pose, as in a discovery design (:mod:`.variants`);
     with ``directions`` each pose also picks the one load case it is measured under.
 
     Parameters
@@ -160,7 +148,7 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     loads : sequence of LoadCase
     candidates : int or CandidatePoses
         Random feasible candidates, or named poses (e.g. another session's
-        measured postures, :func:`.candidate_file.read_candidates`).
+        measured postures, :func:`.from_file.read_candidates`).
     sigma : float
         σ of the new readings per coordinate, m.
     criterion : {"D", "A", "E"} or Criterion
@@ -177,7 +165,7 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
         joined to the home pose by a free path, their tracker beams free, are chosen
         (:func:`.reachability.reachable_choice`).
     alpha, power : float
-        Of the detectability (:mod:`.effect_detection`).
+        Of the detectability (:mod:`.detection`).
     registry : EffectRegistry, optional
     directions : tuple of tuple, optional
         Unit force directions each load may pull along
@@ -189,104 +177,140 @@ def augment_design(model, measured, n_poses: int, loads=(), candidates=5000,
     -------
     AugmentResult
     """
-    whole("n_poses", n_poses, 1, "new pose")
-    positive("sigma", sigma, "m")
-    if not isinstance(candidates, CandidatePoses):
-        whole("candidates", candidates, 1)
+    setting = Setting.checked(model, n_poses, loads, candidates, sigma, constraints, collision,
+                              home, rng, False, params, "new pose")
     level_and_power(alpha, power)
-    rng = np.random.default_rng() if rng is None else rng
-    params = model.nominal() if params is None else params
-    constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints
-    # with load directions each pose's load torques are judged with its own load case
-    feasibility = build_feasibility(model, params.values, constraints if directions is None
-                                    else replace(constraints, torque_limits=None), loads)
-    if isinstance(candidates, CandidatePoses):
-        cands = screened_candidates(feasibility, model.robot, candidates, collision)
-    else:
-        cands = feasible_candidates(feasibility, model.robot, candidates, rng, collision)
-    targets = tuple(targets)
-    before = detect or "+".join(targets)
-    effects = detect_effects(model, before, None, registry) if before else []
-    joints = approach_joints(model, effects)
-    cand = None
-    if directions is not None or joints:
-        cand = variants(cands.q, directed_loads(loads, directions or (DOWN,)), joints,
-                        model.robot.n_joints, every=directions is None)
-        cand = cand.subset(within_torque_limits(model, params.values, constraints, cand))
+    goal = AugmentGoal(measured, Criterion.from_name(criterion), tuple(targets), detect, alpha,
+                       power, registry, directions)
+    return run(goal, setting, candidates)
 
-    def identifiable(mdl, start):
-        """``start`` with what the candidates (each variant of them, or, without variants,
-        they and the campaign's poses) cannot identify fixed."""
+
+@dataclass(frozen=True, eq=False)
+class AugmentInformation:
+    """The information stage of an augmentation: the model's parameters (what the candidates
+    cannot identify fixed); the model and parameters the information is of (with the
+    targets' effects when there are targets) and its criterion (or :class:`Separation`); the
+    effects whose detectability is reported; the variants of the candidates (approach sides,
+    load case) or None; the campaign's information ``m0`` (p, p), the candidates' ``blocks``
+    (K, r, p), the candidate poses ``q`` (P, N), rad (m), and the pose of each candidate."""
+
+    params: object
+    design_model: object
+    design_params: object
+    criterion: Criterion
+    effects: list
+    cand: object
+    m0: np.ndarray
+    blocks: np.ndarray
+    q: np.ndarray
+    pose_of: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Added:
+    """The exchange stage of an augmentation: the candidates added (:func:`exchange_from`)."""
+
+    indices: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class AugmentGoal(Goal):
+    """The K poses that add most to a measured campaign (the settings of
+    :func:`augment_design`)."""
+
+    measured: object
+    criterion: Criterion
+    targets: tuple = ()
+    detect: str = ""
+    alpha: float = 0.05
+    power: float = 0.8
+    registry: object = None
+    directions: tuple | None = None
+
+    @property
+    def own_load_case(self) -> bool:
+        """With load directions each pose's load torques are judged with its own load case."""
+        return self.directions is not None
+
+    def information(self, setting, candidates, stage) -> AugmentInformation:
+        model, loads, sigma, rng = setting.model, setting.loads, setting.sigma, setting.rng
+        q, measured = candidates.poses.q, self.measured
+        before = self.detect or "+".join(self.targets)
+        effects = detect_effects(model, before, None, self.registry) if before else []
+        joints = approach_joints(model, effects)
+        cand = None
+        if self.directions is not None or joints:
+            cand = variants(q, directed_loads(loads, self.directions or (DOWN,)), joints,
+                            model.robot.n_joints, every=self.directions is None)
+            cand = cand.subset(within_torque_limits(model, setting.params.values,
+                                                    setting.constraints, cand))
+
+        def identifiable(mdl, start):
+            """``start`` with what the candidates (each variant of them, or, without variants,
+            they and the campaign's poses) cannot identify fixed."""
+            if cand is None:
+                return design_parameters(mdl, start, np.r_[q, measured.configurations.q],
+                                         loads, rng=rng)
+            return free_parameters(start, observation_rows(mdl, start.values, cand) / sigma,
+                                   cand)
+
+        params = identifiable(model, setting.params)
+        design_model, design_params, crit = model, params, self.criterion
+        if self.targets:
+            added_effects = [e for spec in self.targets
+                             for e in detect_effects(model, spec, None, self.registry)]
+            design_model = build_model(model.robot, model.tool,
+                                       tuple(model.effects) + tuple(added_effects))
+            design_params = identifiable(design_model, grown_parameters(design_model, params))
+            free_names = np.array(design_params.names)[design_params.free]
+            own = np.flatnonzero(np.isin(free_names, np.array(params.names)[params.free]))
+            crit = Separation(tuple(int(i) for i in own))
+        m0 = measured_information(design_model, design_params, measured)
         if cand is None:
-            return design_parameters(mdl, start, np.r_[cands.q, measured.configurations.q],
-                                     loads, rng=rng)
-        return free_parameters(start, observation_rows(mdl, start.values, cand) / sigma, cand)
+            blocks = blocks_for(design_model, design_params, q, loads, sigma)
+            pose_of = np.arange(len(q))
+        else:
+            free = design_params.free
+            blocks = (observation_rows(design_model, design_params.values, cand)[..., free]
+                      * design_params.scales[free] / sigma)
+            pose_of = cand.pose
+        return AugmentInformation(params, design_model, design_params, crit, effects, cand, m0,
+                                  blocks, q, pose_of)
 
-    params = identifiable(model, params)
-    design_model, design_params, crit = model, params, Criterion.from_name(criterion)
-    if targets:
-        added_effects = [e for spec in targets
-                         for e in detect_effects(model, spec, None, registry)]
-        design_model = build_model(model.robot, model.tool,
-                                   tuple(model.effects) + tuple(added_effects))
-        design_params = identifiable(design_model, with_new_free(design_model, params))
-        free_names = np.array(design_params.names)[design_params.free]
-        own = np.flatnonzero(np.isin(free_names, np.array(params.names)[params.free]))
-        crit = Separation(tuple(int(i) for i in own))
-    m0 = measured_information(design_model, design_params, measured)
-    if cand is None:
-        blocks = blocks_for(design_model, design_params, cands.q, loads, sigma)
-        pose_of = np.arange(len(cands.q))
-    else:
-        free = design_params.free
-        blocks = (observation_rows(design_model, design_params.values, cand)[..., free]
-                  * design_params.scales[free] / sigma)
-        pose_of = cand.pose
+    def exchange(self, setting, info, relaxed, allowed, stage) -> Added:
+        sub = np.flatnonzero(allowed[info.pose_of])
+        return Added(sub[exchange_from(info.m0, info.blocks[sub], setting.n_poses,
+                                       info.criterion, pose_of=info.pose_of[sub])])
 
-    def choose(allowed):
-        sub = np.flatnonzero(allowed[pose_of])
-        return sub[exchange_from(m0, blocks[sub], n_poses, crit, pose_of=pose_of[sub])]
-
-    q_used, reach = cands.q, {}
-    if collision is None:
-        chosen = choose(np.ones(len(cands.q), bool))
-    else:
-        start = home_pose(model.robot, constraints, home)
-        start, moved = free_home(collision, start, model.robot, home is not None, cands.q)
-        chosen, q_used, replaced = reachable_choice(choose, cands.q, pose_of, collision, start,
-                                                    model.robot,
-                                                    *constraints.bounds(model.robot))
-        reach = {"home": [float(v) for v in start * model.robot.display_factors],
-                 "replaced": dict(replaced),
-                 "note": reachability_note(start, model.robot, replaced, 0, moved)}
-    poses = pose_of[chosen]
-    added = blocks[chosen]
-    m1 = m0 + np.einsum("kri,krj->ij", added, added)
-    names = [cands.names[k] for k in poses] if cands.names else \
-        [f"new{i + 1}" for i in range(n_poses)]
-    cfg = (load_configurations(model, params.values, q_used[chosen], loads, names)
-           if cand is None else
-           replace(cand, q=q_used).configurations(model, params.values, chosen, names))
-    detected = ((), ())
-    if before:
-        after = concatenate([measured, design_readings(model, params.values, cfg, sigma)])
-        detected = tuple(detectability(model, params, m, effects, alpha, power)
-                         for m in (measured, after))
-    return AugmentResult(
-        configurations=cfg, criterion=crit.name, targets=targets,
-        value_before=float(crit.value(m0)), value_after=float(crit.value(m1)),
-        std_before=parameter_std(design_params, m0), std_after=parameter_std(design_params, m1),
-        detect_before=detected[0], detect_after=detected[1], candidates=cands.to_dict(),
-        measured_configurations=len(measured.configurations), sigma_mm=1000.0 * sigma,
-        robot=model.robot, model=model.spec, reachability=reach)
-
-
-def with_new_free(big, params):
-    """``big``'s parameter set: ``params``' values and free flags, its new parameters free at 0
-    (as :func:`doe_calib.diagnosis.effect_tests.augmented`, for several effects)."""
-    start = big.nominal()
-    values, free, reasons = start.values.copy(), start.free.copy(), list(start.fixed_reason)
-    for i, name in enumerate(params.names):
-        k = start.names.index(name)
-        values[k], free[k], reasons[k] = params.values[i], params.free[i], params.fixed_reason[i]
-    return replace(start, values=values, free=free, fixed_reason=tuple(reasons))
+    def assessment(self, setting, candidates, info, relaxed, choice, refined, bound,
+                   stage) -> AugmentResult:
+        model, n_poses, params, crit = setting.model, setting.n_poses, info.params, info.criterion
+        cands, chosen, measured = candidates.poses, choice.chosen, self.measured
+        poses = info.pose_of[chosen]
+        added = info.blocks[chosen]
+        m1 = info.m0 + np.einsum("kri,krj->ij", added, added)
+        names = [cands.names[k] for k in poses] if cands.names else \
+            [f"new{i + 1}" for i in range(n_poses)]
+        cfg = (load_configurations(model, params.values, choice.q[chosen], setting.loads, names)
+               if info.cand is None else
+               replace(info.cand, q=choice.q).configurations(model, params.values, chosen,
+                                                             names))
+        detected = ((), ())
+        if self.detect or self.targets:
+            after = concatenate([measured, design_readings(model, params.values, cfg,
+                                                           setting.sigma)])
+            detected = tuple(detectability(model, params, m, info.effects, self.alpha,
+                                           self.power) for m in (measured, after))
+        reach, r = None, choice.reachability
+        if r is not None:
+            reach = Reached(r.to_dict(model.robot)["home"], dict(r.replaced), r.note(model.robot))
+        design_params = info.design_params
+        return AugmentResult(
+            configurations=cfg, criterion=crit.name, targets=self.targets,
+            value_before=float(crit.value(info.m0)), value_after=float(crit.value(m1)),
+            std_before=parameter_std(design_params, info.m0),
+            std_after=parameter_std(design_params, m1), detect_before=detected[0],
+            detect_after=detected[1], candidates=cands.count(),
+            measured_configurations=len(measured.configurations),
+            sigma_mm=1000.0 * setting.sigma, robot=model.robot, model=model.spec,
+            reachability=reach)

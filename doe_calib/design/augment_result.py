@@ -2,11 +2,12 @@
 from __future__ import annotations
 
 import textwrap
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
 from doe_calib.design.detectability import Detectability
+from doe_calib.design.result import CandidateCount
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.robot import Robot
@@ -24,6 +25,17 @@ def parameter_std(params, m: np.ndarray) -> dict:
     free = [p for p, f in zip(params.parameters, params.free) if f]
     return {p.name: (float(np.sqrt(s) * p.scale * p.display_factor), p.display_unit)
             for p, s in zip(free, var)}
+
+
+@dataclass(frozen=True)
+class Reached:
+    """The new poses kept reachable: the ``home`` pose (deg, mm), the chosen poses
+    ``replaced`` (reason → count) because no free path joins them to home or a tracker beam
+    is blocked, and that in a ``note``."""
+
+    home: list
+    replaced: dict
+    note: str
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,17 +60,15 @@ class AugmentResult:
         too when there are targets. ``inf`` where not separable.
     detect_before, detect_after : tuple of Detectability
         Of the targets (or the effects asked for) in the campaign, and with the new poses.
-    candidates : dict
+    candidates : CandidateCount
         How many candidates were drawn or read, kept and removed by which constraint.
     measured_configurations : int
     sigma_mm : float
         σ of the new readings, mm.
     robot : Robot
     model : str
-    reachability : dict
-        With a collision model: ``home`` (deg, mm), ``replaced`` (reason → chosen
-        poses replaced because no free path joins them to home, or a beam is
-        blocked) and ``note``, in words; empty without.
+    reachability : Reached or None
+        None without a collision model.
     """
 
     configurations: Configurations
@@ -70,12 +80,12 @@ class AugmentResult:
     std_after: dict
     detect_before: tuple
     detect_after: tuple
-    candidates: dict
+    candidates: CandidateCount
     measured_configurations: int
     sigma_mm: float
     robot: Robot
     model: str
-    reachability: dict = field(default_factory=dict)
+    reachability: Reached | None = None
 
     def summary(self) -> str:
         k = len(dict.fromkeys(self.configurations.pose))
@@ -85,13 +95,10 @@ class AugmentResult:
                  f"configurations ({aim})",
                  f"  criterion {self.criterion}: {self.value_before:.4g} → "
                  f"{self.value_after:.4g}",
-                 f"  candidates: {self.candidates.get('kept')} kept of "
-                 f"{self.candidates.get('drawn')}"
-                 + (f" from {self.candidates['source']}" if self.candidates.get("source")
-                    else ""),
+                 f"  candidates: {self.candidates.kept} kept of {self.candidates.drawn}"
+                 + (f" from {self.candidates.source}" if self.candidates.source else ""),
                  "  poses: " + ", ".join(dict.fromkeys(self.configurations.pose)),
-                 *([f"  {self.reachability['note']}"] if self.reachability.get("note")
-                   else []),
+                 *([f"  {self.reachability.note}"] if self.reachability else []),
                  "", "Predicted std (before → after)"]
         for name, (after, unit) in self.std_after.items():
             lines.append(f"  {name:<28} {self.std_before[name][0]:>10.4g} → {after:<10.4g} "
@@ -117,10 +124,10 @@ class AugmentResult:
                 "std_after": {n: [_num(s), u] for n, (s, u) in self.std_after.items()},
                 "detectability_before": [d.to_dict() for d in self.detect_before],
                 "detectability_after": [d.to_dict() for d in self.detect_after],
-                "candidates": self.candidates,
+                "candidates": self.candidates.to_dict(),
                 "measured_configurations": self.measured_configurations,
                 "sigma_mm": self.sigma_mm, "robot": self.robot.to_dict(),
-                "reachability": self.reachability,
+                "reachability": {} if self.reachability is None else asdict(self.reachability),
                 "configurations": [{"pose": p, "q": list(q * f), "wrench": list(w),
                                     "approach": [int(s) for s in a]}
                                    for p, q, w, a in zip(cfg.pose, cfg.q, cfg.wrench,
@@ -140,12 +147,17 @@ class AugmentResult:
                               float).reshape(len(rows), robot.n_joints))
         std = {k: {n: (np.inf if s is None else float(s), u) for n, (s, u) in d[k].items()}
                for k in ("std_before", "std_after")}
-        return cls(cfg, d["criterion"], tuple(d["targets"]), float(d["value_before"]),
-                   float(d["value_after"]), std["std_before"], std["std_after"],
-                   tuple(Detectability.from_dict(r) for r in d["detectability_before"]),
-                   tuple(Detectability.from_dict(r) for r in d["detectability_after"]),
-                   dict(d["candidates"]), int(d["measured_configurations"]),
-                   float(d["sigma_mm"]), robot, d["model"], dict(d.get("reachability", {})))
+        return cls(configurations=cfg, criterion=d["criterion"], targets=tuple(d["targets"]),
+                   value_before=float(d["value_before"]), value_after=float(d["value_after"]),
+                   std_before=std["std_before"], std_after=std["std_after"],
+                   detect_before=tuple(Detectability.from_dict(r)
+                                       for r in d["detectability_before"]),
+                   detect_after=tuple(Detectability.from_dict(r)
+                                      for r in d["detectability_after"]),
+                   candidates=CandidateCount(**d["candidates"]),
+                   measured_configurations=int(d["measured_configurations"]),
+                   sigma_mm=float(d["sigma_mm"]), robot=robot, model=d["model"],
+                   reachability=Reached(**d["reachability"]) if d.get("reachability") else None)
 
     @classmethod
     def from_json(cls, path) -> "AugmentResult":

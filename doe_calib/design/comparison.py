@@ -1,6 +1,6 @@
 """Side-by-side precision of designs and identification results.
 
-For each source — a design (:class:`~doe_calib.design.result.DesignResult`,
+For each source — a design (:class:`.result.DesignResult`,
 whose covariance is predicted as σ²(BᵀB)⁻¹ at its configurations) or an
 identification result (which carries its covariance) — the standard
 deviation of every parameter (display units: mm, deg, µrad/(N·m)) and,
@@ -156,11 +156,6 @@ class Comparison:
     def __str__(self) -> str:
         return self.summary()
 
-    def _repr_html_(self) -> str:
-        """The comparison report's content for a notebook: tables and bar charts."""
-        from doe_calib.report.compare import compare_fragment
-        return str(compare_fragment(self))
-
 
 def load_source(path, registry=None):
     """A design or identification-result JSON file, by its ``format`` key (``registry``:
@@ -254,27 +249,3 @@ def compare(sources, labels=None, sigma: float | None = None, task=None,
                       tuple(1000.0 * np.asarray(task_point, float)),
                       np.zeros((0, len(sources))) if task is None else np.array(tcp).T)
 
-
-def plot_std(comparison: Comparison, path) -> None:
-    """Grouped bars of every parameter's std (log scale, display units) saved to ``path``.
-
-    Drawn on a bare matplotlib Figure (Agg canvas): no pyplot state, no display.
-    """
-    from matplotlib.figure import Figure
-
-    std = np.where(np.isfinite(comparison.std), comparison.std, 0.0)
-    n, s = std.shape
-    width = 0.8 / s
-    fig = Figure(figsize=(max(6.0, 0.45 * n * max(s, 2)), 4.5))
-    ax = fig.add_subplot()
-    for j, label in enumerate(comparison.labels):
-        ax.bar(np.arange(n) + (j - (s - 1) / 2) * width, std[:, j], width, label=label)
-    ax.set_yscale("log")
-    ax.set_xticks(np.arange(n))
-    ax.set_xticklabels([f"{a} [{u}]" for a, u in zip(comparison.names, comparison.units)],
-                       rotation=90, fontsize=7)
-    ax.set_ylabel("standard deviation (parameter's unit)")
-    ax.set_title("Predicted / identified parameter std")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)

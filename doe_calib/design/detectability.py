@@ -1,6 +1,6 @@
 """What a campaign can reveal of one effect: the record ``design --detect`` writes.
 
-The definition (computed by :mod:`doe_calib.design.effect_detection`): the
+The definition (computed by :mod:`doe_calib.design.discovery.detection`): the
 effect's weighted columns at zero effect, projected onto the orthogonal
 complement of the model's own free observation matrix; ``min_detectable`` is
 the smallest Euclidean size of the effect's parameter vector at which the χ²

@@ -1,77 +1,236 @@
-"""The design pipeline: feasible candidates → relaxation (bound) → exact exchange →
-continuous refinement → bound recomputed with the refined poses → result.
+"""The D-, A-, E- or task-optimal design: the criterion goal of the design pipeline.
+
+Its stages (:mod:`.pipeline`): the information blocks of the candidates, the
+convex relaxation of the criterion (its certified bound), the exact exchange,
+the continuous IPOPT refinement, the bound recomputed with the refined poses
+among the candidates, and the assessment: efficiencies, the equivalence-theorem
+check and the comparison with random designs of the same size.
 """
 from __future__ import annotations
 
-import logging
-import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.design.candidate_file import CandidatePoses, screened_candidates
-from doe_calib.design.candidate_poses import feasible_candidates
-from doe_calib.design.clearances import collision_note, pose_clearances
-from doe_calib.design.constraints import DesignConstraints
-from doe_calib.design.criteria import (
-    AOptimal,
-    Criterion,
-    DOptimal,
-    EOptimal,
-    TaskOptimal,
-    check,
-    log_det,
-)
-from doe_calib.design.exchange import exact_design
-from doe_calib.design.feasibility import build_feasibility
-from doe_calib.design.pose_refinement import refine as refine_poses
-from doe_calib.design.reachability import (
-    free_home,
-    home_pose,
-    reachability_note,
-    unreachable,
-)
-from doe_calib.design.problem import (
-    blocks_for,
-    check_enough_poses,
-    design_parameters,
-    load_configurations,
-    task_matrix,
-)
-from doe_calib.design.relaxation import (
-    equivalence_ratio,
-    information,
-    packed_information,
-    packed_size,
-    relax,
-)
-from doe_calib.design.result import DesignResult
+from doe_calib.design.candidates.clearances import collision_note, pose_clearances
+from doe_calib.design.candidates.constraints import DesignConstraints
+from doe_calib.design.candidates.from_file import CandidatePoses
+from doe_calib.design.candidates.reachability import unreachable
+from doe_calib.design.criteria import (AOptimal, Criterion, DOptimal, EOptimal, TaskOptimal,
+                                       check, log_det)
+from doe_calib.design.pipeline import Goal, Setting, run
+from doe_calib.design.predicted_std import design_std
+from doe_calib.design.problem import (blocks_for, check_enough_poses, design_parameters,
+                                      load_configurations, task_matrix)
+from doe_calib.design.result import Coverage, DesignResult, Equivalence, RandomDesigns
+from doe_calib.design.solvers.exchange import exact_design
+from doe_calib.design.solvers.pose_refinement import refine as refine_poses
+from doe_calib.design.solvers.relaxation import (equivalence_ratio, information,
+                                                 packed_information, packed_size, relax)
 from doe_calib.errors import OptionError, SolverError
-from doe_calib.io.setting_ranges import positive, whole
 
-log = logging.getLogger(__name__)
+#: Random designs of the same size the design is compared with.
+RANDOM_DESIGNS = 100
 
-_RANDOM_DESIGNS = 100
-#: Rounds of exchange with unreachable chosen poses removed from the candidates.
-_REACH_ROUNDS = 8
 
-class _Stages:
-    """Reports each stage to ``progress(stage, note)`` and logs its duration."""
+@dataclass(frozen=True, eq=False)
+class CriterionInformation:
+    """The information stage of a criterion design: the parameters designed for (those no
+    candidate identifies fixed), the criterion, the task matrix T (or None), each
+    candidate's scaled, weighted rows ``blocks`` (K, r, p) and its information ``packed``
+    (:func:`.relaxation.packed_information`: every sweep over the candidates reads it),
+    kept at the start of ``room``, which holds the refined poses' rows after it so that the
+    bound's relaxation copies none of it; the candidate poses ``q`` (K, N), rad (m)."""
 
-    def __init__(self, progress):
-        self.progress, self.name, self.start = progress, None, time.perf_counter()
+    params: object
+    criterion: Criterion
+    task: np.ndarray | None
+    blocks: np.ndarray
+    packed: np.ndarray
+    room: np.ndarray
+    q: np.ndarray
+    pose_of: np.ndarray
 
-    def __call__(self, name: str, note: str = "") -> None:
-        now = time.perf_counter()
-        if self.name is not None and name != self.name:
-            log.info("design stage %s: %.2f s", self.name, now - self.start)
-        if name != self.name:
-            self.name, self.start = name, now
-        if self.progress is not None:
-            self.progress(name, note)
 
-    def iterations(self, name):
-        return lambda it, gap: self(name, f"iteration {it}, gap {gap:.3g}")
+@dataclass(frozen=True, eq=False)
+class Refined:
+    """The refinement stage: IPOPT's outcome and the poses kept, rad (m), those unreachable
+    from home back at their candidate (``reverted`` of them)."""
+
+    outcome: object
+    q: np.ndarray
+    reverted: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class Bound:
+    """The bound stage: the relaxation that certifies the bound, the information it read
+    (``packed``), and the design's blocks when they were computed for it."""
+
+    relaxed: object
+    packed: np.ndarray
+    design: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class CriterionGoal(Goal):
+    """Maximise a criterion of the N poses' information (D, A, E or task)."""
+
+    criterion: object = "D"
+    task: object = None
+    task_point: tuple = (0.0, 0.0, 0.0)
+
+    def information(self, setting, candidates, stage) -> CriterionInformation:
+        model, n_poses, loads = setting.model, setting.n_poses, setting.loads
+        q = candidates.poses.q
+        if len(q) < n_poses:
+            raise SolverError(f"only {len(q)} feasible candidates for {n_poses} poses")
+        params = design_parameters(model, setting.params, q, loads, rng=setting.rng)
+        t = None if self.task is None else task_matrix(model, params, self.task,
+                                                        self.task_point)
+        crit = Criterion.from_name(self.criterion, t)
+        stage("information", f"{len(q)} candidates")
+        blocks = blocks_for(model, params, q, loads, setting.sigma)
+        check_enough_poses(n_poses, blocks, model.tool.n_markers, len(loads), setting.rng)
+        room = np.empty((len(blocks) + (n_poses if setting.refine and candidates.refinable
+                                        else 0), packed_size(blocks.shape[2])))
+        packed = packed_information(blocks, out=room[:len(blocks)])
+        return CriterionInformation(params, crit, t, blocks, packed, room, q,
+                                    np.arange(len(q)))
+
+    def relaxation(self, setting, info, stage):
+        stage("relaxation", f"{info.criterion.name} criterion over {len(info.blocks)} "
+                            f"candidates")
+        return relax(info.blocks, info.criterion, progress=stage.iterations("relaxation"),
+                     packed=info.packed)
+
+    def exchange(self, setting, info, relaxed, allowed, stage):
+        n_poses, cov = setting.n_poses, setting.constraints.coverage
+        stage("exchange", f"{n_poses} poses")
+        pool = np.flatnonzero(allowed)
+        if len(pool) < n_poses:
+            raise SolverError(f"only {len(pool)} candidates a program can reach for "
+                              f"{n_poses} poses")
+        every = len(pool) == len(allowed)  # no copy of every block when none is removed
+        made = exact_design(info.blocks if every else info.blocks[pool], n_poses,
+                            info.criterion, relaxed.weights[pool], None,
+                            None if cov is None else cov.bins(info.q)[pool],
+                            0 if cov is None else cov.min_bins,
+                            packed=info.packed if every else info.packed[pool])
+        return replace(made, indices=pool[made.indices])
+
+    def refinement(self, setting, candidates, info, choice, stage) -> Refined:
+        model, robot, collision = setting.model, setting.model.robot, setting.collision
+        start = choice.q[choice.chosen]
+        stage("refinement", f"IPOPT on {start.size} joint angles")
+        outcome = refine_poses(model, info.params, setting.loads, setting.sigma, start,
+                               candidates.feasibility, info.criterion, collision=collision)
+        q, reverted = outcome.q, 0
+        if choice.reachability is not None and outcome.accepted:
+            checked = unreachable(collision, q, choice.reachability.home, robot,
+                                  *setting.constraints.bounds(robot))
+            back = np.array([why is not None for why, _ in checked])
+            q = np.where(back[:, None], start, [used for _, used in checked])
+            reverted = int(back.sum())
+        return Refined(outcome, q, reverted)
+
+    def bound(self, setting, info, relaxed, refined, stage) -> Bound:
+        if refined is None or not refined.outcome.accepted:
+            return Bound(relaxed, info.packed)
+        stage("bound", "relaxation with the refined poses as candidates")
+        design = blocks_for(setting.model, info.params, refined.q, setting.loads, setting.sigma)
+        packed_information(design, out=info.room[len(info.blocks):])
+        relaxed = relax(None, info.criterion,
+                        start=np.r_[relaxed.weights, np.zeros(setting.n_poses)],
+                        progress=stage.iterations("bound"), packed=info.room, screen=True)
+        return Bound(relaxed, info.room, design)
+
+    def assessment(self, setting, candidates, info, relaxed, choice, refined, bound,
+                   stage) -> DesignResult:
+        model, n_poses, crit, params = setting.model, setting.n_poses, info.criterion, info.params
+        q = choice.q[choice.chosen] if refined is None else refined.q
+        design = (blocks_for(model, params, q, setting.loads, setting.sigma)
+                  if bound.design is None else bound.design)
+        m = information(design, np.ones(n_poses))
+        value, limit = crit.value(m), bound.relaxed.bound(n_poses)
+        p = m.shape[0]
+        efficiencies = {crit.name: crit.efficiency(value, limit, p)}
+        if not isinstance(crit, DOptimal):
+            stage("bound", "D relaxation for the D-efficiency")
+            d_bound = relax(None, packed=bound.packed, screen=True).bound(n_poses)
+            efficiencies["D"] = DOptimal().efficiency(log_det(m), d_bound, p)
+        stage("assessment")
+        reported = [DOptimal(), AOptimal(), EOptimal()] + ([] if info.task is None
+                                                           else [TaskOptimal(info.task)])
+        ratio = equivalence_ratio(None, m / n_poses, crit, packed=bound.packed)
+        target = crit.target(p)
+        versus = RandomDesigns.of([log_det(information(
+            info.blocks[setting.rng.choice(len(info.q), n_poses, replace=False)],
+            np.ones(n_poses))) for _ in range(RANDOM_DESIGNS)], log_det(m), n_poses, p)
+        reach = choice.reachability
+        if reach is not None and refined is not None:
+            reach = replace(reach, reverted=refined.reverted)
+        cands, constraints = candidates.poses, _constraints(setting, reach)
+        clearances, notes = (), (versus.words(n_poses), *_notes(setting, info, bound, m))
+        if setting.collision is not None:
+            stage("assessment", f"clearances at the {n_poses} poses")
+            clearances = pose_clearances(setting.collision, q)
+            notes += (collision_note(setting.collision, cands.removed, cands.drawn, clearances),
+                      reach.note(model.robot))
+        names = [cands.names[k] for k in choice.chosen] if cands.names else None
+        stages = {"relaxation": relaxed.to_dict(), "exchange": choice.made.to_dict()}
+        if refined is not None:
+            stages["refinement"] = refined.outcome.to_dict()
+        return DesignResult(
+            robot=model.robot, tool=model.tool, model=model.spec,
+            configurations=load_configurations(model, params.values, q, setting.loads, names),
+            criterion=crit.name, value=value, bound=limit, efficiency=efficiencies[crit.name],
+            predicted_std=design_std(params, m), constraints=constraints, notes=notes,
+            efficiencies=efficiencies, criteria={c.name: c.value(m) for c in reported},
+            equivalence=Equivalence(crit.name, crit.statistic, target,
+                                    target * bound.relaxed.ratio, target * ratio, 1.0 / ratio),
+            candidates=cands.count(), coverage=_coverage(setting, q),
+            versus_random=versus,
+            sigma_mm=1000.0 * setting.sigma, clearances=clearances, stages=stages)
+
+
+def _notes(setting, info, bound, m) -> tuple:
+    """The criterion, the relaxation and, for the task criterion, the task poses' predicted
+    RMS std, in words."""
+    crit, params, relaxed, p = info.criterion, info.params, bound.relaxed, m.shape[0]
+    notes = (f"{crit.name} criterion: {crit.words}",
+             f"relaxation over {len(bound.packed)} candidates: equivalence ratio "
+             f"{relaxed.ratio:.4g} after {relaxed.iterations} iterations; {p} parameters "
+             f"designed for, {int((~params.free).sum())} fixed as not identifiable by any "
+             f"candidate")
+    if info.task is not None:
+        task = TaskOptimal(info.task).value(m)
+        n_task = len(info.task) // 3
+        notes += (f"task: predicted RMS position std at the {n_task} task poses "
+                  f"{1000 * np.sqrt(-task / n_task):.4g} mm (σ = {1000 * setting.sigma:g} mm)",)
+    return notes
+
+
+def _constraints(setting, reach) -> dict:
+    """The constraints as used (file units), with the loads, the collision model and the
+    reachability when checked."""
+    model, collision = setting.model, setting.collision
+    used = setting.constraints.to_dict(model.robot, model.tool)
+    used["loads"] = [ld.spec() for ld in setting.loads]
+    if collision is not None:
+        used["collision"] = collision.summary()
+        used["reachability"] = reach.to_dict(model.robot)
+    return used
+
+
+def _coverage(setting, q) -> Coverage | None:
+    """Bins of the coverage joint used by the poses (None without a coverage constraint)."""
+    cov = setting.constraints.coverage
+    if cov is None:
+        return None
+    used = cov.used(q)
+    return Coverage(setting.model.robot.joints[cov.joint].name, used, cov.min_bins,
+                    len(used) >= cov.min_bins)
 
 
 def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePoses = 20000,
@@ -91,7 +250,7 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     loads : sequence of LoadCase
     candidates : int or CandidatePoses
         Feasible candidate poses, drawn uniformly inside the joint bounds; or
-        named poses (:func:`.candidate_file.read_candidates`: taught, known-safe
+        named poses (:func:`.from_file.read_candidates`: taught, known-safe
         or measured ones) screened by the same constraints, designed over as
         they are (no continuous refinement), the chosen ones keeping their names.
     sigma : float
@@ -111,7 +270,9 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
     params : ParameterSet, optional
         Expected values (default nominal); parameters no candidate can
         identify are fixed.
-    progress : callable(stage, note), optional
+    progress : callable(done, total, note), optional
+        Stages begun of :data:`.pipeline.STAGES` (total None for a stage's iterations)
+        and what the stage does.
     collision : CollisionModel, optional
         Candidates closer than its clearances are rejected, refined poses
         that lose it step back, and each pose's clearance is reported
@@ -127,175 +288,17 @@ def optimal_design(model, n_poses: int, loads=(), candidates: int | CandidatePos
         free candidate nearest it when it is not free
         (:func:`.reachability.free_home`); recorded in the result's
         ``constraints["reachability"]["home"]`` (deg, mm).
+    discovery : DiscoveryGoal, optional
+        Design to discover effects (:mod:`.goal`), D criterion only.
     """
     if isinstance(criterion, TaskOptimal):
         raise OptionError("ask for the task criterion by name, criterion=\"task\", with task= "
                           "poses: its matrix depends on the parameters designed for")
     check(criterion, task)
-    whole("n_poses", n_poses, 1, "pose")
-    positive("sigma", sigma, "m")
-    if not isinstance(candidates, CandidatePoses):
-        whole("candidates", candidates, 1)
-    rng = np.random.default_rng() if rng is None else rng
-    params = model.nominal() if params is None else params
-    constraints = DesignConstraints.from_robot(model.robot) if constraints is None else constraints
-    stage = _Stages(progress)
-    # a discovery design judges each pose's load torques with its own load case
-    feasibility = build_feasibility(model, params.values, constraints if discovery is None
-                                    else replace(constraints, torque_limits=None), loads)
-    if isinstance(candidates, CandidatePoses):
-        stage("candidates", f"screening the {len(candidates)} poses of {candidates.source}")
-        cands, refine = screened_candidates(feasibility, model.robot, candidates, collision), False
-    else:
-        stage("candidates", f"drawing {candidates} feasible poses")
-        cands = feasible_candidates(feasibility, model.robot, candidates, rng, collision)
-    if len(cands.q) < n_poses:
-        raise SolverError(f"only {len(cands.q)} feasible candidates for {n_poses} poses")
-    if discovery is not None:
-        if criterion != "D":
-            raise OptionError(f"--detect-size and --load-directions designs maximise the D "
-                              f"criterion; got "
-                              f"--criterion {criterion}")
-        from doe_calib.design.discovery import discovery_design  # its statistics load slowly
-
-        return discovery_design(model, params, cands.q, loads, n_poses, sigma, discovery,
-                                constraints, cands.to_dict(), progress=stage, refine=refine,
-                                feasibility=feasibility, collision=collision, home=home)
-    params = design_parameters(model, params, cands.q, loads, rng=rng)
-    t = None if task is None else task_matrix(model, params, task, task_point)
-    crit = Criterion.from_name(criterion, t)
-    stage("information", f"{len(cands.q)} candidates")
-    blocks = blocks_for(model, params, cands.q, loads, sigma)
-    check_enough_poses(n_poses, blocks, model.tool.n_markers, len(loads), rng)
-    stage("relaxation", f"{crit.name} criterion over {len(blocks)} candidates")
-    # kept: every sweep over the candidates reads it; room for the refined poses' rows, so the
-    # bound's relaxation over candidates and refined poses copies none of it
-    room = np.empty((len(blocks) + (n_poses if refine else 0), packed_size(blocks.shape[2])))
-    packed = packed_information(blocks, out=room[:len(blocks)])
-    relaxed = relax(blocks, crit, progress=stage.iterations("relaxation"), packed=packed)
-    stages = {"relaxation": relaxed.to_dict()}
-    stage("exchange", f"{n_poses} poses")
-    cov = constraints.coverage
-    given, moved = home is not None, ""
-    home = None if collision is None else home_pose(model.robot, constraints, home)
-    if home is not None:
-        home, moved = free_home(collision, home, model.robot, given, cands.q)
-    keep, replaced, verdict = np.ones(len(cands.q), bool), {}, {}
-    pool_q, bounds = cands.q.copy(), constraints.bounds(model.robot)
-    for _ in range(_REACH_ROUNDS):
-        pool = np.flatnonzero(keep)
-        if len(pool) < n_poses:
-            raise SolverError(f"only {len(pool)} candidates a program can reach for {n_poses} "
-                              f"poses: " + ", ".join(f"{n} {why}" for why, n in replaced.items()))
-        every = len(pool) == len(keep)  # no copy of every block when none is removed
-        exchanged = exact_design(blocks if every else blocks[pool], n_poses, crit,
-                                 relaxed.weights[pool], None,
-                                 None if cov is None else cov.bins(cands.q)[pool],
-                                 0 if cov is None else cov.min_bins,
-                                 packed=packed if every else packed[pool])
-        chosen = pool[exchanged.indices]
-        if home is None:
-            break
-        todo = [k for k in chosen if k not in verdict]
-        for k, (why, used) in zip(todo, unreachable(collision, pool_q[todo], home, model.robot,
-                                                     *bounds)):
-            verdict[k], pool_q[k] = why, used
-        bad = [k for k in chosen if verdict[k] is not None]
-        if not bad:
-            break
-        for k in bad:
-            keep[k] = False
-            replaced[verdict[k]] = replaced.get(verdict[k], 0) + 1
-    else:
-        raise SolverError(f"after {_REACH_ROUNDS} exchanges some chosen poses are still "
-                          f"unreachable: " + ", ".join(f"{n} {why}" for why, n in replaced.items())
-                          + "; give more candidates, another --home or fewer constraints")
-    stages["exchange"] = exchanged.to_dict()
-    q, refinement, reverted, design = pool_q[chosen], None, 0, None
-    if refine:
-        stage("refinement", f"IPOPT on {q.size} joint angles")
-        refinement = refine_poses(model, params, loads, sigma, q, feasibility, crit,
-                                  collision=collision)
-        q, stages["refinement"] = refinement.q, refinement.to_dict()
-        if home is not None and refinement.accepted:
-            checked = unreachable(collision, q, home, model.robot, *bounds)
-            back = np.array([why is not None for why, _ in checked])
-            q = np.where(back[:, None], pool_q[chosen], [used for _, used in checked])
-            reverted = int(back.sum())
-        if refinement.accepted:
-            stage("bound", "relaxation with the refined poses as candidates")
-            design = blocks_for(model, params, q, loads, sigma)
-            packed = room
-            packed_information(design, out=packed[len(blocks):])
-            relaxed = relax(None, crit, start=np.r_[relaxed.weights, np.zeros(n_poses)],
-                            progress=stage.iterations("bound"), packed=packed, screen=True)
-    design = blocks_for(model, params, q, loads, sigma) if design is None else design
-    m = information(design, np.ones(n_poses))
-    value, bound = crit.value(m), relaxed.bound(n_poses)
-    p = m.shape[0]
-    efficiencies = {crit.name: crit.efficiency(value, bound, p)}
-    if not isinstance(crit, DOptimal):
-        stage("bound", "D relaxation for the D-efficiency")
-        d_bound = relax(None, packed=packed, screen=True).bound(n_poses)
-        efficiencies["D"] = DOptimal().efficiency(log_det(m), d_bound, p)
-    stage("report")
-    reported = [DOptimal(), AOptimal(), EOptimal()] + ([] if t is None else [TaskOptimal(t)])
-    criteria = {c.name: c.value(m) for c in reported}
-    ratio = equivalence_ratio(None, m / n_poses, crit, packed=packed)
-    target = crit.target(p)
-    equivalence = {"criterion": crit.name, "statistic": crit.statistic, "target": target,
-                   "relaxation": target * relaxed.ratio, "design": target * ratio,
-                   "design_efficiency_at_least": 1.0 / ratio}
-    randoms = [log_det(information(blocks[rng.choice(len(cands.q), n_poses, replace=False)],
-                                   np.ones(n_poses))) for _ in range(_RANDOM_DESIGNS)]
-    singular = float(np.mean(~np.isfinite(randoms)))
-    equivalent = None
-    if np.isfinite(np.median(randoms)):
-        equivalent = n_poses * np.exp((log_det(m) - np.median(randoms)) / p)
-        versus_random = (f"{n_poses} optimal poses are as precise (D criterion) as "
-                         f"{equivalent:.0f} random ones (median of {_RANDOM_DESIGNS} random "
-                         f"designs of {n_poses} feasible poses)")
-        if singular:
-            versus_random += f"; {singular:.0%} of those cannot identify every parameter"
-    else:
-        versus_random = (f"{singular:.0%} of {_RANDOM_DESIGNS} random designs of {n_poses} "
-                         f"feasible poses cannot identify every parameter; these {n_poses} can")
-    scale = params.scales[params.free]
-    std = np.sqrt(np.diag(np.linalg.inv(m))) * scale
-    free = [par for par, f in zip(params.parameters, params.free) if f]
-    notes = [versus_random, f"{crit.name} criterion: {crit.words}",
-             f"relaxation over {len(packed)} candidates: equivalence ratio {relaxed.ratio:.4g} "
-             f"after {relaxed.iterations} iterations; {p} parameters designed for, "
-             f"{int((~params.free).sum())} fixed as not identifiable by any candidate"]
-    if t is not None:
-        notes.append(f"task: predicted RMS position std at the {len(task)} task poses "
-                     f"{1000 * np.sqrt(-criteria['task'] / len(task)):.4g} mm "
-                     f"(σ = {1000 * sigma:g} mm)")
-    coverage = {}
-    if cov is not None:
-        used = cov.used(q)
-        coverage = {"joint": model.robot.joints[cov.joint].name, "bins_used": used,
-                    "min_bins": cov.min_bins, "met": len(used) >= cov.min_bins}
-    used_constraints = constraints.to_dict(model.robot, model.tool)
-    used_constraints["loads"] = [ld.spec() for ld in loads]
-    clearances = ()
-    if collision is not None:
-        stage("clearance", f"distances at the {n_poses} poses")
-        clearances = pose_clearances(collision, q)
-        used_constraints["collision"] = collision.summary()
-        notes.append(collision_note(collision, cands.removed, cands.drawn, clearances))
-        notes.append(reachability_note(home, model.robot, replaced, reverted, moved))
-        used_constraints["reachability"] = {
-            "home": [float(v) for v in home * model.robot.display_factors],
-            "replaced": dict(replaced), "refined_reverted": reverted}
-    names = [cands.names[k] for k in chosen] if cands.names else None
-    cfg = load_configurations(model, params.values, q, loads, names)
-    return DesignResult(model.robot, model.tool, model.spec, cfg, crit.name, value, bound,
-                        efficiencies[crit.name],
-                        {par.name: (float(s * par.display_factor), par.display_unit)
-                         for par, s in zip(free, std)}, used_constraints, tuple(notes),
-                        efficiencies, criteria, equivalence, cands.to_dict(),
-                        {} if refinement is None else refinement.to_dict(), coverage,
-                        {"designs": _RANDOM_DESIGNS, "singular_fraction": singular,
-                         "equivalent_poses": None if equivalent is None else float(equivalent)},
-                        sigma_mm=1000.0 * sigma, clearances=clearances, stages=stages)
+    if discovery is not None and criterion != "D":
+        raise OptionError(f"--detect-size and --load-directions designs maximise the D "
+                          f"criterion; got --criterion {criterion}")
+    setting = Setting.checked(model, n_poses, loads, candidates, sigma, constraints, collision,
+                              home, rng, refine, params)
+    goal = CriterionGoal(criterion, task, task_point) if discovery is None else discovery
+    return run(goal, setting, candidates, progress)

@@ -10,6 +10,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import numpy as np
+
 from doe_calib.model.parameter_names import alias_hint, resolve
 from doe_calib.model.parameters import DISPLAY_UNITS
 
@@ -100,3 +102,12 @@ class StdMapping(Mapping):
     def __repr__(self) -> str:
         return "StdMapping({" + ", ".join(f"{n!r}: {r.std:.4g}"
                                           for n, r in self._records.items()) + "})"
+
+
+def design_std(params, m: np.ndarray) -> dict:
+    """Predicted std of each free parameter from the scaled information ``m`` (p, p):
+    name → (std, unit) in display units (σ²M⁻¹ with σ already in ``m``)."""
+    std = np.sqrt(np.diag(np.linalg.inv(m))) * params.scales[params.free]
+    free = [par for par, f in zip(params.parameters, params.free) if f]
+    return {par.name: (float(s * par.display_factor), par.display_unit)
+            for par, s in zip(free, std)}

@@ -7,7 +7,7 @@ from math import ceil
 import numpy as np
 
 from doe_calib.design.batch import map_poses
-from doe_calib.design.symbolic import pose_blocks
+from doe_calib.design.solvers.symbolic import pose_blocks
 from doe_calib.errors import OptionError
 from doe_calib.estimation.identifiability import analyse
 from doe_calib.io.measurements import Configurations

@@ -1,7 +1,7 @@
 """A design: chosen poses with their load cases, what they promise, and its JSON form."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -14,6 +14,94 @@ from doe_calib.io.measurements import Configurations
 from doe_calib.model.robot import Robot
 from doe_calib.model.tool import Tool
 
+
+
+@dataclass(frozen=True)
+class CandidateCount:
+    """The candidate poses: how many were drawn (or read), kept, and removed by which
+    constraint (a pose may violate several: the counts overlap); ``source`` the file they
+    were read from, ``variants`` the candidates of a discovery design (pose × load case ×
+    approach sides)."""
+
+    drawn: int
+    kept: int
+    removed: dict
+    note: str = "removed counts overlap: a pose may violate several constraints"
+    source: str = ""
+    variants: int | None = None
+
+    def to_dict(self) -> dict:
+        return {k: v for k, v in asdict(self).items()
+                if not (k == "source" and not v or k == "variants" and v is None)}
+
+
+@dataclass(frozen=True)
+class Equivalence:
+    """The equivalence-theorem check of the criterion ``criterion``: its ``statistic``, the
+    ``target`` it reaches at the approximate optimum, its value at the ``relaxation``
+    (certifies the bound) and at the ``design``, and the design's efficiency against the
+    approximate optimum it guarantees."""
+
+    criterion: str
+    statistic: str
+    target: float
+    relaxation: float
+    design: float
+    design_efficiency_at_least: float
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """The bins of ``joint`` the poses use and how many were asked for."""
+
+    joint: str
+    bins_used: list
+    min_bins: int
+    met: bool
+
+
+@dataclass(frozen=True)
+class RandomDesigns:
+    """The design against ``designs`` random designs of its size drawn from the candidates:
+    the share of them that cannot identify every parameter, and how many random poses are as
+    precise (D criterion, against their median; None when that median is singular)."""
+
+    designs: int
+    singular_fraction: float
+    equivalent_poses: float | None
+
+    @classmethod
+    def of(cls, log_dets, log_det: float, n_poses: int, p: int) -> "RandomDesigns":
+        """From log det M of each random design and of the design (p parameters)."""
+        singular = float(np.mean(~np.isfinite(log_dets)))
+        median = np.median(log_dets)
+        return cls(len(log_dets), singular, float(n_poses * np.exp((log_det - median) / p))
+                   if np.isfinite(median) else None)
+
+    def words(self, n_poses: int) -> str:
+        """The comparison in one sentence, for the design's ``n_poses``."""
+        if self.equivalent_poses is None:
+            return (f"{self.singular_fraction:.0%} of {self.designs} random designs of "
+                    f"{n_poses} feasible poses cannot identify every parameter; these "
+                    f"{n_poses} can")
+        text = (f"{n_poses} optimal poses are as precise (D criterion) as "
+                f"{self.equivalent_poses:.0f} random ones (median of {self.designs} random "
+                f"designs of {n_poses} feasible poses)")
+        if self.singular_fraction:
+            text += f"; {self.singular_fraction:.0%} of those cannot identify every parameter"
+        return text
+
+
+def _typed(cls, d):
+    """``cls`` of a design file's section (its known keys), None for an empty or missing one."""
+    return cls(**{k: v for k, v in d.items() if k in cls.__dataclass_fields__}) if d else None
+
+
+def _plain(x):
+    """A typed section as the design file writes it (an empty dict when absent)."""
+    if x is None:
+        return {}
+    return x.to_dict() if hasattr(x, "to_dict") else asdict(x)
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,21 +137,11 @@ class DesignResult:
         (the design's criterion, and D).
     criteria : dict
         Criterion → value of the design (D, A, E, and task when given).
-    equivalence : dict
-        The equivalence-theorem check: the statistic, its target, its value
-        at the relaxation (certifies the bound) and at the design.
-    candidates : dict
-        Poses drawn, kept, and removed by each constraint.
-    refinement : dict
-        The continuous refinement's outcome (empty when not run).
-    coverage : dict
-        Bins used by the poses and how many were asked for (empty when none).
-    versus_random : dict
-        ``designs`` (random designs of the same size drawn from the feasible
-        candidates), ``singular_fraction`` (share of them that cannot identify
-        every parameter) and ``equivalent_poses`` (how many random poses are as
-        precise, D criterion, against their median; None when that median is
-        singular).
+    equivalence : Equivalence or None
+    candidates : CandidateCount or None
+    coverage : Coverage or None
+        None without a coverage constraint.
+    versus_random : RandomDesigns or None
     sigma_mm : float or None
         The tracker σ per coordinate (mm) the predicted std are for (None in
         design files written before it was stored).
@@ -73,8 +151,9 @@ class DesignResult:
         checked.
     stages : dict
         Each solver's outcome (:meth:`.outcome.DesignOutcome.to_dict`) by stage:
-        ``relaxation``, ``exchange`` and, when run, ``refinement`` (empty in
-        design files written before it was stored).
+        ``relaxation``, ``exchange`` and, when run, ``refinement`` (in design files
+        written before the stages were stored, the refinement alone); a discovery
+        design's ``discovery`` or ``load_choice``.
 
     Examples
     --------
@@ -96,15 +175,19 @@ class DesignResult:
     notes: tuple = field(default=())
     efficiencies: dict = field(default_factory=dict)
     criteria: dict = field(default_factory=dict)
-    equivalence: dict = field(default_factory=dict)
-    candidates: dict = field(default_factory=dict)
-    refinement: dict = field(default_factory=dict)
-    coverage: dict = field(default_factory=dict)
-    versus_random: dict = field(default_factory=dict)
+    equivalence: Equivalence | None = None
+    candidates: CandidateCount | None = None
+    coverage: Coverage | None = None
+    versus_random: RandomDesigns | None = None
     sigma_mm: float | None = None
     clearances: tuple = ()
     stages: dict = field(default_factory=dict)
     detectability: tuple = ()
+
+    @property
+    def refinement(self) -> dict:
+        """The continuous refinement's outcome, ``stages["refinement"]`` (empty when not run)."""
+        return self.stages.get("refinement", {})
 
     @property
     def std(self) -> StdMapping:
@@ -123,10 +206,29 @@ class DesignResult:
     def __str__(self) -> str:
         return self.summary()
 
-    def _repr_html_(self) -> str:
-        """The design report's content for a notebook: summary, std table and bars."""
-        from doe_calib.report.design import design_fragment
-        return str(design_fragment(self))
+    def first_configurations(self) -> np.ndarray:
+        """Index of each pose's first configuration (its unloaded one), in measuring order."""
+        cfg = self.configurations
+        return np.array(sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values()),
+                        int)
+
+    def nominal_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """Flange and marker positions at each pose's first configuration, mm, robot base frame.
+
+        The robot's nominal chain and the tool's nominal markers (no effect at
+        all, as unloaded with every effect at zero): what a design file holds is
+        enough, whatever effects its model names.
+
+        Returns
+        -------
+        flange : ndarray, shape (M, 3)
+        markers : ndarray, shape (M, n, 3)
+        """
+        rotation, translation = self.robot.flange_poses(self.configurations.q[
+            self.first_configurations()])
+        markers = translation[:, None, :] + np.einsum("mij,nj->mni", rotation,
+                                                      np.asarray(self.tool.positions, float))
+        return translation * 1000.0, markers * 1000.0
 
     def poses(self) -> list[dict]:
         """One entry per pose: id, q in deg (mm for prismatic joints), its wrenches, approach
@@ -167,14 +269,14 @@ class DesignResult:
             lines.append("criteria: " + ", ".join(f"{k} {v:.6g}" for k, v in self.criteria.items()))
         if self.equivalence:
             e = self.equivalence
-            lines.append(f"equivalence theorem: {e['statistic']} = {e['relaxation']:.4g} at the "
-                         f"relaxation, {e['design']:.4g} at the design (target {e['target']:g}; "
+            lines.append(f"equivalence theorem: {e.statistic} = {e.relaxation:.4g} at the "
+                         f"relaxation, {e.design:.4g} at the design (target {e.target:g}; "
                          f"design efficiency against the approximate optimum ≥ "
-                         f"{e['design_efficiency_at_least']:.3f})")
+                         f"{e.design_efficiency_at_least:.3f})")
         if self.candidates:
             c = self.candidates
-            lines.append(f"candidates: {c['kept']} kept of {c['drawn']} drawn" + "".join(
-                f"; {k} removed {v}" for k, v in c["removed"].items()))
+            lines.append(f"candidates: {c.kept} kept of {c.drawn} drawn" + "".join(
+                f"; {k} removed {v}" for k, v in c.removed.items()))
         if self.refinement:
             r = self.refinement
             lines.append(f"refinement: {'kept' if r['accepted'] else 'not kept'}, "
@@ -182,8 +284,8 @@ class DesignResult:
                          f"IPOPT iterations ({r['status']})")
         if self.coverage:
             c = self.coverage
-            lines.append(f"coverage of joint {c['joint']}: bins {c['bins_used']} used, "
-                         f"{c['min_bins']} required: {'met' if c['met'] else 'NOT met'}")
+            lines.append(f"coverage of joint {c.joint}: bins {c.bins_used} used, "
+                         f"{c.min_bins} required: {'met' if c.met else 'NOT met'}")
         if self.clearances:
             mm, pair = min(self.clearances)
             lines.append(f"clearance: every pose keeps ≥ {mm:.1f} mm ({pair} the closest)")
@@ -204,9 +306,9 @@ class DesignResult:
                                   for n, (s, u) in self.predicted_std.items()],
                 "constraints": self.constraints, "notes": list(self.notes),
                 "efficiencies": self.efficiencies, "criteria": self.criteria,
-                "equivalence": self.equivalence, "candidates": self.candidates,
-                "refinement": self.refinement, "coverage": self.coverage,
-                "versus_random": self.versus_random, "sigma_mm": self.sigma_mm,
+                "equivalence": _plain(self.equivalence), "candidates": _plain(self.candidates),
+                "refinement": self.refinement, "coverage": _plain(self.coverage),
+                "versus_random": _plain(self.versus_random), "sigma_mm": self.sigma_mm,
                 "stages": self.stages,
                 "detectability": [d.to_dict() for d in self.detectability],
                 "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
@@ -219,19 +321,24 @@ class DesignResult:
     def from_dict(cls, d: dict) -> "DesignResult":
         robot = Robot.from_dict(d["robot"])
         cfg = pose_configurations(d["poses"], robot.display_factors)
-        return cls(robot, Tool.from_dict(d["tool"]), d["model"], cfg, d["criterion"],
-                   float(d["value"]), float(d["bound"]), float(d["efficiency"]),
-                   {r["name"]: (r["std"], r["unit"]) for r in d["predicted_std"]},
-                   d.get("constraints", {}), tuple(d.get("notes", ())),
-                   *(d.get(k, {}) for k in ("efficiencies", "criteria", "equivalence",
-                                            "candidates", "refinement", "coverage",
-                                            "versus_random")),
+        stages = d.get("stages") or {}
+        if d.get("refinement") and "refinement" not in stages:
+            stages = {**stages, "refinement": d["refinement"]}
+        return cls(robot=robot, tool=Tool.from_dict(d["tool"]), model=d["model"],
+                   configurations=cfg, criterion=d["criterion"], value=float(d["value"]),
+                   bound=float(d["bound"]), efficiency=float(d["efficiency"]),
+                   predicted_std={r["name"]: (r["std"], r["unit"]) for r in d["predicted_std"]},
+                   constraints=d.get("constraints", {}), notes=tuple(d.get("notes", ())),
+                   efficiencies=d.get("efficiencies", {}), criteria=d.get("criteria", {}),
+                   equivalence=_typed(Equivalence, d.get("equivalence")),
+                   candidates=_typed(CandidateCount, d.get("candidates")),
+                   coverage=_typed(Coverage, d.get("coverage")),
+                   versus_random=_typed(RandomDesigns, d.get("versus_random")),
                    sigma_mm=None if d.get("sigma_mm") is None else float(d["sigma_mm"]),
                    clearances=tuple((float(p["clearance_mm"]), p["clearance_pair"])
                                     for p in d["poses"] if "clearance_mm" in p),
-                   stages=d.get("stages", {}),
-                   detectability=tuple(Detectability.from_dict(r)
-                                       for r in d.get("detectability", ())))
+                   stages=stages, detectability=tuple(Detectability.from_dict(r)
+                                                      for r in d.get("detectability", ())))
 
     @classmethod
     def from_json(cls, path) -> "DesignResult":

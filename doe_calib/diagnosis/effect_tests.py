@@ -26,9 +26,17 @@ from doe_calib.diagnosis.candidate_batch import batched_columns
 from doe_calib.design.detectability import (MOSTLY_ABSORBED, Detectability, absorbing_parameters,
                                             assess)
 from doe_calib.errors import DoeCalibError
+from doe_calib.estimation.effect_signature import (augmented, candidate_effects, fitted_basis,
+                                                   grown_parameters, projected_columns)
 from doe_calib.estimation.weighted_residuals import weighted_residual
-from doe_calib.model.effects import DEFAULT_REGISTRY, joint_index
-from doe_calib.model.marker_model import build_model, describe_model
+from doe_calib.model.effects import joint_index
+from doe_calib.model.marker_model import describe_model
+
+#: The effect signature (:mod:`doe_calib.estimation.effect_signature`) is read from here too,
+#: beside the tests built on it.
+__all__ = ["CandidateTest", "CandidateTests", "SIGNIFICANT_RAW", "augmented",
+           "candidate_columns", "candidate_effects", "candidate_tests", "fitted_basis",
+           "grown_parameters", "projected_columns", "test_candidates"]
 
 
 @dataclass(frozen=True)
@@ -81,60 +89,6 @@ class CandidateTest:
         return cls(**fields)
 
 
-def candidate_effects(model, configurations=None, registry=None) -> list:
-    """Every catalogue effect instance not yet in ``model`` (one per joint where it applies).
-
-    Effects with several shapes give one candidate per shape;
-    ``configurations`` (the measured ones) place data-dependent shapes. The
-    catalogue is ``registry``'s (default :data:`~doe_calib.model.effects.DEFAULT_REGISTRY`).
-    """
-    registry = DEFAULT_REGISTRY if registry is None else registry
-    robot = model.robot
-    present = {(e.name, None if e.joint is None else joint_index(robot, e.joint))
-               for e in model.effects}
-    out = []
-    for cls in registry.catalogue():
-        for e in cls.candidates(robot, configurations):
-            j = None if e.joint is None else joint_index(robot, e.joint)
-            if (e.name, j) not in present and (e.name, None) not in present:
-                out.append(e)
-    return out
-
-
-def augmented(model, params, effect):
-    """(model + effect, its parameter set: current values and free flags, new ones free at 0)."""
-    big = build_model(model.robot, model.tool, tuple(model.effects) + (effect,))
-    return big, grown_parameters(big, params)
-
-
-def grown_parameters(big, params):
-    """The parameter set of ``big`` (a model grown from the one ``params`` fit): the values and
-    free flags of ``params``, the new parameters free at nominal."""
-    start = big.nominal()
-    values = start.values.copy()
-    free = start.free.copy()
-    reasons = list(start.fixed_reason)
-    for i, name in enumerate(params.names):
-        k = start.names.index(name)
-        values[k], free[k], reasons[k] = params.values[i], params.free[i], params.fixed_reason[i]
-    return replace(start, values=values, free=free, fixed_reason=tuple(reasons))
-
-
-def fitted_basis(model, measurements, params):
-    """Weighted residual r (3K,) of the fit and an orthonormal basis Q of its free Jacobian."""
-    r, jac = weighted_residual(model, measurements, params.values)
-    return r, _basis(jac[:, params.free])
-
-
-def projected_columns(model, measurements, params, effect, q_basis):
-    """The candidate's weighted columns Z (3K, q) and Z⊥ = (I − QQᵀ)Z, what the fitted
-    model (orthonormal basis ``q_basis`` of its free Jacobian) cannot already absorb."""
-    big, bp = augmented(model, params, effect)
-    _, z = weighted_residual(big, measurements, bp.values)
-    z = z[:, ~np.isin(bp.names, params.names)]
-    return z, z - q_basis @ (q_basis.T @ z)
-
-
 def _failure(exc) -> str:
     return str(exc) or type(exc).__name__
 
@@ -167,11 +121,6 @@ def candidate_columns(model, measurements, params, effects, q_basis, batch=None)
         except (DoeCalibError, ValueError, np.linalg.LinAlgError) as exc:
             failed.append((e.spec(), _failure(exc)))
     return out, failed
-
-
-def _basis(jac: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-    u, s, _ = np.linalg.svd(jac, full_matrices=False)
-    return u[:, s > tol * (s[0] if s.size else 1.0)]
 
 
 #: A candidate this significant before the Bonferroni correction, and mostly absorbed by

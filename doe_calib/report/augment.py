@@ -66,9 +66,8 @@ def campaign_section(result, measured=None, dpi: int = 90):
              + (f" in {len(old)} poses" if measured is not None else "")
              + f"; the new readings are predicted with σ = {result.sigma_mm:g} mm per "
              f"coordinate; model {result.model}. Candidates: "
-             f"{result.candidates.get('kept')} kept of {result.candidates.get('drawn')}"
-             + (f" from {result.candidates['source']}" if result.candidates.get("source")
-                else "") + ".")
+             f"{result.candidates.kept} kept of {result.candidates.drawn}"
+             + (f" from {result.candidates.source}" if result.candidates.source else "") + ".")
     return section("Campaign measured", paragraph(words), figure(
         to_png(campaign_chart(robot.joint_names, old, new, units), dpi),
         "joint positions of the measured campaign and of the new poses",

@@ -72,9 +72,7 @@ def compare_sections(comparison, dpi: int = 90) -> list:
         paragraph("Display units (mm, deg, µrad/(N·m)); “—”: fixed, or not in that source's "
                   "model."),
         table(["parameter", "unit", *labels], std_rows, 4),
-        figure(to_png(grouped_bars([f"{n} [{u}]" for n, u in zip(c.names, c.units)], c.std,
-                                   labels, "std (unit in brackets)",
-                                   "predicted / identified standard deviation", log=True), dpi),
+        figure(to_png(std_bars(c), dpi),
                "standard deviation of every parameter for each source, log scale",
                "Std of each parameter, one bar per source (log scale).")))
     if c.task_poses:
@@ -127,3 +125,16 @@ def compare_report(comparison, path, dpi: int = 90):
     """
     title = "Comparison: " + ", ".join(comparison.labels)
     return write_report(path, title, compare_sections(comparison, dpi))
+
+
+def std_bars(comparison):
+    """Every parameter's std, one bar per source (log scale, display units): a Figure."""
+    c = comparison
+    return grouped_bars([f"{n} [{u}]" for n, u in zip(c.names, c.units)], c.std, list(c.labels),
+                        "std (unit in brackets)", "predicted / identified standard deviation",
+                        log=True)
+
+
+def plot_std(comparison, path) -> None:
+    """:func:`std_bars` saved to ``path`` (PNG, PDF or SVG by its suffix)."""
+    std_bars(comparison).savefig(path, dpi=120)

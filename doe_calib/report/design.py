@@ -1,10 +1,10 @@
 """The design report: chosen poses, where they put the markers, what they promise, as HTML."""
 from __future__ import annotations
 
+from dataclasses import asdict
+
 import numpy as np
 
-from doe_calib.model.evaluation import evaluate, marker_positions
-from doe_calib.model.marker_model import build_model
 from doe_calib.report import figures
 from doe_calib.report.figures import to_png as png
 from doe_calib.report.html import (
@@ -46,45 +46,22 @@ def flatten(d: dict, prefix: str = "") -> list[list]:
     return rows
 
 
-def pose_geometry(design, registry=None):
-    """Flange and marker positions of each pose on the design's nominal model, mm.
-
-    The first configuration of each pose (unloaded) is used; the nominal base
-    is the identity, so positions are in the robot base frame. ``registry``
-    names the effects the design's model string may use (default the catalogue;
-    a model with user effects needs the registry it was designed with).
-
-    Returns
-    -------
-    flange : ndarray, shape (M, 3)
-    markers : ndarray, shape (M, n, 3)
-    """
-    model = build_model(design.robot, design.tool, design.model, registry=registry)
-    values = model.nominal().values
-    cfg = design.configurations
-    first = sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())
-    sub = cfg.subset(np.array(first, int))
-    _, t = evaluate(model.flange, sub, values)
-    return t.reshape(len(sub), 3) * 1000.0, marker_positions(model, values, sub) * 1000.0
-
-
 #: Poses drawn in the report's robot figure at most.
 MAX_DRAWN = 16
 
 
-def robot_drawing(design, dpi: int = 90, registry=None):
+def robot_drawing(design, dpi: int = 90):
     """The robot as a stick figure in each pose (the first :data:`MAX_DRAWN`), with its cell.
 
-    Returns the report blocks (figure and caption) of the design report's "Robot in each pose";
-    ``registry`` as in :func:`pose_geometry`.
+    Returns the report blocks (figure and caption) of the design report's "Robot in each pose".
     """
     from doe_calib.model.skeleton import skeleton_points
 
     cfg, robot = design.configurations, design.robot
-    first = sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())[:MAX_DRAWN]
+    first = design.first_configurations()[:MAX_DRAWN]
     ids = [cfg.pose[i] for i in first]
     skeletons = skeleton_points(robot, cfg.q[first]) * 1000.0
-    _, markers = pose_geometry(design, registry)
+    _, markers = design.nominal_points()
     clear = list(design.clearances)
     titles = [f"pose {p}" + (f"\n{clear[k][0]:.0f} mm: {clear[k][1]}" if k < len(clear) else "")
               for k, p in enumerate(ids)]
@@ -117,11 +94,8 @@ def _pose_rows(design):
     return rows
 
 
-def design_sections(design, dpi: int = 90, registry=None) -> list:
-    """The report sections of a design: poses, joint chart, 3-D view, constraints, bound, std.
-
-    ``registry`` names the effects of the design's model (:func:`pose_geometry`).
-    """
+def design_sections(design, dpi: int = 90) -> list:
+    """The report sections of a design: poses, joint chart, 3-D view, constraints, bound, std."""
     robot, png = design.robot, figures.to_png
     units = [j.display_unit for j in robot.joints]
     clear = ["clearance (mm)", "closest pair"] if design.clearances else []
@@ -140,7 +114,7 @@ def design_sections(design, dpi: int = 90, registry=None) -> list:
                                       units), dpi),
         "joint positions of the chosen poses with the joint limits shaded",
         "Joint positions of the chosen poses; grey: URDF joint limits.")))
-    flange, markers = pose_geometry(design, registry)
+    flange, markers = design.nominal_points()
     los = design.constraints.get("line_of_sight") or {}
     tracker = los.get("tracker")
     sections.append(section("Poses in space", figure(
@@ -148,13 +122,13 @@ def design_sections(design, dpi: int = 90, registry=None) -> list:
         "3-D view of flange and marker positions of each pose",
         "Flange (numbered by pose) and markers on the nominal model, robot base frame (mm)"
         + ("; red: the tracker." if tracker is not None else "."))))
-    sections.append(section("Robot in each pose", robot_drawing(design, dpi, registry)))
+    sections.append(section("Robot in each pose", robot_drawing(design, dpi)))
     met = [table(["constraint", "value"], flatten(design.constraints))]
     if design.candidates:
         met += ["Candidate poses drawn and removed by each constraint:",
-                table(["candidates", "value"], flatten(design.candidates))]
+                table(["candidates", "value"], flatten(design.candidates.to_dict()))]
     if design.coverage:
-        met.append(table(["coverage", "value"], flatten(design.coverage)))
+        met.append(table(["coverage", "value"], flatten(asdict(design.coverage))))
     sections.append(section("Constraints met", *met))
     sections += [efficiency_section(design), std_section(design, dpi)]
     if design.detectability:
@@ -173,7 +147,7 @@ def efficiency_section(design):
     if design.equivalence:
         blocks += ["Equivalence-theorem check (the statistic is at most its target at the "
                    "approximate optimum):", table(["equivalence", "value"],
-                                                  flatten(design.equivalence))]
+                                                  flatten(asdict(design.equivalence)))]
     if design.refinement:
         blocks.append(table(["refinement", "value"], flatten(design.refinement)))
     return section("Efficiency against the bound", *blocks)
@@ -224,7 +198,7 @@ def design_fragment(design, dpi: int = 72) -> Html:
     return Html("<div>" + "\n".join(parts) + "</div>")
 
 
-def design_report(design, path, dpi: int = 90, registry=None):
+def design_report(design, path, dpi: int = 90):
     """Write an HTML report of a measurement design.
 
     Parameters
@@ -234,10 +208,6 @@ def design_report(design, path, dpi: int = 90, registry=None):
         HTML file to write; self-contained (figures embedded as PNG).
     dpi : int
         Resolution of the figures.
-    registry : EffectRegistry, optional
-        The effects the design's model string may name (default the built-in
-        catalogue); a design with user effects needs its registry
-        (:func:`~doe_calib.model.effects.registry_with_files`).
 
     Returns
     -------
@@ -248,7 +218,7 @@ def design_report(design, path, dpi: int = 90, registry=None):
     --------
     >>> design_report(DesignResult.from_json("design.json"), "design.html")  # doctest: +SKIP
     """
-    sections = design_sections(design, dpi, registry)
+    sections = design_sections(design, dpi)
     sections.append(section("Summary", preformatted(design.summary())))
     title = (f"Measurement design for {design.robot.name}: {design.model}, "
              f"{design.criterion} criterion")

@@ -120,7 +120,7 @@ def design_point(task: SweepTask) -> dict:
                              criterion=task.criterion, refine=task.refine,
                              rng=np.random.default_rng(task.seed))
     seconds = time.perf_counter() - start
-    equivalent = res.versus_random["equivalent_poses"]
+    equivalent = res.versus_random.equivalent_poses
     return {**asdict(task), "model": model.spec, "d_efficiency": float(res.efficiencies["D"]),
             "efficiency": float(res.efficiency), "value": float(res.value),
             "bound": float(res.bound),

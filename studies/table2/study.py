@@ -22,7 +22,7 @@ from doe_calib.design import (
     information,
     load_configurations,
     log_det,
-    relax_d,
+    relax,
 )
 from doe_calib.design.optimal import optimal_design
 from doe_calib.estimation.covariance import predict_covariance
@@ -88,7 +88,7 @@ def predicted_std(s: Setup, q) -> dict:
 def certified_bound(s: Setup, extra_q, n_poses: int, candidates: int, rng) -> float:
     """log det bound over random candidates plus ``extra_q`` (rad) for n-pose designs."""
     q = np.vstack([random_configurations(s.robot, candidates, rng, margin=0.0), extra_q])
-    return relax_d(blocks_for(s.model, s.params, q, [LOAD], SIGMA_MM / 1000.0)).bound(n_poses)
+    return relax(blocks_for(s.model, s.params, q, [LOAD], SIGMA_MM / 1000.0), "D").bound(n_poses)
 
 
 def design_log_det(s: Setup, q) -> float:

@@ -4,7 +4,7 @@ For each of the four sessions of ``tiago-mocap/csv`` held out in turn: the next 
 (in recording order, cyclically) is the candidate pool, the other two are the campaign
 already measured. ``augment_design`` (D criterion of ``joint_offset+geometry``, the
 campaign's information as the start) picks K of the pool's postures
-(:func:`~doe_calib.design.candidate_file.read_candidates` of its CSV); their *real*
+(:func:`~doe_calib.design.candidates.from_file.read_candidates` of its CSV); their *real*
 readings are added and the model identified again; the held-out session's 3-D RMS is
 compared with K random postures of the pool (the mean over a few draws) and with none.
 """
@@ -17,7 +17,7 @@ import numpy as np
 
 from doe_calib import Tool, build_model, identify, read_measurements
 from doe_calib.design.augment import augment_design
-from doe_calib.design.candidate_file import read_candidates
+from doe_calib.design.candidates.from_file import read_candidates
 from doe_calib.errors import DoeCalibWarning
 from doe_calib.io.measurements import concatenate
 from studies.tiago_mocap.robot import tiago_robot

@@ -41,7 +41,7 @@ it is smooth in q and in the load, so continuous design refinement gets
 gradients. In the modes ``torque`` and ``both`` the robot's own weight is
 ignored (a load that only adds to the weight's torque does not move the joint
 across the band in reality, which they cannot know); ``gravity`` adds it. A design cannot plan the
-approach (it is 0 at design time, :mod:`doe_calib.design.symbolic`), so a
+approach (it is 0 at design time, :mod:`doe_calib.design.solvers.symbolic`), so a
 design sees only the load part.
 
 ``backlash_<joint>`` is in rad (m for a prismatic joint); it should come out

@@ -18,7 +18,7 @@ import casadi as ca
 import numpy as np
 
 from doe_calib.design.batch import map_poses
-from doe_calib.design.symbolic import flange_frame, hanging_wrench, symbolic_model
+from doe_calib.design.solvers.symbolic import flange_frame, hanging_wrench, symbolic_model
 
 _TOL = 1e-9  # accepted violation in the numeric check (m, cos, relative torque)
 

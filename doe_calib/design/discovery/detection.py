@@ -22,7 +22,8 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.design.detectability import assess
-from doe_calib.diagnosis.effect_tests import candidate_effects, fitted_basis, projected_columns
+from doe_calib.estimation.effect_signature import (candidate_effects, fitted_basis,
+                                                   projected_columns)
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.io.measurements import Measurements
 from doe_calib.io.setting_ranges import level_and_power

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.design.criteria import Criterion, DOptimal
-from doe_calib.design.relaxation import packed_weights
+from doe_calib.design.solvers.relaxation import packed_weights
 
 _RIDGE = 1e-10
 
@@ -72,7 +72,7 @@ def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray
 
     Examples
     --------
-    >>> from doe_calib.design.relaxation import packed_information
+    >>> from doe_calib.design.solvers.relaxation import packed_information
     >>> blocks = np.random.default_rng(0).normal(size=(100, 2, 3))
     >>> j, _ = best_added(DOptimal(), np.eye(3), blocks, np.ones(100, bool),
     ...                   packed_information(blocks))

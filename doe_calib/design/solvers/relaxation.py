@@ -22,7 +22,7 @@ from functools import lru_cache
 import numpy as np
 
 from doe_calib.design.criteria import Criterion
-from doe_calib.design.outcome import DesignOutcome
+from doe_calib.design.solvers.outcome import DesignOutcome
 from doe_calib.errors import OptionError
 from doe_calib.runtime.split import run_parts, split_workers
 
@@ -277,13 +277,6 @@ def relax(blocks: np.ndarray | None, criterion="D", task: np.ndarray | None = No
               f"stopped at the iteration limit {max_iterations}, equivalence ratio {ratio:.4g}")
     return DesignOutcome("relaxation", crit, weights, crit.value(m), iterations, status, p,
                          ratio=ratio)
-
-
-def relax_d(blocks: np.ndarray, tol: float = 2e-3, max_iterations: int = 20000,
-            working_set: int = 1500, progress=None) -> DesignOutcome:
-    """D-optimal approximate design over candidates (:func:`relax` with ``criterion="D"``)."""
-    return relax(blocks, "D", tol=tol, max_iterations=max_iterations, working_set=working_set,
-                 progress=progress)
 
 
 def convex_relaxation(blocks: np.ndarray, criterion="D", task: np.ndarray | None = None,

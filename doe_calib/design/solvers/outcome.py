@@ -2,8 +2,8 @@
 
 The convex relaxation (:func:`.relaxation.relax`), the exact exchange
 (:func:`.exchange.exact_design`) and the continuous IPOPT refinement
-(:func:`.pose_refinement.refine`) are interchangeable steps of the pipeline
-(:func:`.optimal.optimal_design`); each returns a design measure over the
+(:func:`.pose_refinement.refine`) are interchangeable steps of the design pipeline
+(:mod:`doe_calib.design.pipeline`); each returns a design measure over the
 points it was given — weights on candidates (the relaxation's sum to 1, the
 exchange's are 1 on the N chosen) or, for the refinement, N moved poses of
 weight 1 — with its criterion value and how the solver got there. The

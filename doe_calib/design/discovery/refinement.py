@@ -16,16 +16,16 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.design.constrained_exchange import projected_information, shortfall
+from doe_calib.design.solvers.constrained_exchange import projected_information, shortfall
 from doe_calib.design.criteria import log_det
-from doe_calib.design.discovery_candidates import (
+from doe_calib.design.discovery.variants import (
     EVERY,
     effect_columns,
     observation_rows,
     within_torque_limits,
 )
-from doe_calib.design.pose_refinement import refine as refine_poses
-from doe_calib.design.reachability import unreachable
+from doe_calib.design.solvers.pose_refinement import refine as refine_poses
+from doe_calib.design.candidates.reachability import unreachable
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,7 +101,7 @@ def refine_discovery(model, params, cand, chosen, sigma: float, feasibility, eff
     effects : sequence of Effect
         The effects whose detection bounds are kept.
     targets : array_like, shape (E,)
-        Their ``λ*(P)/S²`` (:func:`.discovery_candidates.detection_target`).
+        Their ``λ*(P)/S²`` (:func:`.variants.detection_target`).
     collision : CollisionModel, optional
     home : ndarray, shape (N,), optional
         With ``collision``: refined poses must stay joined to it.

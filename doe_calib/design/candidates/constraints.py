@@ -4,7 +4,7 @@ Everything is SI here (rad/m, N·m/N); :meth:`DesignConstraints.to_dict`
 gives the file's units (deg/mm). Points and boxes are in the robot base
 frame; the flange, every marker and every load's centre of mass (with
 ``load_clearance`` around it) must respect the Cartesian constraints. Read
-a file with :func:`doe_calib.design.constraint_file.read_constraints`.
+a file with :func:`doe_calib.design.candidates.constraint_file.read_constraints`.
 """
 from __future__ import annotations
 

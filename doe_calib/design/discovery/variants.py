@@ -2,7 +2,7 @@
 with the model's information blocks and each effect's columns there.
 
 A variant of pose i is measured unloaded and under one load case c (a
-:class:`~doe_calib.design.load_directions.DirectedLoad`), every joint whose
+:class:`.load_directions.DirectedLoad`), every joint whose
 approach backlash is to be detected reached from side s (+1 or −1, the
 convention of :mod:`doe_calib.export.approach`). Without load cases a
 variant is the unloaded reading alone.
@@ -16,8 +16,8 @@ import numpy as np
 
 from doe_calib.design.batch import map_poses
 from doe_calib.design.detectability import own_directions
-from doe_calib.design.feasibility import build_feasibility
-from doe_calib.diagnosis.effect_tests import augmented
+from doe_calib.design.candidates.feasibility import build_feasibility
+from doe_calib.estimation.effect_signature import augmented
 from doe_calib.errors import OptionError
 from doe_calib.estimation.identifiability import analyse
 from doe_calib.estimation.chi_square import noncentrality_for_power
@@ -164,7 +164,7 @@ def free_parameters(params, blocks_raw, cand: Variants, sample: int = 400):
 def effect_columns(model, params, effect, cand: Variants, sigma: float):
     """An effect's σ-weighted columns per variant on its own directions, (K, r, d) (SI
     parameters; directions that are a free model parameter removed, as in
-    :func:`~doe_calib.design.detectability.assess`), with the orthonormal basis (q, d)."""
+    :func:`.detectability.assess`), with the orthonormal basis (q, d)."""
     big, bp = augmented(model, params, effect)
     b = observation_rows(big, bp.values, cand)[..., ~np.isin(bp.names, params.names)] / sigma
     new = effect.parameters(model.robot)

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from doe_calib.collision import Workspace
-from doe_calib.design.candidate_poses import CandidateSet, screen_collisions
+from doe_calib.design.candidates.draw import CandidateSet, screen_collisions
 from doe_calib.errors import DataError, SolverError
 from doe_calib.io.csv_files import read_design, read_measurements
 from doe_calib.io.table import read_table

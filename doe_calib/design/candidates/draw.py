@@ -6,6 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.collision import Workspace, screen_beams, too_close
+from doe_calib.design.result import CandidateCount
 from doe_calib.errors import SolverError
 
 _MAX_DRAWS = 50  # draw at most this many poses per candidate wanted
@@ -26,7 +27,7 @@ class CandidateSet:
         violate several).
     names : tuple of str
         Pose id of each candidate when they come from a file
-        (:mod:`.candidate_file`); empty for random candidates.
+        (:mod:`.from_file`); empty for random candidates.
     source : str
         The file they come from ("" for random candidates).
     """
@@ -37,12 +38,9 @@ class CandidateSet:
     names: tuple = ()
     source: str = ""
 
-    def to_dict(self) -> dict:
-        out = {"drawn": self.drawn, "kept": len(self.q), "removed": dict(self.removed),
-               "note": "removed counts overlap: a pose may violate several constraints"}
-        if self.source:
-            out["source"] = self.source
-        return out
+    def count(self) -> CandidateCount:
+        """How many were drawn, kept and removed by which constraint."""
+        return CandidateCount(self.drawn, len(self.q), dict(self.removed), source=self.source)
 
 
 def feasible_candidates(feasibility, robot, n: int, rng, collision=None) -> CandidateSet:

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from doe_calib.design.constraints import (
+from doe_calib.design.candidates.constraints import (
     DEFAULT_MARGIN,
     Box,
     Coverage,

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.design.outcome import DesignOutcome
+from doe_calib.design.solvers.outcome import DesignOutcome
 from doe_calib.design.criteria import DOptimal
 
 _TINY = 1e-300

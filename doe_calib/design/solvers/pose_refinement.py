@@ -20,8 +20,8 @@ import numpy as np
 
 from doe_calib.collision import too_close
 from doe_calib.design.criteria import Criterion
-from doe_calib.design.outcome import DesignOutcome
-from doe_calib.design.symbolic import log_criterion, pose_information
+from doe_calib.design.solvers.outcome import DesignOutcome
+from doe_calib.design.solvers.symbolic import log_criterion, pose_information
 
 log = logging.getLogger(__name__)
 

@@ -8,14 +8,14 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.design.criteria import Criterion, DOptimal
-from doe_calib.design.outcome import DesignOutcome
-from doe_calib.design.relaxation import (
+from doe_calib.design.solvers.outcome import DesignOutcome
+from doe_calib.design.solvers.relaxation import (
     information,
     packed_information,
     packed_weights,
     traces,
 )
-from doe_calib.design.updates import added_values, best_added, regularised
+from doe_calib.design.solvers.updates import added_values, best_added, regularised
 from doe_calib.errors import SolverError
 
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
@@ -176,8 +176,3 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
     return DesignOutcome("exchange", crit, selected, float(current), sweeps, status,
                          blocks.shape[2], indices=indices)
 
-
-def exact_d_design(blocks: np.ndarray, n: int, weights: np.ndarray | None = None,
-                   pool: int = 2000, max_sweeps: int = 50) -> np.ndarray:
-    """Indices of the D-optimal :func:`exact_design` (kept for callers of the first release)."""
-    return exact_design(blocks, n, "D", weights, pool=pool, max_sweeps=max_sweeps).indices

@@ -7,7 +7,7 @@ load, a fraction of a millimetre, is neglected for placing things).
 
 The environment is unknown at design time: temperature NaN (no thermal
 correction) and, unless a pose's approach sides are design variables (a
-discovery design, :mod:`.discovery_candidates`), every joint's approach
+discovery design, :mod:`.variants`), every joint's approach
 direction 0, so ``backlash`` enters the design only through the applied
 loads.
 """
