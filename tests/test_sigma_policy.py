@@ -11,7 +11,7 @@ import doe_calib
 from doe_calib import Configurations, Robot, Tool, build_model, simulate
 from doe_calib.cli import main
 from doe_calib.diagnosis import diagnose
-from doe_calib.estimation.identify import identify_quietly
+from doe_calib.estimation.identify import FitSettings, identify_quietly
 from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.io.csv_files import read_measurements, write_measurements
 from doe_calib.io.measurements import concatenate
@@ -165,7 +165,7 @@ def test_sigma_in_mm_on_the_command_line_and_in_metres_in_python_agree(model3, f
                str(without), "--model", "joint_offset", "--sigma", "0.02", "--out",
                str(tmp_path / "r.json"), "--json")
     py = identify_quietly(model3, read_measurements(without, model3.robot, model3.tool),
-                          sigma=2e-5, select="cv").to_dict()
+                          sigma=2e-5, settings=FitSettings(select="cv")).to_dict()
     assert cli["sigma_mm"] == py["sigma_mm"] == 0.02 and cli["sigma_source"] == "given"
     assert [p["value"] for p in cli["parameters"]] == [p["value"] for p in py["parameters"]]
     assert cli["sigma_ratio"] == py["sigma_ratio"]

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from doe_calib.errors import DataError, ModelError
-from doe_calib.io.measurements import Configurations, Measurements
+from doe_calib.io.measurements import Configurations, Measurements, provisional
 from doe_calib.estimation.labelled import read_only
 from doe_calib.estimation.measured_region import outside_joints
 from doe_calib.estimation.session import reregister, session_notes
@@ -206,8 +206,6 @@ def predict(result, data, model=None, *, registry=None, apriori: bool = False,
         params = aligned_parameters(model, result)
     measured = isinstance(data, Measurements) and bool(np.all(np.isfinite(data.xyz)))
     if measured:  # a re-registration weighs readings without σ alike
-        from doe_calib.estimation.sigma import provisional  # sigma imports the estimators
-
         data = provisional(data)
     done = None
     if register is not None:

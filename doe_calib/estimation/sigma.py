@@ -41,6 +41,7 @@ from doe_calib.io.measurements import (
     REPEATED,
     SIGMA_SOURCES,
     Measurements,
+    provisional,
 )
 from doe_calib.model.marker_model import for_workload
 
@@ -75,11 +76,6 @@ class SettledSigma:
     repeated: Repeatability | None = None
 
 
-#: σ (m) a fit that estimates σ weighs readings without one by: any uniform σ gives the same
-#: estimate, and σ̂ replaces it.
-PROVISIONAL_SIGMA = 1e-3
-
-
 def with_sigma(measurements, sigma: float, source: str = GIVEN) -> Measurements:
     """``measurements`` with every reading's σ set to ``sigma`` (m), from ``source``.
 
@@ -95,14 +91,6 @@ def with_sigma(measurements, sigma: float, source: str = GIVEN) -> Measurements:
     return replace(measurements, sigma=np.full(len(measurements), float(sigma)),
                    sigma_source=source, sigma_estimated=False)
 
-
-def provisional(measurements) -> Measurements:
-    """The readings a fit that estimates σ weighs: those without σ at
-    :data:`PROVISIONAL_SIGMA`, still ``sigma_estimated``."""
-    missing = np.isnan(measurements.sigma)
-    if not missing.any():
-        return measurements
-    return replace(measurements, sigma=np.where(missing, PROVISIONAL_SIGMA, measurements.sigma))
 
 
 def resolve_sigma(model, measurements, sigma: float | None = None, params=None, fit=None,

@@ -308,3 +308,17 @@ def joined_sigma_source(parts) -> str:
     if ESTIMATED in sources:
         return ESTIMATED
     return sources.pop() if len(sources) == 1 else PER_READING
+
+
+#: σ (m) a fit that estimates σ weighs readings without one by: any uniform σ gives the same
+#: estimate, and σ̂ replaces it.
+PROVISIONAL_SIGMA = 1e-3
+
+
+def provisional(measurements: "Measurements") -> "Measurements":
+    """The readings a fit that estimates σ weighs: those without σ at
+    :data:`PROVISIONAL_SIGMA`, still ``sigma_estimated``."""
+    missing = np.isnan(measurements.sigma)
+    if not missing.any():
+        return measurements
+    return replace(measurements, sigma=np.where(missing, PROVISIONAL_SIGMA, measurements.sigma))
