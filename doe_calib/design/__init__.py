@@ -22,7 +22,7 @@ _HOMES = {"read_constraints": "candidates.constraint_file", "Box": "candidates.c
           "AOptimal": "criteria", "Criterion": "criteria", "DOptimal": "criteria",
           "EOptimal": "criteria", "TaskOptimal": "criteria", "criterion": "criteria",
           "d_efficiency": "criteria", "efficiency": "criteria",
-          "evaluate_criterion": "criteria", "log_det": "criteria",
+          "log_det": "criteria",
           "exact_design": "solvers.exchange",
           "LoadCase": "problem", "blocks_for": "problem", "design_parameters": "problem",
           "load_configurations": "problem", "task_matrix": "problem",

@@ -28,8 +28,7 @@ over the candidates has
 with the sensitivity matrix H and factor c of ``sensitivity``
 (``Σ_i w_i tr(H M_i) = 1``; ψ_i = tr(H M_i) ≤ 1 for all i is the optimality
 condition: d_i = tr(M⁻¹M_i) ≤ p for D). The functions at the end
-(:func:`evaluate_criterion`, :func:`sensitivity`, :func:`efficiency` …) take
-a criterion name or object.
+(:func:`criterion`, :func:`efficiency` …) take a criterion name or object.
 
 Examples
 --------
@@ -117,7 +116,14 @@ class Criterion:
         return 1.0
 
     def sensitivity(self, m: np.ndarray) -> tuple[np.ndarray, float]:
-        """Sensitivity matrix H (p, p) and bound factor c at M (module docstring)."""
+        """Sensitivity matrix H (p, p) and bound factor c at M (module docstring).
+
+        ψ_i = tr(H M_i) is the directional derivative of Φ towards candidate i,
+        normalised so that Σ w_i ψ_i = 1 at M = Σ w_i M_i. D: H = M⁻¹/p;
+        A: M⁻²/tr M⁻¹; task: M⁻¹TᵀTM⁻¹/tr(TM⁻¹Tᵀ); c = 1. E: H is that of the
+        surrogate (tr M^-k)^(-1/k), k = :data:`E_ORDER`, and c turns it into a
+        bound on λ_min.
+        """
         raise NotImplementedError
 
     def scale_value(self, value: float, n: float, p: int) -> float:
@@ -367,24 +373,6 @@ def check(name, task) -> None:
         raise ValueError(f"unknown criterion {name!r}; choose one of {', '.join(CRITERIA)}")
     if name == "task" and task is None:
         raise ValueError("the task criterion needs task poses")
-
-
-def evaluate_criterion(name, m: np.ndarray, task: np.ndarray | None = None) -> float:
-    """The criterion ``name`` (a name of :data:`CRITERIA` or a Criterion) of M."""
-    return Criterion.from_name(name, task).value(m)
-
-
-def sensitivity(name, m: np.ndarray, task: np.ndarray | None = None):
-    """Sensitivity matrix H (p, p) and bound factor c of the criterion at M.
-
-    ψ_i = tr(H M_i) is the directional derivative of Φ towards candidate i,
-    normalised so that Σ w_i ψ_i = 1 at M = Σ w_i M_i; no design over the
-    candidates has Φ above ``c · max_i ψ_i · Φ(M)``. D: H = M⁻¹/p;
-    A: M⁻²/tr M⁻¹; task: M⁻¹TᵀTM⁻¹/tr(TM⁻¹Tᵀ); c = 1. E: H is that of the
-    surrogate (tr M^-k)^(-1/k), k = :data:`E_ORDER`, and c turns it into a
-    bound on λ_min.
-    """
-    return Criterion.from_name(name, task).sensitivity(m)
 
 
 def efficiency(name, value: float, reference: float, p: int) -> float:
