@@ -128,6 +128,15 @@ def unreachable(collision, q, home, robot, lower, upper,
     return forked_map(_reached, shared, len(q), 1 if collision.planner is None else workers)
 
 
+def revert_unreachable(collision, q, start, home, robot, constraints) -> tuple:
+    """Poses q (M, N) at the angles they are reached at from ``home``, each unreachable one
+    back at its ``start`` (M, N), rad (m); and how many went back. ``constraints``: the
+    :class:`DesignConstraints` whose bounds the equivalent angles stay in."""
+    checked = unreachable(collision, q, home, robot, *constraints.bounds(robot))
+    back = np.array([why is not None for why, _ in checked])
+    return np.where(back[:, None], start, [used for _, used in checked]), int(back.sum())
+
+
 def _reached(shared, i: int):
     """(reason or None, the angles used) for pose i of :func:`unreachable`."""
     collision, q, home, robot, lower, upper, ws = shared
