@@ -17,6 +17,7 @@ import numpy as np
 
 from doe_calib.collision import Workspace
 from doe_calib.design.candidates.draw import CandidateSet, screen_collisions
+from doe_calib.design.result import first_rows
 from doe_calib.errors import DataError, SolverError
 from doe_calib.io.csv_files import read_design, read_measurements
 from doe_calib.io.table import read_table
@@ -46,11 +47,8 @@ class CandidatePoses:
     @classmethod
     def from_configurations(cls, configurations, source: str = "") -> "CandidatePoses":
         """One candidate per distinct pose id of ``configurations`` (its first row's q)."""
-        first = {}
-        for i, pose in enumerate(configurations.pose):
-            first.setdefault(pose, i)
-        index = np.array(list(first.values()), int)
-        return cls(configurations.q[index], tuple(first), source)
+        index = first_rows(configurations)
+        return cls(configurations.q[index], tuple(configurations.pose[i] for i in index), source)
 
 
 def _is_measurement_csv(path) -> bool:

@@ -15,7 +15,7 @@ from doe_calib.design.solvers.relaxation import (
     packed_weights,
     traces,
 )
-from doe_calib.design.solvers.updates import added_values, best_added, regularised
+from doe_calib.design.solvers.updates import best_added, regularised
 from doe_calib.errors import SolverError
 
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
@@ -63,7 +63,7 @@ def _cover(blocks, chosen, pool, bins, min_bins, crit):
         best = (-np.inf, None, None)
         for s in slots:
             b = blocks[chosen[s]]
-            values = added_values(crit, m - b.T @ b, blocks[new])
+            values = crit.added_values(regularised(m - b.T @ b), blocks[new])
             j = int(np.argmax(values))
             if values[j] > best[0]:
                 best = (values[j], s, int(new[j]))

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.design.criteria import Criterion, DOptimal
+from doe_calib.design.criteria import DOptimal
 from doe_calib.design.solvers.relaxation import packed_weights
 
 _RIDGE = 1e-10
@@ -19,33 +19,13 @@ def regularised(m: np.ndarray) -> np.ndarray:
     return m + _RIDGE * np.trace(m) / p * np.eye(p)
 
 
-def added_values(criterion, m: np.ndarray, blocks: np.ndarray,
-                 task: np.ndarray | None = None) -> np.ndarray:
-    """Criterion (:meth:`.criteria.Criterion.value`) of M + B_jᵀB_j for every B_j.
-
-    Parameters
-    ----------
-    criterion : {"D", "A", "E", "task"} or Criterion
-    m : ndarray, shape (p, p)
-        Information of the design without the candidate (regularised here).
-    blocks : ndarray, shape (K, r, p)
-    task : ndarray, shape (rows, p), optional
-        For the task criterion named by a string.
-
-    Returns
-    -------
-    ndarray, shape (K,)
-    """
-    return Criterion.from_name(criterion, task).added_values(regularised(m), blocks)
-
-
 def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray,
                packed: np.ndarray | None = None, batch: int = 64) -> tuple[int, float]:
     """The candidate j maximising the criterion of M + B_jᵀB_j among ``allowed``, and that value.
 
-    The same answer as ``argmax`` of :func:`added_values` over the allowed
-    candidates. For D, with ``packed`` (the blocks' packed information,
-    :func:`.relaxation.packed_information`), candidates are tried in
+    The same answer as ``argmax`` of the criterion's ``added_values`` at the
+    regularised M over the allowed candidates. For D, with ``packed`` (the
+    blocks' :func:`.relaxation.packed_information`), candidates are tried in
     decreasing order of the exact upper bound
 
         log det(I + B_j M⁻¹ B_jᵀ) ≤ r log(1 + tr(M⁻¹ M_j) / r)    (r rows of B_j),
@@ -76,7 +56,7 @@ def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray
     >>> blocks = np.random.default_rng(0).normal(size=(100, 2, 3))
     >>> j, _ = best_added(DOptimal(), np.eye(3), blocks, np.ones(100, bool),
     ...                   packed_information(blocks))
-    >>> j == int(np.argmax(added_values("D", np.eye(3), blocks)))
+    >>> j == int(np.argmax(DOptimal().added_values(regularised(np.eye(3)), blocks)))
     True
     """
     m = regularised(m)
