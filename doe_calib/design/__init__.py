@@ -21,7 +21,7 @@ _HOMES = {"read_constraints": "candidates.constraint_file", "Box": "candidates.c
           "LineOfSight": "candidates.constraints", "CRITERIA": "criteria",
           "AOptimal": "criteria", "Criterion": "criteria", "DOptimal": "criteria",
           "EOptimal": "criteria", "TaskOptimal": "criteria", "criterion": "criteria",
-          "d_efficiency": "criteria", "efficiency": "criteria",
+          "efficiency": "criteria",
           "log_det": "criteria",
           "exact_design": "solvers.exchange",
           "LoadCase": "problem", "blocks_for": "problem", "design_parameters": "problem",

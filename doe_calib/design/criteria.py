@@ -5,17 +5,10 @@ parameters, already scaled by their typical sizes (``S M S`` with
 ``S = diag(scale)``) so that units do not decide the A and E criteria; D is
 scale-invariant anyway. Larger is better. :class:`DOptimal`,
 :class:`AOptimal`, :class:`EOptimal` and :class:`TaskOptimal` each carry
-
-* ``value(M)``: what a design reports: log det M, −tr M⁻¹, λ_min(M),
-  −tr(T M⁻¹ Tᵀ);
-* ``cvxpy_value(M)``: the same as a concave cvxpy expression, for the
-  relaxation solved by an interior-point method;
-* ``sensitivity(M)`` and the bounds of the equivalence theorem below;
-* ``added_values(M, B)``: the criterion of M + B_jᵀB_j for many candidates
-  at once (rank-r updates), the exchange's inner step;
-* ``log_phi(M)``: log Φ as a CasADi expression, the IPOPT refinement's
-  objective;
-* its ``name`` and the words a report uses.
+what every solver asks of it: its ``value`` (log det M, −tr M⁻¹, λ_min(M),
+−tr(T M⁻¹ Tᵀ)), a concave cvxpy expression, the sensitivity and bounds of
+the equivalence theorem below, rank-r updates for the exchange, log Φ as a
+CasADi expression for IPOPT, and its name and words for reports.
 
 The information function Φ is concave and positively homogeneous of degree 1
 ((det M)^(1/p), 1/tr M⁻¹, λ_min, 1/tr(T M⁻¹ Tᵀ)), which makes efficiencies
@@ -384,8 +377,3 @@ def efficiency(name, value: float, reference: float, p: int) -> float:
     if not isinstance(name, Criterion) and name == "task":  # needs no task matrix
         name = TaskOptimal(np.zeros((0, p)))
     return Criterion.from_name(name).efficiency(value, reference, p)
-
-
-def d_efficiency(m: np.ndarray, m_reference: np.ndarray) -> float:
-    """(det M / det M_ref)^(1/p): 1 means as informative as the reference."""
-    return DOptimal().efficiency(log_det(m), log_det(m_reference), m.shape[0])

@@ -150,20 +150,6 @@ def _reached(shared, i: int):
     return (NO_PATH, pose) if used is None else (None, used)
 
 
-def reachability_note(home, robot, replaced: dict, reverted: int, moved: str = "") -> str:
-    """One sentence: the home pose and how many chosen poses were replaced, and why."""
-    deg = ", ".join(f"{v:.4g}" for v in np.asarray(home) * robot.display_factors)
-    text = f"reachability: every pose joined to the home pose ({deg}) by a free path"
-    if moved:
-        text += f" ({moved})"
-    if replaced:
-        text += "; chosen poses replaced from the candidates: " + ", ".join(
-            f"{n} ({why})" for why, n in sorted(replaced.items(), key=lambda x: -x[1]))
-    if reverted:
-        text += f"; {reverted} refined pose(s) kept at their candidate (refined, unreachable)"
-    return text
-
-
 def reachable_choice(choose, q, pose_of, collision, home, robot, lower, upper,
                      rounds: int = 8) -> tuple:
     """The candidates ``choose`` picks once every chosen pose is joined to ``home``.

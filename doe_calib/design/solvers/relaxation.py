@@ -52,7 +52,7 @@ def traces(blocks: np.ndarray, h: np.ndarray) -> np.ndarray:
 
 
 def equivalence_ratio(blocks: np.ndarray | None, m: np.ndarray, criterion="D",
-                      task: np.ndarray | None = None, packed: np.ndarray | None = None) -> float:
+                      packed: np.ndarray | None = None) -> float:
     """c · max_i ψ_i over every candidate at the normalised information M (≥ 1 at the optimum).
 
     No design over the candidates has an information function Φ above
@@ -62,7 +62,7 @@ def equivalence_ratio(blocks: np.ndarray | None, m: np.ndarray, criterion="D",
     makes the sweep over the candidates one matrix-vector product (``blocks``
     may then be None).
     """
-    h, c = Criterion.from_name(criterion, task).sensitivity(m)
+    h, c = Criterion.from_name(criterion).sensitivity(m)
     psi = traces(blocks, h) if packed is None else packed @ packed_weights(h)
     return float(c * psi.max())
 
