@@ -15,7 +15,7 @@ from doe_calib.design import (
     relax,
 )
 from doe_calib.design.optimal import optimal_design
-from doe_calib.design.solvers.updates import regularised
+from doe_calib.design.solvers.exchange import regularised
 from doe_calib.io.csv_files import write_design
 from doe_calib.model.simulate import random_configurations
 

@@ -24,7 +24,7 @@ from doe_calib.design.solvers.relaxation import (
     traces,
     unpack,
 )
-from doe_calib.design.solvers.updates import best_added, regularised
+from doe_calib.design.solvers.exchange import best_added, regularised
 from doe_calib.errors import OptionError
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 from doe_calib.model.simulate import random_configurations

@@ -148,22 +148,9 @@ def augment_fragment(result, dpi: int = 72) -> Html:
 
 
 def augment_report(result, path, measured=None, dpi: int = 90):
-    """Write the HTML report of ``design --augment``.
-
-    Parameters
-    ----------
-    result : AugmentResult
-    path : str or Path
-        HTML file to write; self-contained (figures embedded as PNG).
-    measured : Measurements, optional
-        The campaign measured, drawn with the new poses in the joint chart.
-    dpi : int
-        Resolution of the figures.
-
-    Returns
-    -------
-    Path
-        The file written.
+    """Write the HTML report of ``design --augment``, an AugmentResult, to ``path`` and return
+    the Path written (``path`` and ``dpi`` as for :func:`.design.design_report`); ``measured``
+    (Measurements, optional): the campaign, drawn with the new poses in the joint chart.
 
     Examples
     --------

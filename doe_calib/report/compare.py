@@ -102,21 +102,9 @@ def compare_fragment(comparison, dpi: int = 72) -> Html:
 
 
 def compare_report(comparison, path, dpi: int = 90):
-    """Write an HTML report of a comparison of designs and identification results.
-
-    Parameters
-    ----------
-    comparison : Comparison
-        From :func:`doe_calib.design.comparison.compare`.
-    path : str or Path
-        HTML file to write; self-contained (figures embedded as PNG).
-    dpi : int
-        Resolution of the figures.
-
-    Returns
-    -------
-    Path
-        The file written.
+    """Write an HTML report of a :class:`~doe_calib.design.comparison.Comparison` of designs and
+    identification results to ``path`` and return the Path written (``path`` and ``dpi`` as
+    for :func:`.design.design_report`).
 
     Examples
     --------
