@@ -88,26 +88,11 @@ def read_candidates(path, robot, tool=None) -> CandidatePoses:
 
 def screened_candidates(feasibility, robot, candidates: CandidatePoses,
                         collision=None) -> CandidateSet:
-    """The poses of ``candidates`` that meet every constraint (and clearance), with counts.
+    """The poses of ``candidates`` that meet every constraint of ``feasibility``
+    (:func:`.feasibility.build_feasibility`) and, with a collision model, their clearance.
 
-    Parameters
-    ----------
-    feasibility : Feasibility
-        From :func:`.feasibility.build_feasibility`.
-    robot : Robot
-    candidates : CandidatePoses
-    collision : CollisionModel, optional
-
-    Returns
-    -------
-    CandidateSet
-        ``drawn`` = the file's poses, ``removed`` the constraints' counts,
-        ``names`` and ``source`` from the file.
-
-    Raises
-    ------
-    SolverError
-        When none of the file's poses is feasible.
+    Returns a CandidateSet: ``drawn`` the file's poses, ``removed`` the constraints' counts,
+    ``names`` and ``source`` from the file. Raises SolverError when none is feasible.
     """
     q = np.asarray(candidates.q, float)
     ok, violated = feasibility.feasible(q)
