@@ -18,7 +18,7 @@ from doe_calib.design.candidates.from_file import CandidatePoses
 from doe_calib.design.candidates.reachability import revert_unreachable
 from doe_calib.design.criteria import (AOptimal, Criterion, DOptimal, EOptimal, TaskOptimal,
                                        check, log_det)
-from doe_calib.design.pipeline import Goal, Setting, run
+from doe_calib.design.pipeline import Goal, Setting, constraints_used, run
 from doe_calib.design.predicted_std import design_std
 from doe_calib.design.problem import (blocks_for, check_enough_poses, design_parameters,
                                       load_configurations, task_matrix)
@@ -206,18 +206,6 @@ def _notes(setting, info, bound, m) -> tuple:
         notes += (f"task: predicted RMS position std at the {n_task} task poses "
                   f"{1000 * np.sqrt(-task / n_task):.4g} mm (σ = {1000 * setting.sigma:g} mm)",)
     return notes
-
-
-def constraints_used(setting, loads, reach) -> dict:
-    """The constraints as used (file units), with the ``loads`` (their specs), the collision
-    model and the reachability when checked."""
-    model, collision = setting.model, setting.collision
-    used = setting.constraints.to_dict(model.robot, model.tool)
-    used["loads"] = [ld.spec() for ld in loads]
-    if collision is not None:
-        used["collision"] = collision.summary()
-        used["reachability"] = reach.to_dict(model.robot)
-    return used
 
 
 def _coverage(setting, q) -> Coverage | None:

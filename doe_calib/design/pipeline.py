@@ -218,6 +218,18 @@ def reachable_exchange(exchange, q, pose_of, setting: Setting) -> Choice:
     return Choice(made[-1], np.asarray(chosen), used, Reachability(start, replaced, 0, moved))
 
 
+def constraints_used(setting: Setting, loads, reach: Reachability | None) -> dict:
+    """The constraints as used (file units), with the ``loads`` (their specs), the collision
+    model and the reachability when checked."""
+    model, collision = setting.model, setting.collision
+    used = setting.constraints.to_dict(model.robot, model.tool)
+    used["loads"] = [ld.spec() for ld in loads]
+    if collision is not None:
+        used["collision"] = collision.summary()
+        used["reachability"] = reach.to_dict(model.robot)
+    return used
+
+
 def run(goal: Goal, setting: Setting, candidates, progress=None):
     """The design of ``goal``: every stage in order, each given the results before it.
 

@@ -34,8 +34,7 @@ from doe_calib.design.discovery.variants import (approach_joints, detection_targ
                                                  effect_columns, free_parameters,
                                                  observation_rows, variants,
                                                  within_torque_limits)
-from doe_calib.design.optimal import constraints_used
-from doe_calib.design.pipeline import Goal
+from doe_calib.design.pipeline import Goal, constraints_used
 from doe_calib.design.predicted_std import design_std
 from doe_calib.design.result import CandidateCount, DesignResult
 from doe_calib.design.solvers.constrained_exchange import (constrained_exchange,
