@@ -8,15 +8,14 @@ from doe_calib import Configurations, examples
 from doe_calib.design import (
     CRITERIA,
     LoadCase,
+    criterion,
     efficiency,
-    evaluate_criterion,
     exact_design,
     information,
     relax,
 )
-from doe_calib.design.criteria import sensitivity
 from doe_calib.design.optimal import optimal_design
-from doe_calib.design.solvers.updates import added_values
+from doe_calib.design.solvers.exchange import regularised
 from doe_calib.io.csv_files import write_design
 from doe_calib.model.simulate import random_configurations
 
@@ -32,7 +31,7 @@ def small():
 
 def _phi(name, m, task):
     """The homogeneous information function Φ of each criterion."""
-    value = evaluate_criterion(name, m, task)
+    value = criterion(name, task).value(m)
     return {"D": np.exp(value / m.shape[0]), "A": -1 / value, "E": value,
             "task": -1 / value}[name]
 
@@ -43,7 +42,7 @@ def test_sensitivity_is_the_directional_derivative(small, name):
     blocks, task = small
     w = np.random.default_rng(1).dirichlet(np.ones(len(blocks)))
     m = information(blocks, w)
-    h, _ = sensitivity(name, m, task)
+    h, _ = criterion(name, task).sensitivity(m)
     mi = np.einsum("kri,krj->kij", blocks, blocks)
     psi = np.einsum("ij,kij->k", h, mi)
     assert w @ psi == pytest.approx(1.0)
@@ -60,8 +59,8 @@ def test_sensitivity_is_the_directional_derivative(small, name):
 def test_rank_r_updates_match_direct_evaluation(small, name):
     blocks, task = small
     m = information(blocks[:6], np.ones(6))
-    values = added_values(name, m, blocks, task)
-    direct = [evaluate_criterion(name, m + b.T @ b, task) for b in blocks]
+    values = criterion(name, task).added_values(regularised(m), blocks)
+    direct = [criterion(name, task).value(m + b.T @ b) for b in blocks]
     assert np.allclose(values, direct, rtol=1e-7)
 
 
@@ -73,7 +72,7 @@ def _cvxpy_optimum(name, blocks, task):
                  "E": cp.Maximize(cp.lambda_min(m)),
                  "task": cp.Minimize(cp.matrix_frac(task.T, m))}[name]
     cp.Problem(objective, [cp.sum(w) == 1]).solve(solver="CLARABEL")
-    return evaluate_criterion(name, information(blocks, np.clip(w.value, 0, None)), task)
+    return criterion(name, task).value(information(blocks, np.clip(w.value, 0, None)))
 
 
 @pytest.mark.parametrize("name", CRITERIA)
@@ -90,9 +89,9 @@ def test_relaxation_matches_cvxpy_and_certifies_its_bound(small, name):
     rng = np.random.default_rng(0)
     for n in (6, 10):
         best = exact_design(blocks, n, name, rel.weights, task).indices
-        value = evaluate_criterion(name, information(blocks[best], np.ones(n)), task)
-        randoms = [evaluate_criterion(name, information(
-            blocks[rng.choice(len(blocks), n, replace=False)], np.ones(n)), task)
+        value = criterion(name, task).value(information(blocks[best], np.ones(n)))
+        randoms = [criterion(name, task).value(information(
+            blocks[rng.choice(len(blocks), n, replace=False)], np.ones(n)))
             for _ in range(300)]
         assert max(randoms) <= value <= rel.bound(n)
     assert 1.0 <= rel.ratio < (1.02 if name == "E" else 1 + 1e-4)

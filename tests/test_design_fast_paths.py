@@ -24,7 +24,7 @@ from doe_calib.design.solvers.relaxation import (
     traces,
     unpack,
 )
-from doe_calib.design.solvers.updates import added_values, best_added
+from doe_calib.design.solvers.exchange import best_added, regularised
 from doe_calib.errors import OptionError
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 from doe_calib.model.simulate import random_configurations
@@ -88,7 +88,7 @@ def test_bound_search_finds_the_argmax_of_every_candidate():
     m = np.einsum("kri,krj->ij", design[:2], design[:2])
     crit = DOptimal()
     for allowed in (np.ones(700, bool), rng.random(700) < 0.3):
-        values = added_values(crit, m, blocks)
+        values = crit.added_values(regularised(m), blocks)
         values[~allowed] = -np.inf
         j, value = best_added(crit, m, blocks, allowed, packed)
         assert j == int(np.argmax(values))

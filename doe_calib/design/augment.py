@@ -28,7 +28,7 @@ from doe_calib.design.discovery.variants import (approach_joints, free_parameter
                                                  observation_rows, variants, within_torque_limits)
 from doe_calib.design.pipeline import Goal, Setting, run
 from doe_calib.design.problem import blocks_for, design_parameters, load_configurations
-from doe_calib.design.solvers.updates import regularised
+from doe_calib.design.solvers.exchange import regularised
 from doe_calib.errors import SolverError
 from doe_calib.estimation.effect_signature import grown_parameters
 from doe_calib.estimation.weighted_residuals import weighted_residual

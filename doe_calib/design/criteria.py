@@ -5,17 +5,10 @@ parameters, already scaled by their typical sizes (``S M S`` with
 ``S = diag(scale)``) so that units do not decide the A and E criteria; D is
 scale-invariant anyway. Larger is better. :class:`DOptimal`,
 :class:`AOptimal`, :class:`EOptimal` and :class:`TaskOptimal` each carry
-
-* ``value(M)``: what a design reports: log det M, −tr M⁻¹, λ_min(M),
-  −tr(T M⁻¹ Tᵀ);
-* ``cvxpy_value(M)``: the same as a concave cvxpy expression, for the
-  relaxation solved by an interior-point method;
-* ``sensitivity(M)`` and the bounds of the equivalence theorem below;
-* ``added_values(M, B)``: the criterion of M + B_jᵀB_j for many candidates
-  at once (rank-r updates), the exchange's inner step;
-* ``log_phi(M)``: log Φ as a CasADi expression, the IPOPT refinement's
-  objective;
-* its ``name`` and the words a report uses.
+what every solver asks of it: its ``value`` (log det M, −tr M⁻¹, λ_min(M),
+−tr(T M⁻¹ Tᵀ)), a concave cvxpy expression, the sensitivity and bounds of
+the equivalence theorem below, rank-r updates for the exchange, log Φ as a
+CasADi expression for IPOPT, and its name and words for reports.
 
 The information function Φ is concave and positively homogeneous of degree 1
 ((det M)^(1/p), 1/tr M⁻¹, λ_min, 1/tr(T M⁻¹ Tᵀ)), which makes efficiencies
@@ -28,8 +21,7 @@ over the candidates has
 with the sensitivity matrix H and factor c of ``sensitivity``
 (``Σ_i w_i tr(H M_i) = 1``; ψ_i = tr(H M_i) ≤ 1 for all i is the optimality
 condition: d_i = tr(M⁻¹M_i) ≤ p for D). The functions at the end
-(:func:`evaluate_criterion`, :func:`sensitivity`, :func:`efficiency` …) take
-a criterion name or object.
+(:func:`criterion`, :func:`efficiency` …) take a criterion name or object.
 
 Examples
 --------
@@ -117,7 +109,14 @@ class Criterion:
         return 1.0
 
     def sensitivity(self, m: np.ndarray) -> tuple[np.ndarray, float]:
-        """Sensitivity matrix H (p, p) and bound factor c at M (module docstring)."""
+        """Sensitivity matrix H (p, p) and bound factor c at M (module docstring).
+
+        ψ_i = tr(H M_i) is the directional derivative of Φ towards candidate i,
+        normalised so that Σ w_i ψ_i = 1 at M = Σ w_i M_i. D: H = M⁻¹/p;
+        A: M⁻²/tr M⁻¹; task: M⁻¹TᵀTM⁻¹/tr(TM⁻¹Tᵀ); c = 1. E: H is that of the
+        surrogate (tr M^-k)^(-1/k), k = :data:`E_ORDER`, and c turns it into a
+        bound on λ_min.
+        """
         raise NotImplementedError
 
     def scale_value(self, value: float, n: float, p: int) -> float:
@@ -369,24 +368,6 @@ def check(name, task) -> None:
         raise ValueError("the task criterion needs task poses")
 
 
-def evaluate_criterion(name, m: np.ndarray, task: np.ndarray | None = None) -> float:
-    """The criterion ``name`` (a name of :data:`CRITERIA` or a Criterion) of M."""
-    return Criterion.from_name(name, task).value(m)
-
-
-def sensitivity(name, m: np.ndarray, task: np.ndarray | None = None):
-    """Sensitivity matrix H (p, p) and bound factor c of the criterion at M.
-
-    ψ_i = tr(H M_i) is the directional derivative of Φ towards candidate i,
-    normalised so that Σ w_i ψ_i = 1 at M = Σ w_i M_i; no design over the
-    candidates has Φ above ``c · max_i ψ_i · Φ(M)``. D: H = M⁻¹/p;
-    A: M⁻²/tr M⁻¹; task: M⁻¹TᵀTM⁻¹/tr(TM⁻¹Tᵀ); c = 1. E: H is that of the
-    surrogate (tr M^-k)^(-1/k), k = :data:`E_ORDER`, and c turns it into a
-    bound on λ_min.
-    """
-    return Criterion.from_name(name, task).sensitivity(m)
-
-
 def efficiency(name, value: float, reference: float, p: int) -> float:
     """Φ(design) / Φ(reference) from criterion values: 1 means as good as the reference.
 
@@ -396,8 +377,3 @@ def efficiency(name, value: float, reference: float, p: int) -> float:
     if not isinstance(name, Criterion) and name == "task":  # needs no task matrix
         name = TaskOptimal(np.zeros((0, p)))
     return Criterion.from_name(name).efficiency(value, reference, p)
-
-
-def d_efficiency(m: np.ndarray, m_reference: np.ndarray) -> float:
-    """(det M / det M_ref)^(1/p): 1 means as informative as the reference."""
-    return DOptimal().efficiency(log_det(m), log_det(m_reference), m.shape[0])

@@ -15,10 +15,10 @@ import numpy as np
 from doe_calib.design.candidates.clearances import collision_note, pose_clearances
 from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.candidates.from_file import CandidatePoses
-from doe_calib.design.candidates.reachability import unreachable
+from doe_calib.design.candidates.reachability import revert_unreachable
 from doe_calib.design.criteria import (AOptimal, Criterion, DOptimal, EOptimal, TaskOptimal,
                                        check, log_det)
-from doe_calib.design.pipeline import Goal, Setting, run
+from doe_calib.design.pipeline import Goal, Setting, constraints_used, run
 from doe_calib.design.predicted_std import design_std
 from doe_calib.design.problem import (blocks_for, check_enough_poses, design_parameters,
                                       load_configurations, task_matrix)
@@ -127,11 +127,8 @@ class CriterionGoal(Goal):
                                candidates.feasibility, info.criterion, collision=collision)
         q, reverted = outcome.q, 0
         if choice.reachability is not None and outcome.accepted:
-            checked = unreachable(collision, q, choice.reachability.home, robot,
-                                  *setting.constraints.bounds(robot))
-            back = np.array([why is not None for why, _ in checked])
-            q = np.where(back[:, None], start, [used for _, used in checked])
-            reverted = int(back.sum())
+            q, reverted = revert_unreachable(collision, q, start, choice.reachability.home,
+                                             robot, setting.constraints)
         return Refined(outcome, q, reverted)
 
     def bound(self, setting, info, relaxed, refined, stage) -> Bound:
@@ -170,7 +167,7 @@ class CriterionGoal(Goal):
         reach = choice.reachability
         if reach is not None and refined is not None:
             reach = replace(reach, reverted=refined.reverted)
-        cands, constraints = candidates.poses, _constraints(setting, reach)
+        cands, constraints = candidates.poses, constraints_used(setting, setting.loads, reach)
         clearances, notes = (), (versus.words(n_poses), *_notes(setting, info, bound, m))
         if setting.collision is not None:
             stage("assessment", f"clearances at the {n_poses} poses")
@@ -209,18 +206,6 @@ def _notes(setting, info, bound, m) -> tuple:
         notes += (f"task: predicted RMS position std at the {n_task} task poses "
                   f"{1000 * np.sqrt(-task / n_task):.4g} mm (σ = {1000 * setting.sigma:g} mm)",)
     return notes
-
-
-def _constraints(setting, reach) -> dict:
-    """The constraints as used (file units), with the loads, the collision model and the
-    reachability when checked."""
-    model, collision = setting.model, setting.collision
-    used = setting.constraints.to_dict(model.robot, model.tool)
-    used["loads"] = [ld.spec() for ld in setting.loads]
-    if collision is not None:
-        used["collision"] = collision.summary()
-        used["reachability"] = reach.to_dict(model.robot)
-    return used
 
 
 def _coverage(setting, q) -> Coverage | None:

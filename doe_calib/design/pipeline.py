@@ -22,8 +22,7 @@ from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.candidates.draw import CandidateSet, feasible_candidates
 from doe_calib.design.candidates.feasibility import build_feasibility
 from doe_calib.design.candidates.from_file import CandidatePoses, screened_candidates
-from doe_calib.design.candidates.reachability import (free_home, home_pose, reachability_note,
-                                                      reachable_choice)
+from doe_calib.design.candidates.reachability import free_home, home_pose, reachable_choice
 from doe_calib.io.setting_ranges import positive, whole
 
 log = logging.getLogger(__name__)
@@ -90,8 +89,18 @@ class Reachability:
     moved: str = ""
 
     def note(self, robot) -> str:
-        """One sentence: the home pose, and what was replaced or reverted."""
-        return reachability_note(self.home, robot, self.replaced, self.reverted, self.moved)
+        """One sentence: the home pose, and what was replaced or reverted, and why."""
+        deg = ", ".join(f"{v:.4g}" for v in np.asarray(self.home) * robot.display_factors)
+        text = f"reachability: every pose joined to the home pose ({deg}) by a free path"
+        if self.moved:
+            text += f" ({self.moved})"
+        if self.replaced:
+            text += "; chosen poses replaced from the candidates: " + ", ".join(
+                f"{n} ({why})" for why, n in sorted(self.replaced.items(), key=lambda x: -x[1]))
+        if self.reverted:
+            text += (f"; {self.reverted} refined pose(s) kept at their candidate (refined, "
+                     f"unreachable)")
+        return text
 
     def to_dict(self, robot) -> dict:
         """``home`` (deg, mm), ``replaced`` and ``refined_reverted``, as design files hold."""
@@ -207,6 +216,18 @@ def reachable_exchange(exchange, q, pose_of, setting: Setting) -> Choice:
     chosen, used, replaced = reachable_choice(choose, q, pose_of, collision, start, robot,
                                               *setting.constraints.bounds(robot))
     return Choice(made[-1], np.asarray(chosen), used, Reachability(start, replaced, 0, moved))
+
+
+def constraints_used(setting: Setting, loads, reach: Reachability | None) -> dict:
+    """The constraints as used (file units), with the ``loads`` (their specs), the collision
+    model and the reachability when checked."""
+    model, collision = setting.model, setting.collision
+    used = setting.constraints.to_dict(model.robot, model.tool)
+    used["loads"] = [ld.spec() for ld in loads]
+    if collision is not None:
+        used["collision"] = collision.summary()
+        used["reachability"] = reach.to_dict(model.robot)
+    return used
 
 
 def run(goal: Goal, setting: Setting, candidates, progress=None):

@@ -95,10 +95,6 @@ class StdMapping(Mapping):
         """Name → (std, unit) in display units (mm, deg, µrad/(N·m) …)."""
         return {n: (r.display_std, r.display_unit) for n, r in self._records.items()}
 
-    def unit(self, name: str) -> str:
-        """The SI unit of ``name``'s std."""
-        return self.record(name).unit
-
     def __repr__(self) -> str:
         return "StdMapping({" + ", ".join(f"{n!r}: {r.std:.4g}"
                                           for n, r in self._records.items()) + "})"

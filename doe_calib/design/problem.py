@@ -81,9 +81,14 @@ def design_parameters(model, params, q, loads, sample: int = 400, rng=None):
     pick = rng.choice(len(q), size=min(sample, len(q)), replace=False)
     cfg = load_configurations(model, params.values, q[pick], loads)
     _, b = observation_matrix(model, params.values, cfg)
-    ident = analyse(b.reshape(-1, b.shape[-1]), params)
-    for name, why in ident.dependent:
-        params = params.fixed([name], why + " (over the candidate poses)")
+    return fixed_unidentifiable(params, b.reshape(-1, b.shape[-1]), "the candidate poses")
+
+
+def fixed_unidentifiable(params, rows: np.ndarray, over: str):
+    """``params`` with every parameter the observation ``rows`` (n, P) cannot identify fixed,
+    its reason saying what the rows are ``over``."""
+    for name, why in analyse(rows, params).dependent:
+        params = params.fixed([name], f"{why} (over {over})")
     return params
 
 

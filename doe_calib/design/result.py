@@ -92,6 +92,14 @@ class RandomDesigns:
         return text
 
 
+def first_rows(configurations) -> np.ndarray:
+    """Index of each pose's first configuration, poses in order of appearance; shape (M,)."""
+    first = {}
+    for i, pose in enumerate(configurations.pose):
+        first.setdefault(pose, i)
+    return np.array(list(first.values()), int)
+
+
 def _typed(cls, d):
     """``cls`` of a design file's section (its known keys), None for an empty or missing one."""
     return cls(**{k: v for k, v in d.items() if k in cls.__dataclass_fields__}) if d else None
@@ -208,9 +216,7 @@ class DesignResult:
 
     def first_configurations(self) -> np.ndarray:
         """Index of each pose's first configuration (its unloaded one), in measuring order."""
-        cfg = self.configurations
-        return np.array(sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values()),
-                        int)
+        return first_rows(self.configurations)
 
     def nominal_points(self) -> tuple[np.ndarray, np.ndarray]:
         """Flange and marker positions at each pose's first configuration, mm, robot base frame.

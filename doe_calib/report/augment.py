@@ -9,20 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.report.compare import grouped_bars
+from doe_calib.design.result import first_rows
+from doe_calib.report.compare import grouped_bars, number_cell
 from doe_calib.report.figures import new_figure, to_png
 from doe_calib.report.html import (
     Html, figure, paragraph, preformatted, section, table, write_report)
-
-
-def _num(v):
-    """A finite number as a float cell, anything else (inf, None) as a dash."""
-    return float(v) if v is not None and np.isfinite(v) else "—"
-
-
-def _first_rows(cfg) -> list:
-    """Index of the first configuration of each pose, in order."""
-    return sorted({p: i for i, p in reversed(list(enumerate(cfg.pose)))}.values())
 
 
 def campaign_chart(joint_names, measured_q, new_q, units):
@@ -60,8 +51,8 @@ def campaign_section(result, measured=None, dpi: int = 90):
     old = np.zeros((0, robot.n_joints))
     if measured is not None:
         cfg = measured.configurations
-        old = cfg.q[_first_rows(cfg)] * k
-    new = result.configurations.q[_first_rows(result.configurations)] * k
+        old = cfg.q[first_rows(cfg)] * k
+    new = result.configurations.q[first_rows(result.configurations)] * k
     words = (f"The campaign measured: {result.measured_configurations} configurations"
              + (f" in {len(old)} poses" if measured is not None else "")
              + f"; the new readings are predicted with σ = {result.sigma_mm:g} mm per "
@@ -104,7 +95,8 @@ def std_section(result, dpi: int = 90):
     before = [result.std_before[n][0] for n in names]
     after = [result.std_after[n][0] for n in names]
     units = [result.std_after[n][1] for n in names]
-    rows = [[n, u, _num(b), _num(a), _num(b / a) if np.isfinite(b) and a > 0 else "—"]
+    rows = [[n, u, number_cell(b), number_cell(a),
+             number_cell(b / a) if np.isfinite(b) and a > 0 else "—"]
             for n, u, b, a in zip(names, units, before, after)]
     values = np.array([[b, a] for b, a in zip(before, after)], float).reshape(-1, 2)
     values[~np.isfinite(values)] = np.nan
@@ -124,7 +116,7 @@ def std_section(result, dpi: int = 90):
 
 def detectability_section(result):
     """Each target effect's smallest detectable size before and after."""
-    rows = [[b.effect, b.unit, _num(b.min_detectable), _num(a.min_detectable),
+    rows = [[b.effect, b.unit, number_cell(b.min_detectable), number_cell(a.min_detectable),
              f"{a.power:.0%}", f"{b.absorbed:.0%}", f"{a.absorbed:.0%}",
              a.why or b.why or "–"]
             for b, a in zip(result.detect_before, result.detect_after)]
@@ -156,22 +148,9 @@ def augment_fragment(result, dpi: int = 72) -> Html:
 
 
 def augment_report(result, path, measured=None, dpi: int = 90):
-    """Write the HTML report of ``design --augment``.
-
-    Parameters
-    ----------
-    result : AugmentResult
-    path : str or Path
-        HTML file to write; self-contained (figures embedded as PNG).
-    measured : Measurements, optional
-        The campaign measured, drawn with the new poses in the joint chart.
-    dpi : int
-        Resolution of the figures.
-
-    Returns
-    -------
-    Path
-        The file written.
+    """Write the HTML report of ``design --augment``, an AugmentResult, to ``path`` and return
+    the Path written (``path`` and ``dpi`` as for :func:`.design.design_report`); ``measured``
+    (Measurements, optional): the campaign, drawn with the new poses in the joint chart.
 
     Examples
     --------

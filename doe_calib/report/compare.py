@@ -51,9 +51,9 @@ def grouped_bars(categories, values, labels, ylabel: str, title: str = "", log: 
     return fig
 
 
-def _num(v: float):
-    """A finite value as a float cell, anything else as a dash."""
-    return float(v) if np.isfinite(v) else "—"
+def number_cell(v):
+    """A finite number as a float cell, anything else (inf, NaN, None) as a dash."""
+    return float(v) if v is not None and np.isfinite(v) else "—"
 
 
 def compare_sections(comparison, dpi: int = 90) -> list:
@@ -66,7 +66,7 @@ def compare_sections(comparison, dpi: int = 90) -> list:
         ["source", "kind", "model", "poses", "observations", "σ (mm)"],
         [[lab, k, m, n or "—", o, s] for lab, k, m, n, o, s in
          zip(labels, c.kinds, c.models, c.n_poses, c.n_observations, c.sigma_mm)], 4))]
-    std_rows = [[n, u, *map(_num, row)] for n, u, row in zip(c.names, c.units, c.std)]
+    std_rows = [[n, u, *map(number_cell, row)] for n, u, row in zip(c.names, c.units, c.std)]
     out.append(section(
         "Standard deviation of each parameter",
         paragraph("Display units (mm, deg, µrad/(N·m)); “—”: fixed, or not in that source's "
@@ -77,9 +77,10 @@ def compare_sections(comparison, dpi: int = 90) -> list:
                "Std of each parameter, one bar per source (log scale).")))
     if c.task_poses:
         point = ", ".join(f"{v:g}" for v in c.task_point_mm)
-        rows = [[i + 1, str(p), *map(_num, row)]
+        rows = [[i + 1, str(p), *map(number_cell, row)]
                 for i, (p, row) in enumerate(zip(c.task_poses, c.task_std))]
-        rows += [["RMS", "", *map(_num, c.task_rms())], ["max", "", *map(_num, c.task_max())]]
+        rows += [["RMS", "", *map(number_cell, c.task_rms())],
+                 ["max", "", *map(number_cell, c.task_max())]]
         ticks = [f"{i + 1} ({p})" for i, p in enumerate(c.task_poses)]
         out.append(section(
             "Predicted accuracy at the task poses",
@@ -101,21 +102,9 @@ def compare_fragment(comparison, dpi: int = 72) -> Html:
 
 
 def compare_report(comparison, path, dpi: int = 90):
-    """Write an HTML report of a comparison of designs and identification results.
-
-    Parameters
-    ----------
-    comparison : Comparison
-        From :func:`doe_calib.design.comparison.compare`.
-    path : str or Path
-        HTML file to write; self-contained (figures embedded as PNG).
-    dpi : int
-        Resolution of the figures.
-
-    Returns
-    -------
-    Path
-        The file written.
+    """Write an HTML report of a :class:`~doe_calib.design.comparison.Comparison` of designs and
+    identification results to ``path`` and return the Path written (``path`` and ``dpi`` as
+    for :func:`.design.design_report`).
 
     Examples
     --------

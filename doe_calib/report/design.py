@@ -96,7 +96,7 @@ def _pose_rows(design):
 
 def design_sections(design, dpi: int = 90) -> list:
     """The report sections of a design: poses, joint chart, 3-D view, constraints, bound, std."""
-    robot, png = design.robot, figures.to_png
+    robot = design.robot
     units = [j.display_unit for j in robot.joints]
     clear = ["clearance (mm)", "closest pair"] if design.clearances else []
     sections = [section(

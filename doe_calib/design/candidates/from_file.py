@@ -17,6 +17,7 @@ import numpy as np
 
 from doe_calib.collision import Workspace
 from doe_calib.design.candidates.draw import CandidateSet, screen_collisions
+from doe_calib.design.result import first_rows
 from doe_calib.errors import DataError, SolverError
 from doe_calib.io.csv_files import read_design, read_measurements
 from doe_calib.io.table import read_table
@@ -46,11 +47,8 @@ class CandidatePoses:
     @classmethod
     def from_configurations(cls, configurations, source: str = "") -> "CandidatePoses":
         """One candidate per distinct pose id of ``configurations`` (its first row's q)."""
-        first = {}
-        for i, pose in enumerate(configurations.pose):
-            first.setdefault(pose, i)
-        index = np.array(list(first.values()), int)
-        return cls(configurations.q[index], tuple(first), source)
+        index = first_rows(configurations)
+        return cls(configurations.q[index], tuple(configurations.pose[i] for i in index), source)
 
 
 def _is_measurement_csv(path) -> bool:
@@ -90,26 +88,11 @@ def read_candidates(path, robot, tool=None) -> CandidatePoses:
 
 def screened_candidates(feasibility, robot, candidates: CandidatePoses,
                         collision=None) -> CandidateSet:
-    """The poses of ``candidates`` that meet every constraint (and clearance), with counts.
+    """The poses of ``candidates`` that meet every constraint of ``feasibility``
+    (:func:`.feasibility.build_feasibility`) and, with a collision model, their clearance.
 
-    Parameters
-    ----------
-    feasibility : Feasibility
-        From :func:`.feasibility.build_feasibility`.
-    robot : Robot
-    candidates : CandidatePoses
-    collision : CollisionModel, optional
-
-    Returns
-    -------
-    CandidateSet
-        ``drawn`` = the file's poses, ``removed`` the constraints' counts,
-        ``names`` and ``source`` from the file.
-
-    Raises
-    ------
-    SolverError
-        When none of the file's poses is feasible.
+    Returns a CandidateSet: ``drawn`` the file's poses, ``removed`` the constraints' counts,
+    ``names`` and ``source`` from the file. Raises SolverError when none is feasible.
     """
     q = np.asarray(candidates.q, float)
     ok, violated = feasibility.feasible(q)

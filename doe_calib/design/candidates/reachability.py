@@ -128,6 +128,15 @@ def unreachable(collision, q, home, robot, lower, upper,
     return forked_map(_reached, shared, len(q), 1 if collision.planner is None else workers)
 
 
+def revert_unreachable(collision, q, start, home, robot, constraints) -> tuple:
+    """Poses q (M, N) at the angles they are reached at from ``home``, each unreachable one
+    back at its ``start`` (M, N), rad (m); and how many went back. ``constraints``: the
+    :class:`DesignConstraints` whose bounds the equivalent angles stay in."""
+    checked = unreachable(collision, q, home, robot, *constraints.bounds(robot))
+    back = np.array([why is not None for why, _ in checked])
+    return np.where(back[:, None], start, [used for _, used in checked]), int(back.sum())
+
+
 def _reached(shared, i: int):
     """(reason or None, the angles used) for pose i of :func:`unreachable`."""
     collision, q, home, robot, lower, upper, ws = shared
@@ -139,20 +148,6 @@ def _reached(shared, i: int):
     tries = [pose] + ([near] if not np.allclose(near, pose) else [])
     used = next((t for t in tries if _joined(collision, home, t, ws)), None)
     return (NO_PATH, pose) if used is None else (None, used)
-
-
-def reachability_note(home, robot, replaced: dict, reverted: int, moved: str = "") -> str:
-    """One sentence: the home pose and how many chosen poses were replaced, and why."""
-    deg = ", ".join(f"{v:.4g}" for v in np.asarray(home) * robot.display_factors)
-    text = f"reachability: every pose joined to the home pose ({deg}) by a free path"
-    if moved:
-        text += f" ({moved})"
-    if replaced:
-        text += "; chosen poses replaced from the candidates: " + ", ".join(
-            f"{n} ({why})" for why, n in sorted(replaced.items(), key=lambda x: -x[1]))
-    if reverted:
-        text += f"; {reverted} refined pose(s) kept at their candidate (refined, unreachable)"
-    return text
 
 
 def reachable_choice(choose, q, pose_of, collision, home, robot, lower, upper,

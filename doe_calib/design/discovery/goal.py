@@ -34,7 +34,7 @@ from doe_calib.design.discovery.variants import (approach_joints, detection_targ
                                                  effect_columns, free_parameters,
                                                  observation_rows, variants,
                                                  within_torque_limits)
-from doe_calib.design.pipeline import Goal
+from doe_calib.design.pipeline import Goal, constraints_used
 from doe_calib.design.predicted_std import design_std
 from doe_calib.design.result import CandidateCount, DesignResult
 from doe_calib.design.solvers.constrained_exchange import (constrained_exchange,
@@ -194,21 +194,23 @@ class DiscoveryGoal(Goal):
         final = chosen_variants(cand, chosen, None if refined is None else refined.q)
         cfg = final.configurations(model, params.values, None,
                                    [str(i + 1) for i in range(n_poses)])
-        used = setting.constraints.to_dict(model.robot, model.tool)
-        used["loads"] = [ld.spec() for ld in info.cases]
+        reach, notes, clearances = choice.reachability, (), ()
+        if reach is not None:
+            reach = replace(reach, reverted=0 if refined is None else refined.unreachable)
+            notes, clearances = (reach.note(model.robot),), pose_clearances(setting.collision,
+                                                                             final.q)
         result = DesignResult(
             robot=model.robot, tool=model.tool, model=model.spec, configurations=cfg,
             criterion="D", value=value, bound=limit, efficiency=d_eff,
-            predicted_std=design_std(params, m), constraints=used, efficiencies={"D": d_eff},
+            predicted_std=design_std(params, m),
+            constraints=constraints_used(setting, info.cases, reach), notes=notes,
+            efficiencies={"D": d_eff},
             criteria={c.name: c.value(m) for c in (DOptimal(), AOptimal(), EOptimal())},
             candidates=replace(info.candidates, variants=len(cand)),
-            sigma_mm=1000.0 * setting.sigma, stages=stages)
-        if choice.reachability is not None:
-            result = _with_reachability(result, model, setting.collision, choice.reachability,
-                                        refined)
+            sigma_mm=1000.0 * setting.sigma, clearances=clearances, stages=stages)
         result = with_detectability(result, model, self.effects, self.alpha, self.power,
                                     self.registry)
-        return _with_outcome(result, self, info.effects, info.reach, cand, free, found, versus,
+        return _with_outcome(result, self, info.reach, cand, free, found, versus,
                              setting.loads, refined)
 
 
@@ -255,17 +257,6 @@ def _reached(info, choice):
     return info.cand if choice.reachability is None else replace(info.cand, q=choice.q)
 
 
-def _with_reachability(result, model, collision, reach, refined):
-    """``result`` with the clearances, the collision summary and the reachability note."""
-    clearances = pose_clearances(collision,
-                                 result.configurations.q[result.first_configurations()])
-    reach = replace(reach, reverted=0 if refined is None else refined.unreachable)
-    used = {**result.constraints, "collision": collision.summary(),
-            "reachability": reach.to_dict(model.robot)}
-    return replace(result, constraints=used, notes=result.notes + (reach.note(model.robot),),
-                   clearances=clearances)
-
-
 def _dedupe(start, blocks, pose_of, allowed):
     """The start with repeated poses replaced by the best D candidate of an unused pose
     (among the ``allowed`` candidates)."""
@@ -297,11 +288,20 @@ def _hint(loads, goal) -> str:
     return ""
 
 
-def _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads,
-                  polished=None):
-    """``result`` with the discovery stage and its words."""
+def _with_outcome(result, goal, reach, cand, free, found, versus, loads, polished=None):
+    """``result`` with the discovery stage (``load_choice`` without a size) and its words."""
+    used = _cases_used(cand, found.indices)
+    cases = ", ".join(f"{n}× {s}" for s, n in used.items())
+    chose = {"load_directions": [list(d) for d in goal.directions],
+             "approach_joints": [result.robot.joints[j].name for j in cand.approach_joints]}
     if goal.size is None:
-        return _with_load_choice(result, goal, cand, found)
+        note = ("D-optimal choice of poses, load cases and approach sides (each pose measured "
+                "unloaded and under one allowed load case; no detection bound, --detect-size "
+                "not given); load cases used: " + cases)
+        stage = {"method": "exchange over poses × load cases × approach sides",
+                 "status": found.status, **chose, "load_cases_used": used}
+        return replace(result, notes=(note,) + result.notes,
+                       stages={**result.stages, "load_choice": stage})
     rows, notes = [], []
     for det, ok in zip(result.detectability, reach):
         met = det.detectable and det.min_detectable <= goal.size * (1 + 1e-6)
@@ -323,21 +323,18 @@ def _with_outcome(result, goal, effects, reach, cand, free, found, versus, loads
                      "min_detectable": size, "met": bool(met), "revealable": bool(ok),
                      "words": words})
         notes.append(words)
-    used = _cases_used(cand, found.indices)
     notes.insert(0, f"discovery design (constrained exchange): D-optimal subject to every "
                     f"revealable effect detectable at {goal.size:g} (its unit) with power "
                     f"{goal.power:.0%} (α = {goal.alpha:g}); D-efficiency {versus:.3f} of the "
                     f"unconstrained D-optimal choice among the same candidates; load cases "
-                    f"used: " + ", ".join(f"{n}× {s}" for s, n in used.items()))
+                    f"used: " + cases)
     if polished is not None:
         notes.append(f"discovery design refined (IPOPT, each pose keeping its load case and "
                      f"approach sides): {polished.outcome.status}; "
                      f"{polished.detection} refined pose(s) kept at their candidate so that no "
                      f"detection bound is lost")
     stage = {"method": "constrained exchange", "status": found.status, "size": goal.size,
-             "power": goal.power, "alpha": goal.alpha,
-             "load_directions": [list(d) for d in goal.directions],
-             "approach_joints": [result.robot.joints[j].name for j in cand.approach_joints],
+             "power": goal.power, "alpha": goal.alpha, **chose,
              "unconstrained_log_det": free.value, "d_efficiency_vs_unconstrained": versus,
              "load_cases_used": used, "effects": rows}
     return replace(result, notes=tuple(notes) + result.notes,
@@ -352,18 +349,3 @@ def _cases_used(cand, chosen) -> dict:
         name = "unloaded only" if c < 0 else cand.cases[c].spec()
         used[name] = used.get(name, 0) + 1
     return used
-
-
-def _with_load_choice(result, goal, cand, found):
-    """``result`` of a design without detection bounds whose poses chose their load case and
-    approach sides: the stage ``load_choice`` and its note."""
-    used = _cases_used(cand, found.indices)
-    note = ("D-optimal choice of poses, load cases and approach sides (each pose measured "
-            "unloaded and under one allowed load case; no detection bound, --detect-size not "
-            "given); load cases used: " + ", ".join(f"{n}× {s}" for s, n in used.items()))
-    stage = {"method": "exchange over poses × load cases × approach sides",
-             "status": found.status, "load_directions": [list(d) for d in goal.directions],
-             "approach_joints": [result.robot.joints[j].name for j in cand.approach_joints],
-             "load_cases_used": used}
-    return replace(result, notes=(note,) + result.notes,
-                   stages={**result.stages, "load_choice": stage})

@@ -16,7 +16,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.design.solvers.constrained_exchange import projected_information, shortfall
+from doe_calib.design.solvers.constrained_exchange import (information_parts,
+                                                          projected_information, shortfall)
 from doe_calib.design.criteria import log_det
 from doe_calib.design.discovery.variants import (
     EVERY,
@@ -25,7 +26,7 @@ from doe_calib.design.discovery.variants import (
     within_torque_limits,
 )
 from doe_calib.design.solvers.pose_refinement import refine as refine_poses
-from doe_calib.design.candidates.reachability import unreachable
+from doe_calib.design.candidates.reachability import revert_unreachable
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,11 +78,8 @@ def _columns(model, params, sub, effects, sigma):
 
 
 def _lambda(b, zs):
-    flat = b.reshape(-1, b.shape[2])
-    return projected_information(flat.T @ flat,
-                                 [flat.T @ z.reshape(-1, z.shape[2]) for z in zs],
-                                 [z.reshape(-1, z.shape[2]).T @ z.reshape(-1, z.shape[2])
-                                  for z in zs])
+    """λ_min of each effect's projected information at the poses of ``b`` (n, r, p)."""
+    return projected_information(*information_parts(b, zs))
 
 
 def refine_discovery(model, params, cand, chosen, sigma: float, feasibility, effects, targets,
@@ -127,10 +125,7 @@ def refine_discovery(model, params, cand, chosen, sigma: float, feasibility, eff
                                   chosen_variants(cand, chosen, q1))
     q1 = np.where(heavy[:, None], q0, q1)
     if home is not None:
-        checked = unreachable(collision, q1, home, model.robot,
-                              *constraints.bounds(model.robot))
-        back = np.array([why is not None for why, _ in checked])
-        q1, far = np.where(back[:, None], q0, [used for _, used in checked]), int(back.sum())
+        q1, far = revert_unreachable(collision, q1, q0, home, model.robot, constraints)
     b1, z1 = _columns(model, params, chosen_variants(cand, chosen, q1), effects, sigma)
     need = np.minimum(np.asarray(targets, float), _lambda(b0, z0)) if len(effects) else []
 

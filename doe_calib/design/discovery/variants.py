@@ -17,9 +17,9 @@ import numpy as np
 from doe_calib.design.batch import map_poses
 from doe_calib.design.detectability import own_directions
 from doe_calib.design.candidates.feasibility import build_feasibility
+from doe_calib.design.problem import fixed_unidentifiable
 from doe_calib.estimation.effect_signature import augmented
 from doe_calib.errors import OptionError
-from doe_calib.estimation.identifiability import analyse
 from doe_calib.estimation.chi_square import noncentrality_for_power
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.effects.backlash import Backlash
@@ -155,10 +155,8 @@ def free_parameters(params, blocks_raw, cand: Variants, sample: int = 400):
     (``blocks_raw`` (K, r, P): :func:`observation_rows` over σ)."""
     rng = np.random.default_rng(0)
     pick = rng.choice(len(cand), size=min(sample, len(cand)), replace=False)
-    ident = analyse(blocks_raw[pick].reshape(-1, blocks_raw.shape[2]), params)
-    for name, why in ident.dependent:
-        params = params.fixed([name], why + " (over the candidate poses and load cases)")
-    return params
+    return fixed_unidentifiable(params, blocks_raw[pick].reshape(-1, blocks_raw.shape[2]),
+                                "the candidate poses and load cases")
 
 
 def effect_columns(model, params, effect, cand: Variants, sigma: float):

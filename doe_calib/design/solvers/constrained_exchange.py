@@ -24,7 +24,9 @@ _TINY = 1e-300
 _BATCH = 512
 
 
-def _state(blocks, zblocks, chosen):
+def information_parts(blocks, zblocks, chosen=slice(None)):
+    """``(M, [C_e], [A_e])`` of the ``chosen`` candidates (default all): the model's
+    information and each effect's cross and own information (module docstring)."""
     b = blocks[chosen].reshape(-1, blocks.shape[2])
     m = b.T @ b
     c = [b.T @ z[chosen].reshape(-1, z.shape[2]) for z in zblocks]
@@ -82,7 +84,7 @@ def constrained_exchange(blocks, zblocks, targets, start, pose_of, pool=None,
     k = blocks.shape[0]
     pool = np.arange(k) if pool is None else np.asarray(pool)
     chosen = [int(i) for i in start]
-    m, c, a = _state(blocks, zblocks, chosen)
+    m, c, a = information_parts(blocks, zblocks, chosen)
     value = np.linalg.slogdet(m)
     value = value[1] if value[0] > 0 else -np.inf
     short = float(shortfall(projected_information(m, c, a), targets)) if len(targets) else 0.0

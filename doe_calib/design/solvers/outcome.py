@@ -1,15 +1,7 @@
-"""What every design solver returns: one :class:`DesignOutcome` type for the three solvers.
-
-The convex relaxation (:func:`.relaxation.relax`), the exact exchange
-(:func:`.exchange.exact_design`) and the continuous IPOPT refinement
-(:func:`.pose_refinement.refine`) are interchangeable steps of the design pipeline
-(:mod:`doe_calib.design.pipeline`); each returns a design measure over the
-points it was given — weights on candidates (the relaxation's sum to 1, the
-exchange's are 1 on the N chosen) or, for the refinement, N moved poses of
-weight 1 — with its criterion value and how the solver got there. The
-pipeline's :class:`.result.DesignResult` is built from them and keeps each
-stage's :meth:`DesignOutcome.to_dict` under ``stages``.
-"""
+"""What every design solver returns: one :class:`DesignOutcome` for the relaxation
+(:func:`.relaxation.relax`), the exchange (:func:`.exchange.exact_design`) and the IPOPT
+refinement (:func:`.pose_refinement.refine`), interchangeable steps of the pipeline: a design
+measure over the points the solver was given, its criterion value and how it got there."""
 from __future__ import annotations
 
 from dataclasses import dataclass

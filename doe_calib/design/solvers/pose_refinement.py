@@ -86,8 +86,8 @@ def _information(groups, q: np.ndarray, p: int) -> np.ndarray:
 
 
 def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
-           criterion="D", task: np.ndarray | None = None,
-           max_iterations: int = 300, collision=None, variants=None) -> DesignOutcome:
+           criterion="D", max_iterations: int = 300, collision=None,
+           variants=None) -> DesignOutcome:
     """Optimise the poses q0 (N, n_joints) jointly with IPOPT (L-BFGS Hessian).
 
     Parameters
@@ -101,9 +101,7 @@ def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
     q0 : ndarray, shape (N, n_joints)
         Start poses (the exact design), rad/m; they satisfy every constraint.
     feasibility : Feasibility
-    criterion : {"D", "A", "E", "task"} or Criterion
-    task : ndarray, optional
-        Task Jacobians (scaled), for the task criterion named by a string.
+    criterion : {"D", "A", "E"} or Criterion
     collision : CollisionModel, optional
         Refined poses closer than its clearances step back (:func:`step_back`).
     variants : sequence of (sequence of load cases, array_like (n_joints,)), optional
@@ -118,7 +116,7 @@ def refine(model, params, loads, sigma: float, q0: np.ndarray, feasibility,
         ``accepted``, else q0), ``value`` and ``start_value`` their criterion,
         ``status`` IPOPT's return status or why the result was not kept.
     """
-    crit = Criterion.from_name(criterion, task)
+    crit = Criterion.from_name(criterion)
     t0 = time.perf_counter()
     n, dof = q0.shape
     groups = _groups(model, params, loads, sigma, n, variants)

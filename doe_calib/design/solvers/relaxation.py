@@ -7,8 +7,8 @@ for A and task, 1/(k+1) for E), each followed by a vertex-direction step
 towards the most sensitive candidate (closed form for D, a line search
 otherwise) and, for D, Harman–Pronzato pruning; on a working set grown by
 the candidates that violate the equivalence theorem. The optimum is
-certified by the equivalence theorem (:func:`.criteria.sensitivity`): with
-normalised weights w and ratio = c · max_i ψ_i over *every* candidate, no
+certified by the equivalence theorem (:meth:`.criteria.Criterion.sensitivity`):
+with normalised weights w and ratio = c · max_i ψ_i over *every* candidate, no
 design over the candidates does better than ``ratio`` times Φ(M(w)); for D,
 
     log det M_N ≤ p log N + log det M(w) + p log(max_i d_i / p)
@@ -52,16 +52,17 @@ def traces(blocks: np.ndarray, h: np.ndarray) -> np.ndarray:
 
 
 def equivalence_ratio(blocks: np.ndarray | None, m: np.ndarray, criterion="D",
-                      task: np.ndarray | None = None, packed: np.ndarray | None = None) -> float:
+                      packed: np.ndarray | None = None) -> float:
     """c · max_i ψ_i over every candidate at the normalised information M (≥ 1 at the optimum).
 
     No design over the candidates has an information function Φ above
-    ratio · Φ(M) (:func:`.criteria.sensitivity`); for D, ratio = max_i d_i / p.
+    ratio · Φ(M) (:meth:`.criteria.Criterion.sensitivity`); for D, ratio =
+    max_i d_i / p.
     ``packed``, the blocks' :func:`packed_information` if already at hand,
     makes the sweep over the candidates one matrix-vector product (``blocks``
     may then be None).
     """
-    h, c = Criterion.from_name(criterion, task).sensitivity(m)
+    h, c = Criterion.from_name(criterion).sensitivity(m)
     psi = traces(blocks, h) if packed is None else packed @ packed_weights(h)
     return float(c * psi.max())
 

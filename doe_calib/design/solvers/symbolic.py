@@ -80,37 +80,17 @@ def pose_blocks(model, params, loads, sigma: float, approach=None) -> ca.Functio
 
 
 def pose_information(model, params, loads, sigma: float, approach=None) -> ca.Function:
-    """``pose_information(q) -> M``: one pose's scaled information (as :func:`.problem.blocks_for`).
-
-    M = Σ_c B̃_cᵀB̃_c over the unloaded case and every load case c, with
-    B̃ = ∂x/∂p_free · scale / σ and the load's wrench a function of q through
-    the flange rotation (:func:`pose_blocks`); shape (F, F), per unit σ²
-    (``sigma`` in m); the pose reached from the sides ``approach`` (N values,
-    default 0).
-    """
+    """``pose_information(q) -> M``: one pose's scaled information BᵀB (F, F), per unit σ²,
+    of its :func:`pose_blocks` (same arguments)."""
     q = ca.SX.sym("q", model.robot.n_joints)
     bt = pose_blocks(model, params, loads, sigma, approach)(q)
     return ca.Function("pose_information", [q], [bt.T @ bt], ["q"], ["M"])
 
 
-def log_criterion(criterion, p: int, task: np.ndarray | None = None,
-                  reference: float = 1.0) -> ca.Function:
-    """``log_criterion(M) -> log Φ(M)`` for the information function Φ of the criterion.
-
-    The criterion's :meth:`.criteria.Criterion.log_phi` frozen into a
-    Function of a (p, p) SX symbol: log det M / p (D), −log tr M⁻¹ (A),
-    −log tr(T M⁻¹ Tᵀ) (task) and, for E, the smooth −(1/k) log tr M^-k on
-    M / ``reference`` (pass about λ_min so the powers stay near 1).
-
-    Parameters
-    ----------
-    criterion : {"D", "A", "E", "task"} or Criterion
-    p : int
-        Size of M.
-    task : ndarray, shape (rows, p), optional
-        For the task criterion named by a string.
-    reference : float
-    """
-    crit = Criterion.from_name(criterion, task)
+def log_criterion(criterion, p: int, reference: float = 1.0) -> ca.Function:
+    """``log_criterion(M) -> log Φ(M)``: the criterion's (a Criterion, or D, A or E by name)
+    :meth:`.criteria.Criterion.log_phi` frozen into a Function of a (p, p) symbol;
+    ``reference``: about λ_min for E, whose powers of M / ``reference`` then stay near 1."""
+    crit = Criterion.from_name(criterion)
     m = ca.SX.sym("M", p, p)
     return ca.Function("log_criterion", [m], [crit.log_phi(m, reference)], ["M"], ["log_phi"])
