@@ -12,8 +12,9 @@ import pytest
 from doe_calib import Configurations, build_model, simulate
 from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_model_builders
 from doe_calib.errors import DoeCalibError
-from doe_calib.diagnosis.effect_tests import (augmented, candidate_columns, candidate_effects,
-                                              fitted_basis, projected_columns)
+from doe_calib.diagnosis.effect_tests import (candidate_columns, candidate_effects, fitted_basis,
+                                              projected_columns)
+from doe_calib.estimation.effect_signature import augmented
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects import DEFAULT_REGISTRY
 from doe_calib.examples import EFFECT_FILE as EXAMPLE_FILE

@@ -20,7 +20,8 @@ import pytest
 from doe_calib import Configurations, build_model, examples, simulate
 from doe_calib.diagnosis.candidate_batch import grown_model_builders
 from doe_calib.diagnosis.refine import refine
-from doe_calib.diagnosis.effect_tests import augmented, candidate_effects
+from doe_calib.diagnosis.effect_tests import candidate_effects
+from doe_calib.estimation.effect_signature import augmented
 from doe_calib.diagnosis.candidate_scoring import GROWN
 from doe_calib.diagnosis.diagnose import diagnose, diagnosis_step
 from doe_calib.diagnosis.settings import RefineSettings

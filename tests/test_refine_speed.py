@@ -21,7 +21,8 @@ from doe_calib.diagnosis.candidate_scoring import GROWN
 from doe_calib.diagnosis.diagnose import candidate_batch_for, diagnose
 from doe_calib.diagnosis.settings import RefineSettings
 from doe_calib.model.effects import parse_effect
-from doe_calib.diagnosis.effect_tests import augmented, candidate_effects
+from doe_calib.diagnosis.effect_tests import candidate_effects
+from doe_calib.estimation.effect_signature import augmented
 from doe_calib.errors import DoeCalibWarning
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.chi_square import noncentrality_for_power

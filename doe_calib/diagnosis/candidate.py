@@ -1,12 +1,7 @@
 """One candidate effect as a diagnosis reports it: its test, its fitted size, the decision.
 
-A :class:`Candidate` is what a researcher questions from a notebook:
-``diagnosis.candidates[0]`` answers with the effect, its parameters, their
-fitted size ± std in display units (deg, mm, µrad/(N·m), …), the score test
-(F, its two degrees of freedom, raw and Bonferroni-adjusted p), the share of
-the residual it explains, the cross-validated RMS before → after, and whether
-it is proposed or why not. It is plain data: reading one from JSON needs no
-model and no effect file.
+Plain data (``diagnosis.candidates[0]`` in a notebook): reading one from JSON
+needs no model and no effect file.
 """
 from __future__ import annotations
 
@@ -286,6 +281,14 @@ def why_not(p_value, cv_rms_mm, implausible, cv_rms_before_mm, level, min_gain, 
     if implausible:
         return implausible
     return f"{proposed_spec} predicts better" if proposed_spec else "not chosen"
+
+
+def rows_words(rows) -> str:
+    """Fitted rows (dicts of name, value, std or None, unit) in words, e.g.
+    "w_a2 = 0.012 ± 0.001 deg; …"."""
+    return "; ".join(f"{r['name']} = {r['value']:.3g}"
+                     + (f" ± {r['std']:.2g}" if r["std"] is not None else "")
+                     + f" {r['unit']}" for r in rows)
 
 
 def _parameters(spec, robot, registry=None) -> tuple:

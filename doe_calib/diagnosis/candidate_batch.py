@@ -1,32 +1,21 @@
 """Every candidate effect in one model: their columns from one CasADi build, not one each.
 
-Diagnosis asks, for each candidate effect ``e`` not in the fitted model, the
-weighted columns ``Z = ∂r/∂θ_e`` of ``model + e`` at the fit (the candidate's
-parameters ``θ_e`` at nominal). Building ``model + e`` for every candidate
-re-derives the whole chain and its Jacobian some seventy times. Here the
-model and every candidate make one chain, each candidate reading its own
-copy of its parameters (shapes of one effect share parameter names, so each
-candidate's are tagged ``b<batch>c<i>:``; each batch is built afresh, from the
-effects' code as it is). Every catalogue effect is inert at its
-nominal parameters (a zero correction, an identity placement), so with every
-candidate at nominal the chain is the model's, and along ``θ_e`` alone, the
-others at nominal, it is ``model + e``'s: its columns for ``θ_e`` are exactly
-``model + e``'s. That is checked on the data (the positions at nominal must be
-the model's, :meth:`CandidateBatch.inert`): a batch that fails it, or cannot be
-built, is split until the candidate at fault is alone (:func:`batched_columns`),
-and that one is built by itself, as without a batch.
+Diagnosis needs, for each candidate effect ``e`` not in the fitted model, the
+weighted columns ``Z = ∂r/∂θ_e`` of ``model + e`` at the fit. Here the model
+and every candidate make one chain, each candidate reading its own tagged copy
+of its parameters (``b<batch>c<i>:``; each batch built afresh from the
+effects' code). Every catalogue effect is inert at its nominal parameters, so
+along ``θ_e`` alone the chain is ``model + e``'s and so are its columns. That
+is checked on the data (:meth:`CandidateBatch.inert`); a batch that fails it,
+or cannot be built, is split until the candidate at fault is alone and built
+by itself (:func:`batched_columns`).
 
-The same holds away from nominal: :meth:`CandidateBatch.augmented` is
-``model + e`` made from the batch's Functions (the other candidates' parameters
-held at nominal fold away: the same instructions as ``model + e`` built alone),
-so that the candidates' fits for cross-validation need no chain built each.
-
-Refine grows the model by one of these candidates at a time, and tests the
-others again: :meth:`CandidateBatch.within` sees the same batch from the grown
-model (the chosen candidates' parameters become the base's, at its fitted
-values; the others still at nominal), so one batch serves every step. The
-chain is then the grown model's up to the order in which the effects' joint
-corrections and deflections are summed (rounding, ~1e-16); a chosen effect that
+:meth:`CandidateBatch.augmented` is ``model + e`` made from the batch's
+Functions (the other candidates' nominal parameters fold away), for the
+candidates' fits. Refine tests again after each added effect:
+:meth:`CandidateBatch.within` sees the same batch from the grown model (the
+chosen candidates' parameters become the base's), equal to the grown model's
+chain up to the order of summed corrections (~1e-16); a chosen effect that
 corrects a placement (whose composition order matters) is not seen this way.
 """
 from __future__ import annotations
@@ -227,13 +216,21 @@ def candidate_batch(model, effects) -> CandidateBatch:
     return CandidateBatch(model, tuple(effects), big, tuple(blocks))
 
 
-def _seen_from(batch, model, measurements, values, effects):
-    """``batch`` (built for a model ``model`` grew from) as ``model`` + ``effects`` when it
-    holds them and is inert at ``values`` on ``measurements``, else None."""
+def _inert_batch(batch, model, measurements, values, effects) -> CandidateBatch | None:
+    """``model`` + ``effects`` as one batch inert at ``values`` (SI) on ``measurements``:
+    ``batch`` (built for a model ``model`` grew from) seen from ``model`` when it holds them
+    (:meth:`CandidateBatch.within`), else a batch built here; None when neither builds or is
+    inert."""
     try:
         view = None if batch is None else batch.within(model, effects)
-        return view if view is not None and view.inert(measurements, values) else None
+        if view is not None and view.inert(measurements, values):
+            return view
     except (DoeCalibError, ValueError, np.linalg.LinAlgError):  # then as without it
+        pass
+    try:
+        batch = candidate_batch(model, effects)
+        return batch if batch.inert(measurements, values) else None
+    except (DoeCalibError, ValueError, np.linalg.LinAlgError):
         return None
 
 
@@ -241,19 +238,12 @@ def batched_columns(model, measurements, values, effects, batch=None) -> list:
     """Each candidate's weighted columns Z (3K, q) at ``values`` (SI, the fit of ``model``), or
     None for a candidate to be built alone: a group whose batch cannot be built or is not
     inert is split in two, down to single candidates. ``batch``: a :class:`CandidateBatch`
-    of a model ``model`` grew from (refine's first), used when it holds every candidate
-    (:meth:`CandidateBatch.within`)."""
+    of a model ``model`` grew from (refine's first), used when it holds every candidate."""
     if not effects:
         return []
-    view = _seen_from(batch, model, measurements, values, effects)
-    if view is not None:
-        return view.columns(measurements, values)
-    try:
-        batch = candidate_batch(model, effects)
-        if batch.inert(measurements, values):
-            return batch.columns(measurements, values)
-    except (DoeCalibError, ValueError, np.linalg.LinAlgError):
-        pass
+    found = _inert_batch(batch, model, measurements, values, effects)
+    if found is not None:
+        return found.columns(measurements, values)
     if len(effects) == 1:
         return [None]
     half = len(effects) // 2
@@ -264,18 +254,10 @@ def batched_columns(model, measurements, values, effects, batch=None) -> list:
 def grown_model_builders(model, effects, measurements, values, batch=None) -> list:
     """A builder (no argument → ``model + e``) for each of ``effects``: through one batch
     when it builds and is inert at ``values`` (SI) on ``measurements``' configurations, else
-    built one by one; ``batch``: as :func:`batched_columns`'s, its Functions used when it
-    holds them. Builders, so that a caller can fit one grown model while it builds the next."""
-    if not effects:
-        return []
-    view = _seen_from(batch, model, measurements, values, effects)
-    if view is not None:
-        return [functools.partial(view.augmented, i) for i in range(len(effects))]
-    try:
-        batch = candidate_batch(model, effects)
-        if batch.inert(measurements, values):
-            return [functools.partial(batch.augmented, i) for i in range(len(effects))]
-    except (DoeCalibError, ValueError):
-        pass
+    built one by one; ``batch``: as :func:`batched_columns`'s. Builders, so that a caller
+    can fit one grown model while it builds the next."""
+    found = _inert_batch(batch, model, measurements, values, effects) if effects else None
+    if found is not None:
+        return [functools.partial(found.augmented, i) for i in range(len(effects))]
     return [functools.partial(build_model, model.robot, model.tool, tuple(model.effects) + (e,))
             for e in effects]

@@ -1,17 +1,12 @@
 """The chosen candidates scored: each grown model built, fitted, then cross-validated.
 
-Every chosen candidate of a diagnosis is fitted as the model grown by it, from
-the model's own fit, and its cross-validated RMS computed
-(:func:`~doe_calib.diagnosis.cross_validation.cross_validated_rms`). The
-candidates are independent of each other, and CasADi evaluates without
-Python's lock: ``workers`` threads fit them at once, each in its own
-evaluation workspace (:func:`~doe_calib.model.evaluation.thread_workspace`),
-while the calling thread builds the next grown model (CasADi's symbolic
-construction is not thread-safe: only the calling thread builds; the workers
-only evaluate). The scores are those of fitting one after another, bit for
-bit: no fit reads another's state. The toolkit's warnings of these fits are held back, as by
-:func:`~doe_calib.estimation.identify.identify_quietly`, once for every thread
-(a ``warnings.catch_warnings`` per thread would race on the global filters).
+The candidates are independent and CasADi evaluates without Python's lock:
+``workers`` threads fit them at once, each in its own evaluation workspace
+(:func:`~doe_calib.model.evaluation.thread_workspace`), while the calling
+thread builds the next grown model (CasADi's symbolic construction is not
+thread-safe). The scores are those of fitting one after another, bit for bit.
+The toolkit's warnings of these fits are held back once for every thread (a
+``warnings.catch_warnings`` per thread would race on the global filters).
 """
 from __future__ import annotations
 
@@ -21,8 +16,8 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 from doe_calib.diagnosis.cross_validation import cross_validated_rms
-from doe_calib.diagnosis.effect_tests import grown_parameters
 from doe_calib.errors import DoeCalibError, DoeCalibWarning
+from doe_calib.estimation.effect_signature import grown_parameters
 from doe_calib.estimation.identify import FitSettings, identify
 from doe_calib.estimation.plausibility import beyond_plausible, out_of_bounds, value_words
 
@@ -58,11 +53,6 @@ class CandidateScore:
     odd: str
 
 
-def default_workers() -> int:
-    """Threads for the candidates' fits: the machine's cores, at most :data:`MAX_WORKERS`."""
-    return max(1, min(MAX_WORKERS, os.cpu_count() or 1))
-
-
 def score_candidates(builders, effects, params, measurements, folds,
                      workers: int | None = None, progress=None) -> list:
     """Build, fit and cross-validate each grown model.
@@ -82,7 +72,8 @@ def score_candidates(builders, effects, params, measurements, folds,
     folds : Folds
         The cross-validation's folds.
     workers : int, optional
-        Threads fitting at once (default :func:`default_workers`; 1: one after another).
+        Threads fitting at once (default: the machine's cores, at most :data:`MAX_WORKERS`;
+        1: one after another).
     progress : callable, optional
         ``progress(done, total, note)`` as each candidate is scored, in order: the
         candidates done, their number, the effect's spec.
@@ -92,18 +83,11 @@ def score_candidates(builders, effects, params, measurements, folds,
     list of CandidateScore or None
         In the order of ``builders``; None where the grown model's fit failed.
     """
-    workers = default_workers() if workers is None else max(1, int(workers))
+    workers = min(MAX_WORKERS, os.cpu_count() or 1) if workers is None else max(1, int(workers))
     jobs = list(zip(builders, effects))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DoeCalibWarning)
-        if workers == 1 or len(jobs) < 2:
-            out = []
-            for i, (build, effect) in enumerate(jobs):
-                if progress:
-                    progress(i, len(jobs), effect.spec())
-                out.append(_score(build(), effect, params, measurements, folds))
-            return out
-        with ThreadPoolExecutor(min(workers, len(jobs))) as pool:
+        with ThreadPoolExecutor(max(1, min(workers, len(jobs)))) as pool:
             futures = [pool.submit(_score, build(), effect, params, measurements, folds)
                        for build, effect in jobs]  # each built while the workers fit
             out = []

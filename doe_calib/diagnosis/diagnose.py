@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.diagnosis.candidate import candidate_records
+from doe_calib.diagnosis.candidate import candidate_records, rows_words
 from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_model_builders
 from doe_calib.diagnosis.candidate_scoring import score_candidates
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
@@ -65,6 +65,16 @@ def candidate_batch_for(model, measurements, registry=None):
         return candidate_batch(model, candidate_effects(model, screen.configurations, registry))
     except (DoeCalibError, ValueError):
         return None
+
+
+def settled_fit(model, measurements, sigma=None, fit=None):
+    """σ settled as on the command line (:func:`~doe_calib.estimation.sigma.resolve_sigma`,
+    its ``.measurements`` the readings with it) and ``model``'s fit at that σ: ``fit`` when
+    the readings already had it, else identified here."""
+    settled = resolve_sigma(model, measurements, sigma, fit=fit)
+    if fit is None or settled.measurements is not measurements:
+        fit = identify_quietly(model, settled.measurements)
+    return settled, fit
 
 
 def describe(candidate, robot, registry=None) -> str:
@@ -190,9 +200,7 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
     cv_words = f"cross-validated RMS {cv:.3g} mm ({folds.description})"
     if proposed is not None:
         words = describe(proposed, model.robot, registry)
-        size = "; ".join(f"{r['name']} = {r['value']:.3g}"
-                         + (f" ± {r['std']:.2g}" if r["std"] is not None else "")
-                         + f" {r['unit']}" for r in proposed.fitted[:4])
+        size = rows_words(proposed.fitted[:4])
         text = (f"{words[0].upper()}{words[1:]} is missing: adding {proposed.spec} lowers the "
                 f"{cv_words} to {proposed.cv_rms_mm:.3g} mm "
                 f"({100 * (1 - proposed.cv_rms_mm / cv):.0f} %) and accounts for "
@@ -320,11 +328,8 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     """
     s = DiagnosisSettings() if settings is None else settings
     level, min_gain = s.level, s.min_gain
-    settled = resolve_sigma(model, measurements, sigma, fit=fit)
-    if settled.measurements is not measurements:  # σ settled here: fit at that σ
-        measurements, fit = settled.measurements, None
-    if fit is None:
-        fit = identify_quietly(model, measurements)
+    settled, fit = settled_fit(model, measurements, sigma, fit)
+    measurements = settled.measurements
     params = fit.parameters
     res = residuals(model, measurements, params.values)
     rank = int(params.free.sum())

@@ -23,20 +23,13 @@ import numpy as np
 from scipy.special import fdtrc
 
 from doe_calib.diagnosis.candidate_batch import batched_columns
-from doe_calib.design.detectability import (MOSTLY_ABSORBED, Detectability, absorbing_parameters,
-                                            assess)
+from doe_calib.design.detectability import MOSTLY_ABSORBED, absorbing_parameters, assess
 from doe_calib.errors import DoeCalibError
-from doe_calib.estimation.effect_signature import (augmented, candidate_effects, fitted_basis,
-                                                   grown_parameters, projected_columns)
+from doe_calib.estimation.effect_signature import (candidate_effects, fitted_basis,
+                                                   projected_columns)
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects import joint_index
 from doe_calib.model.marker_model import describe_model
-
-#: The effect signature (:mod:`doe_calib.estimation.effect_signature`) is read from here too,
-#: beside the tests built on it.
-__all__ = ["CandidateTest", "CandidateTests", "SIGNIFICANT_RAW", "augmented",
-           "candidate_columns", "candidate_effects", "candidate_tests", "fitted_basis",
-           "grown_parameters", "projected_columns", "test_candidates"]
 
 
 @dataclass(frozen=True)
@@ -68,29 +61,19 @@ class CandidateTest:
         when a value is physically implausible."""
         return replace(self, cv_rms_mm=cv_rms_mm, fitted=tuple(fitted), implausible=implausible)
 
-    def to_dict(self) -> dict:
-        return {"effect": self.effect, "spec": self.spec, "joint": self.joint,
-                "n_parameters": self.n_parameters, "rank": self.rank,
-                "statistic": self.statistic, "p_value": self.p_value,
-                "p_value_raw": self.p_value_raw, "explained_fraction": self.explained_fraction,
-                "absorbed_fraction": self.absorbed_fraction, "log10_p": self.log10_p,
-                "cv_rms_mm": self.cv_rms_mm, "fitted": list(self.fitted),
-                "implausible": self.implausible, "dof": self.dof,
-                "detectability": None if self.detection is None else self.detection.to_dict(),
-                "absorbed_by": list(self.absorbed_by)}
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "CandidateTest":
-        fields = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
-        fields["fitted"] = tuple(fields.get("fitted", ()))
-        fields["absorbed_by"] = tuple(fields.get("absorbed_by", ()))
-        if d.get("detectability"):
-            fields["detection"] = Detectability.from_dict(d["detectability"])
-        return cls(**fields)
-
 
 def _failure(exc) -> str:
     return str(exc) or type(exc).__name__
+
+
+def failure_note(failed, what: str) -> str:
+    """``failed`` (``(spec, reason)`` pairs) in words: "2 {what}s could not be computed:
+    spec: reason, …" ("" when none failed)."""
+    if not failed:
+        return ""
+    n = len(failed)
+    return (f"{n} {what}{'s' if n > 1 else ''} could not be computed: "
+            + ", ".join(f"{s}: {why}" for s, why in failed))
 
 
 def candidate_columns(model, measurements, params, effects, q_basis, batch=None) -> tuple:
@@ -146,12 +129,9 @@ class CandidateTests:
 
     def note(self) -> str:
         """The failed candidates in words (empty when none failed)."""
-        if not self.failed:
-            return ""
-        n = len(self.failed)
-        return (f"{n} candidate{'s' if n > 1 else ''} could not be computed: "
-                + ", ".join(f"{s}: {why}" for s, why in self.failed)
-                + f" ({'they count' if n > 1 else 'it counts'} in the Bonferroni correction)")
+        note = failure_note(self.failed, "candidate")
+        return note and note + (f" ({'they count' if len(self.failed) > 1 else 'it counts'} "
+                                "in the Bonferroni correction)")
 
 
 def candidate_tests(model, measurements, params, effects=None,

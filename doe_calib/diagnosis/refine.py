@@ -12,13 +12,12 @@ a validation set is given) validation RMS: the error falling step by step.
 from __future__ import annotations
 
 from doe_calib.diagnosis.cross_validation import validation_rms
-from doe_calib.diagnosis.effect_tests import augmented
 from doe_calib.diagnosis.candidate_scoring import GROWN
-from doe_calib.diagnosis.diagnose import candidate_batch_for, diagnosis_step
+from doe_calib.diagnosis.diagnose import candidate_batch_for, diagnosis_step, settled_fit
 from doe_calib.diagnosis.refine_result import RefineResult, RefineStep
 from doe_calib.diagnosis.settings import RefineSettings
+from doe_calib.estimation.effect_signature import augmented
 from doe_calib.estimation.identify import identify_quietly
-from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.io.repeated_readings import copies_words
 from doe_calib.model.effects import parse_effect
 
@@ -76,10 +75,8 @@ def refine(model, measurements, validation=None, *, settings: RefineSettings | N
     (:func:`~doe_calib.diagnosis.diagnose.diagnosis_step`).
     """
     s = RefineSettings() if settings is None else settings
-    settled = resolve_sigma(model, measurements, sigma, fit=fit)
-    if settled.measurements is not measurements:  # σ settled here: fit at that σ
-        measurements, fit = settled.measurements, None
-    fit = identify_quietly(model, measurements) if fit is None else fit
+    settled, fit = settled_fit(model, measurements, sigma, fit)
+    measurements = settled.measurements
     steps, added, reason, effect = [], None, "starting model", None
     batch = candidate_batch_for(model, measurements, registry)
     while True:

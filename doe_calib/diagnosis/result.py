@@ -92,11 +92,6 @@ class DiagnosisResult:
     outliers: tuple = ()
 
     @property
-    def significant(self) -> list[Candidate]:
-        """Candidates significant at ``level`` (Bonferroni-adjusted), best first."""
-        return [c for c in self.candidates if c.p_value < self.level]
-
-    @property
     def best(self) -> Candidate | None:
         """The proposed candidate (see ``proposed``), or None."""
         return next((c for c in self.candidates if c.spec == self.proposed), None)

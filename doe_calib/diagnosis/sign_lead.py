@@ -9,6 +9,7 @@ accepts the reversed convention (``--approach-sign reversed``).
 """
 from __future__ import annotations
 
+from doe_calib.diagnosis.candidate import rows_words
 from doe_calib.errors import DoeCalibError
 from doe_calib.model.effects import parse_effect
 
@@ -65,9 +66,7 @@ def sign_lead(model, odd, proposed, cv, folds, words: str, registry=None) -> str
     if not wrong or cv - odd.cv_rms_mm < LEAD_FACTOR * best_gain:
         return ""
     effect = parse_effect(odd.spec, registry=registry)
-    values = "; ".join(f"{r['name']} = {r['value']:.3g}"
-                       + (f" ± {r['std']:.2g}" if r["std"] is not None else "")
-                       + f" {r['unit']}" for _, r in wrong)
+    values = rows_words(r for _, r in wrong)
     meaning = "; ".join(dict.fromkeys(p.sign for p, _ in wrong if p.sign))
     other = "" if proposed is None else \
         (f", against {100 * best_gain / cv:.0f} % for the best plausible candidate, "
