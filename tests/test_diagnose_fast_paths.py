@@ -1,7 +1,5 @@
 """The diagnose and refine commands' fast paths give the reference paths' answers.
 
-- a candidate grown from the batch (diagnosis/candidate_batch.py) has the observation of
-  ``model + e`` built alone: the same instruction count and the same numbers;
 - refine takes on the chosen candidate's model and fit from diagnose (``diagnosis_step``)
   instead of building and fitting it again: the same fit as doing so (independently
   simulated readings, a hidden angle-dependent compliance);
@@ -17,10 +15,8 @@ from markered_robot import markered_robot
 import numpy as np
 import pytest
 
-from doe_calib import Configurations, build_model, examples, simulate
-from doe_calib.diagnosis.candidate_batch import grown_model_builders
+from doe_calib import build_model, examples
 from doe_calib.diagnosis.refine import refine
-from doe_calib.diagnosis.effect_tests import candidate_effects
 from doe_calib.estimation.effect_signature import augmented
 from doe_calib.diagnosis.candidate_scoring import GROWN
 from doe_calib.diagnosis.diagnose import diagnose, diagnosis_step
@@ -28,7 +24,6 @@ from doe_calib.diagnosis.settings import RefineSettings
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.model.effects import parse_effect
-from doe_calib.model.evaluation import evaluate
 from doe_calib.report.figures import residual_scatter, to_png
 
 SIGMA_MM = 0.02
@@ -48,26 +43,6 @@ def campaign(tmp_path_factory):
     path = tmp_path_factory.mktemp("fast_paths") / "m.csv"
     sim.write_campaign(path, chain, truth, q, w, list(MARKERS), SIGMA_MM, rng)
     return build_model(robot, tool, START), read_measurements(path, robot, tool)
-
-
-def test_grown_observation_is_the_one_built_alone(model6):
-    rng = np.random.default_rng(3)
-    q = rng.uniform(model6.robot.lower, model6.robot.upper, size=(12, 6))
-    cfg = Configurations.from_arrays(q, np.zeros((12, 6)), pose=np.arange(12) + 1)
-    meas = simulate(model6, model6.nominal().values, cfg, 2e-5, rng)
-    effects = [e for e in candidate_effects(model6, cfg)
-               if e.spec() in ("cyclic(j4,harmonics=2)", "compliance_by_angle(j2,bins=3)",
-                               "link_compliance")]
-    assert len(effects) == 3
-    grown = [build() for build in grown_model_builders(model6, effects, meas,
-                                                      model6.nominal().values)]
-    for e, g in zip(effects, grown):
-        alone = build_model(model6.robot, model6.tool, tuple(model6.effects) + (e,))
-        assert g.observation.n_instructions() == alone.observation.n_instructions(), e.spec()
-        values = alone.nominal().values + 1e-3 * rng.normal(size=alone.n_parameters)
-        for ours, theirs in zip(evaluate(g.observation, cfg, values),
-                                evaluate(alone.observation, cfg, values)):
-            assert np.abs(ours - theirs).max() <= 1e-14 * np.abs(theirs).max(), e.spec()
 
 
 def test_refine_takes_on_the_fit_diagnose_made(campaign):

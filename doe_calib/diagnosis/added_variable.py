@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.diagnosis.effect_tests import failure_note
-from doe_calib.diagnosis.variables import configuration_variables, smooth_basis
+from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.errors import DoeCalibError, DoeCalibWarning
 from doe_calib.estimation.effect_signature import candidate_effects, fitted_basis, projected_columns
 from doe_calib.model.effects import joint_index
@@ -192,22 +192,11 @@ def _joint_direction(model, measurements, values, k) -> np.ndarray:
 
 
 def _best_variable(fitted, variables):
-    """The configuration variable the fitted curve follows best (adjusted R²)."""
+    """The configuration variable the fitted curve follows best (adjusted R² of
+    :func:`~doe_calib.diagnosis.variables.follows`), else the measurement order."""
     ok = np.isfinite(fitted)
-    y = fitted[ok]
-    best, best_r2 = None, -np.inf
-    for name, (v, _, is_angle) in variables.items():
-        if name == "measurement order":
-            continue
-        x = smooth_basis(np.asarray(v, float)[ok], is_angle)
-        k = np.linalg.matrix_rank(x)
-        tot = float(((y - y.mean()) ** 2).sum())
-        if tot == 0 or len(y) <= k + 1:
-            continue
-        fit = x @ np.linalg.lstsq(x, y, rcond=None)[0]
-        r2 = 1 - (1 - (1 - float(((y - fit) ** 2).sum()) / tot)) * (len(y) - 1) / (len(y) - k)
-        if r2 > best_r2:
-            best, best_r2 = name, r2
-    if best is None:
-        best = "measurement order"
-    return best, variables[best]
+    best = follows(fitted[ok], {name: (np.asarray(v, float)[ok], unit, is_angle)
+                                for name, (v, unit, is_angle) in variables.items()
+                                if name != "measurement order"})
+    name = best[0].variable if best else "measurement order"
+    return name, variables[name]

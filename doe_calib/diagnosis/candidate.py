@@ -65,17 +65,13 @@ class Candidate:
         1-based joint the effect sits on.
     words : str
         The effect in words, e.g. "a cyclic (transmission) error of joint 3 (a3)".
-    parameters : tuple of str
-        Its parameters' names.
-    units : tuple of str
-        Their display units.
+    parameters, units : tuple of str
+        Its parameters' names and display units.
     n_parameters : int
         Columns the effect adds.
-    rank : int
-        Columns left once what the model already absorbs is projected out:
-        the numerator degrees of freedom of F.
-    dof : int or None
-        Denominator degrees of freedom of F (3K − rank J − rank); None when read from a file without it.
+    rank, dof : int
+        Degrees of freedom of F: the columns left once what the model absorbs is projected
+        out, and 3K − rank J − rank (None when read from a file without it).
     statistic : float
         The score test's F.
     p_value, p_value_raw : float
@@ -90,15 +86,17 @@ class Candidate:
     cv_rms_before_mm : float
         Cross-validated RMS of the model without it, mm.
     cv_rms_mm : float or None
-        Cross-validated RMS with it, mm; None when not cross-validated
-        (weaker evidence than those that were), NaN when its fit failed.
+        Cross-validated RMS with it, mm; None when not cross-validated, NaN when its fit
+        failed.
     sizes : tuple of FittedSize
         Its parameters fitted on all data (cross-validated candidates only).
     proposed : bool
-    why_not : str
-        Why it is not proposed, in words ("" when it is).
-    implausible : str
-        What is physically implausible about its fitted size ("" when nothing).
+    why_not, implausible : str
+        Why it is not proposed, and what is physically implausible about its fitted size,
+        in words ("" when it is, or nothing is).
+    detectability : Detectability or None
+    absorbed_by : tuple of str
+        The model's own parameters that absorb most of its signature (significant ones only).
     """
 
     effect: str

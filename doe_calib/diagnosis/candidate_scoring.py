@@ -20,6 +20,7 @@ from doe_calib.errors import DoeCalibError, DoeCalibWarning
 from doe_calib.estimation.effect_signature import grown_parameters
 from doe_calib.estimation.identify import FitSettings, identify
 from doe_calib.estimation.plausibility import beyond_plausible, out_of_bounds, value_words
+from doe_calib.model.marker_model import build_model
 
 #: Threads at most by default: beyond, the fits' Python parts wait on each other.
 MAX_WORKERS = 4
@@ -53,18 +54,16 @@ class CandidateScore:
     odd: str
 
 
-def score_candidates(builders, effects, params, measurements, folds,
+def score_candidates(model, effects, params, measurements, folds,
                      workers: int | None = None, progress=None) -> list:
-    """Build, fit and cross-validate each grown model.
+    """Build, fit and cross-validate each model grown from ``model`` by one of ``effects``.
 
     Parameters
     ----------
-    builders : sequence of callable
-        ``build()`` → the model grown by each candidate effect
-        (:func:`~doe_calib.diagnosis.candidate_batch.grown_model_builders`), called in
-        order by the calling thread.
+    model : Model
+        The fitted model.
     effects : sequence of Effect
-        The effects, in the same order.
+        The candidate effects; each grown model is built in order by the calling thread.
     params : ParameterSet
         The model's own fit: the grown models start from its values.
     measurements : Measurements
@@ -81,19 +80,28 @@ def score_candidates(builders, effects, params, measurements, folds,
     Returns
     -------
     list of CandidateScore or None
-        In the order of ``builders``; None where the grown model's fit failed.
+        In the order of ``effects``; None where the grown model's fit failed.
     """
     workers = min(MAX_WORKERS, os.cpu_count() or 1) if workers is None else max(1, int(workers))
-    jobs = list(zip(builders, effects))
+    def grown(effect):
+        return build_model(model.robot, model.tool, tuple(model.effects) + (effect,))
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DoeCalibWarning)
-        with ThreadPoolExecutor(max(1, min(workers, len(jobs)))) as pool:
-            futures = [pool.submit(_score, build(), effect, params, measurements, folds)
-                       for build, effect in jobs]  # each built while the workers fit
+        if workers == 1 or len(effects) < 2:  # in this thread, as the caller's own fits
             out = []
-            for i, (future, (_, effect)) in enumerate(zip(futures, jobs)):
+            for i, effect in enumerate(effects):
                 if progress:
-                    progress(i, len(jobs), effect.spec())
+                    progress(i, len(effects), effect.spec())
+                out.append(_score(grown(effect), effect, params, measurements, folds))
+            return out
+        with ThreadPoolExecutor(min(workers, len(effects))) as pool:
+            futures = [pool.submit(_score, grown(e), e, params, measurements, folds)
+                       for e in effects]  # each built while the workers fit
+            out = []
+            for i, (future, effect) in enumerate(zip(futures, effects)):
+                if progress:
+                    progress(i, len(effects), effect.spec())
                 out.append(future.result())
             return out
 

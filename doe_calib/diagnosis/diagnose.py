@@ -14,10 +14,9 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.diagnosis.candidate import candidate_records, rows_words
-from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_model_builders
 from doe_calib.diagnosis.candidate_scoring import score_candidates
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
-from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
+from doe_calib.diagnosis.effect_tests import candidate_tests
 from doe_calib.diagnosis.outliers import gross_outliers, outlier_verdict
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
@@ -25,7 +24,7 @@ from doe_calib.diagnosis.settings import DiagnosisSettings
 from doe_calib.diagnosis.sign_lead import sign_lead
 from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.design.detectability import SEPARATE
-from doe_calib.errors import DoeCalibError, ModelError
+from doe_calib.errors import ModelError
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.load_units import kgf_finding
 from doe_calib.estimation.sigma import resolve_sigma
@@ -53,18 +52,6 @@ def screening_set(measurements, limit: int = SCREENING_CONFIGURATIONS, seed: int
     return subset, (f"candidate effects were tested and cross-validated on {len(keep)} poses "
                     f"drawn at random ({len(subset.configurations)} of {len(cfg)} "
                     f"configurations); the adequacy test and the fit use every reading")
-
-
-def candidate_batch_for(model, measurements, registry=None):
-    """Every candidate effect of ``model`` (those :func:`diagnose` tests on ``measurements``)
-    in one :class:`~doe_calib.diagnosis.candidate_batch.CandidateBatch`, or None when they
-    cannot be built together: what :func:`diagnosis_step` takes as ``batch`` for ``model``
-    and the models grown from it."""
-    screen, _ = screening_set(measurements)
-    try:
-        return candidate_batch(model, candidate_effects(model, screen.configurations, registry))
-    except (DoeCalibError, ValueError):
-        return None
 
 
 def settled_fit(model, measurements, sigma=None, fit=None):
@@ -263,19 +250,6 @@ def _chi2_record(test, s, repeated) -> dict:
             "repeated": None if repeated is None else repeated.to_dict()}
 
 
-def _outlier_result(model, measurements, res, test, cv, split, outliers, s, notes,
-                    repeated) -> DiagnosisResult:
-    """The diagnosis of data with gross outliers: they are named, no effect is proposed."""
-    flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
-    verdict = outlier_verdict(outliers, _adequacy_words(test))
-    return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, False,
-                           _chi2_record(test, s, repeated), (), (), tuple(flagged),
-                           s.level, verdict, None, int(res.weighted.size),
-                           cv_grouping=split.description, min_gain=s.min_gain,
-                           gross_errors=tuple(dict.fromkeys(o.pose for o in outliers)),
-                           notes=tuple(n for n in notes if n), outliers=outliers)
-
-
 def diagnose(model, measurements, fit=None, *, settings: DiagnosisSettings | None = None,
              sigma: float | None = None, registry=None, progress=None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
@@ -312,12 +286,8 @@ def diagnose(model, measurements, fit=None, *, settings: DiagnosisSettings | Non
 
 
 def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | None = None, *,
-                   sigma: float | None = None, registry=None, progress=None, batch=None):
+                   sigma: float | None = None, registry=None, progress=None):
     """:func:`diagnose` as each step of :func:`~doe_calib.diagnosis.refine.refine` runs it.
-
-    ``batch``: the candidates of a model ``model`` grew from, built once
-    (:func:`candidate_batch_for`); the candidates' columns and grown models come from it
-    when it holds them all, instead of from a batch built here.
 
     Returns
     -------
@@ -344,16 +314,22 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     screen, screened = screening_set(measurements)
     split = make_folds(screen, s.folds, s.grouping)
     cv = cross_validated_rms(model, screen, params, split)
+    flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
+    chi2 = _chi2_record(test, s, settled.repeated)
     if outliers:  # no effect is tested on data an outlier pulls
-        return _outlier_result(model, measurements, res, test, cv, split, outliers, s,
-                               (units, screened, doubt, copies), settled.repeated), {}
-    tried = candidate_tests(model, screen, params, registry=registry, batch=batch)
+        verdict = outlier_verdict(outliers, _adequacy_words(test))
+        return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, False, chi2, (), (),
+                               tuple(flagged), level, verdict, None, int(res.weighted.size),
+                               cv_grouping=split.description, min_gain=min_gain,
+                               gross_errors=tuple(dict.fromkeys(o.pose for o in outliers)),
+                               notes=tuple(n for n in (units, screened, doubt, copies) if n),
+                               outliers=outliers), {}
+    tried = candidate_tests(model, screen, params, registry=registry)
     tests = list(tried.tests)
     chosen = _groups_to_try(tests, level, s.cv_top)
     scored, fitted = {}, {}
     effects = [parse_effect(t.spec, registry=registry) for t in chosen]
-    builders = grown_model_builders(model, effects, screen, params.values, batch)
-    scores = score_candidates(builders, effects, params, screen, split, s.workers, progress)
+    scores = score_candidates(model, effects, params, screen, split, s.workers, progress)
     for t, score in zip(chosen, scores):
         if score is None:  # the grown model's fit failed
             scored[t.spec] = t.with_cv(float("nan"))
@@ -372,7 +348,6 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     variables = {k: (v[0][used], v[1], v[2]) for k, v in
                  configuration_variables(model.robot, measurements.configurations).items()}
     follow = follows(size[used] / count[used], variables)
-    flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
     n_poses = len(set(measurements.configurations.pose))
     gross = not adequate and proposed is None and _gross_errors(test, flagged, follow, n_poses)
     verdict = _verdict_words(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
@@ -389,7 +364,6 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     elif odd is not None and (proposed is None or odd.cv_rms_mm < proposed.cv_rms_mm):
         verdict += (f" Not proposed although it predicts better (cross-validated RMS "
                     f"{odd.cv_rms_mm:.3g} mm): {odd.spec}, {odd.implausible}.")
-    chi2 = _chi2_record(test, s, settled.repeated)
     spec = None if proposed is None else proposed.spec
     candidates = candidate_records(ranked, model.robot,
                                    [describe(t, model.robot, registry) for t in ranked],

@@ -76,14 +76,13 @@ def failure_note(failed, what: str) -> str:
             + ", ".join(f"{s}: {why}" for s, why in failed))
 
 
-def candidate_columns(model, measurements, params, effects, q_basis, batch=None) -> tuple:
+def candidate_columns(model, measurements, params, effects, q_basis) -> tuple:
     """Every candidate's columns ``(effect, Z, Z⊥)`` (:func:`projected_columns`), and
     ``(spec, reason)`` of those that could not be built.
 
     The columns come from one batch of the candidates
     (:func:`~doe_calib.diagnosis.candidate_batch.batched_columns`); a candidate that does
-    not fit in it is built alone. ``batch``: a batch of a model ``model`` grew from
-    (:func:`~doe_calib.diagnosis.candidate_batch.batched_columns`).
+    not fit in it is built alone.
     """
     ok, failed = [], []
     names = set(model.description.nominal().names)
@@ -96,8 +95,7 @@ def candidate_columns(model, measurements, params, effects, q_basis, batch=None)
         except (DoeCalibError, ValueError) as exc:
             failed.append((e.spec(), _failure(exc)))
     out = []
-    for e, z in zip(ok, batched_columns(model, measurements, params.values, ok,
-                                                  batch)):
+    for e, z in zip(ok, batched_columns(model, measurements, params.values, ok)):
         try:
             out.append((e, z, z - q_basis @ (q_basis.T @ z)) if z is not None else
                        (e, *projected_columns(model, measurements, params, e, q_basis)))
@@ -135,7 +133,7 @@ class CandidateTests:
 
 
 def candidate_tests(model, measurements, params, effects=None,
-                    registry=None, batch=None) -> CandidateTests:
+                    registry=None) -> CandidateTests:
     """Score/F test of every candidate effect against the residual of ``params``.
 
     Parameters
@@ -149,10 +147,6 @@ def candidate_tests(model, measurements, params, effects=None,
         Candidates; default :func:`candidate_effects` of ``registry``.
     registry : EffectRegistry, optional
         Whose catalogue the default candidates come from (default the built-in one).
-    batch : CandidateBatch, optional
-        The candidates of a model ``model`` grew from, built once (refine's): their columns
-        come from it when it holds every candidate
-        (:meth:`~doe_calib.diagnosis.candidate_batch.CandidateBatch.within`).
 
     Returns
     -------
@@ -173,7 +167,7 @@ def candidate_tests(model, measurements, params, effects=None,
             jac.append(weighted_residual(model, measurements, params.values)[1][:, params.free])
         return jac[0]
 
-    columns, failed = candidate_columns(model, measurements, params, effects, q_basis, batch)
+    columns, failed = candidate_columns(model, measurements, params, effects, q_basis)
     for e, z, zp in columns:
         new = e.parameters(model.robot)
         norm2 = float((z ** 2).sum())

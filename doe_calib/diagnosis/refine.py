@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from doe_calib.diagnosis.cross_validation import validation_rms
 from doe_calib.diagnosis.candidate_scoring import GROWN
-from doe_calib.diagnosis.diagnose import candidate_batch_for, diagnosis_step, settled_fit
+from doe_calib.diagnosis.diagnose import diagnosis_step, settled_fit
 from doe_calib.diagnosis.refine_result import RefineResult, RefineStep
 from doe_calib.diagnosis.settings import RefineSettings
 from doe_calib.estimation.effect_signature import augmented
@@ -68,20 +68,16 @@ def refine(model, measurements, validation=None, *, settings: RefineSettings | N
 
     Notes
     -----
-    The starting model's candidates are built once, in one batch; every step takes its
-    candidate columns and grown models from it
-    (:meth:`~doe_calib.diagnosis.candidate_batch.CandidateBatch.within`), and the chosen
-    candidate's fit from the step's diagnosis
+    Each step takes the chosen candidate's fit from its diagnosis
     (:func:`~doe_calib.diagnosis.diagnose.diagnosis_step`).
     """
     s = RefineSettings() if settings is None else settings
     settled, fit = settled_fit(model, measurements, sigma, fit)
     measurements = settled.measurements
     steps, added, reason, effect = [], None, "starting model", None
-    batch = candidate_batch_for(model, measurements, registry)
     while True:
-        diag, fitted = diagnosis_step(model, measurements, fit, s, registry=registry,
-                                      batch=batch)  # the chosen candidate is not fitted again
+        # the chosen candidate is not fitted again
+        diag, fitted = diagnosis_step(model, measurements, fit, s, registry=registry)
         val = validation_rms(model, fit.parameters.values, validation) \
             if validation is not None else None
         steps.append(RefineStep(model.spec, added, diag.rms_mm, diag.cv_rms_mm, val,

@@ -50,6 +50,11 @@ def residuals(model, measurements, values) -> Residuals:
     return Residuals(e, e / measurements.sigma[:, None], measurements.config, pose)
 
 
+def residual_norms_mm(model, measurements, values) -> np.ndarray:
+    """3-D residual norm of each reading at parameter ``values`` (SI), shape (K,), mm."""
+    return np.linalg.norm(marker_residuals(model, measurements, values), axis=1) * 1000.0
+
+
 @dataclass(frozen=True)
 class Adequacy:
     """The χ² test of the residual against the measurement noise.

@@ -72,6 +72,15 @@ def configuration_variables(robot, configurations) -> dict:
     return out
 
 
+def reading_columns(model, measurements) -> list[tuple]:
+    """The variables of :func:`configuration_variables` as one value per reading, labelled
+    with their unit: ``[(label, ndarray of shape (K,)), …]`` (what the residual figures
+    plot against)."""
+    variables = configuration_variables(model.robot, measurements.configurations)
+    return [(f"{name} ({unit})" if unit else name, v[measurements.config])
+            for name, (v, unit, _) in variables.items()]
+
+
 def _varies(v: np.ndarray, family: np.ndarray) -> bool:
     """Whether ``v`` spreads more than round-off next to the largest value of its family."""
     return bool(np.ptp(v) > RELATIVE_SPREAD * max(float(np.abs(family).max()), 1e-300))
