@@ -300,29 +300,10 @@ def _parameters(spec, robot, registry=None) -> tuple:
 
 def candidate_records(tests, robot, words, cv_rms_before_mm: float, level: float,
                       min_gain: float, proposed: str | None, registry=None) -> tuple:
-    """The candidates of a diagnosis, from its tests (``CandidateTest``, ranked).
-
-    Parameters
-    ----------
-    tests : sequence of CandidateTest
-    robot : Robot
-        For the effects' parameter names and units.
-    words : sequence of str
-        Each test's effect in words.
-    cv_rms_before_mm : float
-        The model's cross-validated RMS without any candidate, mm.
-    level, min_gain : float
-        The diagnosis's significance level and material gain.
-    proposed : str or None
-        The proposed candidate's spec.
-    registry : EffectRegistry, optional
-        Names the effects (default the built-in ones): pass the diagnosis's own
-        registry when user effects were tested.
-
-    Returns
-    -------
-    tuple of Candidate, in the order of ``tests``.
-    """
+    """The candidates of a diagnosis from its ranked tests (``CandidateTest``), in their order:
+    ``words`` each effect in words, ``cv_rms_before_mm`` the model's cross-validated RMS (mm),
+    ``level`` and ``min_gain`` the diagnosis's, ``proposed`` the proposed spec or None,
+    ``registry`` what names the effects (default the built-in one)."""
     out = []
     for t, text in zip(tests, words):
         names, units = _parameters(t.spec, robot, registry)

@@ -31,14 +31,10 @@ GROWN = FitSettings(select="none", register=False)
 
 @dataclass(frozen=True)
 class CandidateScore:
-    """One grown model's fit and cross-validated RMS.
+    """One grown model's cross-validated RMS and its effect's fitted parameters.
 
     Attributes
     ----------
-    model : Model
-        The grown model.
-    fit : IdentificationResult
-        The grown model's fit to the screening readings.
     cv_rms_mm : float
         Its cross-validated RMS per coordinate, mm.
     rows : tuple of dict
@@ -47,8 +43,6 @@ class CandidateScore:
         Words on those beyond their bounds or plausible range ("" when none).
     """
 
-    model: object
-    fit: object
     cv_rms_mm: float
     rows: tuple
     odd: str
@@ -58,24 +52,10 @@ def score_candidates(model, effects, params, measurements, folds,
                      workers: int | None = None, progress=None) -> list:
     """Build, fit and cross-validate each model grown from ``model`` by one of ``effects``.
 
-    Parameters
-    ----------
-    model : Model
-        The fitted model.
-    effects : sequence of Effect
-        The candidate effects; each grown model is built in order by the calling thread.
-    params : ParameterSet
-        The model's own fit: the grown models start from its values.
-    measurements : Measurements
-        The readings the candidates are fitted and cross-validated on.
-    folds : Folds
-        The cross-validation's folds.
-    workers : int, optional
-        Threads fitting at once (default: the machine's cores, at most :data:`MAX_WORKERS`;
-        1: one after another).
-    progress : callable, optional
-        ``progress(done, total, note)`` as each candidate is scored, in order: the
-        candidates done, their number, the effect's spec.
+    The grown models start from ``params`` (``model``'s fit) and are fitted and
+    cross-validated over ``folds`` on ``measurements``; ``workers`` threads fit at once
+    (default: the machine's cores, at most :data:`MAX_WORKERS`; 1: one after another).
+    ``progress(done, total, spec)`` is told as each is scored, in order.
 
     Returns
     -------
@@ -114,8 +94,8 @@ def _score(big, effect, params, measurements, folds):
         return None
     new = [n for n in fit.parameters.names if n not in params.names]
     rows, odd = fitted_rows(fit, new, effect)
-    return CandidateScore(big, fit, cross_validated_rms(big, measurements, fit.parameters,
-                                                        folds), rows, odd)
+    return CandidateScore(cross_validated_rms(big, measurements, fit.parameters, folds), rows,
+                          odd)
 
 
 def fitted_rows(fit, names, effect) -> tuple:

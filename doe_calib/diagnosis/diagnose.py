@@ -101,12 +101,6 @@ def _cv_key(t) -> float:
     return float(f"{np.nan_to_num(t.cv_rms_mm, nan=np.inf):.9g}")
 
 
-def _proposal(tests, cv_rms, level, min_gain):
-    """The physically plausible material candidate with the lowest cross-validated RMS."""
-    return next((t for t in _material(tests, cv_rms, level, min_gain) if not t.implausible),
-                None)
-
-
 def _gross_errors(test, flagged, follow, n_poses):
     """Whether the misfit sits in a few poses that follow no variable."""
     excess = test.statistic - test.dof
@@ -140,13 +134,12 @@ def _adequate_why(test, s) -> str:
 
 
 def _is_adequate(test, proposed, s) -> bool:
-    """Adequate: χ² passes, or no material candidate and the misfit within the tolerance or
-    the practical size. With no σ given (σ̂ of the starting model's fit, which holds its
-    misfit) the χ² test cannot judge: adequate is then only that no candidate helps."""
+    """Adequate by the module's rules; with no σ given (σ̂ holds the model's own misfit),
+    only that no candidate helps."""
     if test.sigma_source == ESTIMATED:
         return proposed is None
     return test.adequate or (proposed is None and (test.ratio <= 1 + s.tolerance
-                                                   or test.practically_adequate(s.practical_um)))
+                                                   or test.misfit_um < s.practical_um))
 
 
 def _confounded_words(tests, proposed, level) -> str:
@@ -281,21 +274,6 @@ def diagnose(model, measurements, fit=None, *, settings: DiagnosisSettings | Non
     -------
     DiagnosisResult
     """
-    return diagnosis_step(model, measurements, fit, settings, sigma=sigma,
-                          registry=registry, progress=progress)[0]
-
-
-def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | None = None, *,
-                   sigma: float | None = None, registry=None, progress=None):
-    """:func:`diagnose` as each step of :func:`~doe_calib.diagnosis.refine.refine` runs it.
-
-    Returns
-    -------
-    (DiagnosisResult, dict)
-        The diagnosis, and, when the candidates were fitted on every reading (no
-        screening subset), spec → (``model`` + the effect, its fit to ``measurements``
-        from this fit's values): what refine takes on, not fitting again.
-    """
     s = DiagnosisSettings() if settings is None else settings
     level, min_gain = s.level, s.min_gain
     settled, fit = settled_fit(model, measurements, sigma, fit)
@@ -323,23 +301,22 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
                                cv_grouping=split.description, min_gain=min_gain,
                                gross_errors=tuple(dict.fromkeys(o.pose for o in outliers)),
                                notes=tuple(n for n in (units, screened, doubt, copies) if n),
-                               outliers=outliers), {}
+                               outliers=outliers)
     tried = candidate_tests(model, screen, params, registry=registry)
     tests = list(tried.tests)
     chosen = _groups_to_try(tests, level, s.cv_top)
-    scored, fitted = {}, {}
+    scored = {}
     effects = [parse_effect(t.spec, registry=registry) for t in chosen]
     scores = score_candidates(model, effects, params, screen, split, s.workers, progress)
     for t, score in zip(chosen, scores):
         if score is None:  # the grown model's fit failed
             scored[t.spec] = t.with_cv(float("nan"))
             continue
-        if screen is measurements:
-            fitted[t.spec] = (score.model, score.fit)
         scored[t.spec] = t.with_cv(score.cv_rms_mm, score.rows, score.odd)
     ranked = sorted(scored.values(), key=lambda t: (_cv_key(t), t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]
-    proposed = _proposal(ranked, cv, level, min_gain)
+    material = _material(ranked, cv, level, min_gain)
+    proposed = next((t for t in material if not t.implausible), None)  # the best plausible
     adequate = _is_adequate(test, proposed, s)
     m = len(measurements.configurations)
     size = np.bincount(res.config, (res.weighted ** 2).sum(axis=1), minlength=m)
@@ -353,7 +330,7 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     verdict = _verdict_words(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
                              gross, s, registry) \
         + _confounded_words(ranked, proposed, level)
-    odd = next((t for t in _material(ranked, cv, level, min_gain) if t.implausible), None)
+    odd = next((t for t in material if t.implausible), None)
     lead = "" if odd is None else sign_lead(model, odd, proposed, cv, split,
                                             describe(odd, model.robot, registry), registry)
     if lead and proposed is None:
@@ -374,4 +351,4 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
                            notes=tuple(n for n in (units, screened, tried.note(), doubt, copies)
-                                       if n)), fitted
+                                       if n))

@@ -159,7 +159,6 @@ def candidate_tests(model, measurements, params, effects=None,
     r, q_basis = fitted_basis(model, measurements, params)
     rank_j = q_basis.shape[1]
     ss = float(r @ r)
-    raw = []
     jac = []  # the free weighted Jacobian, made once and only when words need it
 
     def jacobian():
@@ -168,38 +167,36 @@ def candidate_tests(model, measurements, params, effects=None,
         return jac[0]
 
     columns, failed = candidate_columns(model, measurements, params, effects, q_basis)
+    n = max(len(columns) + len(failed), 1)  # Bonferroni over every candidate tried
+    out = []
     for e, z, zp in columns:
-        new = e.parameters(model.robot)
         norm2 = float((z ** 2).sum())
         absorbed = 1.0 - float((zp ** 2).sum()) / norm2 if norm2 > 0 else 1.0
         svd = np.linalg.svd(zp, full_matrices=False)
-        detection = assess(e.spec(), new, params, z, zp, jacobian, zp_svd=svd)
+        detection = assess(e.spec(), e.parameters(model.robot), params, z, zp, jacobian,
+                           zp_svd=svd)
         scale = np.sqrt(max(norm2, 1e-300) / max(z.shape[1], 1))
         u, s, _ = svd
         keep = s > 1e-6 * scale
         q = int(keep.sum())
         dof = len(r) - rank_j - q
+        f, log_p, frac, by = 0.0, 0.0, 0.0, ()
         if q == 0 or dof <= 0:
-            raw.append((e, z.shape[1], 0, 0.0, 0.0, 0.0, absorbed, None, detection, ()))
-            continue
-        dss = float(((u[:, keep].T @ r) ** 2).sum())
-        f = (dss / q) / max((ss - dss) / dof, 1e-300)
-        with np.errstate(divide="ignore"):  # −inf (p = 0) past underflow, no warning
-            log_p = float(np.log(fdtrc(q, dof, f)))
-        by = ()
-        if absorbed > MOSTLY_ABSORBED and log_p < np.log(SIGNIFICANT_RAW):
-            # what the model's own parameters made of the signature the residual asks for
-            theta = np.linalg.lstsq(z, r, rcond=None)[0]
-            by = tuple(absorbing_parameters(params, jacobian(), z @ theta))
-        raw.append((e, z.shape[1], q, f, log_p, dss / ss if ss > 0 else 0.0, absorbed, dof,
-                    detection, by))
-    n = max(len(raw) + len(failed), 1)
-    out = [CandidateTest(e.name, e.spec(),
-                         None if e.joint is None else joint_index(model.robot, e.joint) + 1,
-                         npar, q, float(f), float(min(1.0, np.exp(log_p) * n)),
-                         float(np.exp(log_p)), frac, absorbed, log_p / np.log(10), dof=dof,
-                         detection=detection, absorbed_by=by)
-           for e, npar, q, f, log_p, frac, absorbed, dof, detection, by in raw]
+            q, dof = 0, None
+        else:
+            dss = float(((u[:, keep].T @ r) ** 2).sum())
+            f = (dss / q) / max((ss - dss) / dof, 1e-300)
+            with np.errstate(divide="ignore"):  # −inf (p = 0) past underflow, no warning
+                log_p = float(np.log(fdtrc(q, dof, f)))
+            frac = dss / ss if ss > 0 else 0.0
+            if absorbed > MOSTLY_ABSORBED and log_p < np.log(SIGNIFICANT_RAW):
+                # what the model's own parameters made of the signature the residual asks for
+                theta = np.linalg.lstsq(z, r, rcond=None)[0]
+                by = tuple(absorbing_parameters(params, jacobian(), z @ theta))
+        out.append(CandidateTest(
+            e.name, e.spec(), None if e.joint is None else joint_index(model.robot, e.joint) + 1,
+            z.shape[1], q, float(f), float(min(1.0, np.exp(log_p) * n)), float(np.exp(log_p)),
+            frac, absorbed, log_p / np.log(10), dof=dof, detection=detection, absorbed_by=by))
     return CandidateTests(tuple(sorted(out, key=lambda c: (c.log10_p, -c.statistic))),
                           tuple(failed))
 

@@ -104,10 +104,6 @@ class Adequacy:
         """
         return float(1e3 * self.sigma_mm * np.sqrt(max(self.ratio ** 2 - 1.0, 0.0)))
 
-    def practically_adequate(self, practical_um: float) -> bool:
-        """Whether the misfit beyond the noise (:attr:`misfit_um`) is below ``practical_um``."""
-        return self.misfit_um < practical_um
-
     def ratio_interval(self, confidence: float = 0.95) -> tuple:
         """Interval of the true σ over the assumed σ at ``confidence`` (from χ²(dof))."""
         return ratio_interval(self.statistic, self.dof, confidence)
