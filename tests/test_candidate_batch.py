@@ -1,7 +1,7 @@
 """The candidates' columns from one batch equal those of the model grown by each candidate
 alone (to 1e-12), on the 6R full model, on a model with user effects and on an odd chain; a
-candidate that is not inert at nominal sends the batch back to one model per candidate; and the columns are ∂r/∂θ (finite
-differences)."""
+candidate that is not inert at nominal sends the batch back to one model per candidate; and
+the columns are ∂r/∂θ (finite differences)."""
 import textwrap
 from dataclasses import replace
 

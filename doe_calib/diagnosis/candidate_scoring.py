@@ -66,24 +66,19 @@ def score_candidates(model, effects, params, measurements, folds,
     def grown(effect):
         return build_model(model.robot, model.tool, tuple(model.effects) + (effect,))
 
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), ThreadPoolExecutor(max(1, min(workers, len(effects)))) as pool:
         warnings.simplefilter("ignore", DoeCalibWarning)
         if workers == 1 or len(effects) < 2:  # in this thread, as the caller's own fits
-            out = []
-            for i, effect in enumerate(effects):
-                if progress:
-                    progress(i, len(effects), effect.spec())
-                out.append(_score(grown(effect), effect, params, measurements, folds))
-            return out
-        with ThreadPoolExecutor(min(workers, len(effects))) as pool:
-            futures = [pool.submit(_score, grown(e), e, params, measurements, folds)
-                       for e in effects]  # each built while the workers fit
-            out = []
-            for i, (future, effect) in enumerate(zip(futures, effects)):
-                if progress:
-                    progress(i, len(effects), effect.spec())
-                out.append(future.result())
-            return out
+            scores = (_score(grown(e), e, params, measurements, folds) for e in effects)
+        else:  # each built while the workers fit
+            scores = (f.result() for f in [pool.submit(_score, grown(e), e, params, measurements,
+                                                       folds) for e in effects])
+        out = []
+        for i, effect in enumerate(effects):
+            if progress:
+                progress(i, len(effects), effect.spec())
+            out.append(next(scores))
+        return out
 
 
 def _score(big, effect, params, measurements, folds):

@@ -47,14 +47,11 @@ class Outlier:
 
     Attributes
     ----------
-    pose : str
-        Its pose id.
-    marker : str
-        Its marker.
+    pose, marker : str
+        Its pose id and marker.
     line : int
-        Its line in ``source`` (0 when not from a file).
+        Its line in ``source``, the file it was read from (0 when not from a file).
     source : str
-        The file it was read from.
     size_mm : float
         Length of its deletion residual, mm.
     size_sigma : float
