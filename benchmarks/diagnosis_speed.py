@@ -162,9 +162,7 @@ def run(quick: bool = False) -> Section:
              "command's wall time, judged against the issue's goal as the issue measures.",
              "before/after give the same verdicts, proposals and added effects; their "
              "numbers agree to rounding (~1e-13 relative).",
-             "refine builds the starting model's candidates once and sees that batch from "
-             "each grown model; the "
-             "chosen candidates fitted in threads (diagnosis/candidate_scoring.py), each "
+             "the chosen candidates fitted in threads (diagnosis/candidate_scoring.py), each "
              "grown model built while the others fit; the figure drawn in a child process.")
     return Section("(h) diagnose and refine, in-process and the refine command", tuple(rows),
                    "this round's start, same calls", notes,

@@ -1,8 +1,7 @@
 """The candidates' columns from one batch equal those of the model grown by each candidate
-alone (to 1e-12), on the 6R full model, on a model with user effects and on an odd chain; the
-grown models made from the batch equal the ones built alone; a candidate that is not inert at
-nominal sends the batch back to one model per candidate; and the columns are ∂r/∂θ (finite
-differences)."""
+alone (to 1e-12), on the 6R full model, on a model with user effects and on an odd chain; a
+candidate that is not inert at nominal sends the batch back to one model per candidate; and
+the columns are ∂r/∂θ (finite differences)."""
 import textwrap
 from dataclasses import replace
 
@@ -10,14 +9,14 @@ import numpy as np
 import pytest
 
 from doe_calib import Configurations, build_model, simulate
-from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_model_builders
+from doe_calib.diagnosis.candidate_batch import candidate_batch
 from doe_calib.errors import DoeCalibError
-from doe_calib.diagnosis.effect_tests import (augmented, candidate_columns, candidate_effects,
-                                              fitted_basis, projected_columns)
+from doe_calib.diagnosis.effect_tests import (candidate_columns, candidate_effects, fitted_basis,
+                                              projected_columns)
+from doe_calib.estimation.effect_signature import augmented
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects import DEFAULT_REGISTRY
 from doe_calib.examples import EFFECT_FILE as EXAMPLE_FILE
-from doe_calib.model.evaluation import evaluate
 from doe_calib.model.loads import hanging_mass_wrench
 from doe_calib.model.simulate import random_configurations, random_truth
 
@@ -160,29 +159,3 @@ def test_columns_are_the_derivative_of_the_residual(model6):
             fd = (weighted_residual(big, meas, up, jacobian=False)[0]
                   - weighted_residual(big, meas, down, jacobian=False)[0]) / (2 * h)
             assert np.abs(z[:, c] - fd).max() <= 1e-5 * np.abs(fd).max() + 1e-9, e.spec()
-
-
-def test_grown_models_from_the_batch_equal_the_models_built_alone(model6):
-    rng = np.random.default_rng(5)
-    meas, truth = _fitted(model6, rng, n=8)
-    params = _with_values(model6.nominal(), truth)
-    effects = [e for e in candidate_effects(model6, meas.configurations)
-               if e.spec() in ("cyclic(j4,harmonics=2)", "compliance_by_angle(j2,bins=3)",
-                               "link_compliance", "backlash(j3,mode=approach)")]
-    assert len(effects) == 4
-    grown = [build() for build in grown_model_builders(model6, effects, meas, params.values)]
-    cfg = meas.configurations
-    t = np.array([0.01, -0.02, 0.15])
-    for e, g in zip(effects, grown):
-        alone = build_model(model6.robot, model6.tool, tuple(model6.effects) + (e,))
-        assert g.spec == alone.spec and g.parameters == alone.parameters
-        values = alone.nominal().values.copy()
-        values[:model6.n_parameters] = params.values
-        new = np.arange(model6.n_parameters, alone.n_parameters)
-        values[new] = rng.normal(0.0, 1.0, new.size) * [alone.parameters[k].scale for k in new]
-        for name, extra in (("markers", ()), ("observation", ()), ("point", (t,)),
-                            ("point_robot", (t,)), ("flange", ())):
-            ours = evaluate(getattr(g, name), cfg, values, *extra)
-            theirs = evaluate(getattr(alone, name), cfg, values, *extra)
-            for a, b in zip(ours, theirs):
-                assert _same(a, b), (e.spec(), name)

@@ -2,9 +2,8 @@
 
 A repeated evaluation returns the buffers of the last call (the same bits as evaluating
 again); the detection power's noncentrality (estimation/chi_square.py) is
-the root of SciPy's power equation; refine builds the starting model's candidates once and sees
-that batch from each grown model (the columns and grown models of a batch built for it, to
-1e-12; the same steps as diagnosing each grown model afresh to 1e-9).
+the root of SciPy's power equation; refine takes the same steps as diagnosing each grown model
+afresh (to 1e-9).
 """
 import warnings
 
@@ -14,20 +13,18 @@ import numpy as np
 import pytest
 from scipy import optimize, stats
 
-from doe_calib import Configurations, build_model, examples, simulate
-from doe_calib.diagnosis.candidate_batch import candidate_batch
+from doe_calib import Configurations, build_model, examples
 from doe_calib.diagnosis.refine import refine
 from doe_calib.diagnosis.candidate_scoring import GROWN
-from doe_calib.diagnosis.diagnose import candidate_batch_for, diagnose
+from doe_calib.diagnosis.diagnose import diagnose
 from doe_calib.diagnosis.settings import RefineSettings
 from doe_calib.model.effects import parse_effect
-from doe_calib.diagnosis.effect_tests import augmented, candidate_effects
+from doe_calib.estimation.effect_signature import augmented
 from doe_calib.errors import DoeCalibWarning
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.chi_square import noncentrality_for_power
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.model.evaluation import Workspace, observation_matrix
-from doe_calib.model.loads import hanging_mass_wrench
 from doe_calib.model.simulate import random_configurations, random_truth
 
 MARKERS = {"A": [0.15, 0.0, 0.08], "B": [-0.075, 0.13, 0.08], "C": [-0.075, -0.13, 0.08]}  # m
@@ -86,87 +83,6 @@ def test_the_first_call_is_evaluated_even_at_zero(model6):
     assert np.array_equal(got[0][0].ravel(), x_single)
 
 
-def _loaded_campaign(model, n, seed, sigma=2e-5):
-    """n poses of ``model``'s robot, each unloaded and under a 250 kg pull, simulated with the
-    full model (rigid and compliant) at random parameters."""
-    rng = np.random.default_rng(seed)
-    true = build_model(model.robot, model.tool, "joint_offset+geometry+joint_compliance")
-    truth = random_truth(true, rng)
-    q = np.repeat(random_configurations(model.robot, n, rng), 2, axis=0)
-    w = np.zeros((2 * n, 6))
-    w[1::2] = hanging_mass_wrench(true, truth, q[1::2], 250.0, (0.0, 0.0, 0.2))
-    cfg = Configurations.from_arrays(q, w, pose=np.repeat(np.arange(n) + 1, 2))
-    return simulate(true, truth, cfg, sigma, rng)
-
-
-@pytest.fixture(scope="module")
-def rigid6(robot6, tool6):
-    return build_model(robot6, tool6, "joint_offset+geometry")
-
-
-def _pick(effects, specs):
-    out = [e for e in effects if e.spec() in specs]
-    assert [e.spec() for e in out] == [s for s in specs if s in [e.spec() for e in out]]
-    assert len(out) == len(specs)
-    return out
-
-
-def _close(a, b, tol=1e-12):
-    return np.abs(a - b).max() <= tol * max(np.abs(a).max(), np.abs(b).max(), 1e-300)
-
-
-def test_one_batch_seen_from_a_grown_model_is_the_grown_models_batch(rigid6):
-    """Refine's one batch, seen from the model grown by two of its candidates, gives the
-    columns of the batch built for that model and the grown models built alone (1e-12)."""
-    meas = _loaded_campaign(rigid6, 10, 3)
-    cfg = meas.configurations
-    first = candidate_effects(rigid6, cfg)
-    batch = candidate_batch(rigid6, first)
-    chosen = _pick(first, ["compliance_by_angle(j2,bins=3)", "cyclic(j3,harmonics=1)"])
-    grown = build_model(rigid6.robot, rigid6.tool, tuple(rigid6.effects) + tuple(chosen))
-    rest = candidate_effects(grown, cfg)
-    assert len(rest) < len(first) - 2  # the chosen joints' other shapes are not tried again
-    rng = np.random.default_rng(4)
-    values = grown.nominal().values.copy()
-    values[:rigid6.n_parameters] = random_truth(rigid6, rng)
-    new = np.arange(rigid6.n_parameters, grown.n_parameters)
-    values[new] = rng.normal(size=new.size) * [grown.parameters[k].scale for k in new]
-    view = batch.within(grown, rest)
-    assert view is not None and view.inert(meas, values)
-    ours = view.columns(meas, values)
-    theirs = candidate_batch(grown, rest).columns(meas, values)
-    assert len(ours) == len(rest)
-    for a, b, e in zip(ours, theirs, rest):
-        assert _close(a, b), e.spec()
-    for e in rest[:: max(1, len(rest) // 6)]:
-        k = rest.index(e)
-        alone = build_model(grown.robot, grown.tool, tuple(grown.effects) + (e,))
-        mine = view.augmented(k)
-        assert mine.spec == alone.spec and mine.parameters == alone.parameters
-        v = alone.nominal().values.copy()
-        v[:grown.n_parameters] = values
-        extra = np.arange(grown.n_parameters, alone.n_parameters)
-        v[extra] = rng.normal(size=extra.size) * [alone.parameters[j].scale for j in extra]
-        for a, b in zip(observation_matrix(mine, v, cfg), observation_matrix(alone, v, cfg)):
-            assert _close(a, b), e.spec()
-
-
-def test_one_batch_is_not_seen_where_the_order_of_effects_matters(rigid6):
-    meas = _loaded_campaign(rigid6, 6, 5)
-    first = candidate_effects(rigid6, meas.configurations)
-    batch = candidate_batch(rigid6, first)
-    link = _pick(first, ["link_compliance"])
-    bent = build_model(rigid6.robot, rigid6.tool, tuple(rigid6.effects) + tuple(link))
-    # a placement correction inside: its composition with the others' is not the batch's
-    assert batch.within(bent, candidate_effects(bent, meas.configurations)) is None
-    cyc = _pick(first, ["cyclic(j3,harmonics=1)"])
-    grown = build_model(rigid6.robot, rigid6.tool, tuple(rigid6.effects) + tuple(cyc))
-    assert batch.within(grown, cyc) is None  # a candidate already in the model
-    other = build_model(rigid6.robot, rigid6.tool, "joint_offset")
-    assert batch.within(other, first[:3]) is None  # not grown from the batch's model
-    assert batch.within(grown, first[-2:]) is not None
-
-
 @pytest.fixture(scope="module")
 def hidden_campaign(tmp_path_factory):
     """30 poses of the KR 270, unloaded and under 250 kg, from the independent simulator: two
@@ -201,9 +117,6 @@ def test_refine_from_one_batch_equals_diagnosing_each_step_afresh(hidden_campaig
                                      parse_effect(slow[-1].best.spec))
             step_fit = identify_quietly(model, meas, begin, settings=GROWN)
     assert len(fast.steps) == len(slow) == 4  # it grows: the comparison covers grown models
-    final = build_model(start.robot, start.tool, fast.fit.model)
-    batch = candidate_batch_for(start, meas)  # what refine saw every step from
-    assert batch.within(final, candidate_effects(final, meas.configurations)) is not None
     assert [s.added for s in fast.steps[1:]] == [d.best.spec for d in slow[:-1]]
     for a, d, before in zip(fast.steps, slow, [None] + slow[:-1]):
         assert a.cv_rms_mm == pytest.approx(d.cv_rms_mm, rel=1e-9)

@@ -76,7 +76,8 @@ OUTPUTS = {"out": "file", "plot": "file", "report": "file"}
 
 def run(args):
     from doe_calib.diagnosis import diagnose
-    from doe_calib.diagnosis.residual_plot_data import reading_columns, residual_norms_mm
+    from doe_calib.diagnosis.residuals import residual_norms_mm
+    from doe_calib.diagnosis.variables import reading_columns
     from doe_calib.estimation.identify import identify_quietly
     from doe_calib.report.figure_worker import FigureWorker
 

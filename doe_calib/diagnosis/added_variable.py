@@ -1,31 +1,21 @@
 """Added-variable plots: the shape a candidate effect has in the residual.
 
-The size of a residual hides its sign: a backlash step, a cyclic sine or a
-compliance slope all look like clouds. Here, for a fitted model (weighted
-residual ``r``, free Jacobian ``J``) and a candidate effect with columns
-``Z``, the part the model cannot already absorb is ``Z⊥ = (I − QQᵀ)Z``
-(``Q`` an orthonormal basis of ``J``, as the candidate tests use), its
-least-squares fit to the residual ``θ̂ = Z⊥⁺ r`` and the displacement it
-explains ``f = Z⊥ θ̂``. Each configuration c is then reduced to one signed
-number, two ways:
+The size of a residual hides its sign (a backlash step, a cyclic sine, a
+compliance slope all look like clouds). For a fitted model (weighted residual
+``r``) and a candidate with columns ``Z``, the part the model cannot absorb is
+``Z⊥`` (as in the candidate tests), its fit to the residual ``θ̂ = Z⊥⁺ r`` and
+the displacement it explains ``f = Z⊥ θ̂``. Each configuration c is reduced to
+one signed number:
 
-* an effect on joint k is read as an equivalent joint error: on the joint's
-  own direction ``g_c = ∂x_c/∂q_k`` (a central difference of the model's
-  marker positions), the fitted curve ``g_cᵀ f_c / g_cᵀ g_c`` and the
-  residual ``g_cᵀ r_c / g_cᵀ g_c`` (mdeg, or µm for a prismatic joint);
-* any other effect (thermal, a user effect on no joint) along the fitted
-  displacement itself: ``‖f_c‖`` and ``f_cᵀ r_c / ‖f_c‖`` (mm): its size,
-  not its sign.
+* an effect on joint k as an equivalent joint error along ``g_c = ∂x_c/∂q_k``
+  (central difference): fitted ``g_cᵀ f_c / g_cᵀ g_c`` and residual
+  ``g_cᵀ r_c / g_cᵀ g_c`` (mdeg, or µm for a prismatic joint);
+* any other effect along the fitted displacement: ``‖f_c‖`` and
+  ``f_cᵀ r_c / ‖f_c‖`` (mm), its size, not its sign.
 
-``r`` is the residual of the model without the candidate, so it already
-holds what the candidate would explain: the points scatter about the curve
-when the candidate has the right shape.
-
-The variable on the horizontal axis is the configuration variable
-(:func:`~doe_calib.diagnosis.variables.configuration_variables`) that the
-fitted curve follows best (adjusted R² of the same smooth fit as
-:func:`~doe_calib.diagnosis.variables.follows`): the joint angle for a sine,
-the torque or approach side for backlash, the torque for a compliance.
+The points scatter about the curve when the candidate has the right shape.
+The horizontal axis is the configuration variable the fitted curve follows
+best (adjusted R² of :func:`~doe_calib.diagnosis.variables.follows`' smooth fit).
 """
 from __future__ import annotations
 
@@ -34,9 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from doe_calib.diagnosis.effect_tests import candidate_effects, fitted_basis, projected_columns
-from doe_calib.diagnosis.variables import configuration_variables, smooth_basis
+from doe_calib.diagnosis.effect_tests import failure_note
+from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.errors import DoeCalibError, DoeCalibWarning
+from doe_calib.estimation.effect_signature import candidate_effects, fitted_basis, projected_columns
 from doe_calib.model.effects import joint_index
 from doe_calib.model.evaluation import marker_positions
 
@@ -147,11 +138,7 @@ class AddedVariables:
 
     def note(self) -> str:
         """The failed plots in words (empty when none failed)."""
-        if not self.failed:
-            return ""
-        n = len(self.failed)
-        return (f"{n} added-variable plot{'s' if n > 1 else ''} could not be computed: "
-                + ", ".join(f"{s}: {why}" for s, why in self.failed))
+        return failure_note(self.failed, "added-variable plot")
 
 
 def strongest_added_variables(diagnosis, model, measurements, fit, top: int = 4,
@@ -205,22 +192,11 @@ def _joint_direction(model, measurements, values, k) -> np.ndarray:
 
 
 def _best_variable(fitted, variables):
-    """The configuration variable the fitted curve follows best (adjusted R²)."""
+    """The configuration variable the fitted curve follows best (adjusted R² of
+    :func:`~doe_calib.diagnosis.variables.follows`), else the measurement order."""
     ok = np.isfinite(fitted)
-    y = fitted[ok]
-    best, best_r2 = None, -np.inf
-    for name, (v, _, is_angle) in variables.items():
-        if name == "measurement order":
-            continue
-        x = smooth_basis(np.asarray(v, float)[ok], is_angle)
-        k = np.linalg.matrix_rank(x)
-        tot = float(((y - y.mean()) ** 2).sum())
-        if tot == 0 or len(y) <= k + 1:
-            continue
-        fit = x @ np.linalg.lstsq(x, y, rcond=None)[0]
-        r2 = 1 - (1 - (1 - float(((y - fit) ** 2).sum()) / tot)) * (len(y) - 1) / (len(y) - k)
-        if r2 > best_r2:
-            best, best_r2 = name, r2
-    if best is None:
-        best = "measurement order"
-    return best, variables[best]
+    best = follows(fitted[ok], {name: (np.asarray(v, float)[ok], unit, is_angle)
+                                for name, (v, unit, is_angle) in variables.items()
+                                if name != "measurement order"})
+    name = best[0].variable if best else "measurement order"
+    return name, variables[name]

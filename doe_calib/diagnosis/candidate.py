@@ -1,12 +1,7 @@
 """One candidate effect as a diagnosis reports it: its test, its fitted size, the decision.
 
-A :class:`Candidate` is what a researcher questions from a notebook:
-``diagnosis.candidates[0]`` answers with the effect, its parameters, their
-fitted size ± std in display units (deg, mm, µrad/(N·m), …), the score test
-(F, its two degrees of freedom, raw and Bonferroni-adjusted p), the share of
-the residual it explains, the cross-validated RMS before → after, and whether
-it is proposed or why not. It is plain data: reading one from JSON needs no
-model and no effect file.
+Plain data (``diagnosis.candidates[0]`` in a notebook): reading one from JSON
+needs no model and no effect file.
 """
 from __future__ import annotations
 
@@ -70,17 +65,13 @@ class Candidate:
         1-based joint the effect sits on.
     words : str
         The effect in words, e.g. "a cyclic (transmission) error of joint 3 (a3)".
-    parameters : tuple of str
-        Its parameters' names.
-    units : tuple of str
-        Their display units.
+    parameters, units : tuple of str
+        Its parameters' names and display units.
     n_parameters : int
         Columns the effect adds.
-    rank : int
-        Columns left once what the model already absorbs is projected out:
-        the numerator degrees of freedom of F.
-    dof : int or None
-        Denominator degrees of freedom of F (3K − rank J − rank); None when read from a file without it.
+    rank, dof : int
+        Degrees of freedom of F: the columns left once what the model absorbs is projected
+        out, and 3K − rank J − rank (None when read from a file without it).
     statistic : float
         The score test's F.
     p_value, p_value_raw : float
@@ -95,15 +86,17 @@ class Candidate:
     cv_rms_before_mm : float
         Cross-validated RMS of the model without it, mm.
     cv_rms_mm : float or None
-        Cross-validated RMS with it, mm; None when not cross-validated
-        (weaker evidence than those that were), NaN when its fit failed.
+        Cross-validated RMS with it, mm; None when not cross-validated, NaN when its fit
+        failed.
     sizes : tuple of FittedSize
         Its parameters fitted on all data (cross-validated candidates only).
     proposed : bool
-    why_not : str
-        Why it is not proposed, in words ("" when it is).
-    implausible : str
-        What is physically implausible about its fitted size ("" when nothing).
+    why_not, implausible : str
+        Why it is not proposed, and what is physically implausible about its fitted size,
+        in words ("" when it is, or nothing is).
+    detectability : Detectability or None
+    absorbed_by : tuple of str
+        The model's own parameters that absorb most of its signature (significant ones only).
     """
 
     effect: str
@@ -288,6 +281,14 @@ def why_not(p_value, cv_rms_mm, implausible, cv_rms_before_mm, level, min_gain, 
     return f"{proposed_spec} predicts better" if proposed_spec else "not chosen"
 
 
+def rows_words(rows) -> str:
+    """Fitted rows (dicts of name, value, std or None, unit) in words, e.g.
+    "w_a2 = 0.012 ± 0.001 deg; …"."""
+    return "; ".join(f"{r['name']} = {r['value']:.3g}"
+                     + (f" ± {r['std']:.2g}" if r["std"] is not None else "")
+                     + f" {r['unit']}" for r in rows)
+
+
 def _parameters(spec, robot, registry=None) -> tuple:
     """Names and display units of the effect's parameters (cheap: no model is built)."""
     try:
@@ -299,29 +300,10 @@ def _parameters(spec, robot, registry=None) -> tuple:
 
 def candidate_records(tests, robot, words, cv_rms_before_mm: float, level: float,
                       min_gain: float, proposed: str | None, registry=None) -> tuple:
-    """The candidates of a diagnosis, from its tests (``CandidateTest``, ranked).
-
-    Parameters
-    ----------
-    tests : sequence of CandidateTest
-    robot : Robot
-        For the effects' parameter names and units.
-    words : sequence of str
-        Each test's effect in words.
-    cv_rms_before_mm : float
-        The model's cross-validated RMS without any candidate, mm.
-    level, min_gain : float
-        The diagnosis's significance level and material gain.
-    proposed : str or None
-        The proposed candidate's spec.
-    registry : EffectRegistry, optional
-        Names the effects (default the built-in ones): pass the diagnosis's own
-        registry when user effects were tested.
-
-    Returns
-    -------
-    tuple of Candidate, in the order of ``tests``.
-    """
+    """The candidates of a diagnosis from its ranked tests (``CandidateTest``), in their order:
+    ``words`` each effect in words, ``cv_rms_before_mm`` the model's cross-validated RMS (mm),
+    ``level`` and ``min_gain`` the diagnosis's, ``proposed`` the proposed spec or None,
+    ``registry`` what names the effects (default the built-in one)."""
     out = []
     for t, text in zip(tests, words):
         names, units = _parameters(t.spec, robot, registry)

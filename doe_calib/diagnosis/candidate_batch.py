@@ -1,48 +1,28 @@
 """Every candidate effect in one model: their columns from one CasADi build, not one each.
 
-Diagnosis asks, for each candidate effect ``e`` not in the fitted model, the
-weighted columns ``Z = ∂r/∂θ_e`` of ``model + e`` at the fit (the candidate's
-parameters ``θ_e`` at nominal). Building ``model + e`` for every candidate
-re-derives the whole chain and its Jacobian some seventy times. Here the
-model and every candidate make one chain, each candidate reading its own
-copy of its parameters (shapes of one effect share parameter names, so each
-candidate's are tagged ``b<batch>c<i>:``; each batch is built afresh, from the
-effects' code as it is). Every catalogue effect is inert at its
-nominal parameters (a zero correction, an identity placement), so with every
-candidate at nominal the chain is the model's, and along ``θ_e`` alone, the
-others at nominal, it is ``model + e``'s: its columns for ``θ_e`` are exactly
-``model + e``'s. That is checked on the data (the positions at nominal must be
-the model's, :meth:`CandidateBatch.inert`): a batch that fails it, or cannot be
-built, is split until the candidate at fault is alone (:func:`batched_columns`),
-and that one is built by itself, as without a batch.
-
-The same holds away from nominal: :meth:`CandidateBatch.augmented` is
-``model + e`` made from the batch's Functions (the other candidates' parameters
-held at nominal fold away: the same instructions as ``model + e`` built alone),
-so that the candidates' fits for cross-validation need no chain built each.
-
-Refine grows the model by one of these candidates at a time, and tests the
-others again: :meth:`CandidateBatch.within` sees the same batch from the grown
-model (the chosen candidates' parameters become the base's, at its fitted
-values; the others still at nominal), so one batch serves every step. The
-chain is then the grown model's up to the order in which the effects' joint
-corrections and deflections are summed (rounding, ~1e-16); a chosen effect that
-corrects a placement (whose composition order matters) is not seen this way.
+Diagnosis needs, for each candidate effect ``e`` not in the fitted model, the
+weighted columns ``Z = ∂r/∂θ_e`` of ``model + e`` at the fit. Here the model
+and every candidate make one chain, each candidate reading its own tagged copy
+of its parameters (``b<batch>c<i>:``; each batch built afresh from the
+effects' code). Every catalogue effect is inert at its nominal parameters (a
+zero correction, an identity placement), so along ``θ_e`` alone the chain is
+``model + e``'s and so are its columns. That is checked on the data
+(:meth:`CandidateBatch.inert`); a batch that fails it, or cannot be built, is
+split until the candidate at fault is alone and built by itself
+(:func:`batched_columns`).
 """
 from __future__ import annotations
 
-import functools
 import itertools
 from dataclasses import dataclass, replace
 
-import casadi as ca
 import numpy as np
 
 from doe_calib.errors import DoeCalibError
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects.base import Effect
 from doe_calib.model.evaluation import marker_positions
-from doe_calib.model.marker_model import Model, build_model, describe_model
+from doe_calib.model.marker_model import Model, build_model
 
 _BATCHES = itertools.count()
 
@@ -106,52 +86,13 @@ class CandidateBatch:
     effects: tuple
     model: Model
     blocks: tuple
-    base_index: tuple | None = None
-
-    def _base_index(self) -> np.ndarray:
-        """Where ``base``'s parameters sit among ``model``'s (the first ones unless grown)."""
-        return np.arange(self.base.n_parameters) if self.base_index is None else \
-            np.asarray(self.base_index)
 
     def values(self, base_values) -> np.ndarray:
-        """The batch's parameter values (SI): ``base_values`` in their places, each candidate
-        at nominal."""
+        """The batch's parameter values (SI): ``base_values`` first, each candidate at
+        nominal."""
         v = self.model.nominal().values.copy()
-        v[self._base_index()] = base_values
+        v[:self.base.n_parameters] = base_values
         return v
-
-    def within(self, model, effects) -> "CandidateBatch | None":
-        """This batch as ``model`` + ``effects``, when ``model`` is ``base`` grown by some of
-        this batch's candidates (none correcting a placement) and ``effects`` are among the
-        others; None otherwise (module notes)."""
-        if self.base_index is not None:  # seen from the model it was built for only
-            return None
-        key = [(type(e), e.spec()) for e in self.effects]
-        root = tuple(self.base.effects)
-        grown = tuple(model.effects)
-        if (model.robot is not self.base.robot or model.tool is not self.base.tool
-                or [(type(e), e.spec()) for e in grown[:len(root)]]
-                != [(type(e), e.spec()) for e in root]):
-            return None
-        inside, chosen = [], [(type(e), e.spec()) for e in effects]
-        for e in grown[len(root):]:
-            k = (type(e), e.spec())
-            if k not in key or type(e).placement is not Effect.placement:
-                return None
-            inside.append(key.index(k))
-        if any(k not in key or key.index(k) in inside for k in chosen):
-            return None
-        index = np.concatenate([np.arange(self.base.n_parameters)]
-                               + [np.arange(self.model.n_parameters)[self.blocks[i]]
-                                  for i in inside])
-        names = self.model.nominal().names
-        untagged = [names[i].split(":", 1)[1] if i >= self.base.n_parameters else names[i]
-                    for i in index]
-        if untagged != list(model.nominal().names):  # the grown model's parameters, in order
-            return None
-        return CandidateBatch(model, tuple(effects), self.model,
-                              tuple(self.blocks[key.index(k)] for k in chosen),
-                              tuple(index.tolist()))
 
     def inert(self, measurements, base_values) -> bool:
         """Whether, every candidate at nominal, the batch puts the markers where ``base`` does
@@ -166,44 +107,6 @@ class CandidateBatch:
         candidate at nominal: those of ``base + candidate`` when the batch is :meth:`inert`."""
         _, jac = weighted_residual(self.model, measurements, self.values(base_values))
         return [jac[:, b] for b in self.blocks]
-
-    def augmented(self, i: int) -> Model:
-        """``base + effects[i]``, its Functions made from the batch's (module notes)."""
-        description = describe_model(self.base.robot, self.base.tool,
-                                     tuple(self.base.effects) + (self.effects[i],))
-        index = np.r_[self._base_index(),
-                      np.arange(self.model.n_parameters)[self.blocks[i]]].tolist()
-        m = self.model
-        nominal = m.nominal().values
-        # markers and observation, evaluated the most, inlined on symbols: the other
-        # candidates' nominal constants fold away (x·0 = 0, x + 0 = x) as in model + e alone
-        ins = [ca.SX.sym(m.markers.name_in(k), m.markers.sparsity_in(k)) for k in range(3)]
-        p = ca.SX.sym("p", len(index))
-        full = ca.SX(ca.DM(nominal))
-        full[index] = p
-        (x,) = m.markers.call([*ins, full])
-        names = m.markers.name_in()
-        markers = ca.Function("markers", [*ins, p], [x], names, ["x"])
-        # the batch's own observation (its Jacobian from the flange's twist when that is
-        # shorter), its columns for p kept: the instructions of model + e built alone
-        x_obs, jac = m.observation.call([*ins, full])
-        observation = ca.Function("observation", [*ins, p], [x_obs, ca.densify(jac[:, index])],
-                                  names, ["x", "B"])
-        # the others, seldom evaluated, call the batch's own with p placed among the constants
-        fixed = nominal.copy()
-        fixed[index] = 0.0
-        select = ca.DM(ca.Sparsity.triplet(len(nominal), len(index), index,
-                                           list(range(len(index)))), 1.0)
-
-        def restrict(f, jacobian_outputs):
-            args = [ca.MX.sym(f.name_in(k), f.sparsity_in(k)) for k in range(f.n_in())]
-            args[3] = ca.MX.sym("p", len(index))
-            outs = f.call([*args[:3], ca.DM(fixed) + ca.mtimes(select, args[3]), *args[4:]])
-            outs = [o[:, index] if k in jacobian_outputs else o for k, o in enumerate(outs)]
-            return ca.Function(f.name(), args, outs, f.name_in(), f.name_out())
-
-        return Model(description, markers, observation, restrict(m.point, (1,)),
-                     restrict(m.point_robot, (1,)), restrict(m.flange, ()))
 
 
 def candidate_batch(model, effects) -> CandidateBatch:
@@ -227,27 +130,12 @@ def candidate_batch(model, effects) -> CandidateBatch:
     return CandidateBatch(model, tuple(effects), big, tuple(blocks))
 
 
-def _seen_from(batch, model, measurements, values, effects):
-    """``batch`` (built for a model ``model`` grew from) as ``model`` + ``effects`` when it
-    holds them and is inert at ``values`` on ``measurements``, else None."""
-    try:
-        view = None if batch is None else batch.within(model, effects)
-        return view if view is not None and view.inert(measurements, values) else None
-    except (DoeCalibError, ValueError, np.linalg.LinAlgError):  # then as without it
-        return None
-
-
-def batched_columns(model, measurements, values, effects, batch=None) -> list:
+def batched_columns(model, measurements, values, effects) -> list:
     """Each candidate's weighted columns Z (3K, q) at ``values`` (SI, the fit of ``model``), or
     None for a candidate to be built alone: a group whose batch cannot be built or is not
-    inert is split in two, down to single candidates. ``batch``: a :class:`CandidateBatch`
-    of a model ``model`` grew from (refine's first), used when it holds every candidate
-    (:meth:`CandidateBatch.within`)."""
+    inert is split in two, down to single candidates."""
     if not effects:
         return []
-    view = _seen_from(batch, model, measurements, values, effects)
-    if view is not None:
-        return view.columns(measurements, values)
     try:
         batch = candidate_batch(model, effects)
         if batch.inert(measurements, values):
@@ -259,23 +147,3 @@ def batched_columns(model, measurements, values, effects, batch=None) -> list:
     half = len(effects) // 2
     return (batched_columns(model, measurements, values, effects[:half])
             + batched_columns(model, measurements, values, effects[half:]))
-
-
-def grown_model_builders(model, effects, measurements, values, batch=None) -> list:
-    """A builder (no argument → ``model + e``) for each of ``effects``: through one batch
-    when it builds and is inert at ``values`` (SI) on ``measurements``' configurations, else
-    built one by one; ``batch``: as :func:`batched_columns`'s, its Functions used when it
-    holds them. Builders, so that a caller can fit one grown model while it builds the next."""
-    if not effects:
-        return []
-    view = _seen_from(batch, model, measurements, values, effects)
-    if view is not None:
-        return [functools.partial(view.augmented, i) for i in range(len(effects))]
-    try:
-        batch = candidate_batch(model, effects)
-        if batch.inert(measurements, values):
-            return [functools.partial(batch.augmented, i) for i in range(len(effects))]
-    except (DoeCalibError, ValueError):
-        pass
-    return [functools.partial(build_model, model.robot, model.tool, tuple(model.effects) + (e,))
-            for e in effects]

@@ -1,17 +1,12 @@
 """The chosen candidates scored: each grown model built, fitted, then cross-validated.
 
-Every chosen candidate of a diagnosis is fitted as the model grown by it, from
-the model's own fit, and its cross-validated RMS computed
-(:func:`~doe_calib.diagnosis.cross_validation.cross_validated_rms`). The
-candidates are independent of each other, and CasADi evaluates without
-Python's lock: ``workers`` threads fit them at once, each in its own
-evaluation workspace (:func:`~doe_calib.model.evaluation.thread_workspace`),
-while the calling thread builds the next grown model (CasADi's symbolic
-construction is not thread-safe: only the calling thread builds; the workers
-only evaluate). The scores are those of fitting one after another, bit for
-bit: no fit reads another's state. The toolkit's warnings of these fits are held back, as by
-:func:`~doe_calib.estimation.identify.identify_quietly`, once for every thread
-(a ``warnings.catch_warnings`` per thread would race on the global filters).
+The candidates are independent and CasADi evaluates without Python's lock:
+``workers`` threads fit them at once, each in its own evaluation workspace
+(:func:`~doe_calib.model.evaluation.thread_workspace`), while the calling
+thread builds the next grown model (CasADi's symbolic construction is not
+thread-safe). The scores are those of fitting one after another, bit for bit.
+The toolkit's warnings of these fits are held back once for every thread (a
+``warnings.catch_warnings`` per thread would race on the global filters).
 """
 from __future__ import annotations
 
@@ -21,10 +16,11 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 from doe_calib.diagnosis.cross_validation import cross_validated_rms
-from doe_calib.diagnosis.effect_tests import grown_parameters
 from doe_calib.errors import DoeCalibError, DoeCalibWarning
+from doe_calib.estimation.effect_signature import grown_parameters
 from doe_calib.estimation.identify import FitSettings, identify
 from doe_calib.estimation.plausibility import beyond_plausible, out_of_bounds, value_words
+from doe_calib.model.marker_model import build_model
 
 #: Threads at most by default: beyond, the fits' Python parts wait on each other.
 MAX_WORKERS = 4
@@ -35,14 +31,10 @@ GROWN = FitSettings(select="none", register=False)
 
 @dataclass(frozen=True)
 class CandidateScore:
-    """One grown model's fit and cross-validated RMS.
+    """One grown model's cross-validated RMS and its effect's fitted parameters.
 
     Attributes
     ----------
-    model : Model
-        The grown model.
-    fit : IdentificationResult
-        The grown model's fit to the screening readings.
     cv_rms_mm : float
         Its cross-validated RMS per coordinate, mm.
     rows : tuple of dict
@@ -51,67 +43,42 @@ class CandidateScore:
         Words on those beyond their bounds or plausible range ("" when none).
     """
 
-    model: object
-    fit: object
     cv_rms_mm: float
     rows: tuple
     odd: str
 
 
-def default_workers() -> int:
-    """Threads for the candidates' fits: the machine's cores, at most :data:`MAX_WORKERS`."""
-    return max(1, min(MAX_WORKERS, os.cpu_count() or 1))
-
-
-def score_candidates(builders, effects, params, measurements, folds,
+def score_candidates(model, effects, params, measurements, folds,
                      workers: int | None = None, progress=None) -> list:
-    """Build, fit and cross-validate each grown model.
+    """Build, fit and cross-validate each model grown from ``model`` by one of ``effects``.
 
-    Parameters
-    ----------
-    builders : sequence of callable
-        ``build()`` → the model grown by each candidate effect
-        (:func:`~doe_calib.diagnosis.candidate_batch.grown_model_builders`), called in
-        order by the calling thread.
-    effects : sequence of Effect
-        The effects, in the same order.
-    params : ParameterSet
-        The model's own fit: the grown models start from its values.
-    measurements : Measurements
-        The readings the candidates are fitted and cross-validated on.
-    folds : Folds
-        The cross-validation's folds.
-    workers : int, optional
-        Threads fitting at once (default :func:`default_workers`; 1: one after another).
-    progress : callable, optional
-        ``progress(done, total, note)`` as each candidate is scored, in order: the
-        candidates done, their number, the effect's spec.
+    The grown models start from ``params`` (``model``'s fit) and are fitted and
+    cross-validated over ``folds`` on ``measurements``; ``workers`` threads fit at once
+    (default: the machine's cores, at most :data:`MAX_WORKERS`; 1: one after another).
+    ``progress(done, total, spec)`` is told as each is scored, in order.
 
     Returns
     -------
     list of CandidateScore or None
-        In the order of ``builders``; None where the grown model's fit failed.
+        In the order of ``effects``; None where the grown model's fit failed.
     """
-    workers = default_workers() if workers is None else max(1, int(workers))
-    jobs = list(zip(builders, effects))
-    with warnings.catch_warnings():
+    workers = min(MAX_WORKERS, os.cpu_count() or 1) if workers is None else max(1, int(workers))
+    def grown(effect):
+        return build_model(model.robot, model.tool, tuple(model.effects) + (effect,))
+
+    with warnings.catch_warnings(), ThreadPoolExecutor(max(1, min(workers, len(effects)))) as pool:
         warnings.simplefilter("ignore", DoeCalibWarning)
-        if workers == 1 or len(jobs) < 2:
-            out = []
-            for i, (build, effect) in enumerate(jobs):
-                if progress:
-                    progress(i, len(jobs), effect.spec())
-                out.append(_score(build(), effect, params, measurements, folds))
-            return out
-        with ThreadPoolExecutor(min(workers, len(jobs))) as pool:
-            futures = [pool.submit(_score, build(), effect, params, measurements, folds)
-                       for build, effect in jobs]  # each built while the workers fit
-            out = []
-            for i, (future, (_, effect)) in enumerate(zip(futures, jobs)):
-                if progress:
-                    progress(i, len(jobs), effect.spec())
-                out.append(future.result())
-            return out
+        if workers == 1 or len(effects) < 2:  # in this thread, as the caller's own fits
+            scores = (_score(grown(e), e, params, measurements, folds) for e in effects)
+        else:  # each built while the workers fit
+            scores = (f.result() for f in [pool.submit(_score, grown(e), e, params, measurements,
+                                                       folds) for e in effects])
+        out = []
+        for i, effect in enumerate(effects):
+            if progress:
+                progress(i, len(effects), effect.spec())
+            out.append(next(scores))
+        return out
 
 
 def _score(big, effect, params, measurements, folds):
@@ -122,8 +89,8 @@ def _score(big, effect, params, measurements, folds):
         return None
     new = [n for n in fit.parameters.names if n not in params.names]
     rows, odd = fitted_rows(fit, new, effect)
-    return CandidateScore(big, fit, cross_validated_rms(big, measurements, fit.parameters,
-                                                        folds), rows, odd)
+    return CandidateScore(cross_validated_rms(big, measurements, fit.parameters, folds), rows,
+                          odd)
 
 
 def fitted_rows(fit, names, effect) -> tuple:

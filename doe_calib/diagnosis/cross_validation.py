@@ -1,30 +1,26 @@
 """Cross-validated RMS: how well a model predicts readings it was not fitted to.
 
-The readings are split into folds of whole groups; the model is refitted
-on all folds but one and predicts the marker positions of the held-out fold.
-The RMS of every held-out coordinate's error (mm) is the cross-validated
-RMS. Unlike the fit residual it rises when a model over-fits, so it ranks
-models with different numbers of parameters.
+The readings are split into folds of whole groups; the model is refitted on
+all folds but one and predicts the held-out fold. The RMS of every held-out
+coordinate's error (mm) rises when a model over-fits, so it ranks models with
+different numbers of parameters.
 
 The refit is linearised: from the fit on all data (weighted residual ``r``,
-Jacobian ``J`` of the free parameters), the training rows give one
-Gauss–Newton step ``δ = −J_T⁺ r_T`` and the held-out prediction error is
-``r_H + J_H δ``. For a model linear in its parameters this is the exact
-refit; the models here are close to linear around a fit (small
-corrections), and the cost is one Jacobian and one least-squares solve per
-fold instead of an identification.
+free Jacobian ``J``), one Gauss–Newton step on the training rows
+``δ = −J_T⁺ r_T`` gives the held-out error ``r_H + J_H δ``: exact for a model
+linear in its parameters, close for these (small corrections), at the cost of
+one least-squares solve per fold instead of an identification.
 
 What a group is (``grouping``):
 
 ``pose``
     a configuration with all its load cases and markers (K folds at random);
 ``session``
-    a measurement session (leave one session out): the test a user faces
-    when the robot is measured again another day;
+    a measurement session (leave one session out): the robot measured again
+    another day;
 ``region``
-    a region of joint space (K clusters of the poses' joint positions,
-    k-means on each joint scaled by its measured range): rewards what
-    extrapolates to configurations unlike the training ones;
+    a region of joint space (k-means on the joint positions scaled by their
+    range): rewards what extrapolates to unlike configurations;
 ``auto`` (default)
     ``session`` when the data hold several sessions, else ``pose``.
 """

@@ -13,11 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.diagnosis.candidate import candidate_records
-from doe_calib.diagnosis.candidate_batch import candidate_batch, grown_model_builders
+from doe_calib.diagnosis.candidate import candidate_records, rows_words
 from doe_calib.diagnosis.candidate_scoring import score_candidates
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
-from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
+from doe_calib.diagnosis.effect_tests import candidate_tests
 from doe_calib.diagnosis.outliers import gross_outliers, outlier_verdict
 from doe_calib.diagnosis.residuals import adequacy, flagged_poses, residuals
 from doe_calib.diagnosis.result import DiagnosisResult
@@ -25,7 +24,7 @@ from doe_calib.diagnosis.settings import DiagnosisSettings
 from doe_calib.diagnosis.sign_lead import sign_lead
 from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.design.detectability import SEPARATE
-from doe_calib.errors import DoeCalibError, ModelError
+from doe_calib.errors import ModelError
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.load_units import kgf_finding
 from doe_calib.estimation.sigma import resolve_sigma
@@ -55,16 +54,14 @@ def screening_set(measurements, limit: int = SCREENING_CONFIGURATIONS, seed: int
                     f"configurations); the adequacy test and the fit use every reading")
 
 
-def candidate_batch_for(model, measurements, registry=None):
-    """Every candidate effect of ``model`` (those :func:`diagnose` tests on ``measurements``)
-    in one :class:`~doe_calib.diagnosis.candidate_batch.CandidateBatch`, or None when they
-    cannot be built together: what :func:`diagnosis_step` takes as ``batch`` for ``model``
-    and the models grown from it."""
-    screen, _ = screening_set(measurements)
-    try:
-        return candidate_batch(model, candidate_effects(model, screen.configurations, registry))
-    except (DoeCalibError, ValueError):
-        return None
+def settled_fit(model, measurements, sigma=None, fit=None):
+    """σ settled as on the command line (:func:`~doe_calib.estimation.sigma.resolve_sigma`,
+    its ``.measurements`` the readings with it) and ``model``'s fit at that σ: ``fit`` when
+    the readings already had it, else identified here."""
+    settled = resolve_sigma(model, measurements, sigma, fit=fit)
+    if fit is None or settled.measurements is not measurements:
+        fit = identify_quietly(model, settled.measurements)
+    return settled, fit
 
 
 def describe(candidate, robot, registry=None) -> str:
@@ -104,12 +101,6 @@ def _cv_key(t) -> float:
     return float(f"{np.nan_to_num(t.cv_rms_mm, nan=np.inf):.9g}")
 
 
-def _proposal(tests, cv_rms, level, min_gain):
-    """The physically plausible material candidate with the lowest cross-validated RMS."""
-    return next((t for t in _material(tests, cv_rms, level, min_gain) if not t.implausible),
-                None)
-
-
 def _gross_errors(test, flagged, follow, n_poses):
     """Whether the misfit sits in a few poses that follow no variable."""
     excess = test.statistic - test.dof
@@ -143,13 +134,12 @@ def _adequate_why(test, s) -> str:
 
 
 def _is_adequate(test, proposed, s) -> bool:
-    """Adequate: χ² passes, or no material candidate and the misfit within the tolerance or
-    the practical size. With no σ given (σ̂ of the starting model's fit, which holds its
-    misfit) the χ² test cannot judge: adequate is then only that no candidate helps."""
+    """Adequate by the module's rules; with no σ given (σ̂ holds the model's own misfit),
+    only that no candidate helps."""
     if test.sigma_source == ESTIMATED:
         return proposed is None
     return test.adequate or (proposed is None and (test.ratio <= 1 + s.tolerance
-                                                   or test.practically_adequate(s.practical_um)))
+                                                   or test.misfit_um < s.practical_um))
 
 
 def _confounded_words(tests, proposed, level) -> str:
@@ -190,9 +180,7 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
     cv_words = f"cross-validated RMS {cv:.3g} mm ({folds.description})"
     if proposed is not None:
         words = describe(proposed, model.robot, registry)
-        size = "; ".join(f"{r['name']} = {r['value']:.3g}"
-                         + (f" ± {r['std']:.2g}" if r["std"] is not None else "")
-                         + f" {r['unit']}" for r in proposed.fitted[:4])
+        size = rows_words(proposed.fitted[:4])
         text = (f"{words[0].upper()}{words[1:]} is missing: adding {proposed.spec} lowers the "
                 f"{cv_words} to {proposed.cv_rms_mm:.3g} mm "
                 f"({100 * (1 - proposed.cv_rms_mm / cv):.0f} %) and accounts for "
@@ -255,19 +243,6 @@ def _chi2_record(test, s, repeated) -> dict:
             "repeated": None if repeated is None else repeated.to_dict()}
 
 
-def _outlier_result(model, measurements, res, test, cv, split, outliers, s, notes,
-                    repeated) -> DiagnosisResult:
-    """The diagnosis of data with gross outliers: they are named, no effect is proposed."""
-    flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
-    verdict = outlier_verdict(outliers, _adequacy_words(test))
-    return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, False,
-                           _chi2_record(test, s, repeated), (), (), tuple(flagged),
-                           s.level, verdict, None, int(res.weighted.size),
-                           cv_grouping=split.description, min_gain=s.min_gain,
-                           gross_errors=tuple(dict.fromkeys(o.pose for o in outliers)),
-                           notes=tuple(n for n in notes if n), outliers=outliers)
-
-
 def diagnose(model, measurements, fit=None, *, settings: DiagnosisSettings | None = None,
              sigma: float | None = None, registry=None, progress=None) -> DiagnosisResult:
     """Diagnose ``model`` on ``measurements``.
@@ -299,32 +274,10 @@ def diagnose(model, measurements, fit=None, *, settings: DiagnosisSettings | Non
     -------
     DiagnosisResult
     """
-    return diagnosis_step(model, measurements, fit, settings, sigma=sigma,
-                          registry=registry, progress=progress)[0]
-
-
-def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | None = None, *,
-                   sigma: float | None = None, registry=None, progress=None, batch=None):
-    """:func:`diagnose` as each step of :func:`~doe_calib.diagnosis.refine.refine` runs it.
-
-    ``batch``: the candidates of a model ``model`` grew from, built once
-    (:func:`candidate_batch_for`); the candidates' columns and grown models come from it
-    when it holds them all, instead of from a batch built here.
-
-    Returns
-    -------
-    (DiagnosisResult, dict)
-        The diagnosis, and, when the candidates were fitted on every reading (no
-        screening subset), spec → (``model`` + the effect, its fit to ``measurements``
-        from this fit's values): what refine takes on, not fitting again.
-    """
     s = DiagnosisSettings() if settings is None else settings
     level, min_gain = s.level, s.min_gain
-    settled = resolve_sigma(model, measurements, sigma, fit=fit)
-    if settled.measurements is not measurements:  # σ settled here: fit at that σ
-        measurements, fit = settled.measurements, None
-    if fit is None:
-        fit = identify_quietly(model, measurements)
+    settled, fit = settled_fit(model, measurements, sigma, fit)
+    measurements = settled.measurements
     params = fit.parameters
     res = residuals(model, measurements, params.values)
     rank = int(params.free.sum())
@@ -339,26 +292,31 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     screen, screened = screening_set(measurements)
     split = make_folds(screen, s.folds, s.grouping)
     cv = cross_validated_rms(model, screen, params, split)
+    flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
+    chi2 = _chi2_record(test, s, settled.repeated)
     if outliers:  # no effect is tested on data an outlier pulls
-        return _outlier_result(model, measurements, res, test, cv, split, outliers, s,
-                               (units, screened, doubt, copies), settled.repeated), {}
-    tried = candidate_tests(model, screen, params, registry=registry, batch=batch)
+        verdict = outlier_verdict(outliers, _adequacy_words(test))
+        return DiagnosisResult(model.spec, res.rms_mm, cv, test.sigma_mm, False, chi2, (), (),
+                               tuple(flagged), level, verdict, None, int(res.weighted.size),
+                               cv_grouping=split.description, min_gain=min_gain,
+                               gross_errors=tuple(dict.fromkeys(o.pose for o in outliers)),
+                               notes=tuple(n for n in (units, screened, doubt, copies) if n),
+                               outliers=outliers)
+    tried = candidate_tests(model, screen, params, registry=registry)
     tests = list(tried.tests)
     chosen = _groups_to_try(tests, level, s.cv_top)
-    scored, fitted = {}, {}
+    scored = {}
     effects = [parse_effect(t.spec, registry=registry) for t in chosen]
-    builders = grown_model_builders(model, effects, screen, params.values, batch)
-    scores = score_candidates(builders, effects, params, screen, split, s.workers, progress)
+    scores = score_candidates(model, effects, params, screen, split, s.workers, progress)
     for t, score in zip(chosen, scores):
         if score is None:  # the grown model's fit failed
             scored[t.spec] = t.with_cv(float("nan"))
             continue
-        if screen is measurements:
-            fitted[t.spec] = (score.model, score.fit)
         scored[t.spec] = t.with_cv(score.cv_rms_mm, score.rows, score.odd)
     ranked = sorted(scored.values(), key=lambda t: (_cv_key(t), t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]
-    proposed = _proposal(ranked, cv, level, min_gain)
+    material = _material(ranked, cv, level, min_gain)
+    proposed = next((t for t in material if not t.implausible), None)  # the best plausible
     adequate = _is_adequate(test, proposed, s)
     m = len(measurements.configurations)
     size = np.bincount(res.config, (res.weighted ** 2).sum(axis=1), minlength=m)
@@ -367,13 +325,12 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     variables = {k: (v[0][used], v[1], v[2]) for k, v in
                  configuration_variables(model.robot, measurements.configurations).items()}
     follow = follows(size[used] / count[used], variables)
-    flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
     n_poses = len(set(measurements.configurations.pose))
     gross = not adequate and proposed is None and _gross_errors(test, flagged, follow, n_poses)
     verdict = _verdict_words(model, test, adequate, cv, split, ranked, proposed, follow, flagged,
                              gross, s, registry) \
         + _confounded_words(ranked, proposed, level)
-    odd = next((t for t in _material(ranked, cv, level, min_gain) if t.implausible), None)
+    odd = next((t for t in material if t.implausible), None)
     lead = "" if odd is None else sign_lead(model, odd, proposed, cv, split,
                                             describe(odd, model.robot, registry), registry)
     if lead and proposed is None:
@@ -384,7 +341,6 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
     elif odd is not None and (proposed is None or odd.cv_rms_mm < proposed.cv_rms_mm):
         verdict += (f" Not proposed although it predicts better (cross-validated RMS "
                     f"{odd.cv_rms_mm:.3g} mm): {odd.spec}, {odd.implausible}.")
-    chi2 = _chi2_record(test, s, settled.repeated)
     spec = None if proposed is None else proposed.spec
     candidates = candidate_records(ranked, model.robot,
                                    [describe(t, model.robot, registry) for t in ranked],
@@ -395,4 +351,4 @@ def diagnosis_step(model, measurements, fit=None, settings: DiagnosisSettings | 
                            cv_grouping=split.description, min_gain=min_gain,
                            gross_errors=tuple(p["pose"] for p in flagged) if gross else (),
                            notes=tuple(n for n in (units, screened, tried.note(), doubt, copies)
-                                       if n)), fitted
+                                       if n))

@@ -23,20 +23,13 @@ import numpy as np
 from scipy.special import fdtrc
 
 from doe_calib.diagnosis.candidate_batch import batched_columns
-from doe_calib.design.detectability import (MOSTLY_ABSORBED, Detectability, absorbing_parameters,
-                                            assess)
+from doe_calib.design.detectability import MOSTLY_ABSORBED, absorbing_parameters, assess
 from doe_calib.errors import DoeCalibError
-from doe_calib.estimation.effect_signature import (augmented, candidate_effects, fitted_basis,
-                                                   grown_parameters, projected_columns)
+from doe_calib.estimation.effect_signature import (candidate_effects, fitted_basis,
+                                                   projected_columns)
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects import joint_index
 from doe_calib.model.marker_model import describe_model
-
-#: The effect signature (:mod:`doe_calib.estimation.effect_signature`) is read from here too,
-#: beside the tests built on it.
-__all__ = ["CandidateTest", "CandidateTests", "SIGNIFICANT_RAW", "augmented",
-           "candidate_columns", "candidate_effects", "candidate_tests", "fitted_basis",
-           "grown_parameters", "projected_columns", "test_candidates"]
 
 
 @dataclass(frozen=True)
@@ -68,39 +61,28 @@ class CandidateTest:
         when a value is physically implausible."""
         return replace(self, cv_rms_mm=cv_rms_mm, fitted=tuple(fitted), implausible=implausible)
 
-    def to_dict(self) -> dict:
-        return {"effect": self.effect, "spec": self.spec, "joint": self.joint,
-                "n_parameters": self.n_parameters, "rank": self.rank,
-                "statistic": self.statistic, "p_value": self.p_value,
-                "p_value_raw": self.p_value_raw, "explained_fraction": self.explained_fraction,
-                "absorbed_fraction": self.absorbed_fraction, "log10_p": self.log10_p,
-                "cv_rms_mm": self.cv_rms_mm, "fitted": list(self.fitted),
-                "implausible": self.implausible, "dof": self.dof,
-                "detectability": None if self.detection is None else self.detection.to_dict(),
-                "absorbed_by": list(self.absorbed_by)}
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "CandidateTest":
-        fields = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
-        fields["fitted"] = tuple(fields.get("fitted", ()))
-        fields["absorbed_by"] = tuple(fields.get("absorbed_by", ()))
-        if d.get("detectability"):
-            fields["detection"] = Detectability.from_dict(d["detectability"])
-        return cls(**fields)
-
 
 def _failure(exc) -> str:
     return str(exc) or type(exc).__name__
 
 
-def candidate_columns(model, measurements, params, effects, q_basis, batch=None) -> tuple:
+def failure_note(failed, what: str) -> str:
+    """``failed`` (``(spec, reason)`` pairs) in words: "2 {what}s could not be computed:
+    spec: reason, …" ("" when none failed)."""
+    if not failed:
+        return ""
+    n = len(failed)
+    return (f"{n} {what}{'s' if n > 1 else ''} could not be computed: "
+            + ", ".join(f"{s}: {why}" for s, why in failed))
+
+
+def candidate_columns(model, measurements, params, effects, q_basis) -> tuple:
     """Every candidate's columns ``(effect, Z, Z⊥)`` (:func:`projected_columns`), and
     ``(spec, reason)`` of those that could not be built.
 
     The columns come from one batch of the candidates
     (:func:`~doe_calib.diagnosis.candidate_batch.batched_columns`); a candidate that does
-    not fit in it is built alone. ``batch``: a batch of a model ``model`` grew from
-    (:func:`~doe_calib.diagnosis.candidate_batch.batched_columns`).
+    not fit in it is built alone.
     """
     ok, failed = [], []
     names = set(model.description.nominal().names)
@@ -113,8 +95,7 @@ def candidate_columns(model, measurements, params, effects, q_basis, batch=None)
         except (DoeCalibError, ValueError) as exc:
             failed.append((e.spec(), _failure(exc)))
     out = []
-    for e, z in zip(ok, batched_columns(model, measurements, params.values, ok,
-                                                  batch)):
+    for e, z in zip(ok, batched_columns(model, measurements, params.values, ok)):
         try:
             out.append((e, z, z - q_basis @ (q_basis.T @ z)) if z is not None else
                        (e, *projected_columns(model, measurements, params, e, q_basis)))
@@ -146,16 +127,13 @@ class CandidateTests:
 
     def note(self) -> str:
         """The failed candidates in words (empty when none failed)."""
-        if not self.failed:
-            return ""
-        n = len(self.failed)
-        return (f"{n} candidate{'s' if n > 1 else ''} could not be computed: "
-                + ", ".join(f"{s}: {why}" for s, why in self.failed)
-                + f" ({'they count' if n > 1 else 'it counts'} in the Bonferroni correction)")
+        note = failure_note(self.failed, "candidate")
+        return note and note + (f" ({'they count' if len(self.failed) > 1 else 'it counts'} "
+                                "in the Bonferroni correction)")
 
 
 def candidate_tests(model, measurements, params, effects=None,
-                    registry=None, batch=None) -> CandidateTests:
+                    registry=None) -> CandidateTests:
     """Score/F test of every candidate effect against the residual of ``params``.
 
     Parameters
@@ -169,10 +147,6 @@ def candidate_tests(model, measurements, params, effects=None,
         Candidates; default :func:`candidate_effects` of ``registry``.
     registry : EffectRegistry, optional
         Whose catalogue the default candidates come from (default the built-in one).
-    batch : CandidateBatch, optional
-        The candidates of a model ``model`` grew from, built once (refine's): their columns
-        come from it when it holds every candidate
-        (:meth:`~doe_calib.diagnosis.candidate_batch.CandidateBatch.within`).
 
     Returns
     -------
@@ -185,7 +159,6 @@ def candidate_tests(model, measurements, params, effects=None,
     r, q_basis = fitted_basis(model, measurements, params)
     rank_j = q_basis.shape[1]
     ss = float(r @ r)
-    raw = []
     jac = []  # the free weighted Jacobian, made once and only when words need it
 
     def jacobian():
@@ -193,39 +166,37 @@ def candidate_tests(model, measurements, params, effects=None,
             jac.append(weighted_residual(model, measurements, params.values)[1][:, params.free])
         return jac[0]
 
-    columns, failed = candidate_columns(model, measurements, params, effects, q_basis, batch)
+    columns, failed = candidate_columns(model, measurements, params, effects, q_basis)
+    n = max(len(columns) + len(failed), 1)  # Bonferroni over every candidate tried
+    out = []
     for e, z, zp in columns:
-        new = e.parameters(model.robot)
         norm2 = float((z ** 2).sum())
         absorbed = 1.0 - float((zp ** 2).sum()) / norm2 if norm2 > 0 else 1.0
         svd = np.linalg.svd(zp, full_matrices=False)
-        detection = assess(e.spec(), new, params, z, zp, jacobian, zp_svd=svd)
+        detection = assess(e.spec(), e.parameters(model.robot), params, z, zp, jacobian,
+                           zp_svd=svd)
         scale = np.sqrt(max(norm2, 1e-300) / max(z.shape[1], 1))
         u, s, _ = svd
         keep = s > 1e-6 * scale
         q = int(keep.sum())
         dof = len(r) - rank_j - q
+        f, log_p, frac, by = 0.0, 0.0, 0.0, ()
         if q == 0 or dof <= 0:
-            raw.append((e, z.shape[1], 0, 0.0, 0.0, 0.0, absorbed, None, detection, ()))
-            continue
-        dss = float(((u[:, keep].T @ r) ** 2).sum())
-        f = (dss / q) / max((ss - dss) / dof, 1e-300)
-        with np.errstate(divide="ignore"):  # −inf (p = 0) past underflow, no warning
-            log_p = float(np.log(fdtrc(q, dof, f)))
-        by = ()
-        if absorbed > MOSTLY_ABSORBED and log_p < np.log(SIGNIFICANT_RAW):
-            # what the model's own parameters made of the signature the residual asks for
-            theta = np.linalg.lstsq(z, r, rcond=None)[0]
-            by = tuple(absorbing_parameters(params, jacobian(), z @ theta))
-        raw.append((e, z.shape[1], q, f, log_p, dss / ss if ss > 0 else 0.0, absorbed, dof,
-                    detection, by))
-    n = max(len(raw) + len(failed), 1)
-    out = [CandidateTest(e.name, e.spec(),
-                         None if e.joint is None else joint_index(model.robot, e.joint) + 1,
-                         npar, q, float(f), float(min(1.0, np.exp(log_p) * n)),
-                         float(np.exp(log_p)), frac, absorbed, log_p / np.log(10), dof=dof,
-                         detection=detection, absorbed_by=by)
-           for e, npar, q, f, log_p, frac, absorbed, dof, detection, by in raw]
+            q, dof = 0, None
+        else:
+            dss = float(((u[:, keep].T @ r) ** 2).sum())
+            f = (dss / q) / max((ss - dss) / dof, 1e-300)
+            with np.errstate(divide="ignore"):  # −inf (p = 0) past underflow, no warning
+                log_p = float(np.log(fdtrc(q, dof, f)))
+            frac = dss / ss if ss > 0 else 0.0
+            if absorbed > MOSTLY_ABSORBED and log_p < np.log(SIGNIFICANT_RAW):
+                # what the model's own parameters made of the signature the residual asks for
+                theta = np.linalg.lstsq(z, r, rcond=None)[0]
+                by = tuple(absorbing_parameters(params, jacobian(), z @ theta))
+        out.append(CandidateTest(
+            e.name, e.spec(), None if e.joint is None else joint_index(model.robot, e.joint) + 1,
+            z.shape[1], q, float(f), float(min(1.0, np.exp(log_p) * n)), float(np.exp(log_p)),
+            frac, absorbed, log_p / np.log(10), dof=dof, detection=detection, absorbed_by=by))
     return CandidateTests(tuple(sorted(out, key=lambda c: (c.log10_p, -c.statistic))),
                           tuple(failed))
 

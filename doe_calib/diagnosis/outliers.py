@@ -1,32 +1,23 @@
 """Gross outliers: single readings the rest of the data place far from where they were read.
 
 A reading's deletion residual ``e_i = y_i − x_i(p̂₍ᵢ₎)`` is its misfit under the
-fit to the *other* readings: an outlier cannot pull that fit towards itself.
-Under an adequate model ``‖e_i / σ_i‖² ~ χ²(3)`` (the leverage of one reading,
-about P/3K, makes it a few % larger at most; ignored), and over K readings the
-largest is judged by Bonferroni: ``K · P(χ²₃ > t_i) < level``.
+fit to the *other* readings, which an outlier cannot pull. Under an adequate
+model ``‖e_i / σ_i‖² ~ χ²(3)`` (leverage ignored: a few % at most), and the
+largest of K is judged by Bonferroni: ``K · P(χ²₃ > t_i) < level``.
 
-With σ estimated from the residuals of the fit, σ̂ holds the outlier and any
-missing effect too, and a pose an effect moves far is not told from an outlier by it. The
-yardstick is then the noise *within* poses: every joint-space effect (a
-compliance, a backlash, a cyclic error) moves the flange, so it moves a
-pose's markers rigidly; what a pose's best small rigid motion
-``e_j ≈ t + ω × x_j`` leaves of its residuals is noise (and marker-position
-error, fitted). Its mean square, over ``3n − rank`` degrees of freedom per
-pose (3 for three markers), is σ̂ free of the model's lacks, taken from the
-poses without suspects (externally studentised); a single marker
-(a lone SMR) has none, and with σ estimated its outliers cannot be told from
-an effect (give σ).
+With σ estimated, σ̂ holds the outliers and any missing effect too. The
+yardstick is then the noise *within* poses: a joint-space effect moves a
+pose's markers rigidly, so what each pose's best small rigid motion
+``e_j ≈ t + ω × x_j`` leaves (``3n − rank`` dof per pose) is noise, taken from
+the poses without suspects. A single marker per pose has none: give σ.
 
-The suspects are found by rounds: the readings beyond the threshold (the
-:data:`MAX_OUTLIERS` worst when more are: an outlier pulls the fit and takes
-other readings past the threshold with it) are left out, the model refitted,
-the threshold applied again to every reading, until the set settles. They are called outliers only when they are few
-(:data:`MAX_OUTLIERS`) and the other readings then fit within the noise (the
-adequacy rules of :func:`~doe_calib.diagnosis.diagnose.diagnose`; with σ
-estimated, the F test of the rigid part of the residuals against the
-within-pose part): a missing effect leaves many readings beyond the
-threshold, or a rest that still does not fit, and is left to the effect tests.
+Suspects are found by rounds: the readings beyond the threshold (the
+:data:`MAX_OUTLIERS` worst when more are) are left out, the model refitted and
+the threshold applied again, until the set settles. They are outliers only
+when few (:data:`MAX_OUTLIERS`) and the other readings then fit within the
+noise (:func:`~doe_calib.diagnosis.diagnose.diagnose`'s adequacy rules; with σ
+estimated, the F test of the rest's rigid part against the within-pose part);
+otherwise the effect tests judge.
 """
 from __future__ import annotations
 
@@ -56,14 +47,11 @@ class Outlier:
 
     Attributes
     ----------
-    pose : str
-        Its pose id.
-    marker : str
-        Its marker.
+    pose, marker : str
+        Its pose id and marker.
     line : int
-        Its line in ``source`` (0 when not from a file).
+        Its line in ``source``, the file it was read from (0 when not from a file).
     source : str
-        The file it was read from.
     size_mm : float
         Length of its deletion residual, mm.
     size_sigma : float

@@ -1,24 +1,20 @@
 """``refine``: forward selection of effects on cross-validated error.
 
-From the starting model, add the candidate effect that is significant
-(Bonferroni over every candidate and shape tried) and lowers the
-cross-validated RMS the most, by at least a material margin; re-identify;
-repeat until no candidate does. Adequacy (residual against the noise) is
-reported at each step but does not stop the growth: on a real robot several
-effects add up, and each that predicts better is kept. Each step records the
-effect, its fitted size ± std with unit, the fit, cross-validated and (when
-a validation set is given) validation RMS: the error falling step by step.
+From the starting model, add the effect :func:`~doe_calib.diagnosis.diagnose.diagnose`
+proposes, re-identify, and repeat until none is proposed. Adequacy is reported at
+each step but does not stop the growth: on a real robot several effects add up.
+Each step records the effect, its fitted size ± std with unit, the fit,
+cross-validated and (with a validation set) validation RMS.
 """
 from __future__ import annotations
 
 from doe_calib.diagnosis.cross_validation import validation_rms
-from doe_calib.diagnosis.effect_tests import augmented
 from doe_calib.diagnosis.candidate_scoring import GROWN
-from doe_calib.diagnosis.diagnose import candidate_batch_for, diagnosis_step
+from doe_calib.diagnosis.diagnose import diagnose, settled_fit
 from doe_calib.diagnosis.refine_result import RefineResult, RefineStep
 from doe_calib.diagnosis.settings import RefineSettings
+from doe_calib.estimation.effect_signature import augmented
 from doe_calib.estimation.identify import identify_quietly
-from doe_calib.estimation.sigma import resolve_sigma
 from doe_calib.io.repeated_readings import copies_words
 from doe_calib.model.effects import parse_effect
 
@@ -56,9 +52,7 @@ def refine(model, measurements, validation=None, *, settings: RefineSettings | N
         σ per coordinate, m, for every reading (replacing the readings' own).
     registry : EffectRegistry, optional
         Whose catalogue the candidate effects come from (default the built-in one;
-        user effects: ``DEFAULT_REGISTRY.with_file(path)``). A candidate whose
-        fitted values are physically implausible (its parameters' bounds and
-        plausible ranges, :func:`~doe_calib.diagnosis.diagnose.diagnose`) is not added.
+        user effects: ``DEFAULT_REGISTRY.with_file(path)``).
     progress : callable, optional
         ``progress(done, total, note)`` after each step: effects added so far, None
         (the steps are not known ahead), the model and its cross-validated RMS.
@@ -66,25 +60,13 @@ def refine(model, measurements, validation=None, *, settings: RefineSettings | N
     Returns
     -------
     RefineResult
-
-    Notes
-    -----
-    The starting model's candidates are built once, in one batch; every step takes its
-    candidate columns and grown models from it
-    (:meth:`~doe_calib.diagnosis.candidate_batch.CandidateBatch.within`), and the chosen
-    candidate's fit from the step's diagnosis
-    (:func:`~doe_calib.diagnosis.diagnose.diagnosis_step`).
     """
     s = RefineSettings() if settings is None else settings
-    settled = resolve_sigma(model, measurements, sigma, fit=fit)
-    if settled.measurements is not measurements:  # σ settled here: fit at that σ
-        measurements, fit = settled.measurements, None
-    fit = identify_quietly(model, measurements) if fit is None else fit
+    settled, fit = settled_fit(model, measurements, sigma, fit)
+    measurements = settled.measurements
     steps, added, reason, effect = [], None, "starting model", None
-    batch = candidate_batch_for(model, measurements, registry)
     while True:
-        diag, fitted = diagnosis_step(model, measurements, fit, s, registry=registry,
-                                      batch=batch)  # the chosen candidate is not fitted again
+        diag = diagnose(model, measurements, fit, settings=s, registry=registry)
         val = validation_rms(model, fit.parameters.values, validation) \
             if validation is not None else None
         steps.append(RefineStep(model.spec, added, diag.rms_mm, diag.cv_rms_mm, val,
@@ -105,12 +87,8 @@ def refine(model, measurements, validation=None, *, settings: RefineSettings | N
         if len(steps) > s.max_steps:
             stopped = f"stopped after {s.max_steps} added effects ({best.spec} would be next)"
             break
-        if best.spec in fitted:  # the same fit: model + effect from this fit's values
-            model, fit = fitted[best.spec]
-        else:
-            model, start = augmented(model, fit.parameters, parse_effect(best.spec,
-                                                                         registry=registry))
-            fit = identify_quietly(model, measurements, start, settings=GROWN)
+        model, start = augmented(model, fit.parameters, parse_effect(best.spec, registry=registry))
+        fit = identify_quietly(model, measurements, start, settings=GROWN)
         added, effect = best.spec, best
         reason = (f"added {best.spec}, {best.words}: "
                   f"{_size_words(best.sizes)}; cross-validated RMS {diag.cv_rms_mm:.4g} → "

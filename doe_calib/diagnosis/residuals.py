@@ -50,6 +50,11 @@ def residuals(model, measurements, values) -> Residuals:
     return Residuals(e, e / measurements.sigma[:, None], measurements.config, pose)
 
 
+def residual_norms_mm(model, measurements, values) -> np.ndarray:
+    """3-D residual norm of each reading at parameter ``values`` (SI), shape (K,), mm."""
+    return np.linalg.norm(marker_residuals(model, measurements, values), axis=1) * 1000.0
+
+
 @dataclass(frozen=True)
 class Adequacy:
     """The χ² test of the residual against the measurement noise.
@@ -98,10 +103,6 @@ class Adequacy:
         effects of parameters held at nominal, σ a few % optimistic): this is that size.
         """
         return float(1e3 * self.sigma_mm * np.sqrt(max(self.ratio ** 2 - 1.0, 0.0)))
-
-    def practically_adequate(self, practical_um: float) -> bool:
-        """Whether the misfit beyond the noise (:attr:`misfit_um`) is below ``practical_um``."""
-        return self.misfit_um < practical_um
 
     def ratio_interval(self, confidence: float = 0.95) -> tuple:
         """Interval of the true σ over the assumed σ at ``confidence`` (from χ²(dof))."""

@@ -32,9 +32,8 @@ class DiagnosisResult:
         The σ per coordinate the model is tested against, mm: the readings' σ (given,
         per reading, from repeated readings when none is given, or estimated).
     adequate : bool
-        Residuals consistent with the noise: the χ² test at ``level`` passes,
-        or no candidate makes a material gain and either σ̂/σ ≤ 1 + ``chi2["tolerance"]``
-        or the misfit beyond the noise is below ``chi2["practical_um"]``.
+        Residuals consistent with the noise (the rules of
+        :func:`~doe_calib.diagnosis.diagnose.diagnose`).
     chi2 : dict
         ``statistic``, ``dof``, ``p_value``, ``sigma_source``, ``sigma_hat_mm``,
         ``sigma_ratio`` (σ̂/σ) and its 95 % ``sigma_ratio_interval``,
@@ -53,9 +52,8 @@ class DiagnosisResult:
     verdict : str
         The conclusion in plain words.
     proposed : str or None
-        The effect to add (model-string form): among the significant
-        candidates, the one with the lowest cross-validated RMS, if it lowers
-        it by at least ``min_gain``; None otherwise.
+        The effect to add (model-string form), or None (the rules of
+        :func:`~doe_calib.diagnosis.diagnose.diagnose`).
     cv_grouping : str
         What the cross-validation held out, in words.
     min_gain : float
@@ -90,11 +88,6 @@ class DiagnosisResult:
     gross_errors: tuple = ()
     notes: tuple = field(default=())
     outliers: tuple = ()
-
-    @property
-    def significant(self) -> list[Candidate]:
-        """Candidates significant at ``level`` (Bonferroni-adjusted), best first."""
-        return [c for c in self.candidates if c.p_value < self.level]
 
     @property
     def best(self) -> Candidate | None:

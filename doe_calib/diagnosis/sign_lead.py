@@ -9,6 +9,7 @@ accepts the reversed convention (``--approach-sign reversed``).
 """
 from __future__ import annotations
 
+from doe_calib.diagnosis.candidate import rows_words
 from doe_calib.errors import DoeCalibError
 from doe_calib.model.effects import parse_effect
 
@@ -41,33 +42,17 @@ def wrong_signs(candidate, robot, registry=None) -> list:
 
 
 def sign_lead(model, odd, proposed, cv, folds, words: str, registry=None) -> str:
-    """The verdict's lead when a sign-defined effect fits far best with the impossible sign:
-    what the sign means, the likely causes and the option that accepts the reversed
-    convention ("" otherwise).
-
-    Parameters
-    ----------
-    model : Model
-    odd : CandidateTest
-        The best material candidate whose fit is physically implausible.
-    proposed : CandidateTest or None
-        The best plausible material candidate.
-    cv : float
-        Cross-validated RMS of the model without either, mm.
-    folds : Folds
-        The cross-validation (its ``description`` is quoted).
-    words : str
-        ``odd`` in its effect's words (:func:`~doe_calib.diagnosis.diagnose.describe`).
-    registry : EffectRegistry, optional
-    """
+    """The verdict's lead when ``odd`` (the best material candidate, physically implausible)
+    fits far best with the impossible sign: what the sign means, the likely causes and the
+    option that accepts the reversed convention ("" otherwise). ``proposed``: the best
+    plausible material candidate or None; ``cv``: the model's cross-validated RMS, mm, over
+    ``folds``; ``words``: ``odd`` in its effect's words."""
     wrong = wrong_signs(odd, model.robot, registry)
     best_gain = 0.0 if proposed is None else cv - proposed.cv_rms_mm
     if not wrong or cv - odd.cv_rms_mm < LEAD_FACTOR * best_gain:
         return ""
     effect = parse_effect(odd.spec, registry=registry)
-    values = "; ".join(f"{r['name']} = {r['value']:.3g}"
-                       + (f" ± {r['std']:.2g}" if r["std"] is not None else "")
-                       + f" {r['unit']}" for _, r in wrong)
+    values = rows_words(r for _, r in wrong)
     meaning = "; ".join(dict.fromkeys(p.sign for p, _ in wrong if p.sign))
     other = "" if proposed is None else \
         (f", against {100 * best_gain / cv:.0f} % for the best plausible candidate, "

@@ -1,16 +1,13 @@
 """What the residual follows: the variables of each configuration and a smooth-fit test.
 
-The variables are the joint angles (deg; mm for prismatic joints), the
-applied wrench components (N, N·m), the joint torques they cause (N·m), the
-torques of the robot's own weight (N·m, when the URDF gives the masses), the
-temperature (°C, when measured), each joint's approach direction (+1/−1, when
-known and not always the same) and the order of measurement. A variable that
-barely varies (a torque of 1e-13 N·m where the others reach 100 N·m: round-off,
-not a signal) is left out. For each, the
-size of the residual at each configuration (mean of r² over its readings) is
-fitted by a smooth function of the variable (angles: sin/cos of one and two
-times the angle plus a line; others: a cubic); the adjusted R² says how much
-of the residual's variation that variable alone explains.
+The variables: joint angles (deg; mm for prismatic joints), applied wrench
+components (N, N·m), the joint torques they cause and those of the robot's own
+weight (N·m, when the URDF gives masses), temperature (°C, when measured), each
+joint's approach direction (±1, when it varies) and the measurement order. A
+variable that varies only by round-off next to its family is left out. The
+residual size per configuration (mean r² over its readings) is fitted by a
+smooth function of each (angles: a line and one and two harmonics; others: a
+cubic); the adjusted R² says how much of its variation that variable explains.
 """
 from __future__ import annotations
 
@@ -73,6 +70,15 @@ def configuration_variables(robot, configurations) -> dict:
             out[f"approach of q{k + 1} ({j.name})"] = (a, "", False)
     out["measurement order"] = (np.arange(len(configurations), dtype=float), "", False)
     return out
+
+
+def reading_columns(model, measurements) -> list[tuple]:
+    """The variables of :func:`configuration_variables` as one value per reading, labelled
+    with their unit: ``[(label, ndarray of shape (K,)), …]`` (what the residual figures
+    plot against)."""
+    variables = configuration_variables(model.robot, measurements.configurations)
+    return [(f"{name} ({unit})" if unit else name, v[measurements.config])
+            for name, (v, unit, _) in variables.items()]
 
 
 def _varies(v: np.ndarray, family: np.ndarray) -> bool:

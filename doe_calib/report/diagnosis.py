@@ -5,7 +5,7 @@ import numpy as np
 
 from doe_calib.diagnosis.added_variable import strongest_added_variables
 from doe_calib.diagnosis.residuals import residuals
-from doe_calib.diagnosis.residual_plot_data import reading_columns
+from doe_calib.diagnosis.variables import reading_columns
 from doe_calib.report.diagnosis_figures import (added_variable_panels, candidate_bars,
                                                 error_falling, residuals_by_direction)
 from doe_calib.report.figures import residual_scatter, to_png

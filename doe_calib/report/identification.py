@@ -1,7 +1,8 @@
 """The identification report: parameters, correlations and residuals of one fit, as HTML."""
 from __future__ import annotations
 
-from doe_calib.diagnosis.residual_plot_data import reading_columns, residual_norms_mm
+from doe_calib.diagnosis.residuals import residual_norms_mm
+from doe_calib.diagnosis.variables import reading_columns
 from doe_calib.report import figures
 from doe_calib.report.html import (collapsible, figure, paragraph, preformatted, section, table,
                                    write_report)
