@@ -194,14 +194,7 @@ class IdentificationResult:
 
     def predict(self, data, model=None, registry=None, *, register: str | None = None,
                 apriori: bool = False) -> Prediction:
-        """Marker positions this result predicts (:func:`doe_calib.estimation.predict.predict`).
-
-        Builds the model (CasADi) from the robot, tool and model string unless
-        ``model`` is given; a user effect needs a ``registry`` holding its file.
-        ``register="frame"`` or ``"frame+tool"`` re-fits the tracker frame (and
-        the tool mounting) on the readings first: a new session. The std is σ̂-scaled
-        (``apriori``: for the a-priori σ).
-        """
+        """Marker positions this result predicts (:func:`doe_calib.estimation.predict.predict`)."""
         return predict(self, data, model, registry=registry, register=register,
                        apriori=apriori)
 

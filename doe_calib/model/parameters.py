@@ -215,23 +215,20 @@ class ParameterSet:
 
     def fixed(self, names, reason: str = "fixed by the user") -> "ParameterSet":
         """Same set with ``names`` (names or blocks) fixed at their current values."""
-        idx = self.index(names)
-        free = self.free.copy()
-        free[idx] = False
-        reasons = list(self.fixed_reason)
-        for i in idx:
-            reasons[i] = reason
-        return replace(self, free=free, fixed_reason=tuple(reasons))
+        return self._with_free(names, False, reason)
 
     def freed(self, names) -> "ParameterSet":
         """Same set with ``names`` (names or blocks) free."""
+        return self._with_free(names, True, "")
+
+    def _with_free(self, names, free: bool, reason: str) -> "ParameterSet":
         idx = self.index(names)
-        free = self.free.copy()
-        free[idx] = True
+        flags = self.free.copy()
+        flags[idx] = free
         reasons = list(self.fixed_reason)
         for i in idx:
-            reasons[i] = ""
-        return replace(self, free=free, fixed_reason=tuple(reasons))
+            reasons[i] = reason
+        return replace(self, free=flags, fixed_reason=tuple(reasons))
 
     def only(self, names) -> "ParameterSet":
         """Same set with exactly ``names`` (names or blocks) free."""
