@@ -75,8 +75,7 @@ class IdentificationResult:
         (:class:`~doe_calib.estimation.selection.Selection`); None when it was not asked.
     joint_range : ndarray, shape (N, 2), or None
         Lowest and highest value of each joint over the measured configurations
-        (rad, m): the region the readings cover. None when not known (a result
-        written before it was kept).
+        (rad, m): the region the readings cover. None when not known.
 
     Every array it holds or answers is read-only. As in statsmodels, ``std``,
     ``cov_params``, ``conf_int``, ``predict``, ``[name].std``, the data frame and the
@@ -280,10 +279,8 @@ class IdentificationResult:
 
     @classmethod
     def from_dict(cls, d: dict) -> "IdentificationResult":
-        """Inverse of :meth:`to_dict`: the parameter set from the file's own rows.
-
-        Needs no model build and no effect file (only :meth:`predict` does).
-        """
+        """Inverse of :meth:`to_dict`: the parameter set from the file's own rows, with no
+        model build and no effect file (only :meth:`predict` needs them)."""
         robot, tool = Robot.from_dict(d["robot"]), Tool.from_dict(d["tool"])
         params = ParameterSet.from_rows(d["parameters"], robot.joint_names)
         estimated = bool(d.get("sigma_estimated", False))
