@@ -29,17 +29,12 @@ from doe_calib.model.twist_jacobian import marker_jacobian
 
 log = logging.getLogger(__name__)
 
-_BASE = [("base_x", "m", "base position x (tracker frame)"),
-         ("base_y", "m", "base position y (tracker frame)"),
-         ("base_z", "m", "base position z (tracker frame)"),
-         ("base_rx", "rad", "base rotation vector x (tracker frame)"),
-         ("base_ry", "rad", "base rotation vector y (tracker frame)"),
-         ("base_rz", "rad", "base rotation vector z (tracker frame)")]
-
 
 def base_parameters() -> list:
     """Pose of the robot base in the tracker frame: position (m) and rotation vector (rad)."""
-    return [Parameter(n, "base", u, 0.0, 1.0, d) for n, u, d in _BASE]
+    return [Parameter(f"base_{r}{a}", "base", unit, 0.0, 1.0, f"base {what} {a} (tracker frame)")
+            for r, unit, what in (("", "m", "position"), ("r", "rad", "rotation vector"))
+            for a in "xyz"]
 
 
 def marker_parameters(tool) -> list:
