@@ -9,7 +9,7 @@ from doe_calib.errors import DataError, ModelError
 from doe_calib.io.measurements import Configurations, Measurements, provisional
 from doe_calib.estimation.labelled import read_only
 from doe_calib.estimation.measured_region import outside_joints
-from doe_calib.estimation.session import reregister, session_notes
+from doe_calib.estimation.session import error_mm, reregister, session_notes
 from doe_calib.estimation.unseen import measured_markers, unseen_notes, unseen_part
 from doe_calib.model.evaluation import observation_matrix
 
@@ -77,11 +77,7 @@ class Prediction:
 
     def error(self, measurements) -> dict:
         """RMS per coordinate, 3-D RMS, mean and max 3-D error against ``measurements``, mm."""
-        e = self.residuals(measurements) * 1000.0
-        d = np.linalg.norm(e, axis=1)
-        return {"rms_mm": float(np.sqrt(np.mean(e ** 2))),
-                "rms_3d_mm": float(np.sqrt(np.mean(d ** 2))), "mean_3d_mm": float(d.mean()),
-                "max_3d_mm": float(d.max())}
+        return error_mm(self.residuals(measurements))
 
     def rms_3d(self, measurements) -> float:
         """3-D RMS error against ``measurements``, m."""

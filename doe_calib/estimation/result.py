@@ -75,8 +75,7 @@ class IdentificationResult:
         (:class:`~doe_calib.estimation.selection.Selection`); None when it was not asked.
     joint_range : ndarray, shape (N, 2), or None
         Lowest and highest value of each joint over the measured configurations
-        (rad, m): the region the readings cover. None when not known (a result
-        written before it was kept).
+        (rad, m): the region the readings cover. None when not known.
 
     Every array it holds or answers is read-only. As in statsmodels, ``std``,
     ``cov_params``, ``conf_int``, ``predict``, ``[name].std``, the data frame and the
@@ -194,14 +193,7 @@ class IdentificationResult:
 
     def predict(self, data, model=None, registry=None, *, register: str | None = None,
                 apriori: bool = False) -> Prediction:
-        """Marker positions this result predicts (:func:`doe_calib.estimation.predict.predict`).
-
-        Builds the model (CasADi) from the robot, tool and model string unless
-        ``model`` is given; a user effect needs a ``registry`` holding its file.
-        ``register="frame"`` or ``"frame+tool"`` re-fits the tracker frame (and
-        the tool mounting) on the readings first: a new session. The std is σ̂-scaled
-        (``apriori``: for the a-priori σ).
-        """
+        """Marker positions this result predicts (:func:`doe_calib.estimation.predict.predict`)."""
         return predict(self, data, model, registry=registry, register=register,
                        apriori=apriori)
 
@@ -287,10 +279,8 @@ class IdentificationResult:
 
     @classmethod
     def from_dict(cls, d: dict) -> "IdentificationResult":
-        """Inverse of :meth:`to_dict`: the parameter set from the file's own rows.
-
-        Needs no model build and no effect file (only :meth:`predict` does).
-        """
+        """Inverse of :meth:`to_dict`: the parameter set from the file's own rows, with no
+        model build and no effect file (only :meth:`predict` needs them)."""
         robot, tool = Robot.from_dict(d["robot"]), Tool.from_dict(d["tool"])
         params = ParameterSet.from_rows(d["parameters"], robot.joint_names)
         estimated = bool(d.get("sigma_estimated", False))

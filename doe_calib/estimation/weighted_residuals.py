@@ -78,13 +78,9 @@ def _blocks(measurements, size: int):
 
 def residual_norm2(model, measurements, values, block: int = BLOCK_CONFIGURATIONS) -> float:
     """‖r‖², the weighted residuals' sum of squares, one block of configurations at a time."""
-    total = 0.0
-    for cfg, rows, c in _blocks(measurements, block):
-        x = marker_positions(model, values, cfg)
-        r = (measurements.xyz[rows] - x[c, measurements.marker[rows]]) / \
-            measurements.sigma[rows, None]
-        total += float(np.sum(r * r))
-    return total
+    r = (measurements.xyz - marker_points(model, measurements, values, block)) / \
+        measurements.sigma[:, None]
+    return float(np.sum(r * r))
 
 
 def reduce_jacobian(model, measurements, values, columns=None, scale=None,

@@ -70,13 +70,14 @@ def frame_placement(robot, name: str) -> np.ndarray:
     >>> frame_placement(robot, "base")[:3, :3].round(6)      # doctest: +SKIP
     array([[-1., -0.,  0.], [ 0., -1.,  0.], [ 0.,  0.,  1.]])
     """
-    frames = fixed_frames(robot.source) if robot.source and Path(robot.source).is_file() else {}
+    urdf = bool(robot.source) and Path(robot.source).is_file()
+    frames = fixed_frames(robot.source) if urdf else {}
     if name in frames:
         return frames[name]
     if name in CONVENTIONS:
         return CONVENTIONS[name].copy()
     moving = ""
-    if robot.source and Path(robot.source).is_file():
+    if urdf:
         import pinocchio as pin
 
         model = pin.buildModelFromUrdf(str(robot.source))

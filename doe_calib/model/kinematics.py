@@ -151,10 +151,15 @@ def nominal_torques(robot, q, wrench) -> ca.SX:
     whose placements are off by 2 mm / 0.3° (measured against a simulation with
     the true chain's torques), far below a tracker's noise.
     """
+    joints, (_, p_f) = _nominal_forward(robot, q)
+    return joint_torques(robot, joints, p_f, wrench)
+
+
+def _nominal_forward(robot, q):
+    """Joint frames and flange pose ``(R, t)`` of the nominal chain at ``q``, SX."""
     placements = [_constant(j.placement_matrix) for j in robot.joints]
     flange = _constant(np.array(robot.flange_placement, float).reshape(4, 4))
-    joints, (_, p_f) = _forward(robot, placements, flange, q)
-    return joint_torques(robot, joints, p_f, wrench)
+    return _forward(robot, placements, flange, q)
 
 
 def nominal_torque_function(robot) -> ca.Function:
@@ -167,9 +172,7 @@ def payload_torque_function(robot) -> ca.Function:
     """``tau(q, m, c)``: joint torques (N·m or N) of a mass ``m`` (kg) hung at ``c`` (flange
     frame, m), nominal chain, gravity :data:`GRAVITY`: τ = J_θᵀ F of its wrench at the flange."""
     q, m, c = ca.SX.sym("q", robot.n_joints), ca.SX.sym("m"), ca.SX.sym("c", 3)
-    placements = [_constant(j.placement_matrix) for j in robot.joints]
-    flange = _constant(np.array(robot.flange_placement, float).reshape(4, 4))
-    joints, (rot, p_f) = _forward(robot, placements, flange, q)
+    joints, (rot, p_f) = _nominal_forward(robot, q)
     f = m * ca.DM(GRAVITY)
     wrench = ca.vertcat(f, ca.cross(rot @ c, f))
     return ca.Function("tau_payload", [q, m, c], [joint_torques(robot, joints, p_f, wrench)],

@@ -29,17 +29,12 @@ from doe_calib.model.twist_jacobian import marker_jacobian
 
 log = logging.getLogger(__name__)
 
-_BASE = [("base_x", "m", "base position x (tracker frame)"),
-         ("base_y", "m", "base position y (tracker frame)"),
-         ("base_z", "m", "base position z (tracker frame)"),
-         ("base_rx", "rad", "base rotation vector x (tracker frame)"),
-         ("base_ry", "rad", "base rotation vector y (tracker frame)"),
-         ("base_rz", "rad", "base rotation vector z (tracker frame)")]
-
 
 def base_parameters() -> list:
     """Pose of the robot base in the tracker frame: position (m) and rotation vector (rad)."""
-    return [Parameter(n, "base", u, 0.0, 1.0, d) for n, u, d in _BASE]
+    return [Parameter(f"base_{r}{a}", "base", unit, 0.0, 1.0, f"base {what} {a} (tracker frame)")
+            for r, unit, what in (("", "m", "position"), ("r", "rad", "rotation vector"))
+            for a in "xyz"]
 
 
 def marker_parameters(tool) -> list:
@@ -52,8 +47,26 @@ def marker_parameters(tool) -> list:
     return out
 
 
+class _Described:
+    """What a model and its description both answer from ``effects`` and ``parameters``."""
+
+    @property
+    def spec(self) -> str:
+        """The model string, e.g. ``joint_offset+geometry``."""
+        return "+".join(e.spec() for e in self.effects)
+
+    @property
+    def n_parameters(self) -> int:
+        return len(self.parameters)
+
+    def nominal(self) -> ParameterSet:
+        """Parameter set at nominal values, every parameter free; names may write a joint
+        as the model string does (``k_j2``)."""
+        return ParameterSet.nominal(self.parameters, self.robot.joint_names)
+
+
 @dataclass(frozen=True, eq=False)
-class ModelDescription:
+class ModelDescription(_Described):
     """What a model is, without its CasADi graph: robot, tool, effects, parameters.
 
     Cheap to make (no symbolic work): reading a result, comparing results
@@ -69,20 +82,6 @@ class ModelDescription:
     def __repr__(self) -> str:
         return (f"ModelDescription({self.spec or '(base + markers)'!r}, {self.robot.name}, "
                 f"{self.tool.n_markers} markers, {self.n_parameters} parameters)")
-
-    @property
-    def spec(self) -> str:
-        """The model string, e.g. ``joint_offset+geometry``."""
-        return "+".join(e.spec() for e in self.effects)
-
-    @property
-    def n_parameters(self) -> int:
-        return len(self.parameters)
-
-    def nominal(self) -> ParameterSet:
-        """Parameter set at nominal values, every parameter free; names may write a joint
-        as the model string does (``k_j2``)."""
-        return ParameterSet.nominal(self.parameters, self.robot.joint_names)
 
 
 def describe_model(robot, tool, model: str | tuple = DEFAULT_MODEL,
@@ -129,7 +128,7 @@ def describe_model(robot, tool, model: str | tuple = DEFAULT_MODEL,
 
 
 @dataclass(frozen=True, eq=False)
-class Model:
+class Model(_Described):
     """A model description frozen into CasADi Functions.
 
     Functions (inputs ``q`` (N), ``w`` (6: N, N·m), ``env`` (1 + N: temperature °C,
@@ -186,19 +185,6 @@ class Model:
     def parameters(self) -> tuple:
         return self.description.parameters
 
-    @property
-    def spec(self) -> str:
-        """The model string, e.g. ``joint_offset+geometry``."""
-        return self.description.spec
-
-    @property
-    def n_parameters(self) -> int:
-        return len(self.parameters)
-
-    def nominal(self) -> ParameterSet:
-        """Parameter set at nominal values, every parameter free."""
-        return self.description.nominal()
-
 
 _BUILT: OrderedDict = OrderedDict()  # (robot, tool, effects, native) -> Model
 _BUILT_SIZE = 24
@@ -227,10 +213,8 @@ def build_model(robot, tool=None, model: str | tuple = DEFAULT_MODEL,
         Effects, e.g. ``"joint_offset+geometry+joint_compliance"``.
     compile : bool
         Compile ``markers``, ``observation``, ``point`` and ``point_robot`` to
-        native code (:mod:`doe_calib.model.compiled`): same names, inputs and
-        outputs, several times faster. The first build of a model takes a few
-        seconds; later builds load the cached library. Commands decide with
-        :func:`for_workload`.
+        native code (:mod:`doe_calib.model.compiled`): same signatures, several
+        times faster, seconds to build the first time (:func:`for_workload` decides).
     registry : EffectRegistry, optional
         The effects a model string may name; see :func:`describe_model`.
 
@@ -296,11 +280,9 @@ def for_workload(model: Model, evaluations: int, progress=None) -> Model:
     Returns
     -------
     Model
-        ``model`` itself, or the same model compiled (:func:`build_model`
-        with ``compile=True``; cached on disk, so only the first compilation
-        of a model costs seconds) when ``evaluations`` reaches
-        :data:`NATIVE_WORKLOAD`. The environment variable
-        ``DOE_CALIB_COMPILE`` = ``always`` or ``never`` overrides the choice.
+        ``model`` itself, or the same model compiled (cached on disk) when
+        ``evaluations`` reaches :data:`NATIVE_WORKLOAD`; ``DOE_CALIB_COMPILE`` =
+        ``always`` or ``never`` overrides the choice.
     """
     mode = os.environ.get("DOE_CALIB_COMPILE", "auto").strip().lower() or "auto"
     if mode not in _COMPILE_MODES:

@@ -215,23 +215,20 @@ class ParameterSet:
 
     def fixed(self, names, reason: str = "fixed by the user") -> "ParameterSet":
         """Same set with ``names`` (names or blocks) fixed at their current values."""
-        idx = self.index(names)
-        free = self.free.copy()
-        free[idx] = False
-        reasons = list(self.fixed_reason)
-        for i in idx:
-            reasons[i] = reason
-        return replace(self, free=free, fixed_reason=tuple(reasons))
+        return self._with_free(names, False, reason)
 
     def freed(self, names) -> "ParameterSet":
         """Same set with ``names`` (names or blocks) free."""
+        return self._with_free(names, True, "")
+
+    def _with_free(self, names, free: bool, reason: str) -> "ParameterSet":
         idx = self.index(names)
-        free = self.free.copy()
-        free[idx] = True
+        flags = self.free.copy()
+        flags[idx] = free
         reasons = list(self.fixed_reason)
         for i in idx:
-            reasons[i] = ""
-        return replace(self, free=free, fixed_reason=tuple(reasons))
+            reasons[i] = reason
+        return replace(self, free=flags, fixed_reason=tuple(reasons))
 
     def only(self, names) -> "ParameterSet":
         """Same set with exactly ``names`` (names or blocks) free."""
@@ -252,13 +249,9 @@ class ParameterSet:
 
     @classmethod
     def from_rows(cls, rows, joints=()) -> "ParameterSet":
-        """A set rebuilt from :meth:`to_list` rows alone: no model, no effect file.
-
-        ``joints``: the robot's joint names along the chain (see the class).
-
-        Rows in display units (``unit`` is the display unit: mm, deg, …). A row
-        without ``scale`` gets one display unit as the scale; one without
-        ``bounds``, ``plausible`` or ``sign``, none.
+        """A set rebuilt from :meth:`to_list` rows alone (display units): no model, no effect
+        file. A row without ``scale`` gets one display unit as the scale; one without
+        ``bounds``, ``plausible`` or ``sign``, none. ``joints``: see the class.
 
         Raises
         ------
@@ -319,12 +312,8 @@ class ParameterSet:
         return "\n".join(lines)
 
     def from_list(self, rows) -> "ParameterSet":
-        """Values and free flags read back from :meth:`to_list` rows (matched by name).
-
-        The parameters themselves (unit, bounds, plausible range, sign) are this
-        set's; rows of older files, without ``bounds``, ``plausible`` and
-        ``sign``, read the same.
-        """
+        """Values and free flags read back from :meth:`to_list` rows (matched by name); the
+        parameters themselves (unit, bounds, plausible range, sign) are this set's."""
         by_name = {r["name"]: r for r in rows}
         missing = [n for n in self.names if n not in by_name]
         if missing:

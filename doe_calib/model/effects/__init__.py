@@ -23,7 +23,7 @@ from doe_calib.model.effects.joint_offset import JointOffset
 from doe_calib.model.effects.link_compliance import LinkCompliance
 from doe_calib.model.effects.registry import EffectRegistry
 from doe_calib.model.effects.thermal import Thermal
-from doe_calib.model.effects.user import load_effect_file, load_effect_files
+from doe_calib.model.effects.user import load_effect_file
 
 #: The catalogue: every built-in effect. Adding an effect: one module, one line here.
 DEFAULT_REGISTRY = EffectRegistry([
@@ -119,5 +119,5 @@ def parse_model(spec: str, registry: EffectRegistry | None = None) -> tuple:
 
 
 __all__ = ["ChainSymbols", "Effect", "EffectRegistry", "DEFAULT_REGISTRY", "REGISTRY",
-           "DEFAULT_MODEL", "joint_index", "load_effect_file", "load_effect_files", "parse_effect",
+           "DEFAULT_MODEL", "joint_index", "load_effect_file", "parse_effect",
            "parse_model", "registry_with_files", "split_model"]

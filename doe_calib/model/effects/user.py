@@ -17,15 +17,9 @@ The file declares::
         # doe_calib.model.parameters.DISPLAY_UNITS ("m", "rad", "rad/(N·m)", "m/N", "1", "1/K"),
         # the scale the parameter's typical size (SI). Every parameter is nominally 0;
         # its full name is f"{NAME}_{joint}_{suffix}" (URDF joint name) when per joint,
-        # f"{NAME}_{suffix}" otherwise, and its block is NAME. A fifth item, optional, is a
-        # dict of what is known about the parameter (SI; default: nothing):
-        #   {"bounds": (0, inf),            # physical range: beyond it (by 2 std) a fit is
-        #                                   # reported as physically implausible
-        #    "plausible": (-0.035, 0.035),  # range beyond which a fitted value is implausible
-        #    "sign": "positive: …; negative usually means …"}   # what the sign means
-    PHRASE = "a droop of the tool"   # optional: what a diagnosis verdict calls the effect;
-                                     # "{joint}" becomes e.g. "3 (a3)" (default "effect <spec>")
-    IMPLAUSIBLE = "far beyond …"     # optional: why a value outside "plausible" is implausible
+        # f"{NAME}_{suffix}" otherwise, and its block is NAME. An optional fifth item, a
+        # dict with "bounds", "plausible" and "sign", and the optional PHRASE and
+        # IMPLAUSIBLE say what is known of the effect (docs/formats.md §9).
 
 and at least one of the functions::
 
@@ -61,10 +55,8 @@ the vertical load and shifts with the angle of one joint (m)::
         return None, [p["s"] * ca.sin(q[joint]), 0, p["c"] * wrench[2]]
 
 A per-joint deflection example ships as ``doe_calib/examples/example_effect.py``
-(:data:`doe_calib.examples.EFFECT_FILE`). Result files name the model by its string, so
-reading back a result (``predict``, ``compare``, a report) needs the same
-``--effect-file``, or a registry with the file passed to
-:meth:`IdentificationResult.from_json` (``registry=``).
+(:data:`doe_calib.examples.EFFECT_FILE`). Reading back a result that names the effect
+needs the same file.
 
 Examples
 --------
@@ -368,10 +360,6 @@ def _import(path: str):
 def load_effect_file(path) -> list[type]:
     """Import a user effect file and make its effect class(es); nothing is registered.
 
-    To use them, make a registry that holds them:
-    ``DEFAULT_REGISTRY.with_file(path)``
-    (:meth:`~doe_calib.model.effects.registry.EffectRegistry.with_file`).
-
     Parameters
     ----------
     path : str or Path
@@ -407,8 +395,3 @@ def load_effect_file(path) -> list[type]:
     if len(set(names)) != len(names):
         raise ModelError(f"{source}: two effects are named the same; give each its own NAME")
     return classes
-
-
-def load_effect_files(paths) -> list[type]:
-    """:func:`load_effect_file` for each of ``paths`` (None or empty: nothing)."""
-    return [cls for path in paths or () for cls in load_effect_file(path)]
