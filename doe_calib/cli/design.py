@@ -185,9 +185,7 @@ def run(args):
         return run_augment(args, model, loads, candidates, constraints, collision,
                            effect_registry(args), csv_path, home)
     discovery = _discovery_goal(args)
-    show = stage_progress()
-    progress = None if show is None else (lambda done, total, note: show(
-        "design" if total is None else f"design {done}/{total}", note))
+    progress = stage_progress()
     result = optimal_design(model, args.poses, loads, candidates=candidates,
                             sigma=args.sigma / 1000.0, criterion=args.criterion, task=task,
                             task_point=parse_floats(args.task_point, 3, "--task-point") / 1000.0,

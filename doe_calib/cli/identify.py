@@ -63,12 +63,12 @@ def run(args):
     params = fix_and_free(params, args.fix, args.free)
     settings = FitSettings(select=args.select, normalisation=args.normalisation
                            if args.estimator == "pose" else None)
-    show = stage_progress()
+    progress = stage_progress()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = identify(model, meas, params, estimator=args.estimator, settings=settings,
-                          progress=show and (lambda done, total, note: show("identify", note)))
-    if show:
+                          progress=progress)
+    if progress:
         print(file=sys.stderr)
     report_warnings(caught)
     if args.verbose:
