@@ -273,6 +273,14 @@ def fix_and_free(params, fix: str | None, free: str | None):
     return params
 
 
+def show_result(args, result, *written) -> None:
+    """Print ``result``'s summary (its JSON with ``--json``), then the files ``written`` on stderr."""
+    from doe_calib.io.json_file import strict_json
+
+    print(strict_json(result.to_dict()) if args.json else result.summary())
+    print(f"\nwritten: {', '.join(map(str, written))}", file=sys.stderr)
+
+
 def report_warnings(caught):
     """Print recorded warnings to stderr, one line each."""
     for w in caught:

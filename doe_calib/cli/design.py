@@ -14,11 +14,11 @@ from doe_calib.cli.common import (
     parse_floats,
     parse_load,
     robot_arguments,
+    show_result,
     stage_progress,
 )
 from doe_calib.cli.options import count, positive, probability
 from doe_calib.errors import DoeCalibError, OptionError
-from doe_calib.io.json_file import strict_json
 from doe_calib.io.setting_ranges import level_and_power
 
 HELP = "choose optimal measurement poses (D, A, E or task criterion; constraints; loads)"
@@ -201,8 +201,7 @@ def run(args):
                                     effect_registry(args))
     result.to_json(args.out)
     write_design(csv_path, result.configurations, robot)
-    print(strict_json(result.to_dict()) if args.json else result.summary())
-    print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
+    show_result(args, result, args.out, csv_path)
     if args.report:
         from doe_calib.report import design_report
         design_report(result, args.report)
