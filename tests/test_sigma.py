@@ -9,10 +9,10 @@ import pytest
 import doe_calib
 from doe_calib import Configurations, IdentificationResult, Robot, Tool, build_model, simulate
 from doe_calib.cli import main
-from doe_calib.cli.predict import predicted_markers
 from doe_calib.design.comparison import compare
 from doe_calib.design.optimal import optimal_design
 from doe_calib.design.result import DesignResult
+from doe_calib.estimation.predict import predict
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.io.csv_files import read_measurements, write_measurements
 from doe_calib.model.simulate import random_configurations
@@ -131,9 +131,9 @@ def test_predicted_std_matches_a_monte_carlo_of_identifications(model3, truth):
     probe = simulate(model3, truth, held, SIGMA, rng)  # poses to predict
     fits = [identify_quietly(model3, simulate(model3, truth, cfg, SIGMA, rng))
             for _ in range(300)]
-    predicted = np.array([predicted_markers(model3, f, probe)[0] for f in fits])
+    predicted = np.array([predict(f, probe, model3, apriori=True).xyz for f in fits])
     empirical = predicted.std(axis=0, ddof=1)  # (K, 3)
-    _, std = predicted_markers(model3, fits[0], probe)
+    std = predict(fits[0], probe, model3, apriori=True).std
     assert std.min() > 1e-6  # nonzero: tens of µm, like σ
     ratio = empirical / std
     assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio
@@ -149,12 +149,12 @@ def test_predict_writes_std_columns_that_read_back(model3, truth, tmp_path, no_s
     rows = list(csv.DictReader(ln for ln in pred.read_text().splitlines()
                                if not ln.startswith("#")))
     got = np.array([[float(r[c]) for c in ("std_x", "std_y", "std_z")] for r in rows])
-    _, want = predicted_markers(model3, res, meas)
+    want = predict(res, meas, model3, apriori=True).std
     assert np.allclose(got, want * 1000.0, rtol=1e-9)
     assert np.allclose([float(r["sigma"]) for r in rows], 0.02)
     back = read_measurements(pred, model3.robot, model3.tool)  # std columns ignored
     assert len(back) == len(meas) and not back.sigma_estimated
-    assert np.allclose(back.xyz, predicted_markers(model3, res, meas)[0], atol=1e-9)
+    assert np.allclose(back.xyz, predict(res, meas, model3, apriori=True).xyz, atol=1e-9)
 
 
 def test_simulated_data_without_sigma_and_a_sigma_given_disagree_by_the_ratio(

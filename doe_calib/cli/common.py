@@ -70,9 +70,9 @@ def load_robot_tool(args):
     return robot, tool
 
 
-def data_argument(c, required: bool = True):
+def data_argument(c):
     """``--data FILE [FILE …]``: measurement CSVs, each file one session unless it has a column."""
-    c.add_argument("--data", required=required, nargs="+", metavar="CSV",
+    c.add_argument("--data", required=True, nargs="+", metavar="CSV",
                    help="measurement CSV(s) (docs/formats.md); several files are several "
                         "sessions (a 'session' column also says so)")
 
@@ -102,7 +102,6 @@ def read_data(paths, robot, tool, sigma=None, skip_bad=False, require_xyz=True,
     from doe_calib.io.csv_files import read_measurements
     from doe_calib.io.measurements import concatenate
 
-    paths = [paths] if isinstance(paths, str) else list(paths)
     meas = concatenate([read_measurements(p, robot, tool, sigma=sigma, skip_bad=skip_bad,
                                           require_xyz=require_xyz) for p in paths])
     for msg in meas.dropped:
@@ -274,6 +273,14 @@ def fix_and_free(params, fix: str | None, free: str | None):
     return params
 
 
+def show_result(args, result, *written) -> None:
+    """Print ``result``'s summary (its JSON with ``--json``), then the files ``written`` on stderr."""
+    from doe_calib.io.json_file import strict_json
+
+    print(strict_json(result.to_dict()) if args.json else result.summary())
+    print(f"\nwritten: {', '.join(map(str, written))}", file=sys.stderr)
+
+
 def report_warnings(caught):
     """Print recorded warnings to stderr, one line each."""
     for w in caught:
@@ -346,23 +353,22 @@ def collision_builder(args, robot, tool, constraints, recorded: dict | None = No
     if args.no_collision:
         return None
     recorded = recorded or {}
-    clear = args.clearance if args.clearance is not None else recorded.get(
-        "clearance_mm", 1000.0 * DEFAULT_CLEARANCE)
-    self_clear = args.self_clearance if args.self_clearance is not None else recorded.get(
-        "self_clearance_mm", 1000.0 * DEFAULT_SELF_CLEARANCE)
-    # a move clearance not given follows a pose clearance given, else the design's, else half
-    move = args.move_clearance if args.move_clearance is not None else None if \
-        args.clearance is not None else recorded.get("move_clearance_mm")
-    move_self = args.move_self_clearance if args.move_self_clearance is not None else None if \
-        args.self_clearance is not None else recorded.get("move_self_clearance_mm")
+    metres = {}
+    for name, default in (("clearance", DEFAULT_CLEARANCE),
+                          ("self_clearance", DEFAULT_SELF_CLEARANCE)):
+        pose, move = getattr(args, name), getattr(args, f"move_{name}")
+        # a move clearance not given follows a pose clearance given, else the design's, else half
+        if move is None and pose is None:
+            move = recorded.get(f"move_{name}_mm")
+        if pose is None:
+            pose = recorded.get(f"{name}_mm", 1000.0 * default)
+        metres[name] = pose / 1000.0
+        metres[f"move_{name}"] = None if move is None else move / 1000.0
     planner = None if args.no_planner else PlannerSettings(
         time=args.planner_time, seed=args.planner_seed, checks=args.planner_checks)
 
     def build(loads):
-        return build_collision_model(
-            robot, tool, loads, constraints, clearance=clear / 1000.0,
-            self_clearance=self_clear / 1000.0, srdf=args.srdf,
-            move_clearance=None if move is None else move / 1000.0,
-            move_self_clearance=None if move_self is None else move_self / 1000.0,
-            planner=planner, package_dirs=args.package_dir or ())
+        return build_collision_model(robot, tool, loads, constraints, srdf=args.srdf,
+                                     planner=planner, package_dirs=args.package_dir or (),
+                                     **metres)
     return build

@@ -12,11 +12,11 @@ from doe_calib.cli.common import (
     effect_registry,
     parse_floats,
     report_warnings,
+    show_result,
 )
 from doe_calib.cli.options import positive
 from doe_calib.cli.program_options import program_arguments, stations, tool_payload
 from doe_calib.errors import ConvergenceWarning, DataError, OptionError
-from doe_calib.io.json_file import strict_json
 
 HELP = ("compensate a program: joint values that put the TCP on its targets with the "
         "identified model")
@@ -126,8 +126,7 @@ def run(args):
         if not ok:
             print(f"warning: target {pose} not reached: {note}", file=sys.stderr)
     out.to_csv(args.out)
-    print(strict_json(out.to_dict()) if args.json else out.summary())
-    print(f"\nwritten: {args.out}", file=sys.stderr)
+    show_result(args, out, args.out)
     if args.format:
         where = args.program_out if args.program_out is not None else Path(args.out).parent
         try:

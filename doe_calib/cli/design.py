@@ -14,11 +14,11 @@ from doe_calib.cli.common import (
     parse_floats,
     parse_load,
     robot_arguments,
+    show_result,
     stage_progress,
 )
 from doe_calib.cli.options import count, positive, probability
 from doe_calib.errors import DoeCalibError, OptionError
-from doe_calib.io.json_file import strict_json
 from doe_calib.io.setting_ranges import level_and_power
 
 HELP = "choose optimal measurement poses (D, A, E or task criterion; constraints; loads)"
@@ -185,9 +185,7 @@ def run(args):
         return run_augment(args, model, loads, candidates, constraints, collision,
                            effect_registry(args), csv_path, home)
     discovery = _discovery_goal(args)
-    show = stage_progress()
-    progress = None if show is None else (lambda done, total, note: show(
-        "design" if total is None else f"design {done}/{total}", note))
+    progress = stage_progress()
     result = optimal_design(model, args.poses, loads, candidates=candidates,
                             sigma=args.sigma / 1000.0, criterion=args.criterion, task=task,
                             task_point=parse_floats(args.task_point, 3, "--task-point") / 1000.0,
@@ -203,8 +201,7 @@ def run(args):
                                     effect_registry(args))
     result.to_json(args.out)
     write_design(csv_path, result.configurations, robot)
-    print(strict_json(result.to_dict()) if args.json else result.summary())
-    print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
+    show_result(args, result, args.out, csv_path)
     if args.report:
         from doe_calib.report import design_report
         design_report(result, args.report)

@@ -5,11 +5,12 @@ import sys
 
 import numpy as np
 
+from doe_calib.cli.common import show_result
 from doe_calib.design.augment import augment_design, diagnosis_targets
 from doe_calib.design.discovery.load_directions import parse_directions
 from doe_calib.errors import OptionError
 from doe_calib.io.csv_files import read_measurements, write_design
-from doe_calib.io.json_file import read_json, strict_json
+from doe_calib.io.json_file import read_json
 
 
 def run_augment(args, model, loads, candidates, constraints, collision, registry, csv_path,
@@ -41,8 +42,7 @@ def run_augment(args, model, loads, candidates, constraints, collision, registry
                             parse_directions(args.load_directions), home=home)
     result.to_json(args.out)
     write_design(csv_path, result.configurations, model.robot)
-    print(strict_json(result.to_dict()) if args.json else result.summary())
-    print(f"\nwritten: {args.out}, {csv_path}", file=sys.stderr)
+    show_result(args, result, args.out, csv_path)
     if args.report:
         from doe_calib.report import augment_report
 

@@ -11,9 +11,9 @@ from doe_calib.cli.common import (
     effect_registry,
     model_and_measurements,
     robot_arguments,
+    show_result,
 )
 from doe_calib.cli.options import at_least, count, fraction, positive, probability
-from doe_calib.io.json_file import strict_json
 
 HELP = "test the model against the measurements and rank the effects it is missing"
 EXAMPLE = ("doe-calib diagnose --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -99,5 +99,4 @@ def run(args):
         from doe_calib.report import diagnosis_report
         print(f"report: {diagnosis_report(d, model, meas, fit, args.report, registry=registry)}",
               file=sys.stderr)
-    print(strict_json(d.to_dict()) if args.json else d.summary())
-    print(f"\nwritten: {args.out}, {plot}", file=sys.stderr)
+    show_result(args, d, args.out, plot)

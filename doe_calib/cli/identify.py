@@ -12,11 +12,11 @@ from doe_calib.cli.common import (
     model_and_measurements,
     report_warnings,
     robot_arguments,
+    show_result,
     stage_progress,
 )
 from doe_calib.cli.options import positive
 from doe_calib.cli.probe import probe_arguments, probe_model_and_measurements
-from doe_calib.io.json_file import strict_json
 
 HELP = "identify parameters from a measurement CSV"
 EXAMPLE = ("doe-calib identify --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -63,12 +63,12 @@ def run(args):
     params = fix_and_free(params, args.fix, args.free)
     settings = FitSettings(select=args.select, normalisation=args.normalisation
                            if args.estimator == "pose" else None)
-    show = stage_progress()
+    progress = stage_progress()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = identify(model, meas, params, estimator=args.estimator, settings=settings,
-                          progress=show and (lambda done, total, note: show("identify", note)))
-    if show:
+                          progress=progress)
+    if progress:
         print(file=sys.stderr)
     report_warnings(caught)
     if args.verbose:
@@ -77,8 +77,7 @@ def run(args):
             if not free:
                 print(f"fixed: {p.name}: {why}", file=sys.stderr)
     result.to_json(args.out)
-    print(strict_json(result.to_dict()) if args.json else result.summary())
-    print(f"\nwritten: {args.out}", file=sys.stderr)
+    show_result(args, result, args.out)
     if args.report:
         from doe_calib.report import identification_report
         identification_report(result, model, meas, args.report)

@@ -32,18 +32,6 @@ def add_arguments(c):
 OUTPUTS = {"out": "file"}
 
 
-def predicted_markers(model, result, meas):
-    """Predicted marker position of each reading and its std per coordinate, both (K, 3), m.
-
-    :func:`doe_calib.estimation.predict.predict` for the result's σ (a priori;
-    σ̂ when σ was estimated), as this command writes them.
-    """
-    from doe_calib.estimation.predict import predict
-
-    pred = predict(result, meas, model, apriori=True)
-    return pred.xyz, pred.std
-
-
 def run(args):
     import numpy as np
 

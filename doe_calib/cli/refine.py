@@ -9,11 +9,11 @@ from doe_calib.cli.common import (
     model_and_measurements,
     read_data,
     robot_arguments,
+    show_result,
     sigma_option,
 )
 from doe_calib.cli.diagnose import diagnosis_settings, measurement_arguments
 from doe_calib.cli.options import count
-from doe_calib.io.json_file import strict_json
 
 HELP = "grow the model by the best significant effect until it is adequate; write the fit"
 EXAMPLE = ("doe-calib refine --robot kr270.urdf --tool tool.yaml --data meas.csv "
@@ -75,5 +75,4 @@ def run(args):
         final = build_model(model.robot, model.tool, out.fit.model, registry=registry)
         print(f"report: {refine_report(out, final, meas, args.report, registry=registry)}",
               file=sys.stderr)
-    print(strict_json(out.to_dict()) if args.json else out.summary())
-    print(f"\nwritten: {args.out}, {history}, {plot}", file=sys.stderr)
+    show_result(args, out, args.out, history, plot)

@@ -12,16 +12,11 @@ from doe_calib.cli.options import count
 from doe_calib.io.json_file import read_json, strict_json
 
 #: Study name → module in the ``studies`` package (each has ``main(argv)``).
-STUDIES = {"table1": "studies.table1", "tiago_mocap": "studies.tiago_mocap.__main__",
-           "tiago_refine": "studies.tiago_refine.__main__",
-           "tiago_single_point": "studies.tiago_single_point.__main__",
-           "tiago_one_session": "studies.tiago_one_session.__main__",
-           "table2": "studies.table2.__main__", "diagnosis": "studies.diagnosis.__main__",
-           "design_sweep": "studies.design_sweep.__main__",
-           "compensation": "studies.compensation.__main__",
-           "tiago_compensation": "studies.tiago_compensation.__main__",
-           "sequential": "studies.sequential.__main__",
-           "tiago_sequential": "studies.tiago_sequential.__main__"}
+STUDIES = {"table1": "studies.table1", **{
+    name: f"studies.{name}.__main__" for name in (
+        "tiago_mocap", "tiago_refine", "tiago_single_point", "tiago_one_session", "table2",
+        "diagnosis", "design_sweep", "compensation", "tiago_compensation", "sequential",
+        "tiago_sequential")}}
 
 HELP = "run a study and write its results"
 EXAMPLE = "doe-calib study table1 --out results [--scheduler tcp://host:8786]"

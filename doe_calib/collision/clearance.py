@@ -103,11 +103,6 @@ class Workspace:
         self.bounded = bounded
         self._motion = False  # not computed yet
 
-    def weights(self, cm) -> np.ndarray | None:
-        """Per pair and joint, how fast the pair can close (:meth:`motion`), when moves'
-        checks may skip poses by it (``bounded``); else None."""
-        return self.motion(cm) if self.bounded else None
-
     def motion(self, cm) -> np.ndarray | None:
         """Per pair and joint, how fast the pair can close (:func:`.bounds.motion_weights`,
         computed once)."""
@@ -216,8 +211,18 @@ def check_segment(cm, qa, qb, margin: float | None = None, step: float = SEGMENT
     """
     qa, qb = np.asarray(qa, float), np.asarray(qb, float)
     ws = Workspace(cm) if workspace is None else workspace
-    pairs = None if pairs is None else tuple(int(k) for k in pairs)
-    return _check(cm, qa, qb, margin, step, ws, pairs)
+    t = np.linspace(0.0, 1.0, max(2, int(np.ceil(np.max(np.abs(qb - qa)) / step)) + 1))
+    weights = ws.motion(cm) if ws.bounded else None
+    if pairs is None and (weights is None or not len(cm.geometry.collisionPairs)):
+        hit = too_close(cm, qa + t[:, None] * (qb - qa), margin, ws)
+        bad = np.flatnonzero(hit >= 0)
+        found = (bad[0], int(hit[bad[0]])) if len(bad) else None
+    else:
+        pairs = None if pairs is None else tuple(int(k) for k in pairs)
+        found = _first_too_close(cm, qa, qb, t, margin, weights, ws, pairs)
+    if found is None:
+        return SegmentCheck(len(t), None, None)
+    return SegmentCheck(len(t), float(t[found[0]]), cm.pair_name(found[1]))
 
 
 def check_path(cm, path, margin=None, workspace: Workspace | None = None,
@@ -239,26 +244,6 @@ def check_path(cm, path, margin=None, workspace: Workspace | None = None,
         if not check.free:
             return check, samples
     return None, samples
-
-
-def _check(cm, qa, qb, margin, step, ws, pairs=None) -> SegmentCheck:
-    t = np.linspace(0.0, 1.0, max(2, int(np.ceil(np.max(np.abs(qb - qa)) / step)) + 1))
-    weights = ws.weights(cm)
-    if pairs is not None:
-        found = _first_too_close(cm, qa, qb, t, margin, weights, ws, pairs)
-        return SegmentCheck(len(t), None, None) if found is None else \
-            SegmentCheck(len(t), float(t[found[0]]), cm.pair_name(found[1]))
-    if weights is None or not len(cm.geometry.collisionPairs):
-        hit = too_close(cm, qa + t[:, None] * (qb - qa), margin, ws)
-        bad = np.flatnonzero(hit >= 0)
-        if not len(bad):
-            return SegmentCheck(len(t), None, None)
-        return SegmentCheck(len(t), float(t[bad[0]]), cm.pair_name(int(hit[bad[0]])))
-    found = _first_too_close(cm, qa, qb, t, margin, weights, ws)
-    if found is None:
-        return SegmentCheck(len(t), None, None)
-    i, k = found
-    return SegmentCheck(len(t), float(t[i]), cm.pair_name(k))
 
 
 def _first_too_close(cm, qa, qb, t, margin, weights, ws, pairs=None):

@@ -63,6 +63,7 @@ from doe_calib.io.configuration_columns import (
 )
 from doe_calib.io.design_json import read_design_json
 from doe_calib.io.measurements import ESTIMATED, GIVEN, PER_READING, Configurations, Measurements
+from doe_calib.io.reading_units import metres_finding
 from doe_calib.io.row_problems import RowProblems, earlier_in_group
 from doe_calib.io.table import read_table
 
@@ -181,7 +182,11 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
                         + tuple(text for i, text in notes if i in kept),
                         session, not given,
                         PER_READING if "sigma" in table.columns else GIVEN if given else ESTIMATED)
-    return _with_unit_check(meas, robot, tool)
+    finding = metres_finding(meas.xyz, robot, meas.configurations.q, meas.config,
+                             tool.position_array[meas.marker], meas.sessions[meas.config])
+    if finding is not None:
+        raise DataError(finding, meas.source)
+    return meas
 
 
 def _same_q(table, problems, rank, robot, q, group, pose) -> None:
@@ -195,17 +200,6 @@ def _same_q(table, problems, rank, robot, q, group, pose) -> None:
         problems.check((rank, k), checked & differ.any(axis=1) & (which == k), lambda i, k=k: (
             f"pose {pose[i]!r} has q{k + 1} = {shown[i, k]:g} here but {shown[first[i], k]:g} "
             f"on line {table.numbers[first[i]]}; all rows of a pose share q"), name)
-
-
-def _with_unit_check(meas, robot, tool) -> Measurements:
-    """``meas``, unless its x, y, z look like metres (:mod:`~doe_calib.io.reading_units`)."""
-    from doe_calib.io.reading_units import metres_finding
-
-    finding = metres_finding(meas.xyz, robot, meas.configurations.q, meas.config,
-                             tool.position_array[meas.marker], meas.sessions[meas.config])
-    if finding is not None:
-        raise DataError(finding, meas.source)
-    return meas
 
 
 def read_design(path, robot) -> Configurations:

@@ -55,21 +55,22 @@ def run_tasks(func, tasks, scheduler: str | None = None, workers: int | None = N
         return _on_dask(func, tasks, scheduler, progress, connect_timeout)
     workers = default_workers() if workers is None else workers
     if workers <= 1 or len(tasks) <= 1:
-        out = []
-        for t in tasks:
-            out.append(func(t))
-            if progress:
-                progress(len(out), len(tasks), "")
-        return out
+        return _collected(((i, func(t)) for i, t in enumerate(tasks)), len(tasks), progress)
     from concurrent.futures import ProcessPoolExecutor, as_completed  # 15 ms: when used
 
-    out = [None] * len(tasks)
     with ProcessPoolExecutor(max_workers=min(workers, len(tasks))) as pool:
         futures = {pool.submit(func, t): i for i, t in enumerate(tasks)}
-        for done, fut in enumerate(as_completed(futures), start=1):
-            out[futures[fut]] = fut.result()
-            if progress:
-                progress(done, len(tasks), "")
+        return _collected(((futures[f], f.result()) for f in as_completed(futures)),
+                          len(tasks), progress)
+
+
+def _collected(finished, n: int, progress) -> list:
+    """The results of ``finished`` (task index, result) pairs in task order, each reported."""
+    out = [None] * n
+    for done, (i, result) in enumerate(finished, start=1):
+        out[i] = result
+        if progress:
+            progress(done, n, "")
     return out
 
 
@@ -88,9 +89,5 @@ def _on_dask(func, tasks, scheduler, progress, connect_timeout) -> list:
     with client:
         futures = client.map(func, tasks, pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
-        out = [None] * len(tasks)
-        for done, fut in enumerate(dask_completed(futures), start=1):
-            out[index[fut.key]] = fut.result()
-            if progress:
-                progress(done, len(tasks), "")
-    return out
+        return _collected(((index[f.key], f.result()) for f in dask_completed(futures)),
+                          len(tasks), progress)
