@@ -3,6 +3,7 @@ did not simulate (``independent_sim``): its predicted error at new poses is the 
 leave-one-pose-out error, it keeps every parameter of a rich campaign, and on few poses
 with unmodelled effects it predicts new poses no worse than the whole fit."""
 import warnings
+from dataclasses import replace
 
 import independent_sim as sim
 import numpy as np
@@ -164,3 +165,14 @@ def test_the_kept_fit_names_the_values_of_the_reduced_set(tmp_path, kr270):
     kept = {n for n in whole.absorbed if n in res.free_names}
     assert kept and {c.parameter for c in res.combinations()} == kept
     assert all(res[n].role == "reduced set" for n in kept)
+
+
+def test_a_kept_refit_with_sigma_estimated_states_one_sigma(tmp_path, kr270):
+    """The refit's σ̂ is the σ the result uses; the whole fit's σ̂ is not told beside it."""
+    model = kr270[3]
+    (train,) = _campaign(tmp_path, kr270, seed=1, n=20, amplitude_deg=0.05)
+    unknown = replace(train, sigma=np.full(len(train), np.nan), sigma_estimated=True)
+    res = _fit(model, unknown)
+    assert res.selection.left_at_nominal and res.sigma_estimated
+    said = [w for w in res.warnings if w.startswith("σ estimated from the residuals:")]
+    assert said == [f"σ estimated from the residuals: {res.sigma_mm:.3g} mm"]

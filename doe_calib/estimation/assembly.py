@@ -10,6 +10,9 @@ from doe_calib.estimation.measured_region import joint_range
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.estimation.weighted_residuals import marker_residuals, reduce_jacobian
 
+#: The note a fit that estimates σ leads its notes with (its σ̂ follows, mm).
+SIGMA_ESTIMATED = "σ estimated from the residuals"
+
 
 def residual_statistics(model, measurements, values) -> dict:
     """Residual RMS (per coordinate) and max 3-D error, overall, per marker and per pose, mm."""
@@ -60,7 +63,7 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
     estimated = bool(measurements.sigma_estimated and np.isfinite(ratio))
     if estimated:  # σ unknown: σ̂ becomes σ and scales the covariance (statsmodels' scale)
         covariance, sigma_mm, ratio = covariance * ratio ** 2, sigma_mm * ratio, 1.0
-        notes = [f"σ estimated from the residuals: {sigma_mm:.3g} mm"] + list(notes)
+        notes = [f"{SIGMA_ESTIMATED}: {sigma_mm:.3g} mm"] + list(notes)
     return IdentificationResult(
         model.robot, model.tool, model.spec, estimator, params, covariance, ratio,
         residual_statistics(model, measurements, params.values), convergence, n_obs,

@@ -19,6 +19,7 @@ from doe_calib.errors import (
     PlausibilityWarning,
 )
 from doe_calib.estimation import plausibility
+from doe_calib.estimation.assembly import SIGMA_ESTIMATED
 from doe_calib.estimation.fit_statistics import misfit_finding
 from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
 from doe_calib.estimation.selection import SELECTIONS, select as choose
@@ -168,9 +169,9 @@ def identify(model, measurements, params=None, *, estimator: str = "point",
     told = _told(said[id(first)], said[id(kept)]) if kept is not first else said[id(first)]
     for w in list(told):  # a copy: a caller recording warnings may hold the same list
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    notes = kept.warnings + tuple(n for n in first.warnings if n not in kept.warnings and n not in
-                                  {str(w.message) for w in said[id(first)]
-                                   if issubclass(w.category, OF_THAT_FIT)})
+    of_that_fit = {str(w.message) for w in said[id(first)] if issubclass(w.category, OF_THAT_FIT)}
+    notes = kept.warnings + tuple(n for n in first.warnings if n not in kept.warnings
+                                  and n not in of_that_fit and not n.startswith(SIGMA_ESTIMATED))
     return with_plausibility(model, measurements,
                              replace(kept, warnings=notes, selection=selection,
                                      absorbed=first.absorbed))
