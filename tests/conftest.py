@@ -24,6 +24,13 @@ def tool6():
 
 
 @pytest.fixture(scope="session")
+def model3():
+    """The 3-DOF study robot with joint offsets (and base and markers)."""
+    return build_model(Robot.from_urdf(examples.THREE_DOF_URDF),
+                       Tool.from_yaml(examples.THREE_DOF_TOOL_YAML), "joint_offset")
+
+
+@pytest.fixture(scope="session")
 def model6(robot6, tool6):
     """6R, every parameter block: base, markers, offsets, geometry, compliance."""
     return build_model(robot6, tool6, "joint_offset+geometry+joint_compliance")

@@ -35,12 +35,6 @@ THREE = ["--robot", examples.THREE_DOF_URDF, "--tool", examples.THREE_DOF_TOOL_Y
 
 
 @pytest.fixture(scope="module")
-def model3():
-    return build_model(Robot.from_urdf(examples.THREE_DOF_URDF),
-                       Tool.from_yaml(examples.THREE_DOF_TOOL_YAML), "joint_offset")
-
-
-@pytest.fixture(scope="module")
 def truth(model3):
     p = model3.nominal()
     v = p.values.copy()

@@ -4,7 +4,7 @@ setting, the value and the range allowed."""
 import numpy as np
 import pytest
 
-from doe_calib import (Configurations, FitSettings, Robot, Tool, build_model, examples, identify,
+from doe_calib import (Configurations, FitSettings, Robot, examples, identify, 
                        simulate)
 from doe_calib.cli import main, options
 from doe_calib.design.augment import augment_design
@@ -76,12 +76,6 @@ def test_design_refuses_a_power_not_above_its_level_before_any_work(tmp_path, ca
     assert "error: --alpha 0.5 and --power 0.4: the power must be above the level" in \
         capsys.readouterr().err
     assert not list(tmp_path.iterdir())
-
-
-@pytest.fixture(scope="module")
-def model3():
-    return build_model(Robot.from_urdf(examples.THREE_DOF_URDF),
-                       Tool.from_yaml(examples.THREE_DOF_TOOL_YAML), "joint_offset")
 
 
 @pytest.fixture(scope="module")

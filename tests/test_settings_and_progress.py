@@ -11,11 +11,8 @@ from doe_calib import (
     DiagnosisSettings,
     FitSettings,
     RefineSettings,
-    Robot,
-    Tool,
     build_model,
     diagnose,
-    examples,
     identify,
     refine,
     simulate,
@@ -26,12 +23,6 @@ from doe_calib.model.simulate import random_configurations
 #: Few poses for the parameters, and a missing effect: both expected here.
 pytestmark = [pytest.mark.filterwarnings("ignore::doe_calib.errors.IdentifiabilityWarning"),
               pytest.mark.filterwarnings("ignore::doe_calib.errors.MisfitWarning")]
-
-
-@pytest.fixture(scope="module")
-def model3():
-    return build_model(Robot.from_urdf(examples.THREE_DOF_URDF),
-                       Tool.from_yaml(examples.THREE_DOF_TOOL_YAML), "joint_offset")
 
 
 @pytest.fixture(scope="module")

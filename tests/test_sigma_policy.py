@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import doe_calib
-from doe_calib import Configurations, Robot, Tool, build_model, simulate
+from doe_calib import Configurations, simulate
 from doe_calib.cli import main
 from doe_calib.diagnosis import diagnose
 from doe_calib.estimation.identify import FitSettings, identify_quietly
@@ -20,11 +20,6 @@ from doe_calib.model.simulate import random_configurations
 DATA = Path(doe_calib.__file__).parent / "examples"
 URDF, TOOL = DATA / "three_dof.urdf", DATA / "three_dof_tool.yaml"
 SIGMA_MM = 0.02  # the true simulated σ
-
-
-@pytest.fixture(scope="module")
-def model3():
-    return build_model(Robot.from_urdf(URDF), Tool.from_yaml(TOOL), "joint_offset")
 
 
 @pytest.fixture(scope="module")

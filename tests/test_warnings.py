@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import doe_calib
-from doe_calib import Configurations, Robot, Tool, build_model, errors, simulate
+from doe_calib import Configurations, errors, simulate
 from doe_calib.diagnosis import diagnose
 from doe_calib.diagnosis.effect_tests import candidate_effects, candidate_tests
 from doe_calib.errors import DoeCalibWarning, IdentifiabilityWarning, ModelError
@@ -18,12 +18,6 @@ from doe_calib.model.effects.gear_ratio import GearRatio
 from doe_calib.model.simulate import random_configurations
 
 DATA = Path(doe_calib.__file__).parent / "examples"
-
-
-@pytest.fixture(scope="module")
-def model3():
-    return build_model(Robot.from_urdf(DATA / "three_dof.urdf"),
-                       Tool.from_yaml(DATA / "three_dof_tool.yaml"), "joint_offset")
 
 
 @pytest.fixture(scope="module")
