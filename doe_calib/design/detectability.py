@@ -119,12 +119,12 @@ def assess(spec: str, new, params, z, zp, jacobian, alpha: float = 0.05,
     zs, zps = (z * scale) @ basis, (zp * scale) @ basis
     s_raw = np.linalg.svd(zs, compute_uv=False)
     if s_raw.size == 0 or s_raw[-1] < INVISIBLE:
-        null = basis @ np.linalg.svd(zs, full_matrices=False)[2][-1]  # V only: no 3K × 3K U
+        null = basis @ null_direction(*np.linalg.svd(zs, full_matrices=False)[1:])
         return Detectability(spec, names, unit, alpha, power, np.inf, False,
                              invisible_words(new, null), absorbed, tuple(_unit(null * scale)))
     _, s_scaled, vt_scaled = np.linalg.svd(zps, full_matrices=False)
     if s_scaled[-1] < INVISIBLE:
-        null = basis @ vt_scaled[-1]
+        null = basis @ null_direction(s_scaled, vt_scaled)
         words = absorbed_words(params, jacobian(), z @ (null * scale), new, null)
         return Detectability(spec, names, unit, alpha, power, np.inf, False, words, absorbed,
                              tuple(_unit(null * scale)))
@@ -138,6 +138,20 @@ def assess(spec: str, new, params, z, zp, jacobian, alpha: float = 0.05,
     lam = noncentrality_for_power(own.shape[1], alpha, power)
     return Detectability(spec, names, unit, alpha, power, float(np.sqrt(lam) / s[-1] * factor),
                          True, "", absorbed, tuple(own @ vt[-1]))
+
+
+def null_direction(s, vt) -> np.ndarray:
+    """One direction, the same whichever basis the SVD returned, of the null space of a
+    matrix with singular values ``s`` and right singular vectors ``vt``: the null space's
+    closest direction to a single parameter (the one it holds most of), that parameter's
+    component positive. With a null space of one dimension, the SVD's own vector."""
+    null = vt[s < INVISIBLE] if s.size else vt[-1:]
+    if len(null) < 2:
+        return vt[-1]
+    weight = np.round((null ** 2).sum(axis=0), 9)
+    k = int(np.argmax(weight))
+    direction = null.T @ null[:, k]
+    return np.round(direction / np.linalg.norm(direction), 12)  # no rounding noise shown
 
 
 def own_directions(new, params) -> np.ndarray:
