@@ -19,18 +19,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from doe_calib.io.logged_turns import turn_joints
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.evaluation import evaluate
 
 TURN = 2.0 * np.pi
 #: Largest difference of a marker's position a full turn away that counts as the same, m.
 SAME_POSITION = 1e-9
-
-
-def turn_joints(robot) -> tuple:
-    """Revolute joints (0-based) whose limits span more than one turn."""
-    return tuple(k for k, j in enumerate(robot.joints)
-                 if j.kind == "revolute" and j.upper - j.lower > TURN + 1e-9)
 
 
 def periodic_joints(model, joints, rng=None) -> tuple:
