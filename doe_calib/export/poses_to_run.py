@@ -1,0 +1,105 @@
+"""The poses a program runs, read from any of the toolkit's JSON files that hold poses.
+
+- a design (``doe_calib.design``): every pose under every load case;
+- an augmentation (``doe_calib.augment``, ``design --augment``): the new poses it adds, each
+  under every load case (the campaign it augments was measured already and is not in it);
+- a compensation result (``doe_calib.compensation``): each row's compensated q′ (the
+  programmed q where the target was not reached), in the rows' order
+  (:func:`.compensated_program.compensated_design`). It names no tool: give one.
+
+Each is returned as the :class:`~doe_calib.design.result.DesignResult` the exporters take.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from doe_calib.compensation.result import FORMAT as COMPENSATION, CompensationResult
+from doe_calib.design.augment_result import FORMAT as AUGMENT, AugmentResult
+from doe_calib.design.result import FORMAT as DESIGN, DesignResult
+from doe_calib.errors import DataError, DoeCalibError
+from doe_calib.export.compensated_program import compensated_design
+from doe_calib.io.json_file import read_json
+from doe_calib.model.marker_model import build_model
+
+
+@dataclass(frozen=True, eq=False)
+class PosesToRun:
+    """What a program runs: ``design`` (for the exporters), the file's ``format``, what the
+    program runs in words (``note``) and whether it keeps the rows' order (``as_given``: a
+    compensated program is the user's, not a measurement plan)."""
+
+    design: DesignResult
+    format: str
+    note: str
+    as_given: bool = False
+
+
+def read_poses_to_run(path, tool=None) -> PosesToRun:
+    """The poses to run of a design, augmentation or compensation JSON (module notes).
+
+    Parameters
+    ----------
+    path : path-like
+    tool : Tool, optional
+        For a file that names none (a compensation result); refused for one that does.
+
+    Raises
+    ------
+    DataError
+        Not one of these formats, incomplete, or a tool missing or given twice.
+    """
+    data = read_json(path, what="file of poses")
+    kind = data.get("format") if isinstance(data, dict) else None
+    try:
+        if kind == DESIGN:
+            _no_tool(tool, path)
+            design = DesignResult.from_dict(data)
+            return PosesToRun(design, kind, f"the design's {len(design.poses())} poses")
+        if kind == AUGMENT:
+            _no_tool(tool, path)
+            return _augmentation(AugmentResult.from_dict(data), path)
+        if kind == COMPENSATION:
+            return _compensation(data, tool, path)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise DataError(f"not a complete {kind} file ({exc!r} is missing or malformed)",
+                        path) from None
+    raise DataError(f"holds no poses to run: \"format\" is {kind!r}; export takes a design "
+                    f"({DESIGN}), an augmentation ({AUGMENT}) or a compensation result "
+                    f"({COMPENSATION})", path, 1, 1)
+
+
+def _no_tool(tool, path) -> None:
+    if tool is not None:
+        raise DataError("the file holds its tool; --tool is for a compensation result", path)
+
+
+def _augmentation(result: AugmentResult, path) -> PosesToRun:
+    if result.tool is None:
+        raise DataError("this augmentation names no tool (written before doe_calib kept it): "
+                        "run `doe-calib design --augment` again", path)
+    new = len(dict.fromkeys(result.configurations.pose))
+    design = DesignResult(robot=result.robot, tool=result.tool, model=result.model,
+                          configurations=result.configurations,
+                          criterion=f"{result.criterion}, augmentation: its new poses only",
+                          value=result.value_after, bound=math.nan, efficiency=math.nan,
+                          predicted_std=result.std_after, constraints=result.constraints)
+    return PosesToRun(design, AUGMENT, f"the augmentation's {new} new poses (the "
+                                       f"{result.measured_configurations} configurations "
+                                       f"measured before are not run)")
+
+
+def _compensation(data: dict, tool, path) -> PosesToRun:
+    if tool is None:
+        raise DataError("a compensation result holds the joint values to run but names no "
+                        "tool, whose markers the collision check needs: give --tool", path)
+    result = CompensationResult.from_dict(data)
+    try:  # the loads' centres of mass, from the nominal flange orientations
+        model = build_model(result.robot, tool, "joint_offset")
+    except DoeCalibError:
+        model = None
+    reached = int(result.converged.sum())
+    return PosesToRun(compensated_design(result, tool, model), COMPENSATION,
+                      f"the {len(result)} compensated rows in their order ({reached} at q′, "
+                      f"{len(result) - reached} not reached at their programmed q)",
+                      as_given=True)
