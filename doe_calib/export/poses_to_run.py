@@ -7,7 +7,8 @@
   programmed q where the target was not reached), in the rows' order
   (:func:`.compensated_program.compensated_design`). It names no tool: give one.
 
-Each is returned as the :class:`~doe_calib.design.result.DesignResult` the exporters take.
+Each is returned as the :class:`~doe_calib.design.result.DesignResult` the exporters take;
+a new file of poses (an acceptance test's) is one reader and one line in :data:`READERS`.
 """
 from __future__ import annotations
 
@@ -47,34 +48,32 @@ def read_poses_to_run(path, tool=None) -> PosesToRun:
     Raises
     ------
     DataError
-        Not one of these formats, incomplete, or a tool missing or given twice.
+        Not one of :data:`READERS`' formats, incomplete, or a tool missing or given twice.
     """
     data = read_json(path, what="file of poses")
     kind = data.get("format") if isinstance(data, dict) else None
+    if kind not in READERS:
+        raise DataError(f"holds no poses to run: \"format\" is {kind!r}; export takes "
+                        f"{', '.join(READERS)}", path, 1, 1)
+    if (tool is None) == (kind == COMPENSATION):
+        raise DataError("a compensation result holds the joint values to run but names no "
+                        "tool, whose markers the collision check needs: give --tool"
+                        if tool is None else
+                        "the file holds its tool; --tool is for a compensation result", path)
     try:
-        if kind == DESIGN:
-            _no_tool(tool, path)
-            design = DesignResult.from_dict(data)
-            return PosesToRun(design, kind, f"the design's {len(design.poses())} poses")
-        if kind == AUGMENT:
-            _no_tool(tool, path)
-            return _augmentation(AugmentResult.from_dict(data), path)
-        if kind == COMPENSATION:
-            return _compensation(data, tool, path)
+        return READERS[kind](data, tool, path)
     except (KeyError, TypeError, ValueError) as exc:
         raise DataError(f"not a complete {kind} file ({exc!r} is missing or malformed)",
                         path) from None
-    raise DataError(f"holds no poses to run: \"format\" is {kind!r}; export takes a design "
-                    f"({DESIGN}), an augmentation ({AUGMENT}) or a compensation result "
-                    f"({COMPENSATION})", path, 1, 1)
 
 
-def _no_tool(tool, path) -> None:
-    if tool is not None:
-        raise DataError("the file holds its tool; --tool is for a compensation result", path)
+def _design(data: dict, tool, path) -> PosesToRun:
+    design = DesignResult.from_dict(data)
+    return PosesToRun(design, DESIGN, f"the design's {len(design.poses())} poses")
 
 
-def _augmentation(result: AugmentResult, path) -> PosesToRun:
+def _augmentation(data: dict, tool, path) -> PosesToRun:
+    result = AugmentResult.from_dict(data)
     if result.tool is None:
         raise DataError("this augmentation names no tool (written before doe_calib kept it): "
                         "run `doe-calib design --augment` again", path)
@@ -90,9 +89,6 @@ def _augmentation(result: AugmentResult, path) -> PosesToRun:
 
 
 def _compensation(data: dict, tool, path) -> PosesToRun:
-    if tool is None:
-        raise DataError("a compensation result holds the joint values to run but names no "
-                        "tool, whose markers the collision check needs: give --tool", path)
     result = CompensationResult.from_dict(data)
     try:  # the loads' centres of mass, from the nominal flange orientations
         model = build_model(result.robot, tool, "joint_offset")
@@ -103,3 +99,7 @@ def _compensation(data: dict, tool, path) -> PosesToRun:
                       f"the {len(result)} compensated rows in their order ({reached} at q′, "
                       f"{len(result) - reached} not reached at their programmed q)",
                       as_given=True)
+
+
+#: File format → its reader ``(data, tool, path) → PosesToRun``: one line per format of poses.
+READERS = {DESIGN: _design, AUGMENT: _augmentation, COMPENSATION: _compensation}
