@@ -178,8 +178,8 @@ class Measurements:
         dropped silently.
     warnings : tuple of str
         One message per reading accepted with a doubt (a joint a hair past its
-        limit), naming file, line and column; first, when some are, one naming the poses
-        logged a whole turn apart (:mod:`doe_calib.io.logged_turns`).
+        limit), naming file, line and column; one naming the poses logged a whole turn
+        apart, when some are (:mod:`doe_calib.io.logged_turns`).
     session : tuple of str
         The measurement session of each configuration (length M; empty: one
         session). Cross-validation holds out whole sessions when there are several.
