@@ -1,8 +1,5 @@
-"""``doe-calib export``: poses as a robot program (KRL, RAPID, URScript) or design CSV.
-
-The poses are those of any file that holds poses to run
-(:mod:`doe_calib.export.poses_to_run`): a design, an augmentation's new poses, or a
-compensation result's rows.
+"""``doe-calib export``: the poses of a design, augmentation or compensation result
+(:mod:`doe_calib.export.poses_to_run`) as a robot program (KRL, RAPID, URScript) or CSV.
 
 Every move of the program is checked for collisions with the collision model
 the design was made with (its clearances, loads and constraints file) and

@@ -1,14 +1,9 @@
-"""The poses a program runs, read from any of the toolkit's JSON files that hold poses.
+"""The poses a program runs, from any JSON file of the toolkit that holds poses.
 
-- a design (``doe_calib.design``): every pose under every load case;
-- an augmentation (``doe_calib.augment``, ``design --augment``): the new poses it adds, each
-  under every load case (the campaign it augments was measured already and is not in it);
-- a compensation result (``doe_calib.compensation``): each row's compensated q′ (the
-  programmed q where the target was not reached), in the rows' order
-  (:func:`.compensated_program.compensated_design`). It names no tool: give one.
-
-Each is returned as the :class:`~doe_calib.design.result.DesignResult` the exporters take;
-a new file of poses (an acceptance test's) is one reader and one line in :data:`READERS`.
+A design (every pose), an augmentation (``design --augment``: the new poses it adds), a
+compensation result (each row's q′, or its programmed q where not reached, in the rows'
+order; it names no tool). Each becomes the :class:`~doe_calib.design.result.DesignResult`
+the exporters take; another file of poses is one reader and a line in :data:`READERS`.
 """
 from __future__ import annotations
 
@@ -18,7 +13,7 @@ from dataclasses import dataclass
 from doe_calib.compensation.result import FORMAT as COMPENSATION, CompensationResult
 from doe_calib.design.augment_result import FORMAT as AUGMENT, AugmentResult
 from doe_calib.design.result import FORMAT as DESIGN, DesignResult
-from doe_calib.errors import DataError, DoeCalibError
+from doe_calib.errors import DataError
 from doe_calib.export.compensated_program import compensated_design
 from doe_calib.io.json_file import read_json
 from doe_calib.model.marker_model import build_model
@@ -90,11 +85,9 @@ def _augmentation(data: dict, tool, path) -> PosesToRun:
 
 def _compensation(data: dict, tool, path) -> PosesToRun:
     result = CompensationResult.from_dict(data)
-    try:  # the loads' centres of mass, from the nominal flange orientations
-        model = build_model(result.robot, tool, "joint_offset")
-    except DoeCalibError:
-        model = None
     reached = int(result.converged.sum())
+    # the model gives the loads' centres of mass (nominal flange orientations)
+    model = build_model(result.robot, tool, "joint_offset")
     return PosesToRun(compensated_design(result, tool, model), COMPENSATION,
                       f"the {len(result)} compensated rows in their order ({reached} at q′, "
                       f"{len(result) - reached} not reached at their programmed q)",

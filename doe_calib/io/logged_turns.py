@@ -1,11 +1,10 @@
 """Rows of one pose logged a whole turn apart, as a program on a multi-turn joint logs them.
 
-A revolute joint whose limits span more than one turn (a UR's ±360°) stands in the same
-place at q and q ± 360°. A program that takes, per move, the equivalent angle that keeps
-the move short (:mod:`doe_calib.export.turns`) may log a pose's loaded pass one turn away
-from its unloaded pass. Such rows are one pose. Each row keeps its own logged q: the
-kinematics are the same a turn away, but an effect by joint angle (a gear-ratio error)
-need not be, and the logged angle is the one the joint stood at.
+A revolute joint whose limits span more than a turn (a UR's ±360°) stands in the same place
+at q and q ± 360°, and a program that takes the nearer equivalent per move
+(:mod:`doe_calib.export.turns`) may log a pose's loaded pass a turn from its unloaded pass.
+Such rows are one pose, each at its own logged q: an effect by angle (a gear-ratio error)
+need not repeat a turn away.
 """
 from __future__ import annotations
 
@@ -25,20 +24,9 @@ def turn_joints(robot) -> tuple:
 
 
 def whole_turns(difference, robot) -> np.ndarray:
-    """Whole turns in each joint's ``difference`` (file units) on :func:`turn_joints`.
+    """Whole turns k ≠ 0 (to :data:`TURN_TOLERANCE`) in each of ``difference`` (R, N), deg, on
+    the :func:`turn_joints`; 0 elsewhere. Shape (R, N), int.
 
-    Parameters
-    ----------
-    difference : ndarray, shape (R, N)
-        A row's q minus that of its pose's first row, deg (mm for a prismatic joint).
-
-    Returns
-    -------
-    ndarray of int, shape (R, N)
-        k where the difference is k turns (k ≠ 0) to :data:`TURN_TOLERANCE`; 0 elsewhere.
-
-    Examples
-    --------
     >>> from types import SimpleNamespace as J
     >>> arm = J(joints=[J(kind="revolute", lower=-7.0, upper=7.0)] * 2)
     >>> whole_turns(np.array([[-360.0, 359.5]]), arm).tolist()
@@ -53,17 +41,13 @@ def whole_turns(difference, robot) -> np.ndarray:
 
 
 def turns_note(pose, turns, rows) -> str | None:
-    """What was accepted: the poses of ``rows`` logged a whole turn apart (None: none).
-
-    ``pose`` (R,) pose ids, ``turns`` (R, N) from :func:`whole_turns`, ``rows`` the rows kept.
-    """
+    """The poses of ``rows`` logged a whole turn apart (``turns`` (R, N)), in words; None: none."""
     rows = [r for r in rows if turns[r].any()]
     if not rows:
         return None
     poses = list(dict.fromkeys(pose[r] for r in rows))
     joints = ", ".join(f"q{k + 1}" for k in np.flatnonzero(turns[rows].any(axis=0)))
-    shown = ", ".join(map(repr, poses[:8])) + (f" and {len(poses) - 8} more" if len(poses) > 8
-                                                else "")
     return (f"{len(poses)} pose(s) logged a whole turn apart ({joints}) between their rows, "
-            f"as a program that takes the shortest equivalent angle logs them: {shown}; each "
-            f"is kept as one pose, every row at its own logged q")
+            f"as a program that takes the shortest equivalent angle logs them: "
+            f"{', '.join(map(repr, poses[:8]))}{' …' if len(poses) > 8 else ''}; each is kept "
+            f"as one pose, every row at its own logged q")
