@@ -10,6 +10,7 @@ import pytest
 from markered_robot import markered_robot
 
 from doe_calib import build_model
+from doe_calib.cli import main
 from doe_calib.errors import DataError
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.io.csv_files import read_measurements
@@ -57,7 +58,7 @@ def campaign(tmp_path_factory):
     return robot, tool, plain
 
 
-def test_a_pass_logged_a_turn_away_identifies_as_the_unturned_one(campaign, tmp_path):
+def test_a_pass_logged_a_turn_away_identifies_as_the_unturned_one(campaign, tmp_path, capsys):
     robot, tool, plain = campaign
     logged = tmp_path / "logged.csv"
     _turned(plain, logged, lambda v: -360.0 if v > 0 else 360.0)  # the nearer equivalent
@@ -76,6 +77,13 @@ def test_a_pass_logged_a_turn_away_identifies_as_the_unturned_one(campaign, tmp_
     a, b = (identify_quietly(model, m) for m in (before, after))
     assert np.allclose(a.parameters.values, b.parameters.values, rtol=1e-7, atol=1e-12)
     assert a.sigma_mm == pytest.approx(b.sigma_mm, rel=1e-9)
+    tool_yaml = tmp_path / "tool.yaml"  # the command says so
+    tool_yaml.write_text("flange: tool0\nmarkers:\n" + "".join(
+        f"  {k}: [{', '.join(f'{1000 * c:g}' for c in v)}]\n" for k, v in MARKERS.items()))
+    assert main(["identify", "--robot", str(_ur5()), "--flange", "tool0", "--tool",
+                 str(tool_yaml), "--model", MODEL, "--data", str(logged), "--select", "none",
+                 "--out", str(tmp_path / "r.json")]) == 0
+    assert "warning: 30 pose(s) logged a whole turn apart" in capsys.readouterr().err
 
 
 def test_rows_a_turn_and_a_bit_apart_are_still_refused(campaign, tmp_path):
