@@ -22,6 +22,7 @@ from test_export import urscript_structure
 
 from doe_calib import Robot, Tool, examples
 from doe_calib.cli import main
+from doe_calib.io.csv_files import read_design
 
 ONE_DEG = math.radians(1.0)
 UR_TOOL = Path(examples.UR_TOOL_YAML).read_text(encoding="utf-8")
@@ -214,6 +215,13 @@ def test_ur5_in_a_cell_with_its_own_360_limits(tmp_path, capsys):
     program = _program(tmp_path / "ur" / "doe_calib.script")
     tool = Tool.from_yaml(tmp_path / "tool.yaml")
     _check(program, robot, tool, UR5_BOXES, -0.9, UR_LOAD, (-1.5, 0.3, 0.6), 5)
+    # each pose logged at one q: the loaded pass keeps its first pass's turns (export/turns.py)
+    assert main(["export", str(design), "--format", "csv", "--out", str(tmp_path / "p.csv")]) \
+        == 0
+    cfg = read_design(tmp_path / "p.csv", robot)
+    apart = [p for p, q in zip(cfg.pose, cfg.q) if not np.allclose(q, cfg.q[cfg.pose.index(p)])]
+    assert len(apart) <= 1, apart  # 4 of 5 when each move took its nearest equivalent; the
+    # first loaded visit, right after the load change, keeps its turn only within 90° more
 
 
 def test_ur10_without_a_cell_file(tmp_path, capsys):

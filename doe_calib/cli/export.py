@@ -1,4 +1,5 @@
-"""``doe-calib export``: a design as a robot program (KRL, RAPID, URScript) or design CSV.
+"""``doe-calib export``: the poses of a design, augmentation or compensation result
+(:mod:`doe_calib.export.poses_to_run`) as a robot program (KRL, RAPID, URScript) or CSV.
 
 Every move of the program is checked for collisions with the collision model
 the design was made with (its clearances, loads and constraints file) and
@@ -16,13 +17,18 @@ from doe_calib.cli.program_options import program_arguments, stations, tool_payl
 from doe_calib.errors import DataError, OptionError
 from doe_calib.io.json_file import strict_json
 
-HELP = "write a design as a KUKA KRL, ABB RAPID or URScript program, or a design CSV"
+HELP = ("write the poses of a design, an augmentation or a compensation as a KUKA KRL, ABB "
+        "RAPID or URScript program, or a design CSV")
 EXAMPLE = ("doe-calib export design.json --format krl --out programs/ --name calib --handshake 5 "
            "--axis-map a1:-1:0,a3:1:-90")
 
 
 def add_arguments(c):
-    c.add_argument("design", help="design JSON written by doe-calib design")
+    c.add_argument("design", help="JSON of the poses to run: a design (doe-calib design), an "
+                                  "augmentation (design --augment: its new poses) or a "
+                                  "compensation result")
+    c.add_argument("--tool", metavar="TOOL.yaml",
+                   help="the tool, for a compensation result (which names none)")
     c.add_argument("--format", required=True, choices=list(EXPORT_FORMATS),
                    help="; ".join(f"{k}: {d}" for k, d in EXPORT_FORMATS.items()))
     c.add_argument("--out", help="directory (files NAME.src/.dat/.mod/.script/.csv) or file "
@@ -113,13 +119,17 @@ def _is_free(models):
 
 
 def run(args):
-    from doe_calib.design.result import DesignResult
     from doe_calib.export import AxisMap, Plan, check_program, cycle_time, export_design, moves
+    from doe_calib.export.poses_to_run import read_poses_to_run
     from doe_calib.export.sequence import NO_LOAD
     from doe_calib.export.turns import blocked_turns
+    from doe_calib.model.tool import Tool
 
     try:
-        design = DesignResult.from_json(args.design)
+        source = read_poses_to_run(args.design, None if args.tool is None else
+                                   Tool.from_yaml(args.tool))
+        design = source.design
+        print(f"runs {source.note}", file=sys.stderr)
         axis_map = None if args.axis_map is None else AxisMap.parse(args.axis_map, design.robot)
         constraints = _constraints(args, design)
         models = _models(args, design, constraints)
@@ -130,7 +140,9 @@ def run(args):
         turns = args.turns == "shortest"
         # turns that would take a joint through a value no path can pass are not chosen
         blocked = blocked_turns(models[NO_LOAD], design.robot) if turns and models else ()
-        plan = Plan(args.group_by, args.order, args.approach_step, args.alternate != "none",
+        # a compensated program is the user's: its rows in their order, no alternate sides
+        plan = Plan(*(("none", "design") if source.as_given else (args.group_by, args.order)),
+                    args.approach_step, args.alternate != "none" and not source.as_given,
                     axis_map, turns=turns, blocked=blocked, **where)
         out = args.out if args.out is not None else Path(args.design).parent
         visits = moves(design, plan)
@@ -158,7 +170,8 @@ def run(args):
     print(cycle.summary(), file=sys.stderr)
     print(f"written: {', '.join(map(str, paths))}", file=sys.stderr)
     if args.json:
-        print(strict_json({"design": args.design, "format": args.format, "name": args.name,
+        print(strict_json({"design": args.design, "source": source.format, "runs": source.note,
+                           "format": args.format, "name": args.name,
                           "poses": n_poses, "measurements": len(design.configurations),
                           "cycle_time": cycle.to_dict(), "files": [str(p) for p in paths],
                           "collision": None if checked is None else {

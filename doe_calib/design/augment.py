@@ -26,7 +26,7 @@ from doe_calib.design.discovery.detection import design_readings, detect_effects
 from doe_calib.design.discovery.load_directions import directed_loads
 from doe_calib.design.discovery.variants import (approach_joints, free_parameters,
                                                  observation_rows, variants, within_torque_limits)
-from doe_calib.design.pipeline import Goal, Setting, run
+from doe_calib.design.pipeline import Goal, Setting, constraints_used, run
 from doe_calib.design.problem import blocks_for, design_parameters, load_configurations
 from doe_calib.design.solvers.exchange import regularised
 from doe_calib.errors import SolverError
@@ -313,4 +313,5 @@ class AugmentGoal(Goal):
             detect_after=detected[1], candidates=cands.count(),
             measured_configurations=len(measured.configurations),
             sigma_mm=1000.0 * setting.sigma, robot=model.robot, model=model.spec,
-            reachability=reach)
+            reachability=reach, tool=model.tool,
+            constraints=constraints_used(setting, setting.loads, r))

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import textwrap
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -11,6 +11,7 @@ from doe_calib.design.result import CandidateCount
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.robot import Robot
+from doe_calib.model.tool import Tool
 
 FORMAT = "doe_calib.augment"
 
@@ -69,6 +70,9 @@ class AugmentResult:
     model : str
     reachability : Reached or None
         None without a collision model.
+    tool : Tool or None
+    constraints : dict
+        As a design's (its loads, cell file and collision model), for the program's check.
     """
 
     configurations: Configurations
@@ -86,6 +90,8 @@ class AugmentResult:
     robot: Robot
     model: str
     reachability: Reached | None = None
+    tool: Tool | None = None
+    constraints: dict = field(default_factory=dict)
 
     def summary(self) -> str:
         k = len(dict.fromkeys(self.configurations.pose))
@@ -128,6 +134,8 @@ class AugmentResult:
                 "measured_configurations": self.measured_configurations,
                 "sigma_mm": self.sigma_mm, "robot": self.robot.to_dict(),
                 "reachability": {} if self.reachability is None else asdict(self.reachability),
+                "tool": None if self.tool is None else self.tool.to_dict(),
+                "constraints": self.constraints,
                 "configurations": [{"pose": p, "q": list(q * f), "wrench": list(w),
                                     "approach": [int(s) for s in a]}
                                    for p, q, w, a in zip(cfg.pose, cfg.q, cfg.wrench,
@@ -157,7 +165,9 @@ class AugmentResult:
                    candidates=CandidateCount(**d["candidates"]),
                    measured_configurations=int(d["measured_configurations"]),
                    sigma_mm=float(d["sigma_mm"]), robot=robot, model=d["model"],
-                   reachability=Reached(**d["reachability"]) if d.get("reachability") else None)
+                   reachability=Reached(**d["reachability"]) if d.get("reachability") else None,
+                   tool=Tool.from_dict(d["tool"]) if d.get("tool") else None,
+                   constraints=d.get("constraints", {}))
 
     @classmethod
     def from_json(cls, path) -> "AugmentResult":

@@ -218,9 +218,10 @@ def _loads(design) -> tuple:
     return words, payloads
 
 
-def _turned(design, q, loads, plan: Plan, home, load_pose) -> np.ndarray:
-    """``q`` (visits in order, rad/m) with multi-turn joints at their shortest equivalents;
-    with a home pose, ``load_pose`` before each change of ``loads`` is a fixed point."""
+def _turned(design, q, loads, plan: Plan, home, load_pose, poses) -> np.ndarray:
+    """``q`` (visits in order, rad/m; of ``poses``) with multi-turn joints at their shortest
+    equivalents, a pose's later visits on its first one's turn where cheap; with a home pose,
+    ``load_pose`` before each change of ``loads`` is a fixed point."""
     robot = design.robot
     joints = turn_joints(robot) if plan.turns else ()
     if not joints:
@@ -229,11 +230,14 @@ def _turned(design, q, loads, plan: Plan, home, load_pose) -> np.ndarray:
         joints = periodic_joints(build_model(robot, design.tool, design.model), joints)
     except DoeCalibError:  # a model that cannot be built here (an unregistered effect)
         return q
-    path, fixed, previous = [], [], NO_LOAD
-    for v, load in zip(q, loads):
+    path, fixed, first, previous, seen = [], [], [], NO_LOAD, {}
+    for v, load, pose in zip(q, loads, poses):
         if home is not None and load != previous:
             path.append(load_pose)
             fixed.append(True)
+            first.append(-1)
+        first.append(seen.get(pose, -1))
+        seen.setdefault(pose, len(path))
         path.append(v)
         fixed.append(False)
         previous = load
@@ -241,7 +245,7 @@ def _turned(design, q, loads, plan: Plan, home, load_pose) -> np.ndarray:
     lower, upper = (robot.lower, robot.upper) if plan.limits is None else plan.limits
     out = shortest_turns(np.array(path), joints, np.asarray(lower, float),
                          np.asarray(upper, float), margin, start=home, end=home, fixed=fixed,
-                         blocked=dict(plan.blocked))
+                         blocked=dict(plan.blocked), first=first)
     return out[~np.array(fixed)]
 
 
@@ -272,7 +276,8 @@ def moves(design, plan: Plan | None = None) -> list[Move]:
         all_sides += list(default_sides(cfg.approach[group], joints))
     load_pose = home if plan.load_pose is None else np.array(
         check_station(robot, plan.load_pose, "--load-change-pose", limits))
-    turned = _turned(design, cfg.q[rows], [loads[r] for r in rows], plan, home, load_pose)
+    turned = _turned(design, cfg.q[rows], [loads[r] for r in rows], plan, home, load_pose,
+                     [cfg.pose[r] for r in rows])
     out = []
     for r, sides, q in zip(rows, all_sides, turned):
         pose, want = cfg.pose[r], cfg.approach[r]

@@ -10,7 +10,12 @@ programming over the visits, for a lexicographic cost:
    visit i allows: every move as short as the limits let it be;
 2. least total **travel** Σ_i |Δq_i|, start to end (the home pose).
 
-The cost separates over the joints, so the optimum is exact. An equivalent other than
+The cost separates over the joints, so the optimum is exact. A later visit of a pose (its
+loaded pass) keeps, where it can, the angle its first visit got: a visit on another turn
+adds :data:`KEEP_TURN` to the excess, so the logged passes of a pose agree
+(:mod:`doe_calib.io.logged_turns` accepts them either way) unless keeping the turn
+costs more travel than that or crosses a blocked value; the first visits keep the
+angles of the plain optimum. An equivalent other than
 the design's angle keeps ``margin`` inside the limits and is used only on joints on
 which the model's markers have period 2π (:func:`periodic_joints`: not a gear-ratio
 error or a compliance by angle in bins).
@@ -19,18 +24,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from doe_calib.io.logged_turns import turn_joints
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.evaluation import evaluate
 
 TURN = 2.0 * np.pi
 #: Largest difference of a marker's position a full turn away that counts as the same, m.
 SAME_POSITION = 1e-9
-
-
-def turn_joints(robot) -> tuple:
-    """Revolute joints (0-based) whose limits span more than one turn."""
-    return tuple(k for k, j in enumerate(robot.joints)
-                 if j.kind == "revolute" and j.upper - j.lower > TURN + 1e-9)
+#: Extra travel (rad) of a joint worth a later visit of a pose on its first visit's turn.
+KEEP_TURN = np.pi / 2
 
 
 def periodic_joints(model, joints, rng=None) -> tuple:
@@ -75,7 +77,7 @@ def _equivalents(value: float, lower: float, upper: float, margin: float) -> np.
 
 
 def shortest_turns(q, joints, lower, upper, margin, start=None, end=None,
-                   fixed=None, blocked=None) -> np.ndarray:
+                   fixed=None, blocked=None, first=None) -> np.ndarray:
     """``q`` with each joint of ``joints`` turned by whole turns for short moves (module notes).
 
     Parameters
@@ -92,6 +94,9 @@ def shortest_turns(q, joints, lower, upper, margin, start=None, end=None,
         Rows passed through as they are (a load-change pose).
     blocked : dict, optional
         Joint → values (rad) no move of it may pass.
+    first : array_like of int, shape (V,), optional
+        The earlier visit of the same pose whose turn a visit keeps where that costs at most
+        :data:`KEEP_TURN` (module notes); −1: none.
 
     Examples
     --------
@@ -101,15 +106,23 @@ def shortest_turns(q, joints, lower, upper, margin, start=None, end=None,
     """
     q = np.array(q, dtype=float)
     fixed = np.zeros(len(q), dtype=bool) if fixed is None else np.asarray(fixed, bool)
+    first = np.full(len(q), -1) if first is None else np.asarray(first, int)
     for j in joints:
         layers = [np.array([v]) if keep else _equivalents(v, lower[j], upper[j], margin[j])
                   for v, keep in zip(q[:, j], fixed)]
         if not layers:
             continue
-        path = _best_path(layers, None if start is None else start[j],
-                          None if end is None else end[j],
-                          np.zeros(0) if not blocked else np.asarray(blocked.get(j, ()), float))
-        q[:, j] = [layer[k] for layer, k in zip(layers, path)]
+        ends = (None if start is None else start[j], None if end is None else end[j],
+                np.zeros(0) if not blocked else np.asarray(blocked.get(j, ()), float))
+        chosen = [layer[k] for layer, k in zip(layers, _best_path(layers, *ends))]
+        if np.any(first >= 0):  # first visits as chosen; later ones on their turn if cheap
+            kept = set(first[first >= 0].tolist())
+            layers = [np.array([chosen[i]]) if i in kept else layer
+                      for i, layer in enumerate(layers)]
+            penalty = [np.where(np.isclose(layer, chosen[f]), 0.0, KEEP_TURN) if f >= 0 else
+                       np.zeros(len(layer)) for layer, f in zip(layers, first)]
+            chosen = [layer[k] for layer, k in zip(layers, _best_path(layers, *ends, penalty))]
+        q[:, j] = chosen
     return q
 
 
@@ -123,19 +136,21 @@ def _step(prev, layer, blocked):
     return travel, np.round(travel - travel.min(axis=0, keepdims=True), 9), crossed
 
 
-def _best_path(layers, start, end, blocked) -> list:
+def _best_path(layers, start, end, blocked, penalty=None) -> list:
     """Index into each layer of the path of least (crossings, excess, travel),
-    lexicographically."""
-    excess = np.zeros(len(layers[0]))
+    lexicographically; ``penalty`` (one array per layer) adds to the excess of each option."""
+    penalty = [np.zeros(len(layer)) for layer in layers] if penalty is None else penalty
+    excess = penalty[0].copy()
     travel = np.zeros(len(layers[0]))
     crossings = np.zeros(len(layers[0]))
     if start is not None:
         travel, excess, crossings = (a[:, 0] for a in _step(np.array([start]), layers[0],
                                                              blocked))
+        excess = excess + penalty[0]
     back = []
-    for prev, layer in zip(layers[:-1], layers[1:]):
+    for prev, layer, pen in zip(layers[:-1], layers[1:], penalty[1:]):
         t, e, x = _step(prev, layer, blocked)
-        t, e, x = t + travel[None, :], e + excess[None, :], x + crossings[None, :]
+        t, e, x = t + travel[None, :], e + excess[None, :] + pen[:, None], x + crossings[None, :]
         best = np.array([np.lexsort((t[c], e[c], x[c]))[0] for c in range(len(layer))])
         back.append(best)
         rows = np.arange(len(layer))

@@ -62,6 +62,7 @@ from doe_calib.io.configuration_columns import (
     texts,
 )
 from doe_calib.io.design_json import read_design_json
+from doe_calib.io.logged_turns import TURN_DEG, TURN_TOLERANCE, turns_note, whole_turns
 from doe_calib.io.measurements import ESTIMATED, GIVEN, PER_READING, Configurations, Measurements
 from doe_calib.io.reading_units import metres_finding
 from doe_calib.io.row_problems import RowProblems, earlier_in_group
@@ -148,10 +149,11 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     xyz = numbers(table, problems, 9, XYZ, None if require_xyz else np.nan) / 1000.0
     appr = approach(table, problems, 10, robot) if explicit else None
     pose_code, session_code = codes(pose), codes(sessions)
-    _same_q(table, problems, 5, robot, q, combined([session_code, pose_code]), pose)
+    turns = _same_q(table, problems, 5, robot, q, combined([session_code, pose_code]), pose)
     key = combined([pose_code, *(codes(w + 0.0) for w in wrench.T),
                     codes(np.where(np.isfinite(temp), temp + 0.0, np.inf)),
-                    *(codes(a) for a in (appr.T if explicit else ())), session_code])
+                    *(codes(a) for a in (appr.T if explicit else ())), session_code,
+                    *(codes(t) for t in turns.T if t.any())])
     read = ~problems.failing()
     first = earlier_in_group(combined([key, codes(marker)]), read)
     problems.check(11, read & (first >= 0), lambda i: (
@@ -176,10 +178,12 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
                                      derived_approach(q[first_row], robot, session))
     given = not np.isnan(sigma_m).any()
     kept = set(rows.tolist())
+    turned = turns_note(pose, turns, rows)
+    notes = ([(-1, turned)] if turned else []) + notes
     meas = Measurements(cfg, config, marker[rows], xyz[rows], sigma_m[rows],
                         np.array(table.numbers)[rows], table.path, dropped,
                         ((ignored_note(table, extra),) if extra else ())
-                        + tuple(text for i, text in notes if i in kept),
+                        + tuple(text for i, text in notes if i in kept or i < 0),
                         session, not given,
                         PER_READING if "sigma" in table.columns else GIVEN if given else ESTIMATED)
     finding = metres_finding(meas.xyz, robot, meas.configurations.q, meas.config,
@@ -189,17 +193,22 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     return meas
 
 
-def _same_q(table, problems, rank, robot, q, group, pose) -> None:
-    """Refuse a row whose q differs from that of the first good row of its pose (``group``)."""
+def _same_q(table, problems, rank, robot, q, group, pose) -> np.ndarray:
+    """Refuse a row whose q differs from that of the first good row of its pose (``group``)
+    other than by whole turns (:mod:`~doe_calib.io.logged_turns`); return those turns (R, N)."""
     shown = q * robot.display_factors
     first = earlier_in_group(group, ~problems.failing())
     checked = ~problems.failing(below=rank) & (first >= 0)
-    differ = np.abs(shown - shown[np.maximum(first, 0)]) > Q_TOL
+    apart = shown - shown[np.maximum(first, 0)]
+    turns = np.where(checked[:, None], whole_turns(apart, robot), 0)
+    differ = np.abs(apart - TURN_DEG * turns) > np.where(turns != 0, TURN_TOLERANCE, Q_TOL)
     which = np.argmax(differ, axis=1)
     for k, name in enumerate(joint_columns(robot)):
         problems.check((rank, k), checked & differ.any(axis=1) & (which == k), lambda i, k=k: (
             f"pose {pose[i]!r} has q{k + 1} = {shown[i, k]:g} here but {shown[first[i], k]:g} "
-            f"on line {table.numbers[first[i]]}; all rows of a pose share q"), name)
+            f"on line {table.numbers[first[i]]}; all rows of a pose share q (or differ by "
+            f"whole turns on a joint of more than a turn)"), name)
+    return turns
 
 
 def read_design(path, robot) -> Configurations:

@@ -78,7 +78,8 @@ class Configurations:
     ----------
     pose : tuple of str, length M
         Pose id of each configuration; one pose measured under two loads gives
-        two configurations with the same id and q.
+        two configurations with the same id and q (or q whole turns apart on a joint of more
+        than a turn, as logged: :mod:`doe_calib.io.logged_turns`).
     q : ndarray, shape (M, N)
         Joint positions, rad (revolute) or m (prismatic).
     wrench : ndarray, shape (M, 6)
@@ -177,7 +178,8 @@ class Measurements:
         dropped silently.
     warnings : tuple of str
         One message per reading accepted with a doubt (a joint a hair past its
-        limit), naming file, line and column.
+        limit), naming file, line and column; one naming the poses logged a whole turn
+        apart, when some are (:mod:`doe_calib.io.logged_turns`).
     session : tuple of str
         The measurement session of each configuration (length M; empty: one
         session). Cross-validation holds out whole sessions when there are several.
