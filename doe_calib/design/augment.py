@@ -303,7 +303,9 @@ class AugmentGoal(Goal):
                                            self.power) for m in (measured, after))
         reach, r = None, choice.reachability
         if r is not None:
-            reach = Reached(r.to_dict(model.robot)["home"], dict(r.replaced), r.note(model.robot))
+            facts = r.to_dict(model.robot)
+            reach = Reached(facts["home"], facts["replaced"], facts["moved_from"],
+                            facts["too_close"])
         design_params = info.design_params
         return AugmentResult(
             configurations=cfg, criterion=crit.name, targets=self.targets,

@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from doe_calib.design.detectability import Detectability
+from doe_calib.design.notes import reachability_words
 from doe_calib.design.result import CandidateCount
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import Configurations
@@ -32,11 +33,17 @@ def parameter_std(params, m: np.ndarray) -> dict:
 class Reached:
     """The new poses kept reachable: the ``home`` pose (deg, mm), the chosen poses
     ``replaced`` (reason → count) because no free path joins them to home or a tracker beam
-    is blocked, and that in a ``note``."""
+    is blocked, and, when the home pose asked for was too close, that pose ``moved_from``
+    (deg, mm) and the pair ``too_close``; ``note``: the words of a file written before."""
 
     home: list
     replaced: dict
-    note: str
+    moved_from: list | None = None
+    too_close: str = ""
+    note: str = ""
+
+    def words(self) -> str:
+        return self.note or reachability_words(asdict(self))
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,7 +111,7 @@ class AugmentResult:
                  f"  candidates: {self.candidates.kept} kept of {self.candidates.drawn}"
                  + (f" from {self.candidates.source}" if self.candidates.source else ""),
                  "  poses: " + ", ".join(dict.fromkeys(self.configurations.pose)),
-                 *([f"  {self.reachability.note}"] if self.reachability else []),
+                 *([f"  {self.reachability.words()}"] if self.reachability else []),
                  "", "Predicted std (before → after)"]
         for name, (after, unit) in self.std_after.items():
             lines.append(f"  {name:<28} {self.std_before[name][0]:>10.4g} → {after:<10.4g} "
@@ -133,7 +140,8 @@ class AugmentResult:
                 "candidates": self.candidates.to_dict(),
                 "measured_configurations": self.measured_configurations,
                 "sigma_mm": self.sigma_mm, "robot": self.robot.to_dict(),
-                "reachability": {} if self.reachability is None else asdict(self.reachability),
+                "reachability": {} if self.reachability is None else
+                {**asdict(self.reachability), "note": self.reachability.words()},
                 "tool": None if self.tool is None else self.tool.to_dict(),
                 "constraints": self.constraints,
                 "configurations": [{"pose": p, "q": list(q * f), "wrench": list(w),
@@ -165,7 +173,8 @@ class AugmentResult:
                    candidates=CandidateCount(**d["candidates"]),
                    measured_configurations=int(d["measured_configurations"]),
                    sigma_mm=float(d["sigma_mm"]), robot=robot, model=d["model"],
-                   reachability=Reached(**d["reachability"]) if d.get("reachability") else None,
+                   reachability=Reached(**{**r, "note": "" if "too_close" in r else r["note"]})
+                   if (r := d.get("reachability")) else None,  # a note as written: older files
                    tool=Tool.from_dict(d["tool"]) if d.get("tool") else None,
                    constraints=d.get("constraints", {}))
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.design.candidates.clearances import collision_note, pose_clearances
+from doe_calib.design.candidates.clearances import pose_clearances
 from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.candidates.from_file import CandidatePoses
 from doe_calib.design.candidates.reachability import revert_unreachable
@@ -22,7 +22,8 @@ from doe_calib.design.pipeline import Goal, Setting, constraints_used, run
 from doe_calib.design.predicted_std import design_std
 from doe_calib.design.problem import (blocks_for, check_enough_poses, design_parameters,
                                       load_configurations, task_matrix)
-from doe_calib.design.result import Coverage, DesignResult, Equivalence, RandomDesigns
+from doe_calib.design.result import (BoundRelaxation, Coverage, DesignResult, Equivalence,
+                                     RandomDesigns)
 from doe_calib.design.solvers.exchange import exact_design
 from doe_calib.design.solvers.pose_refinement import refine as refine_poses
 from doe_calib.design.solvers.relaxation import (equivalence_ratio, information,
@@ -168,12 +169,10 @@ class CriterionGoal(Goal):
         if reach is not None and refined is not None:
             reach = replace(reach, reverted=refined.reverted)
         cands, constraints = candidates.poses, constraints_used(setting, setting.loads, reach)
-        clearances, notes = (), (versus.words(n_poses), *_notes(setting, info, bound, m))
+        clearances = ()
         if setting.collision is not None:
             stage("assessment", f"clearances at the {n_poses} poses")
             clearances = pose_clearances(setting.collision, q)
-            notes += (collision_note(setting.collision, cands.removed, cands.drawn, clearances),
-                      reach.note(model.robot))
         names = [cands.names[k] for k in choice.chosen] if cands.names else None
         stages = {"relaxation": relaxed.to_dict(), "exchange": choice.made.to_dict()}
         if refined is not None:
@@ -182,30 +181,16 @@ class CriterionGoal(Goal):
             robot=model.robot, tool=model.tool, model=model.spec,
             configurations=load_configurations(model, params.values, q, setting.loads, names),
             criterion=crit.name, value=value, bound=limit, efficiency=efficiencies[crit.name],
-            predicted_std=design_std(params, m), constraints=constraints, notes=notes,
+            predicted_std=design_std(params, m), constraints=constraints,
             efficiencies=efficiencies, criteria={c.name: c.value(m) for c in reported},
             equivalence=Equivalence(crit.name, crit.statistic, target,
                                     target * bound.relaxed.ratio, target * ratio, 1.0 / ratio),
             candidates=cands.count(), coverage=_coverage(setting, q),
             versus_random=versus,
-            sigma_mm=1000.0 * setting.sigma, clearances=clearances, stages=stages)
-
-
-def _notes(setting, info, bound, m) -> tuple:
-    """The criterion, the relaxation and, for the task criterion, the task poses' predicted
-    RMS std, in words."""
-    crit, params, relaxed, p = info.criterion, info.params, bound.relaxed, m.shape[0]
-    notes = (f"{crit.name} criterion: {crit.words}",
-             f"relaxation over {len(bound.packed)} candidates: equivalence ratio "
-             f"{relaxed.ratio:.4g} after {relaxed.iterations} iterations; {p} parameters "
-             f"designed for, {int((~params.free).sum())} fixed as not identifiable by any "
-             f"candidate")
-    if info.task is not None:
-        task = TaskOptimal(info.task).value(m)
-        n_task = len(info.task) // 3
-        notes += (f"task: predicted RMS position std at the {n_task} task poses "
-                  f"{1000 * np.sqrt(-task / n_task):.4g} mm (σ = {1000 * setting.sigma:g} mm)",)
-    return notes
+            sigma_mm=1000.0 * setting.sigma, clearances=clearances, outcomes=stages,
+            bound_relaxation=BoundRelaxation(
+                len(bound.packed), bound.relaxed.ratio, bound.relaxed.iterations,
+                int((~params.free).sum()), 0 if info.task is None else len(info.task) // 3))
 
 
 def _coverage(setting, q) -> Coverage | None:

@@ -80,32 +80,24 @@ class Candidates:
 @dataclass(frozen=True)
 class Reachability:
     """How the chosen poses were kept reachable from the ``home`` pose (rad, m): chosen poses
-    ``replaced`` (reason → count), refined ones ``reverted`` to their candidate, and why the
-    home pose ``moved`` from the one asked for ("" when it did not)."""
+    ``replaced`` (reason → count), refined ones ``reverted`` to their candidate, and, when
+    the home pose asked for was itself too close, that pose ``moved_from`` (rad, m) and the
+    pair ``too_close``."""
 
     home: np.ndarray
     replaced: dict
     reverted: int = 0
-    moved: str = ""
-
-    def note(self, robot) -> str:
-        """One sentence: the home pose, and what was replaced or reverted, and why."""
-        deg = ", ".join(f"{v:.4g}" for v in np.asarray(self.home) * robot.display_factors)
-        text = f"reachability: every pose joined to the home pose ({deg}) by a free path"
-        if self.moved:
-            text += f" ({self.moved})"
-        if self.replaced:
-            text += "; chosen poses replaced from the candidates: " + ", ".join(
-                f"{n} ({why})" for why, n in sorted(self.replaced.items(), key=lambda x: -x[1]))
-        if self.reverted:
-            text += (f"; {self.reverted} refined pose(s) kept at their candidate (refined, "
-                     f"unreachable)")
-        return text
+    moved_from: np.ndarray | None = None
+    too_close: str = ""
 
     def to_dict(self, robot) -> dict:
-        """``home`` (deg, mm), ``replaced`` and ``refined_reverted``, as design files hold."""
-        return {"home": [float(v) for v in self.home * robot.display_factors],
-                "replaced": dict(self.replaced), "refined_reverted": self.reverted}
+        """``home`` (deg, mm), ``replaced``, ``refined_reverted``, ``moved_from`` (deg, mm)
+        and ``too_close``, as design files hold them."""
+        f = robot.display_factors
+        return {"home": [float(v) for v in self.home * f], "replaced": dict(self.replaced),
+                "refined_reverted": self.reverted, "too_close": self.too_close,
+                "moved_from": None if self.moved_from is None
+                else [float(v) for v in self.moved_from * f]}
 
 
 @dataclass(frozen=True, eq=False)
@@ -211,11 +203,12 @@ def reachable_exchange(exchange, q, pose_of, setting: Setting) -> Choice:
     if collision is None:
         chosen = choose(np.ones(len(q), bool))
         return Choice(made[-1], np.asarray(chosen), q, None)
-    start = home_pose(robot, setting.constraints, setting.home)
-    start, moved = free_home(collision, start, robot, setting.home is not None, q)
+    asked = home_pose(robot, setting.constraints, setting.home)
+    start, too_close = free_home(collision, asked, robot, setting.home is not None, q)
     chosen, used, replaced = reachable_choice(choose, q, pose_of, collision, start, robot,
                                               *setting.constraints.bounds(robot))
-    return Choice(made[-1], np.asarray(chosen), used, Reachability(start, replaced, 0, moved))
+    return Choice(made[-1], np.asarray(chosen), used, Reachability(
+        start, replaced, 0, asked if too_close else None, too_close))
 
 
 def constraints_used(setting: Setting, loads, reach: Reachability | None) -> dict:

@@ -1,11 +1,12 @@
 """A design: chosen poses with their load cases, what they promise, and its JSON form."""
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import InitVar, asdict, dataclass, field
 
 import numpy as np
 
 from doe_calib.design.detectability import Detectability
+from doe_calib.design.notes import Notes, design_notes, effect_words
 from doe_calib.design.predicted_std import PredictedStd, StdMapping, predicted_std
 from doe_calib.errors import DataError
 from doe_calib.io.design_json import FORMAT, pose_configurations
@@ -13,7 +14,6 @@ from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.robot import Robot
 from doe_calib.model.tool import Tool
-
 
 
 @dataclass(frozen=True)
@@ -92,6 +92,19 @@ class RandomDesigns:
         return text
 
 
+@dataclass(frozen=True)
+class BoundRelaxation:
+    """The relaxation that certifies a criterion design's bound: over ``candidates`` (the
+    refined poses among them when kept), its equivalence ``ratio`` after ``iterations``; the
+    parameters ``fixed`` as not identifiable by any candidate; the ``task_poses`` (0: none)."""
+
+    candidates: int
+    ratio: float
+    iterations: int
+    fixed: int
+    task_poses: int = 0
+
+
 def first_rows(configurations) -> np.ndarray:
     """Index of each pose's first configuration, poses in order of appearance; shape (M,)."""
     first = {}
@@ -139,7 +152,7 @@ class DesignResult:
     constraints : dict
         The constraints the poses satisfy, as used (file units) with the loads.
     notes : tuple of str
-        Comparisons and remarks, in words.
+        Comparisons and remarks, in words: ``given_notes`` or else said from the facts.
     efficiencies : dict
         Criterion → efficiency against that criterion's certified bound
         (the design's criterion, and D).
@@ -157,11 +170,15 @@ class DesignResult:
         Per pose, in measuring order: its clearance (mm) and the pair with
         least distance to spare (:mod:`doe_calib.collision`); empty when not
         checked.
-    stages : dict
+    outcomes : dict
         Each solver's outcome (:meth:`.outcome.DesignOutcome.to_dict`) by stage:
         ``relaxation``, ``exchange`` and, when run, ``refinement`` (in design files
         written before the stages were stored, the refinement alone); a discovery
-        design's ``discovery`` or ``load_choice``.
+        design's ``discovery`` or ``load_choice``; ``stages`` adds each effect's words.
+    bound_relaxation : BoundRelaxation or None
+        None but for a criterion design.
+    given_notes : tuple of str
+        Notes given in words (``notes=``, or a file written before its facts were kept).
 
     Examples
     --------
@@ -180,7 +197,7 @@ class DesignResult:
     efficiency: float
     predicted_std: dict
     constraints: dict
-    notes: tuple = field(default=())
+    notes: InitVar[tuple] = ()
     efficiencies: dict = field(default_factory=dict)
     criteria: dict = field(default_factory=dict)
     equivalence: Equivalence | None = None
@@ -189,13 +206,28 @@ class DesignResult:
     versus_random: RandomDesigns | None = None
     sigma_mm: float | None = None
     clearances: tuple = ()
-    stages: dict = field(default_factory=dict)
+    outcomes: dict = field(default_factory=dict)
     detectability: tuple = ()
+    bound_relaxation: BoundRelaxation | None = None
+    given_notes: tuple = ()
+
+    def __post_init__(self, notes):
+        if notes and not isinstance(notes, Notes):  # not those replace() hands back
+            object.__setattr__(self, "given_notes", tuple(notes))
+
+    @property
+    def stages(self) -> dict:
+        """Each solver's outcome by stage (``outcomes``), each discovery effect in words."""
+        found = self.outcomes.get("discovery")
+        if not found or self.given_notes:
+            return self.outcomes
+        effects = [{**r, "words": w} for r, w in zip(found["effects"], effect_words(self))]
+        return {**self.outcomes, "discovery": {**found, "effects": effects}}
 
     @property
     def refinement(self) -> dict:
         """The continuous refinement's outcome, ``stages["refinement"]`` (empty when not run)."""
-        return self.stages.get("refinement", {})
+        return self.outcomes.get("refinement", {})
 
     @property
     def std(self) -> StdMapping:
@@ -315,6 +347,7 @@ class DesignResult:
                 "equivalence": _plain(self.equivalence), "candidates": _plain(self.candidates),
                 "refinement": self.refinement, "coverage": _plain(self.coverage),
                 "versus_random": _plain(self.versus_random), "sigma_mm": self.sigma_mm,
+                "bound_relaxation": _plain(self.bound_relaxation),
                 "stages": self.stages,
                 "detectability": [d.to_dict() for d in self.detectability],
                 "robot": self.robot.to_dict(), "tool": self.tool.to_dict()}
@@ -334,7 +367,8 @@ class DesignResult:
                    configurations=cfg, criterion=d["criterion"], value=float(d["value"]),
                    bound=float(d["bound"]), efficiency=float(d["efficiency"]),
                    predicted_std={r["name"]: (r["std"], r["unit"]) for r in d["predicted_std"]},
-                   constraints=d.get("constraints", {}), notes=tuple(d.get("notes", ())),
+                   constraints=d.get("constraints", {}),
+                   notes=() if "bound_relaxation" in d else tuple(d.get("notes", ())),
                    efficiencies=d.get("efficiencies", {}), criteria=d.get("criteria", {}),
                    equivalence=_typed(Equivalence, d.get("equivalence")),
                    candidates=_typed(CandidateCount, d.get("candidates")),
@@ -343,11 +377,17 @@ class DesignResult:
                    sigma_mm=None if d.get("sigma_mm") is None else float(d["sigma_mm"]),
                    clearances=tuple((float(p["clearance_mm"]), p["clearance_pair"])
                                     for p in d["poses"] if "clearance_mm" in p),
-                   stages=stages, detectability=tuple(Detectability.from_dict(r)
-                                                      for r in d.get("detectability", ())))
+                   outcomes=stages, detectability=tuple(Detectability.from_dict(r)
+                                                        for r in d.get("detectability", ())),
+                   bound_relaxation=_typed(BoundRelaxation, d.get("bound_relaxation")))
 
     @classmethod
     def from_json(cls, path) -> "DesignResult":
         """Read a design file written by :meth:`to_json`."""
         return cls.from_dict(read_json(path, FORMAT, "doe_calib design file"))
+
+
+# read as a property: the field ``notes`` only takes notes given in words (``given_notes``)
+DesignResult.notes = property(lambda self: self.given_notes or design_notes(self),
+                              doc="Comparisons and remarks, in words (:mod:`.notes`).")
 

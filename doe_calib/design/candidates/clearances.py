@@ -1,4 +1,4 @@
-"""What the collision check did for a design: each pose's clearance and the rejections, in words."""
+"""What the collision check finds at a design's poses: each pose's clearance and its pair."""
 from __future__ import annotations
 
 import numpy as np
@@ -14,29 +14,3 @@ def pose_clearances(collision, q: np.ndarray) -> tuple:
         c = clearance(collision, pose, ws)
         out.append((c.mm, c.pair))
     return tuple(out)
-
-
-def collision_note(collision, removed: dict, drawn: int, clearances) -> str:
-    """One sentence: clearance asked, poses rejected (most by which pair), least clearance kept."""
-    rejected = {k[len("collision: "):]: v for k, v in removed.items()
-                if k.startswith("collision: ")}
-    text = (f"collision check: {1000 * collision.clearance:g} mm clearance from tool, payloads "
-            f"and cell ({1000 * collision.self_clearance:g} mm between the robot's links), "
-            f"{len(collision.pairs)} pairs checked, {len(collision.disabled)} never "
-            f"(adjacent or always in contact); ")
-    if rejected:
-        worst = max(rejected, key=rejected.get)
-        text += (f"{sum(rejected.values())} of {drawn} drawn poses rejected, most by "
-                 f"{worst} ({rejected[worst]})")
-    else:
-        text += f"none of {drawn} drawn poses rejected"
-    blocked = {k[len("line of sight: blocked by "):]: v for k, v in removed.items()
-               if k.startswith("line of sight: blocked by ")}
-    if blocked:
-        worst = max(blocked, key=blocked.get)
-        text += (f"; {sum(blocked.values())} with a tracker beam blocked, most by {worst} "
-                 f"({blocked[worst]})")
-    if clearances:
-        mm, pair = min(clearances)
-        text += f"; least clearance of the design {mm:.1f} mm ({pair})"
-    return text

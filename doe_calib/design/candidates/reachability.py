@@ -58,7 +58,7 @@ def home_pose(robot, constraints, home=None) -> np.ndarray:
 
 
 def free_home(collision, home, robot, given: bool, candidates) -> tuple:
-    """The home pose checked free at the move clearance, and a note when it was replaced.
+    """The home pose checked free at the move clearance, and the pair when it was replaced.
 
     A given home (``--home``) that is not free is an error; the default one
     (the URDF zero, e.g. a UR's wrist hanging below the base plane) is then
@@ -67,7 +67,7 @@ def free_home(collision, home, robot, given: bool, candidates) -> tuple:
     Returns
     -------
     (ndarray, str)
-        The home pose, rad (m), and "" or a sentence saying why it moved.
+        The home pose, rad (m), and "" or the pair too close at the one asked for.
     """
     hit = too_close(collision, np.atleast_2d(home), collision.move_margins or None)[0]
     if hit < 0:
@@ -77,8 +77,7 @@ def free_home(collision, home, robot, given: bool, candidates) -> tuple:
         raise OptionError(f"the home pose ({deg}) is itself too close: "
                           f"{collision.pair_name(int(hit))}; give a free one with --home")
     near = candidates[int(np.argmin(np.linalg.norm(candidates - home, axis=1)))]
-    return near, (f"the URDF zero ({deg}) is too close ({collision.pair_name(int(hit))}): "
-                  f"the home pose is the free candidate nearest it")
+    return near, collision.pair_name(int(hit))
 
 
 def nearest_equivalent(q, home, robot, lower, upper) -> np.ndarray:

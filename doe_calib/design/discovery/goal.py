@@ -28,7 +28,7 @@ from doe_calib.design.candidates.clearances import pose_clearances
 from doe_calib.design.criteria import AOptimal, DOptimal, EOptimal, log_det
 from doe_calib.design.detectability import INVISIBLE
 from doe_calib.design.discovery.detection import detect_effects, with_detectability
-from doe_calib.design.discovery.load_directions import directed_loads, horizontal
+from doe_calib.design.discovery.load_directions import directed_loads
 from doe_calib.design.discovery.refinement import chosen_variants, refine_discovery
 from doe_calib.design.discovery.variants import (approach_joints, detection_target,
                                                  effect_columns, free_parameters,
@@ -112,7 +112,6 @@ class DiscoveryGoal(Goal):
         raw = observation_rows(model, params.values, cand) / setting.sigma
         params = free_parameters(params, raw, cand)
         blocks = raw[..., params.free] * params.scales[params.free]
-        p = blocks.shape[2]
         columns = [effect_columns(model, params, e, cand, setting.sigma) for e in effects]
         zblocks = [z for z, _ in columns]
         targets = np.array([] if self.size is None else
@@ -194,24 +193,22 @@ class DiscoveryGoal(Goal):
         final = chosen_variants(cand, chosen, None if refined is None else refined.q)
         cfg = final.configurations(model, params.values, None,
                                    [str(i + 1) for i in range(n_poses)])
-        reach, notes, clearances = choice.reachability, (), ()
+        reach, clearances = choice.reachability, ()
         if reach is not None:
             reach = replace(reach, reverted=0 if refined is None else refined.unreachable)
-            notes, clearances = (reach.note(model.robot),), pose_clearances(setting.collision,
-                                                                             final.q)
+            clearances = pose_clearances(setting.collision, final.q)
         result = DesignResult(
             robot=model.robot, tool=model.tool, model=model.spec, configurations=cfg,
             criterion="D", value=value, bound=limit, efficiency=d_eff,
             predicted_std=design_std(params, m),
-            constraints=constraints_used(setting, info.cases, reach), notes=notes,
+            constraints=constraints_used(setting, info.cases, reach),
             efficiencies={"D": d_eff},
             criteria={c.name: c.value(m) for c in (DOptimal(), AOptimal(), EOptimal())},
             candidates=replace(info.candidates, variants=len(cand)),
-            sigma_mm=1000.0 * setting.sigma, clearances=clearances, stages=stages)
+            sigma_mm=1000.0 * setting.sigma, clearances=clearances, outcomes=stages)
         result = with_detectability(result, model, self.effects, self.alpha, self.power,
                                     self.registry)
-        return _with_outcome(result, self, info.reach, cand, free, found, versus,
-                             setting.loads, refined)
+        return _with_outcome(result, self, info.reach, cand, free, found, versus)
 
 
 @dataclass(frozen=True, eq=False)
@@ -279,66 +276,24 @@ def _pool(relaxed, zblocks):
     return np.unique(order)
 
 
-def _hint(loads, goal) -> str:
-    """What would allow more: sideways pulls, or a load at all."""
-    if not any(ld.mass > 0 for ld in loads):
-        return "; add a --load (and --load-directions z,x,y) to put torques on the joints"
-    if not horizontal(goal.directions):
-        return "; allow --load-directions z,x,y (a horizontal pull of the same force)"
-    return ""
-
-
-def _with_outcome(result, goal, reach, cand, free, found, versus, loads, polished=None):
-    """``result`` with the discovery stage (``load_choice`` without a size) and its words."""
-    used = _cases_used(cand, found.indices)
-    cases = ", ".join(f"{n}× {s}" for s, n in used.items())
+def _with_outcome(result, goal, reach, cand, free, found, versus):
+    """``result`` with the discovery stage (``load_choice`` without a size)."""
     chose = {"load_directions": [list(d) for d in goal.directions],
              "approach_joints": [result.robot.joints[j].name for j in cand.approach_joints]}
+    used = _cases_used(cand, found.indices)
     if goal.size is None:
-        note = ("D-optimal choice of poses, load cases and approach sides (each pose measured "
-                "unloaded and under one allowed load case; no detection bound, --detect-size "
-                "not given); load cases used: " + cases)
         stage = {"method": "exchange over poses × load cases × approach sides",
                  "status": found.status, **chose, "load_cases_used": used}
-        return replace(result, notes=(note,) + result.notes,
-                       stages={**result.stages, "load_choice": stage})
-    rows, notes = [], []
-    for det, ok in zip(result.detectability, reach):
-        met = det.detectable and det.min_detectable <= goal.size * (1 + 1e-6)
-        size = det.min_detectable if np.isfinite(det.min_detectable) else None
-        if not ok:
-            words = (f"{det.effect} cannot be detected: no allowed load or approach side "
-                     f"reveals it (none of the {len(cand)} candidates): {det.why}"
-                     f"{_hint(loads, goal)}")
-        elif met:
-            words = (f"{det.effect}: detectable from {det.min_detectable:.3g} {det.unit} "
-                     f"(asked {goal.size:g} {det.unit} at power {goal.power:.0%})")
-        elif det.detectable:
-            words = (f"{det.effect}: NOT detectable at {goal.size:g} {det.unit}; best size "
-                     f"reachable: {det.min_detectable:.3g} {det.unit} with these "
-                     f"{len(found.indices)} poses, candidates and loads")
-        else:
-            words = f"{det.effect}: NOT detectable in the design: {det.why}"
-        rows.append({"effect": det.effect, "unit": det.unit, "asked": goal.size,
-                     "min_detectable": size, "met": bool(met), "revealable": bool(ok),
-                     "words": words})
-        notes.append(words)
-    notes.insert(0, f"discovery design (constrained exchange): D-optimal subject to every "
-                    f"revealable effect detectable at {goal.size:g} (its unit) with power "
-                    f"{goal.power:.0%} (α = {goal.alpha:g}); D-efficiency {versus:.3f} of the "
-                    f"unconstrained D-optimal choice among the same candidates; load cases "
-                    f"used: " + cases)
-    if polished is not None:
-        notes.append(f"discovery design refined (IPOPT, each pose keeping its load case and "
-                     f"approach sides): {polished.outcome.status}; "
-                     f"{polished.detection} refined pose(s) kept at their candidate so that no "
-                     f"detection bound is lost")
+        return replace(result, outcomes={**result.outcomes, "load_choice": stage})
+    rows = [{"effect": det.effect, "unit": det.unit, "asked": goal.size,
+             "min_detectable": det.min_detectable if np.isfinite(det.min_detectable) else None,
+             "met": bool(det.detectable and det.min_detectable <= goal.size * (1 + 1e-6)),
+             "revealable": bool(ok)} for det, ok in zip(result.detectability, reach)]
     stage = {"method": "constrained exchange", "status": found.status, "size": goal.size,
              "power": goal.power, "alpha": goal.alpha, **chose,
              "unconstrained_log_det": free.value, "d_efficiency_vs_unconstrained": versus,
              "load_cases_used": used, "effects": rows}
-    return replace(result, notes=tuple(notes) + result.notes,
-                   stages={**result.stages, "discovery": stage})
+    return replace(result, outcomes={**result.outcomes, "discovery": stage})
 
 
 def _cases_used(cand, chosen) -> dict:
