@@ -10,11 +10,7 @@ from doe_calib.design.criteria import AOptimal, DOptimal, EOptimal, TaskOptimal
 CRITERION_WORDS = {c.name: c.words for c in (DOptimal, AOptimal, EOptimal, TaskOptimal)}
 
 
-class Notes(tuple):
-    """Notes composed from a result's facts (not words given to it)."""
-
-
-def design_notes(d) -> Notes:
+def design_notes(d) -> tuple:
     """The notes of design ``d`` (:class:`.result.DesignResult`): its discovery stage, the
     comparison with random designs, the criterion with its relaxation, the reachability."""
     stages, notes = d.outcomes, []
@@ -41,7 +37,7 @@ def design_notes(d) -> Notes:
         notes += criterion_words(d)
     if d.constraints.get("reachability"):
         notes.append(reachability_words(d.constraints["reachability"]))
-    return Notes(notes)
+    return tuple(notes)
 
 
 def _cases(stage: dict) -> str:

@@ -1,12 +1,12 @@
 """A design: chosen poses with their load cases, what they promise, and its JSON form."""
 from __future__ import annotations
 
-from dataclasses import InitVar, asdict, dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
 from doe_calib.design.detectability import Detectability
-from doe_calib.design.notes import Notes, design_notes, effect_words
+from doe_calib.design.notes import design_notes, effect_words
 from doe_calib.design.predicted_std import PredictedStd, StdMapping, predicted_std
 from doe_calib.errors import DataError
 from doe_calib.io.design_json import FORMAT, pose_configurations
@@ -178,7 +178,8 @@ class DesignResult:
     bound_relaxation : BoundRelaxation or None
         None but for a criterion design.
     given_notes : tuple of str
-        Notes given in words (``notes=``, or a file written before its facts were kept).
+        Notes given in words (a compensated program's; a file written before its facts
+        were kept).
 
     Examples
     --------
@@ -197,7 +198,6 @@ class DesignResult:
     efficiency: float
     predicted_std: dict
     constraints: dict
-    notes: InitVar[tuple] = ()
     efficiencies: dict = field(default_factory=dict)
     criteria: dict = field(default_factory=dict)
     equivalence: Equivalence | None = None
@@ -211,9 +211,11 @@ class DesignResult:
     bound_relaxation: BoundRelaxation | None = None
     given_notes: tuple = ()
 
-    def __post_init__(self, notes):
-        if notes and not isinstance(notes, Notes):  # not those replace() hands back
-            object.__setattr__(self, "given_notes", tuple(notes))
+    @property
+    def notes(self) -> tuple:
+        """Comparisons and remarks, in words: ``given_notes``, or else said from the facts
+        (:mod:`.notes`)."""
+        return self.given_notes or design_notes(self)
 
     @property
     def stages(self) -> dict:
@@ -368,7 +370,7 @@ class DesignResult:
                    bound=float(d["bound"]), efficiency=float(d["efficiency"]),
                    predicted_std={r["name"]: (r["std"], r["unit"]) for r in d["predicted_std"]},
                    constraints=d.get("constraints", {}),
-                   notes=() if "bound_relaxation" in d else tuple(d.get("notes", ())),
+                   given_notes=() if "bound_relaxation" in d else tuple(d.get("notes", ())),
                    efficiencies=d.get("efficiencies", {}), criteria=d.get("criteria", {}),
                    equivalence=_typed(Equivalence, d.get("equivalence")),
                    candidates=_typed(CandidateCount, d.get("candidates")),
@@ -385,9 +387,3 @@ class DesignResult:
     def from_json(cls, path) -> "DesignResult":
         """Read a design file written by :meth:`to_json`."""
         return cls.from_dict(read_json(path, FORMAT, "doe_calib design file"))
-
-
-# read as a property: the field ``notes`` only takes notes given in words (``given_notes``)
-DesignResult.notes = property(lambda self: self.given_notes or design_notes(self),
-                              doc="Comparisons and remarks, in words (:mod:`.notes`).")
-

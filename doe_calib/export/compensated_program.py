@@ -102,7 +102,7 @@ def compensated_design(result, tool, model=None) -> DesignResult:
                         criterion="compensated", value=math.nan, bound=math.nan,
                         efficiency=math.nan, predicted_std={},
                         constraints={"row_loads": loads},
-                        notes=("compensated program (doe-calib compensate)",))
+                        given_notes=("compensated program (doe-calib compensate)",))
 
 
 def export_compensated(result, tool, fmt: str, out, name: str = "compensated", dwell: float = 0.0,
