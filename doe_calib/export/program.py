@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.errors import DataError, DoeCalibError, ModelError, OptionError
+from doe_calib.errors import DataError, DoeCalibError, OptionError
 from doe_calib.export.approach import backlash_joints, default_sides, pre_pose
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.payload import Payload
@@ -150,14 +150,6 @@ def ascii_text(text: str) -> str:
     """``text`` on one line, in printable ASCII (controllers' files are not UTF-8)."""
     text = text.replace("\u00b7", ".").replace("\u00b0", "deg")
     return re.sub(r"[^\x20-\x7e]", "?", " ".join(str(text).split()))
-
-
-def check_name(name: str, max_length: int) -> str:
-    """``name`` if it is a valid program identifier of at most ``max_length`` characters."""
-    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", name) or len(name) > max_length:
-        raise DataError(f"program name {name!r}: use a letter followed by letters, digits or '_', "
-                        f"at most {max_length} characters")
-    return name
 
 
 def check_limits(design) -> None:
@@ -327,36 +319,6 @@ def realised_approach(visits: list[Move], robot) -> np.ndarray:
     if not target:
         return np.zeros((0, robot.n_joints))
     return approach_from_order(np.array(path) * robot.display_factors, _MOVED)[target]
-
-
-def headline(design, visits, units: str) -> list[str]:
-    """The two comment lines a program opens with: what it measures, model and ``units``."""
-    poses = len({m.index for m in visits if m.measures})
-    return [f"doe_calib measurement program: {poses} poses, "
-            f"{sum(m.measures for m in visits)} measurements",
-            ascii_text(f"model {design.model}, criterion {design.criterion}; {units}")]
-
-
-def six_axes(robot, language: str) -> None:
-    """Raise :class:`ModelError` unless ``robot`` has the 6 axes a ``language`` program drives."""
-    if robot.n_joints != 6:
-        raise ModelError(f"{language} export needs a 6-axis robot; {robot.name} has "
-                         f"{robot.n_joints} joints")
-
-
-def declared(visits, target, pre: str, via: str) -> list[tuple]:
-    """(variable, controller q, comment) of each position a program declares: every pose
-    once (``target(m)``), then the pre-poses (``<pre><number>``) and the intermediate
-    positions (``<via><number>_<k>``)."""
-    first = {}
-    for m in visits:
-        first.setdefault(target(m), m)
-    out = [(var, m.q, f"pose {m.pose}" if m.measures else f"{m.kind} pose")
-           for var, m in first.items()]
-    out += [(f"{pre}{m.number}", m.pre, f"pre-pose of pose {m.pose}, visit {m.number}")
-            for m in visits if m.pre is not None]
-    return [(var, q, ascii_text(words)) for var, q, words in out] + [
-        (f"{via}{m.number}_{k}", w.q, w.why) for m in visits for k, w in enumerate(m.via, 1)]
 
 
 def load_changes(visits: list[Move]) -> list[bool]:
