@@ -2,39 +2,31 @@
 
 Every program declares the tool's payload, then writes for each visit (:func:`.program.moves`)
 a comment naming it; before a change of load a stop with the operator's instruction and the
-new payload; the moves to its intermediate positions round a collision, its pre-pose and
-its pose; at a measurement pose the dwell, the trigger line and the handshake
-(:class:`.program.Settings`). Only the words differ:
+tool plus the new load declared; the moves to its intermediate positions round a collision,
+its pre-pose and its pose; at a measurement pose the dwell, the trigger line and with a
+handshake an output set, an input waited for, the output reset and the input's drop waited
+for (:class:`.program.Settings`). Only the words differ:
 
-KRL (:func:`krl`): a ``.src`` program and its ``.dat`` with one E6AXIS per pose (6 axes).
-Each visit is ``PTP XP<i>`` (exact positioning) to A1..A6 in deg (mm for a linear axis),
-E1..E6 0; pre-poses are ``XA<n>`` (n: the visit's number), intermediate positions round a
-collision ``XV<n>_<k>``, the home and load-change poses ``XCHOME`` and ``XCLOAD``. The
-tool's load is declared first (``$LOAD.M`` kg, ``$LOAD.CM`` mm, ``$LOAD.J`` 0); before a
-change of load the program HALTs with the operator's instruction, then declares the tool
-plus the new load. At each measurement pose: ``WAIT SEC dwell`` (which also stops the
-advance run), the trigger line, and with a handshake n ``$OUT[n]`` set, ``$IN[n]`` waited
-for, reset, its drop waited for.
-
-RAPID (:func:`rapid`): one MODULE with a CONST jointtarget per pose and a ``main``
-procedure (6 axes). Each visit is ``MoveAbsJ jp<i>\\NoEOffs, v100, fine, tool0;`` to robax
-in deg (mm for a linear axis), extax 9E9; pre-poses are ``ja<n>``, intermediate positions
-``jv<n>_<k>``, the home and load-change poses ``jhome`` and ``jload``. Before a change of
-load: ``TPWrite`` the load to hang, ``Stop;``, then ``GripLoad`` of its ``loaddata``
-``ldCase<k>`` (kg, mm in the tool frame, no inertia; ``load0`` unloaded). A tool's own mass
-goes in the ``tooldata`` ``tCalib`` the moves then use. At each measurement pose
-``WaitTime dwell;``, the trigger line, and with a handshake ``SetDO doCalibReady``/``WaitDI
-diCalibDone`` up and down (two signals to declare in the I/O configuration).
-
-URScript (:func:`urscript`): ``def <name>():`` with one ``movej`` per move, then
-``<name>()``: the file defines the program function and calls it on its last line (a
-Script node or a script file runs it). Joint positions in rad, to 1e-10 rad; 6 revolute
-joints. The tool's payload is declared first (``set_payload(mass, [cx, cy, cz])``, kg, m,
-flange frame); before a change of load a blocking ``popup`` tells the operator which load
-to hang and ``set_payload`` declares the tool plus it. Pre-poses and intermediate positions
-are ``movej`` too. At each measurement pose ``sleep(dwell)``, the trigger line, and with a
-handshake n standard digital output n set, input n waited for, the output reset, the
-input's drop waited for.
+- KRL (:func:`krl`): a ``.src`` program and its ``.dat`` with one E6AXIS per pose (6 axes).
+  Each visit is ``PTP XP<i>`` (exact positioning) to A1..A6 in deg (mm for a linear axis),
+  E1..E6 0; pre-poses are ``XA<n>`` (n: the visit's number), intermediate positions
+  ``XV<n>_<k>``, the home and load-change poses ``XCHOME`` and ``XCLOAD``. Loads
+  ``$LOAD.M`` kg, ``$LOAD.CM`` mm, ``$LOAD.J`` 0; the stop is a ``HALT``; the dwell ``WAIT
+  SEC dwell`` (which also stops the advance run); the handshake n ``$OUT[n]``, ``$IN[n]``.
+- RAPID (:func:`rapid`): one MODULE with a CONST jointtarget per pose and a ``main``
+  procedure (6 axes). Each visit is ``MoveAbsJ jp<i>\\NoEOffs, v100, fine, tool0;`` to robax
+  in deg (mm for a linear axis), extax 9E9; pre-poses ``ja<n>``, intermediate positions
+  ``jv<n>_<k>``, the home and load-change poses ``jhome`` and ``jload``. The stop is
+  ``TPWrite`` the load to hang and ``Stop;``, then ``GripLoad`` of its ``loaddata``
+  ``ldCase<k>`` (kg, mm in the tool frame, no inertia; ``load0`` unloaded); a tool's own
+  mass goes in the ``tooldata`` ``tCalib`` the moves then use. The dwell ``WaitTime
+  dwell;``, the handshake ``SetDO doCalibReady``/``WaitDI diCalibDone`` (two signals to
+  declare in the I/O configuration).
+- URScript (:func:`urscript`): ``def <name>():`` with one ``movej`` per move (pre-poses and
+  intermediate positions too), joint positions in rad to 1e-10 rad, 6 revolute joints; the
+  file calls the function on its last line (a Script node or a script file runs it). Loads
+  ``set_payload(mass, [cx, cy, cz])`` (kg, m, flange frame); the stop a blocking ``popup``;
+  the dwell ``sleep(dwell)``; the handshake n standard digital output and input n.
 """
 from __future__ import annotations
 
@@ -135,18 +127,19 @@ def _wait(settings, indent: str, dwell: str, handshake) -> list[str]:
 def _statements(design, visits, names, say: str, move, change, wait, gap: bool = True) -> list:
     """The statements of the visits: a comment on each (``say``: the indented comment mark;
     ``gap``: a blank line before), ``change(m)`` before a change of load, ``move(variable,
-    q_si)`` to each intermediate position, pre-pose and pose, ``wait`` where it measures."""
+    q)`` (controller values, deg or mm) to each intermediate position, pre-pose and pose,
+    ``wait`` where it measures."""
     out = []
     for m, changed in zip(visits, load_changes(visits)):
         out += [""] * gap + [say + m.comment()]
         if changed:
             out += change(m)
         for k, w in enumerate(m.via, start=1):
-            out += [say + w.why, move(f"{names[2]}{m.number}_{k}", w.q_si)]
+            out += [say + w.why, move(f"{names[2]}{m.number}_{k}", w.q)]
         if m.pre is not None:
             out += [say + m.approach_words(design.robot.joint_names),
-                    move(f"{names[1]}{m.number}", m.pre_si)]
-        out.append(move(_variable(m, names), m.q_si))
+                    move(f"{names[1]}{m.number}", m.pre)]
+        out.append(move(_variable(m, names), m.q))
         if m.measures:
             out += wait
     return out
@@ -254,9 +247,11 @@ def urscript(design, visits, settings) -> dict:
                 _set_payload(settings.payload(m.payload))]
 
     wait = _wait(settings, "  ", "sleep({dwell:g})", URSCRIPT_HANDSHAKE)
+    factors = design.robot.display_factors  # controller units per rad (m)
     out = [f"def {name}():", *_headline(design, visits, "  # ",
                                         "joints in rad; payload kg, m (flange frame)"),
            "  # the tool alone", _set_payload(settings.tool),
-           *_statements(design, visits, _INLINE, "  # ", lambda _, q: _movej(q), change, wait),
+           *_statements(design, visits, _INLINE, "  # ", lambda _, q: _movej(q / factors), change,
+                        wait),
            "end", "", f"{name}()", ""]
     return {".script": "\n".join(out)}

@@ -66,10 +66,9 @@ class Settings:
 @dataclass(frozen=True)
 class Waypoint:
     """An intermediate position a move passes through to keep clear of collisions: controller
-    values ``q`` (N,) deg (mm) and ``q_si`` rad (m), ``urdf`` rad (m), ``why`` in words."""
+    values ``q`` (N,) deg (mm), ``urdf`` rad (m), ``why`` in words."""
 
     q: np.ndarray
-    q_si: np.ndarray
     urdf: np.ndarray
     why: str
 
@@ -84,16 +83,16 @@ class Move:
     index, number, row : int
         1-based place of the pose in the design and of the visit in the program (they name
         its variables); the design row (−1 for a station).
-    q, q_si : ndarray, shape (N,)
-        Controller joint values (axis map applied), deg (mm) and rad (m).
+    q : ndarray, shape (N,)
+        Controller joint values (axis map applied), deg (mm).
     case, n_cases : int
         1-based load case of this visit and the number of load cases of the pose.
     load : str
         The load hung, in words.
     approach : tuple of int, length N
         Side each joint arrives from (URDF sense: +1 moving up, −1 down; 0 any).
-    pre, pre_si : ndarray, shape (N,), or None
-        The pre-pose, controller values, deg (mm) and rad (m); None without one.
+    pre : ndarray, shape (N,), or None
+        The pre-pose, controller values, deg (mm); None without one.
     urdf_q, urdf_pre : ndarray, shape (N,), or None
         Target and pre-pose as URDF values, rad (m).
     via : tuple of Waypoint
@@ -109,13 +108,11 @@ class Move:
     number: int
     row: int
     q: np.ndarray
-    q_si: np.ndarray
     case: int
     n_cases: int
     load: str
     approach: tuple
     pre: np.ndarray | None
-    pre_si: np.ndarray | None
     urdf_q: np.ndarray
     urdf_pre: np.ndarray | None
     via: tuple = ()
@@ -273,11 +270,9 @@ def moves(design, plan: Plan | None = None) -> list[Move]:
         mine = [i for i, p in enumerate(cfg.pose) if p == pose]
         ctrl = axis_map.to_controller(q * factors)
         ctrl_pre = axis_map.to_controller(pre * factors) if has_pre else None
-        out.append(Move(pose, index[pose], len(out) + 1, r, ctrl, ctrl / factors,
-                        mine.index(r) + 1, len(mine), loads[r],
-                        tuple(int(a) for a in sides), ctrl_pre,
-                        None if ctrl_pre is None else ctrl_pre / factors,
-                        q, pre if has_pre else None, payload=payloads[r]))
+        out.append(Move(pose, index[pose], len(out) + 1, r, ctrl, mine.index(r) + 1, len(mine),
+                        loads[r], tuple(int(a) for a in sides), ctrl_pre, q,
+                        pre if has_pre else None, payload=payloads[r]))
     if home is None:
         return out
     return _with_stations(out, home, load_pose, axis_map, factors)
@@ -288,8 +283,8 @@ def _station(kind: str, q, last: Move | None, axis_map, factors) -> Move:
     ctrl = axis_map.to_controller(q * factors)
     load = NO_LOAD if last is None else last.load
     payload = Payload() if last is None else last.payload
-    return Move(kind, 0, 0, -1, ctrl, ctrl / factors, 0, 0, load,
-                (0,) * len(q), None, None, np.array(q, float), None, kind=kind, payload=payload)
+    return Move(kind, 0, 0, -1, ctrl, 0, 0, load, (0,) * len(q), None, np.array(q, float), None,
+                kind=kind, payload=payload)
 
 
 def _with_stations(visits: list, home, load_pose, axis_map, factors) -> list:

@@ -272,12 +272,9 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
         if via is not None:
             why = ascii_text(f"on the way from {where} to {to}, {how} (straight: "
                              f"{result.pair})")
-            points = []
-            for k, u in enumerate(via, start=1):
-                ctrl = axis_map.to_controller(u * factors)
-                points.append(Waypoint(ctrl, ctrl / factors, u,
-                                       f"intermediate {k} of {len(via)} {why}"))
-            m = replace(m, via=tuple(points))
+            m = replace(m, via=tuple(
+                Waypoint(axis_map.to_controller(u * factors), u,
+                         f"intermediate {k} of {len(via)} {why}") for k, u in enumerate(via, 1)))
             routed.append(f"move {n_moves}, {words}: {how} (straight: {result.pair})")
             result = None
         if result is not None and not result.free:
