@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.collision.clearance import Workspace
+from doe_calib.collision.shapes import frame_along
 
 #: Radius of the capsule standing for a tracker beam, m (the beam and a little aiming error).
 BEAM_RADIUS = 0.003
@@ -103,12 +104,8 @@ def blocked_beams(cm, q, workspace: Workspace | None = None) -> tuple:
         length = float(np.linalg.norm(line)) - objects[i].geometry.radius - BEAM_RADIUS - _GAP
         if length <= 0:
             continue
-        z = line / np.linalg.norm(line)
-        helper = np.eye(3)[int(np.argmin(np.abs(z)))]
-        x = np.cross(helper, z)
-        x /= np.linalg.norm(x)
-        frame = coal.Transform3s(np.column_stack([x, np.cross(z, x), z]),
-                                 tracker + z * length / 2)
+        frame = frame_along(tracker + line / np.linalg.norm(line) * length / 2, line)
+        frame = coal.Transform3s(frame[:3, :3], frame[:3, 3])
         beam = coal.Capsule(BEAM_RADIUS, length)
         for k in others:
             where = ws.geometry.oMg[k]
@@ -124,8 +121,4 @@ def blocked_beams(cm, q, workspace: Workspace | None = None) -> tuple:
 def screen_beams(cm, q, workspace: Workspace | None = None) -> list:
     """For each pose of q (M, N), its first blocked beam, or None when every beam is free."""
     ws = Workspace(cm) if workspace is None else workspace
-    out = []
-    for pose in np.atleast_2d(q):
-        blocked = blocked_beams(cm, pose, ws)
-        out.append(blocked[0] if blocked else None)
-    return out
+    return [(blocked_beams(cm, pose, ws) or (None,))[0] for pose in np.atleast_2d(q)]

@@ -111,8 +111,9 @@ class Workspace:
         return self._motion
 
     def set_margins(self, margins) -> None:
-        """Make the collision tests report each pair closer than its margin (m)."""
-        margins = tuple(float(m) for m in margins)
+        """Make the collision tests report each pair closer than its margin (m; one for all)."""
+        margins = tuple(float(m) for m in np.broadcast_to(np.asarray(margins, float),
+                                                          len(self.results)))
         if margins != self.margins:
             for request, m in zip(self.geometry.collisionRequests, margins):
                 request.security_margin = m
@@ -169,8 +170,7 @@ def too_close(cm, q, margin: float | None = None, workspace: Workspace | None = 
     import pinocchio as pin
 
     ws = Workspace(cm) if workspace is None else workspace
-    ws.set_margins(cm.margins if margin is None
-                   else np.broadcast_to(np.asarray(margin, float), len(cm.margins)))
+    ws.set_margins(cm.margins if margin is None else margin)
     configurations = cm.configurations(q)
     out = np.full(configurations.shape[1], -1)
     results = ws.geometry.collisionResults
@@ -257,8 +257,7 @@ def _first_too_close(cm, qa, qb, t, margin, weights, ws, pairs=None):
     """
     import pinocchio as pin
 
-    ws.set_margins(cm.margins if margin is None
-                   else np.broadcast_to(np.asarray(margin, float), len(cm.margins)))
+    ws.set_margins(cm.margins if margin is None else margin)
     poses = np.ascontiguousarray(cm.configurations(qa + t[:, None] * (qb - qa)).T)
     n = len(t)
     order = range(len(cm.geometry.collisionPairs)) if pairs is None else pairs

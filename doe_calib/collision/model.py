@@ -114,7 +114,7 @@ class CollisionModel:
 
     def configurations(self, q) -> np.ndarray:
         """Pinocchio configurations of the chain's joint values q (M, N) rad/m: shape (nq, M)."""
-        return _configurations(self.model, self.joint_names, q)
+        return pinocchio_configurations(self.model, self.joint_names, q)
 
     def summary(self) -> dict:
         """JSON-able description: clearances (mm), pairs checked and those never checked."""
@@ -133,7 +133,7 @@ def _words(names, pair) -> str:
     return f"{names[pair.first]} vs {names[pair.second]}"
 
 
-def _configurations(model, joint_names, q) -> np.ndarray:
+def pinocchio_configurations(model, joint_names, q) -> np.ndarray:
     """Pinocchio configurations (nq, M) of chain joint values q (M, N); continuous: cos, sin."""
     import pinocchio as pin
 
@@ -262,22 +262,19 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
     own = np.array([p.first in robot_objects and p.second in robot_objects for p in pairs])
     margins = np.where(own, self_clearance, clearance)
     move_margins = np.where(own, move_self_clearance, move_clearance)
-    reasons = {}
     if srdf is not None:
-        reasons.update({k: f"disabled in {Path(srdf).name}" for k in
-                        pair_rules.srdf_pairs(geometry, links, srdf)})
+        reasons = {k: f"disabled in {Path(srdf).name}" for k in
+                   pair_rules.srdf_pairs(geometry, links, srdf)}
     else:
-        reasons.update({k: "adjacent links" for k in
-                        pair_rules.adjacent(model, geometry, robot_objects)})
+        reasons = {k: "adjacent links" for k in pair_rules.adjacent(model, geometry, robot_objects)}
     rng = np.random.default_rng(0) if rng is None else rng
     lo = np.where(np.isfinite(robot.lower), robot.lower, -np.pi)
     hi = np.where(np.isfinite(robot.upper), robot.upper, np.pi)
-    sample = _configurations(model, robot.joint_names,
-                             rng.uniform(lo, hi, (samples, robot.n_joints)))
+    sample = pinocchio_configurations(model, robot.joint_names,
+                                      rng.uniform(lo, hi, (samples, robot.n_joints)))
     rates = pair_rules.contact_rates(model, geometry, sample, margins, set(reasons))
     for k in np.flatnonzero(rates >= pair_rules.ALWAYS):
-        robot_pair = pairs[k].first in robot_objects and pairs[k].second in robot_objects
-        if k not in reasons and (srdf is None or not robot_pair):
+        if k not in reasons and (srdf is None or not own[k]):
             reasons[k] = (f"closer than {1000 * margins[k]:g} mm in {rates[k]:.0%} of "
                           f"{samples} random poses")
     disabled = tuple((_words(names, pairs[k]), reasons[k]) for k in sorted(reasons))

@@ -112,11 +112,9 @@ def contact_rates(model, geometry, configurations: np.ndarray, margins,
     tested = np.array([k for k in range(len(geometry.collisionPairs)) if k not in skipped], int)
     results = list(gdata.collisionResults)
     counts = np.zeros(len(geometry.collisionPairs))
-    hits = np.zeros(len(tested))
     for q in configurations.T:
         pin.computeCollisions(model, data, geometry, gdata, q, False)
-        hits += [results[k].isCollision() for k in tested]
-    counts[tested] = hits
+        counts[tested] += [results[k].isCollision() for k in tested]
     return counts / configurations.shape[1]
 
 

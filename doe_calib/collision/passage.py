@@ -106,7 +106,7 @@ def blocked_passage(cm, qa, qb, margins=None, lower=None, upper=None,
     if weights is None:
         return None
     qa, qb = np.asarray(qa, float), np.asarray(qb, float)
-    lo, hi = _box(cm, lower, upper)
+    lo, hi = joint_box(cm, lower, upper)
     lo, hi = np.minimum(lo, np.minimum(qa, qb)), np.maximum(hi, np.maximum(qa, qb))
     for j in np.flatnonzero(np.abs(qb - qa) > 0):
         n = int(np.ceil(abs(qb[j] - qa[j]) / VALUE_STEP))
@@ -147,7 +147,7 @@ def blocked_values(cm, joint: int, margins=None, lower=None, upper=None, workspa
     ws, weights, margins = _bounded(cm, margins, workspace)
     if weights is None:
         return np.zeros(0)
-    lo, hi = _box(cm, lower, upper)
+    lo, hi = joint_box(cm, lower, upper)
     values = np.arange(lo[joint] + step / 2, hi[joint], step)
     base = np.zeros(len(lo))
     found = set()
@@ -185,7 +185,7 @@ def _narrow_pairs(weights, margins, joint: int):
             yield int(k), float(margins[k]), (others[0] if others else None)
 
 
-def _box(cm, lower, upper):
+def joint_box(cm, lower, upper):
     """The joint box paths stay in, rad (m): the model's limits, ±2π where infinite."""
     lo = np.asarray(cm.lower if lower is None else lower, float)
     hi = np.asarray(cm.upper if upper is None else upper, float)

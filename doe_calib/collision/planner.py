@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.collision.clearance import SEGMENT_STEP, Workspace, check_path, too_close
-from doe_calib.collision.passage import blocked_passage
+from doe_calib.collision.passage import blocked_passage, joint_box
 from doe_calib.io.setting_ranges import positive, whole
 
 #: Joint step at which the search checks its motions, rad (the final check is at 1°).
@@ -100,21 +100,6 @@ class PlannedMove:
     samples: int
 
 
-def _bounds(lower, upper):
-    lo = np.where(np.isfinite(lower), lower, -2 * np.pi)
-    hi = np.where(np.isfinite(upper), upper, 2 * np.pi)
-    return lo, hi
-
-
-def _slots(cm) -> list:
-    """(index in the Pinocchio configuration, whether stored as cos, sin) of each chain joint."""
-    out = []
-    for name in cm.joint_names:
-        jm = cm.model.joints[cm.model.getJointId(name)]
-        out.append((jm.idx_q, jm.nq == 2))
-    return out
-
-
 def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, ws, memo):
     """One seeded RRT-Connect search, simplified; the path's positions (K, N) or None.
 
@@ -139,9 +124,11 @@ def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, ws, memo):
         space.setBounds(bounds)
         setup = og.SimpleSetup(space)
 
-        ws.set_margins(np.broadcast_to(np.asarray(margins, float), len(cm.margins)))
+        ws.set_margins(margins)
         x = cm.configurations(qa)[:, 0]
-        slots = _slots(cm)
+        # each chain joint's index in the Pinocchio configuration, and whether it is (cos, sin)
+        joints = [cm.model.joints[cm.model.getJointId(name)] for name in cm.joint_names]
+        slots = [(jm.idx_q, jm.nq == 2) for jm in joints]
         done = [0]  # validity checks so far: the search's work
 
         def valid(state) -> bool:
@@ -228,8 +215,7 @@ def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | No
     ws = Workspace(cm) if workspace is None else workspace
     qa, qb = np.asarray(qa, float), np.asarray(qb, float)
     margins = cm.move_margins or cm.margins
-    lo, hi = _bounds(np.asarray(cm.lower if lower is None else lower, float),
-                     np.asarray(cm.upper if upper is None else upper, float))
+    lo, hi = joint_box(cm, lower, upper)
     if (too_close(cm, np.array([qa, qb]), margins, ws) >= 0).any():
         return None
     if prove and blocked_passage(cm, qa, qb, margins, lo, hi, ws) is not None:

@@ -39,7 +39,7 @@ class Shape:
     on_flange: bool
 
 
-def _frame(origin, z_axis=None) -> np.ndarray:
+def frame_along(origin, z_axis=None) -> np.ndarray:
     """4×4 placement at ``origin`` (m) whose z axis is ``z_axis`` (default: unrotated)."""
     out = np.eye(4)
     out[:3, 3] = origin
@@ -60,7 +60,7 @@ def _rod(name: str, tip, radius: float) -> list:
     length = float(np.linalg.norm(tip))
     if radius <= 0 or length <= 2 * radius:
         return []
-    return [Shape(name, coal.Capsule(radius, length), _frame(tip / 2, tip), True)]
+    return [Shape(name, coal.Capsule(radius, length), frame_along(tip / 2, tip), True)]
 
 
 def tool_shapes(tool) -> list:
@@ -69,7 +69,7 @@ def tool_shapes(tool) -> list:
 
     out = []
     for name, p in zip(tool.names, tool.position_array):
-        out.append(Shape(f"marker {name}", coal.Sphere(tool.marker_radius), _frame(p), True))
+        out.append(Shape(f"marker {name}", coal.Sphere(tool.marker_radius), frame_along(p), True))
         out += _rod(f"rod to marker {name}", p, tool.rod_radius)
     return out
 
@@ -87,7 +87,7 @@ def load_shapes(loads, rod_radius: float) -> list:
     for load in loads:
         r = load.radius if load.radius is not None else load_radius(load.mass)
         label = f"load {load.mass:g} kg"
-        out.append(Shape(label, coal.Sphere(r), _frame(load.com), True))
+        out.append(Shape(label, coal.Sphere(r), frame_along(load.com), True))
         out += _rod(f"rod to {label}", load.com, rod_radius)
     return out
 
@@ -98,9 +98,9 @@ def cell_shapes(constraints) -> list:
 
     floor = 0.0 if constraints is None or constraints.floor is None else constraints.floor
     out = [Shape("floor", coal.Box(2 * _FLOOR_HALF_SIDE, 2 * _FLOOR_HALF_SIDE, _FLOOR_THICKNESS),
-                 _frame([0.0, 0.0, floor - _FLOOR_THICKNESS / 2]), False)]
+                 frame_along([0.0, 0.0, floor - _FLOOR_THICKNESS / 2]), False)]
     for box in () if constraints is None else constraints.keep_out:
         lo, hi = np.array(box.lower), np.array(box.upper)
-        out.append(Shape(f"keep-out {box.name}", coal.Box(*(hi - lo)), _frame((lo + hi) / 2),
+        out.append(Shape(f"keep-out {box.name}", coal.Box(*(hi - lo)), frame_along((lo + hi) / 2),
                          False))
     return out

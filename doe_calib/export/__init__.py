@@ -15,7 +15,7 @@ from typing import Callable
 import numpy as np
 
 from doe_calib.errors import DataError, OptionError
-from doe_calib.export import krl, rapid, urscript
+from doe_calib.export import dialects
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.cycle import CycleTime, cycle_time
 from doe_calib.export.payload import Payload
@@ -39,9 +39,9 @@ class Format:
 
 #: Format name → Format.
 FORMATS = {
-    "krl": Format("KUKA KRL .src/.dat", krl.SUFFIXES, krl.render),
-    "rapid": Format("ABB RAPID module", rapid.SUFFIXES, rapid.render),
-    "urscript": Format("Universal Robots URScript", urscript.SUFFIXES, urscript.render),
+    "krl": Format("KUKA KRL .src/.dat", (".src", ".dat"), dialects.krl),
+    "rapid": Format("ABB RAPID module", (".mod",), dialects.rapid),
+    "urscript": Format("Universal Robots URScript", (".script",), dialects.urscript),
     "csv": Format("design CSV (docs/formats.md section 4)", (".csv",), None),
 }
 

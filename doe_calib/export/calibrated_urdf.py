@@ -16,6 +16,7 @@ import casadi as ca
 import numpy as np
 import yaml
 
+from doe_calib.collision.model import pinocchio_configurations
 from doe_calib.errors import DataWarning, ModelError
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.effects.base import ChainSymbols, Effect
@@ -166,13 +167,7 @@ def pinocchio_configuration(pin_model, robot, q) -> np.ndarray:
 
     Joints off the chain stay neutral; a continuous joint is (cos q, sin q).
     """
-    import pinocchio as pin
-
-    out = pin.neutral(pin_model)
-    for joint, v in zip(robot.joints, np.asarray(q, float)):
-        jm = pin_model.joints[pin_model.getJointId(joint.name)]
-        out[jm.idx_q:jm.idx_q + jm.nq] = [np.cos(v), np.sin(v)] if jm.nq == 2 else [v]
-    return out
+    return pinocchio_configurations(pin_model, robot.joint_names, q)[:, 0]
 
 
 def leftovers(model, parameters, std=None) -> list[dict]:
@@ -191,34 +186,28 @@ def leftovers(model, parameters, std=None) -> list[dict]:
     return rows
 
 
-def own_weight_deflection(model, params, q):
-    """How far the robot's own weight moves the markers (M, n) and the flange origin (M,), m,
-    unloaded at ``q`` (M, N) rad/m: the effects that use the gravity torque against their
-    parameters at zero, which a URDF cannot hold; and those effects' specs (may be empty).
-    """
+def _own_weight(model, params) -> dict | None:
+    """The YAML's ``own_weight`` entry: how far the robot's own weight moves the markers and
+    the flange origin unloaded, the largest over sampled poses, mm; by the effects that use
+    the gravity torque, against their parameters at zero, which a URDF cannot hold (None:
+    no such effect)."""
     own = [e for e in model.effects if e.uses_gravity]
+    if not own:
+        return None
     blocks = {e.name for e in own}
     values = np.asarray(params.values, float)
     rigid = values.copy()
     rigid[[i for i, p in enumerate(params.parameters) if p.block in blocks]] = 0.0
-    cfg = Configurations.from_arrays(np.atleast_2d(q))
+    cfg = Configurations.from_arrays(random_configurations(
+        model.robot, OWN_WEIGHT_POSES, np.random.default_rng(0), margin=0.0))
     markers = np.linalg.norm(marker_positions(model, values, cfg)
                              - marker_positions(model, rigid, cfg), axis=2)
     origin = [np.asarray(evaluate(model.point, cfg, v, np.zeros(3))[0])[:, :, 0]
               for v in (values, rigid)]
-    return markers, np.linalg.norm(origin[0] - origin[1], axis=1), [e.spec() for e in own]
-
-
-def _own_weight(model, params) -> dict | None:
-    """The YAML's ``own_weight`` entry: largest displacements over sampled poses, mm."""
-    q = random_configurations(model.robot, OWN_WEIGHT_POSES, np.random.default_rng(0),
-                              margin=0.0)
-    markers, flange, effects = own_weight_deflection(model, params, q)
-    if not effects:
-        return None
-    return {"effects": effects, "poses": OWN_WEIGHT_POSES,
+    return {"effects": [e.spec() for e in own], "poses": OWN_WEIGHT_POSES,
             "max_marker_displacement_mm": float(markers.max() * 1000.0),
-            "max_flange_displacement_mm": float(flange.max() * 1000.0)}
+            "max_flange_displacement_mm": float(np.linalg.norm(origin[0] - origin[1],
+                                                               axis=1).max() * 1000.0)}
 
 
 def export_urdf(result, out, model=None) -> tuple[Path, Path]:

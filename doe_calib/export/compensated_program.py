@@ -34,10 +34,6 @@ def _flange_rotations(model, q) -> np.ndarray:
     return np.stack(axes, axis=2)
 
 
-def _skew(v) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
 def row_loads(q, wrench, model=None) -> list:
     """The load of each row as ``KG@X,Y,Z`` (mm, flange frame), "" unloaded, None unknown.
 
@@ -58,6 +54,8 @@ def row_loads(q, wrench, model=None) -> list:
         N, N·m at the flange origin, base frame.
     model : Model, optional
     """
+    import pinocchio as pin
+
     wrench = np.asarray(wrench, float)
     out = [None] * len(wrench)
     groups = {}
@@ -72,7 +70,7 @@ def row_loads(q, wrench, model=None) -> list:
         if rotations is None:
             spec = f"{mass:.6g}@"
         else:
-            a = np.vstack([-_skew(wrench[r, :3]) @ rotations[r] for r in rows])
+            a = np.vstack([-pin.skew(wrench[r, :3]) @ rotations[r] for r in rows])
             b = np.concatenate([wrench[r, 3:] for r in rows])
             com = np.linalg.lstsq(a, b, rcond=None)[0]
             spec = f"{mass:.6g}@" + ",".join(f"{1000 * c:.6g}" for c in com)

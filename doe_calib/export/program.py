@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doe_calib.errors import DataError, DoeCalibError, ModelError, OptionError
+from doe_calib.errors import DataError, DoeCalibError, OptionError
 from doe_calib.export.approach import backlash_joints, default_sides, pre_pose
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.payload import Payload
@@ -66,10 +66,9 @@ class Settings:
 @dataclass(frozen=True)
 class Waypoint:
     """An intermediate position a move passes through to keep clear of collisions: controller
-    values ``q`` (N,) deg (mm) and ``q_si`` rad (m), ``urdf`` rad (m), ``why`` in words."""
+    values ``q`` (N,) deg (mm), ``urdf`` rad (m), ``why`` in words."""
 
     q: np.ndarray
-    q_si: np.ndarray
     urdf: np.ndarray
     why: str
 
@@ -84,16 +83,16 @@ class Move:
     index, number, row : int
         1-based place of the pose in the design and of the visit in the program (they name
         its variables); the design row (−1 for a station).
-    q, q_si : ndarray, shape (N,)
-        Controller joint values (axis map applied), deg (mm) and rad (m).
+    q : ndarray, shape (N,)
+        Controller joint values (axis map applied), deg (mm).
     case, n_cases : int
         1-based load case of this visit and the number of load cases of the pose.
     load : str
         The load hung, in words.
     approach : tuple of int, length N
         Side each joint arrives from (URDF sense: +1 moving up, −1 down; 0 any).
-    pre, pre_si : ndarray, shape (N,), or None
-        The pre-pose, controller values, deg (mm) and rad (m); None without one.
+    pre : ndarray, shape (N,), or None
+        The pre-pose, controller values, deg (mm); None without one.
     urdf_q, urdf_pre : ndarray, shape (N,), or None
         Target and pre-pose as URDF values, rad (m).
     via : tuple of Waypoint
@@ -109,13 +108,11 @@ class Move:
     number: int
     row: int
     q: np.ndarray
-    q_si: np.ndarray
     case: int
     n_cases: int
     load: str
     approach: tuple
     pre: np.ndarray | None
-    pre_si: np.ndarray | None
     urdf_q: np.ndarray
     urdf_pre: np.ndarray | None
     via: tuple = ()
@@ -150,14 +147,6 @@ def ascii_text(text: str) -> str:
     """``text`` on one line, in printable ASCII (controllers' files are not UTF-8)."""
     text = text.replace("\u00b7", ".").replace("\u00b0", "deg")
     return re.sub(r"[^\x20-\x7e]", "?", " ".join(str(text).split()))
-
-
-def check_name(name: str, max_length: int) -> str:
-    """``name`` if it is a valid program identifier of at most ``max_length`` characters."""
-    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", name) or len(name) > max_length:
-        raise DataError(f"program name {name!r}: use a letter followed by letters, digits or '_', "
-                        f"at most {max_length} characters")
-    return name
 
 
 def check_limits(design) -> None:
@@ -286,11 +275,9 @@ def moves(design, plan: Plan | None = None) -> list[Move]:
         mine = [i for i, p in enumerate(cfg.pose) if p == pose]
         ctrl = axis_map.to_controller(q * factors)
         ctrl_pre = axis_map.to_controller(pre * factors) if has_pre else None
-        out.append(Move(pose, index[pose], len(out) + 1, r, ctrl, ctrl / factors,
-                        mine.index(r) + 1, len(mine), loads[r],
-                        tuple(int(a) for a in sides), ctrl_pre,
-                        None if ctrl_pre is None else ctrl_pre / factors,
-                        q, pre if has_pre else None, payload=payloads[r]))
+        out.append(Move(pose, index[pose], len(out) + 1, r, ctrl, mine.index(r) + 1, len(mine),
+                        loads[r], tuple(int(a) for a in sides), ctrl_pre, q,
+                        pre if has_pre else None, payload=payloads[r]))
     if home is None:
         return out
     return _with_stations(out, home, load_pose, axis_map, factors)
@@ -301,8 +288,8 @@ def _station(kind: str, q, last: Move | None, axis_map, factors) -> Move:
     ctrl = axis_map.to_controller(q * factors)
     load = NO_LOAD if last is None else last.load
     payload = Payload() if last is None else last.payload
-    return Move(kind, 0, 0, -1, ctrl, ctrl / factors, 0, 0, load,
-                (0,) * len(q), None, None, np.array(q, float), None, kind=kind, payload=payload)
+    return Move(kind, 0, 0, -1, ctrl, 0, 0, load, (0,) * len(q), None, np.array(q, float), None,
+                kind=kind, payload=payload)
 
 
 def _with_stations(visits: list, home, load_pose, axis_map, factors) -> list:
@@ -332,36 +319,6 @@ def realised_approach(visits: list[Move], robot) -> np.ndarray:
     if not target:
         return np.zeros((0, robot.n_joints))
     return approach_from_order(np.array(path) * robot.display_factors, _MOVED)[target]
-
-
-def headline(design, visits, units: str) -> list[str]:
-    """The two comment lines a program opens with: what it measures, model and ``units``."""
-    poses = len({m.index for m in visits if m.measures})
-    return [f"doe_calib measurement program: {poses} poses, "
-            f"{sum(m.measures for m in visits)} measurements",
-            ascii_text(f"model {design.model}, criterion {design.criterion}; {units}")]
-
-
-def six_axes(robot, language: str) -> None:
-    """Raise :class:`ModelError` unless ``robot`` has the 6 axes a ``language`` program drives."""
-    if robot.n_joints != 6:
-        raise ModelError(f"{language} export needs a 6-axis robot; {robot.name} has "
-                         f"{robot.n_joints} joints")
-
-
-def declared(visits, target, pre: str, via: str) -> list[tuple]:
-    """(variable, controller q, comment) of each position a program declares: every pose
-    once (``target(m)``), then the pre-poses (``<pre><number>``) and the intermediate
-    positions (``<via><number>_<k>``)."""
-    first = {}
-    for m in visits:
-        first.setdefault(target(m), m)
-    out = [(var, m.q, f"pose {m.pose}" if m.measures else f"{m.kind} pose")
-           for var, m in first.items()]
-    out += [(f"{pre}{m.number}", m.pre, f"pre-pose of pose {m.pose}, visit {m.number}")
-            for m in visits if m.pre is not None]
-    return [(var, q, ascii_text(words)) for var, q, words in out] + [
-        (f"{via}{m.number}_{k}", w.q, w.why) for m in visits for k, w in enumerate(m.via, 1)]
 
 
 def load_changes(visits: list[Move]) -> list[bool]:

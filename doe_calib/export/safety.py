@@ -240,11 +240,12 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
     names = tuple(robot.joint_names)
     workspaces = {id(cm): Workspace(cm) for cm in models.values()}
     safe = list({m.pose: m.urdf_q for m in visits}.items())
-    jobs, previous = [], None
+    legs, jobs, previous = [], [], None  # legs: each visit's model, start and first position
     for m in visits:  # every move's check (and route) is known before any is made
         cm = models.get(m.load, models[NO_LOAD])
         first = m.urdf_q if m.urdf_pre is None else m.urdf_pre
         start = first if previous is None else previous
+        legs.append((cm, start, first))
         settings = cm.planner if planner is True else (planner or None)
         jobs.append((cm, start, first, route and previous is not None, settings))
         if m.urdf_pre is not None:
@@ -254,19 +255,16 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
     done = iter(forked_map(_checked_move, (jobs, safe, workspaces), len(jobs), workers))
     out, routed, collisions, blocked = [], [], [], []
     n_moves = n_samples = 0
-    previous, where = None, None
+    where = None
 
     def collision(result, qa, qb, words, proof=None):
         q = (qa + result.first * (qb - qa)) * factors
         return Collision(n_moves, words, result.first, tuple(float(v) for v in q),
                          result.pair, names, "" if proof is None else proof.words(names, factors))
 
-    for m in visits:
-        cm = models.get(m.load, models[NO_LOAD])
-        first = m.urdf_q if m.urdf_pre is None else m.urdf_pre
+    for m, (cm, start, first) in zip(visits, legs):
         to = _label(m) if m.urdf_pre is None else f"pre-pose of {_label(m)}"
-        start = first if previous is None else previous
-        words = (f"first position, {to}" if previous is None else f"from {where} to {to}") \
+        words = (f"first position, {to}" if where is None else f"from {where} to {to}") \
             + f", {m.load}"
         result, (how, via, samples, proof) = next(done)
         n_moves += 1
@@ -274,12 +272,9 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
         if via is not None:
             why = ascii_text(f"on the way from {where} to {to}, {how} (straight: "
                              f"{result.pair})")
-            points = []
-            for k, u in enumerate(via, start=1):
-                ctrl = axis_map.to_controller(u * factors)
-                points.append(Waypoint(ctrl, ctrl / factors, u,
-                                       f"intermediate {k} of {len(via)} {why}"))
-            m = replace(m, via=tuple(points))
+            m = replace(m, via=tuple(
+                Waypoint(axis_map.to_controller(u * factors), u,
+                         f"intermediate {k} of {len(via)} {why}") for k, u in enumerate(via, 1)))
             routed.append(f"move {n_moves}, {words}: {how} (straight: {result.pair})")
             result = None
         if result is not None and not result.free:
@@ -293,7 +288,7 @@ def check_program(visits, models, robot, axis_map: AxisMap | None = None,
                 collisions.append(collision(result, m.urdf_pre, m.urdf_q, words))
         for b in (blocked_beams(cm, m.urdf_q, workspaces[id(cm)]) if m.measures else ()):
             blocked.append(f"{_label(m)}, {m.load}: {b}")  # beams matter where it measures
-        previous, where = m.urdf_q, _label(m)
+        where = _label(m)
         out.append(m)
     cm = models[NO_LOAD]
     return ProgramCheck(tuple(out), n_moves, n_samples, tuple(routed), tuple(collisions),
