@@ -6,6 +6,7 @@ from pathlib import Path
 
 from doe_calib.cli.choices import CRITERIA
 from doe_calib.cli.common import (
+    add_options,
     check_payloads,
     collision_arguments,
     collision_builder,
@@ -54,8 +55,7 @@ def add_arguments(c):
                    help="D (log det), A (trace of the scaled covariance), E (smallest "
                         "eigenvalue) or task (position variance at --task poses)")
     c.add_argument("--task", help="design CSV of task poses (deg/mm) and their loads (N, N·m)")
-    c.add_argument("--task-point", default="0,0,0",
-                   help="X,Y,Z of the task point in the flange frame, mm (default the flange)")
+    add_options(c, "--task-point")
     c.add_argument("--constraints", help="constraints YAML: joint limits, margin, Cartesian boxes "
                                          "and floor, line of sight, load torques, coverage")
     collision_arguments(c)
@@ -67,7 +67,7 @@ def add_arguments(c):
                    help="skip the continuous IPOPT refinement of the exact design")
     c.add_argument("--sigma", type=positive("--sigma", "mm"), default=0.02,
                    help="tracker σ per coordinate, mm")
-    c.add_argument("--seed", type=count("--seed", 0), help="random seed")
+    add_options(c, "--seed")
     c.add_argument("--detect", metavar="EFFECTS",
                    help="also say what these poses can reveal: the smallest detectable size of "
                         "each effect ('+'-joined effect strings, or 'catalogue' for every "
