@@ -33,21 +33,11 @@ from doe_calib.runtime.threads import single_threaded_blas
 FORMATS_NOTE = ("file formats: docs/formats.md in the doe_calib repository; example robot, tool, "
                 f"constraints and effect files: {Path(examples.ROBOT_URDF).parent}")
 
-#: Command name → module, in the order ``--help`` lists them.
-COMMANDS = {
-    "demo": demo,
-    "simulate": simulate,
-    "identify": identify,
-    "predict": predict,
-    "diagnose": diagnose,
-    "refine": refine,
-    "design": design,
-    "study": study,
-    "export": export,
-    "compare": compare,
-    "compensate": compensate,
-    "export-urdf": export_urdf,
-}
+#: Command name → module, in the order ``--help`` lists them; a command is the module of its
+#: name ('-' as '_').
+COMMANDS = {m.__name__.rpartition(".")[2].replace("_", "-"): m for m in (
+    demo, simulate, identify, predict, diagnose, refine, design, study, export, compare,
+    compensate, export_urdf)}
 
 
 def build_parser() -> argparse.ArgumentParser:
