@@ -158,35 +158,29 @@ def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
     ``--exclude-poses``, ``--approach-sign``).
 
     With no σ given (no ``--sigma``, no ``sigma`` column) and ``estimate_sigma``,
-    σ is set to the σ̂ of the starting model (:func:`with_estimated_sigma`).
+    σ is settled by :func:`~doe_calib.estimation.sigma.resolve_sigma` (the σ̂ of the starting
+    model), said on stderr.
     ``registry`` names the effects ``--model`` may use (default :func:`effect_registry`).
     """
+    from doe_calib.estimation.sigma import resolve_sigma
     from doe_calib.model.marker_model import build_model
 
     robot, tool = load_robot_tool(args)
     registry = effect_registry(args) if registry is None else registry
     model = build_model(robot, tool, args.model, registry=registry)
     meas = read_data(args.data, robot, tool, sigma_option(args), args.skip_bad,
-                     approach_sign=getattr(args, "approach_sign", APPROACH_SIGNS[0]))
+                     approach_sign=args.approach_sign)
     meas = excluding(meas, getattr(args, "exclude_poses", None))
     if estimate_sigma and meas.sigma_estimated:
-        meas = with_estimated_sigma(model, meas)
+        settled = resolve_sigma(model, meas)
+        print(settled.words, file=sys.stderr)
+        meas = settled.measurements
     return model, meas
 
 
 def sigma_option(args) -> float | None:
     """``--sigma``, given in mm (the unit of the users' files), in metres (the Python API's)."""
     return None if getattr(args, "sigma", None) is None else args.sigma / 1000.0
-
-
-def with_estimated_sigma(model, meas):
-    """``meas`` with σ settled by :func:`~doe_calib.estimation.sigma.resolve_sigma` (σ̂ of
-    the starting model when none was given), said on stderr."""
-    from doe_calib.estimation.sigma import resolve_sigma
-
-    settled = resolve_sigma(model, meas)
-    print(settled.words, file=sys.stderr)
-    return settled.measurements
 
 
 def parse_floats(text: str, n: int, what: str) -> np.ndarray:
