@@ -109,14 +109,6 @@ def _csv_beside(out: str) -> Path:
     return Path(out).with_suffix(".csv")
 
 
-def _check_level_and_power(args):
-    """Refuse, before any work, a detection test whose power is not above its level."""
-    if args.detect and args.min_power is not None:
-        level_and_power(args.alpha, args.min_power, ("--alpha", "--min-power"))
-    elif args.detect:
-        level_and_power(args.alpha, args.power, ("--alpha", "--power"))
-
-
 def _discovery_goal(args):
     """The :class:`~doe_calib.design.discovery.goal.DiscoveryGoal` of ``--detect-size``, or of
     ``--load-directions`` with plain ``--detect`` (no size: each pose picks its load case for
@@ -151,7 +143,10 @@ def run(args):
     from doe_calib.model.marker_model import build_model
 
     csv_path = _csv_beside(args.out)
-    _check_level_and_power(args)
+    if args.detect:  # before any work: a detection test's power must be above its level
+        power = ("--power", args.power) if args.min_power is None else \
+            ("--min-power", args.min_power)
+        level_and_power(args.alpha, power[1], ("--alpha", power[0]))
     if args.report and Path(args.report).resolve() == csv_path.resolve():
         raise OptionError(f"--report {args.report}: the design CSV is written there; give the "
                           f"report its own name")
