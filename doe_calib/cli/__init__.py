@@ -2,7 +2,7 @@
 
 Each command is a module here with ``HELP``, ``EXAMPLE``, ``add_arguments(parser)``
 and ``run(args)``, and ``OUTPUTS`` if it writes (:mod:`.options`); adding a command is
-one module and one line in :data:`COMMANDS`. File formats: ``docs/formats.md``.
+one module and its name in :data:`COMMANDS`. File formats: ``docs/formats.md``.
 """
 from __future__ import annotations
 
