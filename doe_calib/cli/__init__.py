@@ -2,7 +2,7 @@
 
 Each command is a module here with ``HELP``, ``EXAMPLE``, ``add_arguments(parser)``
 and ``run(args)``, and ``OUTPUTS`` if it writes (:mod:`.options`); adding a command is
-one module and one line in :data:`COMMANDS`. File formats: ``docs/formats.md``.
+one module and its name in :data:`COMMANDS`. File formats: ``docs/formats.md``.
 """
 from __future__ import annotations
 
@@ -33,21 +33,11 @@ from doe_calib.runtime.threads import single_threaded_blas
 FORMATS_NOTE = ("file formats: docs/formats.md in the doe_calib repository; example robot, tool, "
                 f"constraints and effect files: {Path(examples.ROBOT_URDF).parent}")
 
-#: Command name → module, in the order ``--help`` lists them.
-COMMANDS = {
-    "demo": demo,
-    "simulate": simulate,
-    "identify": identify,
-    "predict": predict,
-    "diagnose": diagnose,
-    "refine": refine,
-    "design": design,
-    "study": study,
-    "export": export,
-    "compare": compare,
-    "compensate": compensate,
-    "export-urdf": export_urdf,
-}
+#: Command name → module, in the order ``--help`` lists them; a command is the module of its
+#: name ('-' as '_').
+COMMANDS = {m.__name__.rpartition(".")[2].replace("_", "-"): m for m in (
+    demo, simulate, identify, predict, diagnose, refine, design, study, export, compare,
+    compensate, export_urdf)}
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -12,33 +12,6 @@ if TYPE_CHECKING:
     import numpy as np
 
 
-def effect_file_argument(c):
-    """Add ``--effect-file`` (repeatable): user effects a model or a result may name."""
-    c.add_argument("--effect-file", action="append", metavar="FILE.py",
-                   help="Python file declaring a user effect (doe_calib.model.effects.user); "
-                        "repeat for several")
-
-
-def robot_arguments(c, model: bool = True, tool_required: bool = True):
-    """Add ``--robot``, ``--flange``, ``--tool`` (and ``--model``, ``--effect-file``).
-
-    ``tool_required`` False: the command can also read 6-DoF probe files
-    (``--angles``), whose tool comes from the data; :func:`load_robot_tool`
-    then asks for ``--tool`` when it is needed.
-    """
-    c.add_argument("--robot", required=True, help="URDF file of the nominal robot")
-    c.add_argument("--flange", help="flange link (default: the tool file's, else the "
-                                    "chain's last link)")
-    c.add_argument("--tool", required=tool_required,
-                   help="tool YAML with marker positions (mm): 1 reflector, 2 or more markers"
-                        + ("" if tool_required else "; not with --angles (6-DoF probe files)"))
-    if model:
-        c.add_argument("--model", default=DEFAULT_MODEL, type=model_option,
-                       help=f"effects joined by '+' (default {DEFAULT_MODEL}); 'none' for "
-                            f"base and markers only")
-        effect_file_argument(c)
-
-
 def model_option(text: str) -> str:
     """``--model``: a model string; ``none`` is the empty model (base and markers only)."""
     if text.strip().lower() == "none":
@@ -47,6 +20,56 @@ def model_option(text: str) -> str:
         raise OptionError(f"--model is empty: name the effects joined by '+' (e.g. "
                           f"{DEFAULT_MODEL}) or write --model none for base and markers only")
     return text
+
+
+#: ``--approach-sign``: the file's approach convention (formats.md §3) or its reverse.
+APPROACH_SIGNS = ("as-read", "reversed")
+
+#: Options several commands declare alike, declared once: option → ``add_argument`` keywords.
+SHARED = {
+    "--robot": dict(required=True, help="URDF file of the nominal robot"),
+    "--flange": dict(help="flange link (default: the tool file's, else the chain's last link)"),
+    "--model": dict(default=DEFAULT_MODEL, type=model_option,
+                    help=f"effects joined by '+' (default {DEFAULT_MODEL}); 'none' for base and "
+                         f"markers only"),
+    # results, and models naming a user effect, need its file
+    "--effect-file": dict(action="append", metavar="FILE.py",
+                          help="Python file declaring a user effect "
+                               "(doe_calib.model.effects.user); repeat for several"),
+    "--data": dict(required=True, nargs="+", metavar="CSV",
+                   help="measurement CSV(s) (docs/formats.md); several files are several "
+                        "sessions (a 'session' column also says so)"),
+    "--skip-bad": dict(action="store_true", help="drop bad rows, reporting each"),
+    # a diagnosis proposes reversed when backlash fits negative
+    "--approach-sign": dict(choices=APPROACH_SIGNS, default=APPROACH_SIGNS[0],
+                            help="reversed: negate every approach direction read or derived "
+                                 "from the row order (a file whose convention is the reverse: "
+                                 "backlash by approach then fits positive); default as-read"),
+    "--result": dict(required=True, help="identification result JSON"),
+    "--task-point": dict(default="0,0,0", help="X,Y,Z of the task point in the flange frame, "
+                                               "mm (default the flange)"),
+    "--seed": dict(type=count("--seed", 0), help="random seed"),
+}
+
+
+def add_options(c, *names) -> None:
+    """Add the :data:`SHARED` options ``names`` to the command parser ``c``, in order."""
+    for name in names:
+        c.add_argument(name, **SHARED[name])
+
+
+def robot_arguments(c, tool_required: bool = True):
+    """Add ``--robot``, ``--flange``, ``--tool``, ``--model`` and ``--effect-file``.
+
+    ``tool_required`` False: the command can also read 6-DoF probe files
+    (``--angles``), whose tool comes from the data; :func:`load_robot_tool`
+    then asks for ``--tool`` when it is needed.
+    """
+    add_options(c, "--robot", "--flange")
+    c.add_argument("--tool", required=tool_required,
+                   help="tool YAML with marker positions (mm): 1 reflector, 2 or more markers"
+                        + ("" if tool_required else "; not with --angles (6-DoF probe files)"))
+    add_options(c, "--model", "--effect-file")
 
 
 def effect_registry(args):
@@ -68,26 +91,6 @@ def load_robot_tool(args):
     tool = Tool.from_yaml(args.tool)
     robot = Robot.from_urdf(args.robot, flange=args.flange or tool.flange)
     return robot, tool
-
-
-def data_argument(c):
-    """``--data FILE [FILE …]``: measurement CSVs, each file one session unless it has a column."""
-    c.add_argument("--data", required=True, nargs="+", metavar="CSV",
-                   help="measurement CSV(s) (docs/formats.md); several files are several "
-                        "sessions (a 'session' column also says so)")
-
-
-#: ``--approach-sign``: the file's approach convention (formats.md §3) or its reverse.
-APPROACH_SIGNS = ("as-read", "reversed")
-
-
-def approach_argument(c):
-    """``--approach-sign as-read|reversed``: accept files whose approach directions are the
-    reverse of formats.md §3 (a diagnosis proposes it when backlash fits negative)."""
-    c.add_argument("--approach-sign", choices=APPROACH_SIGNS, default=APPROACH_SIGNS[0],
-                   help="reversed: negate every approach direction read or derived from the "
-                        "row order (a file whose convention is the reverse: backlash by "
-                        "approach then fits positive); default as-read")
 
 
 def read_data(paths, robot, tool, sigma=None, skip_bad=False, require_xyz=True,
@@ -155,35 +158,29 @@ def model_and_measurements(args, estimate_sigma: bool = True, registry=None):
     ``--exclude-poses``, ``--approach-sign``).
 
     With no σ given (no ``--sigma``, no ``sigma`` column) and ``estimate_sigma``,
-    σ is set to the σ̂ of the starting model (:func:`with_estimated_sigma`).
+    σ is settled by :func:`~doe_calib.estimation.sigma.resolve_sigma` (the σ̂ of the starting
+    model), said on stderr.
     ``registry`` names the effects ``--model`` may use (default :func:`effect_registry`).
     """
+    from doe_calib.estimation.sigma import resolve_sigma
     from doe_calib.model.marker_model import build_model
 
     robot, tool = load_robot_tool(args)
     registry = effect_registry(args) if registry is None else registry
     model = build_model(robot, tool, args.model, registry=registry)
     meas = read_data(args.data, robot, tool, sigma_option(args), args.skip_bad,
-                     approach_sign=getattr(args, "approach_sign", APPROACH_SIGNS[0]))
+                     approach_sign=args.approach_sign)
     meas = excluding(meas, getattr(args, "exclude_poses", None))
     if estimate_sigma and meas.sigma_estimated:
-        meas = with_estimated_sigma(model, meas)
+        settled = resolve_sigma(model, meas)
+        print(settled.words, file=sys.stderr)
+        meas = settled.measurements
     return model, meas
 
 
 def sigma_option(args) -> float | None:
     """``--sigma``, given in mm (the unit of the users' files), in metres (the Python API's)."""
     return None if getattr(args, "sigma", None) is None else args.sigma / 1000.0
-
-
-def with_estimated_sigma(model, meas):
-    """``meas`` with σ settled by :func:`~doe_calib.estimation.sigma.resolve_sigma` (σ̂ of
-    the starting model when none was given), said on stderr."""
-    from doe_calib.estimation.sigma import resolve_sigma
-
-    settled = resolve_sigma(model, meas)
-    print(settled.words, file=sys.stderr)
-    return settled.measurements
 
 
 def parse_floats(text: str, n: int, what: str) -> np.ndarray:

@@ -4,7 +4,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from doe_calib.cli.common import effect_file_argument, effect_registry, parse_floats
+from doe_calib.cli.common import add_options, effect_registry, parse_floats
 from doe_calib.cli.options import positive
 from doe_calib.io.json_file import strict_json
 
@@ -17,8 +17,7 @@ EXAMPLE = ("doe-calib compare d15.json d30.json result.json --task task.csv "
 def add_arguments(c):
     c.add_argument("files", nargs="+", help="design JSON and/or identification result JSON files")
     c.add_argument("--task", help="design-format CSV of task poses (deg/mm, N, N·m)")
-    c.add_argument("--task-point", default="0,0,0",
-                   help="X,Y,Z of the task point in the flange frame, mm (default the flange)")
+    add_options(c, "--task-point")
     c.add_argument("--sigma", type=positive("--sigma", "mm"), help="tracker σ per coordinate, "
                    "mm: designs are predicted with it (default: the σ the design was made "
                    "for), results rescaled to it (default: their own)")
@@ -27,7 +26,7 @@ def add_arguments(c):
     c.add_argument("--report", metavar="FILE.html", help="also write an HTML report (tables "
                    "and bar plots of the std per parameter and of the task accuracy)")
     c.add_argument("--json", action="store_true", help="print JSON instead of the tables")
-    effect_file_argument(c)   # results whose model names a user effect need its file
+    add_options(c, "--effect-file")
 
 
 OUTPUTS = {"out": "file", "plot": "file", "report": "file"}

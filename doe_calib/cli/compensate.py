@@ -8,7 +8,7 @@ from pathlib import Path
 
 from doe_calib.cli.choices import EXPORT_FORMATS, MAX_SHIFT
 from doe_calib.cli.common import (
-    effect_file_argument,
+    add_options,
     effect_registry,
     parse_floats,
     report_warnings,
@@ -25,7 +25,7 @@ EXAMPLE = ("doe-calib compensate --result result.json --targets program.csv --tc
 
 
 def add_arguments(c):
-    c.add_argument("--result", required=True, help="identification result JSON")
+    add_options(c, "--result")
     c.add_argument("--targets", required=True,
                    help="design CSV of the program (pose, q1..qN in deg/mm, optional wrench "
                         "fx..mz) with optional x,y,z target positions (mm, tracker frame "
@@ -64,7 +64,7 @@ def add_arguments(c):
                         "deviation, 1 mm and 0.0573 deg")
     program_arguments(c, home="none")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
-    effect_file_argument(c)
+    add_options(c, "--effect-file")
 
 
 OUTPUTS = {"out": "file", "program_out": "folder"}

@@ -6,6 +6,7 @@ from pathlib import Path
 
 from doe_calib.cli.choices import CRITERIA
 from doe_calib.cli.common import (
+    add_options,
     check_payloads,
     collision_arguments,
     collision_builder,
@@ -54,8 +55,7 @@ def add_arguments(c):
                    help="D (log det), A (trace of the scaled covariance), E (smallest "
                         "eigenvalue) or task (position variance at --task poses)")
     c.add_argument("--task", help="design CSV of task poses (deg/mm) and their loads (N, N·m)")
-    c.add_argument("--task-point", default="0,0,0",
-                   help="X,Y,Z of the task point in the flange frame, mm (default the flange)")
+    add_options(c, "--task-point")
     c.add_argument("--constraints", help="constraints YAML: joint limits, margin, Cartesian boxes "
                                          "and floor, line of sight, load torques, coverage")
     collision_arguments(c)
@@ -67,7 +67,7 @@ def add_arguments(c):
                    help="skip the continuous IPOPT refinement of the exact design")
     c.add_argument("--sigma", type=positive("--sigma", "mm"), default=0.02,
                    help="tracker σ per coordinate, mm")
-    c.add_argument("--seed", type=count("--seed", 0), help="random seed")
+    add_options(c, "--seed")
     c.add_argument("--detect", metavar="EFFECTS",
                    help="also say what these poses can reveal: the smallest detectable size of "
                         "each effect ('+'-joined effect strings, or 'catalogue' for every "
@@ -109,14 +109,6 @@ def _csv_beside(out: str) -> Path:
     return Path(out).with_suffix(".csv")
 
 
-def _check_level_and_power(args):
-    """Refuse, before any work, a detection test whose power is not above its level."""
-    if args.detect and args.min_power is not None:
-        level_and_power(args.alpha, args.min_power, ("--alpha", "--min-power"))
-    elif args.detect:
-        level_and_power(args.alpha, args.power, ("--alpha", "--power"))
-
-
 def _discovery_goal(args):
     """The :class:`~doe_calib.design.discovery.goal.DiscoveryGoal` of ``--detect-size``, or of
     ``--load-directions`` with plain ``--detect`` (no size: each pose picks its load case for
@@ -151,7 +143,10 @@ def run(args):
     from doe_calib.model.marker_model import build_model
 
     csv_path = _csv_beside(args.out)
-    _check_level_and_power(args)
+    if args.detect:  # before any work: a detection test's power must be above its level
+        power = ("--power", args.power) if args.min_power is None else \
+            ("--min-power", args.min_power)
+        level_and_power(args.alpha, power[1], ("--alpha", power[0]))
     if args.report and Path(args.report).resolve() == csv_path.resolve():
         raise OptionError(f"--report {args.report}: the design CSV is written there; give the "
                           f"report its own name")

@@ -6,8 +6,7 @@ from pathlib import Path
 
 from doe_calib.cli.choices import CV_GROUPINGS
 from doe_calib.cli.common import (
-    approach_argument,
-    data_argument,
+    add_options,
     effect_registry,
     model_and_measurements,
     robot_arguments,
@@ -22,7 +21,7 @@ EXAMPLE = ("doe-calib diagnose --robot kr270.urdf --tool tool.yaml --data meas.c
 
 def measurement_arguments(c):
     """Data, σ and the diagnosis settings (diagnose, refine)."""
-    data_argument(c)
+    add_options(c, "--data")
     c.add_argument("--sigma", type=positive("--sigma", "mm"), help="tracker σ per coordinate, "
                                                                     "mm, for rows without a "
                                                                     "sigma column")
@@ -41,8 +40,7 @@ def measurement_arguments(c):
                    help="folds for --cv-by pose|region (default 5; at least 2)")
     c.add_argument("--exclude-poses", metavar="P1,P2",
                    help="leave these poses out (each exclusion is reported)")
-    c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")
-    approach_argument(c)
+    add_options(c, "--skip-bad", "--approach-sign")
     c.add_argument("--practical-um", type=positive("--practical-um", "µm"), default=2.0,
                    help="practical size: a misfit beyond the noise √(σ̂² − σ²) below this "
                         "many µm, with no material candidate, is adequate (default 2)")

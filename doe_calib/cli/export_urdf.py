@@ -6,7 +6,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from doe_calib.cli.common import effect_file_argument, effect_registry, report_warnings
+from doe_calib.cli.common import add_options, effect_registry, report_warnings
 from doe_calib.cli.options import refuse_input
 from doe_calib.io.json_file import strict_json
 
@@ -16,11 +16,11 @@ EXAMPLE = "doe-calib export-urdf --result result.json --out robot_calibrated.urd
 
 
 def add_arguments(c):
-    c.add_argument("--result", required=True, help="identification result JSON")
+    add_options(c, "--result")
     c.add_argument("--out", required=True,
                    help="URDF to write; the YAML beside it takes the same name with .yaml")
     c.add_argument("--json", action="store_true", help="print the files written as JSON")
-    effect_file_argument(c)
+    add_options(c, "--effect-file")
 
 
 OUTPUTS = {"out": "file"}

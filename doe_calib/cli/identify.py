@@ -6,8 +6,7 @@ import warnings
 
 from doe_calib.cli.choices import ESTIMATORS, SELECTIONS
 from doe_calib.cli.common import (
-    approach_argument,
-    data_argument,
+    add_options,
     fix_and_free,
     model_and_measurements,
     report_warnings,
@@ -25,7 +24,7 @@ EXAMPLE = ("doe-calib identify --robot kr270.urdf --tool tool.yaml --data meas.c
 
 def add_arguments(c):
     robot_arguments(c, tool_required=False)
-    data_argument(c)
+    add_options(c, "--data")
     probe_arguments(c)
     c.add_argument("--estimator", choices=ESTIMATORS, default="point")
     c.add_argument("--sigma", type=positive("--sigma", "mm"),
@@ -40,8 +39,7 @@ def add_arguments(c):
     c.add_argument("--free", help="comma-separated parameters or blocks to estimate")
     c.add_argument("--normalisation", type=positive("--normalisation", "m/rad"),
                    help="pose estimator only: m per rad")
-    c.add_argument("--skip-bad", action="store_true", help="drop bad rows, reporting each")
-    approach_argument(c)
+    add_options(c, "--skip-bad", "--approach-sign")
     c.add_argument("--out", required=True, help="result JSON to write")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
     c.add_argument("--report", metavar="FILE.html", help="also write an HTML report")

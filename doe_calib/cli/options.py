@@ -25,19 +25,15 @@ from doe_calib.errors import OptionError
 from doe_calib.io import setting_ranges as ranges
 
 
-def _number(option: str, text: str, kind, what: str):
-    try:
-        value = kind(text)
-    except ValueError:
-        raise OptionError(f"{option} {text!r}: expected {what}") from None
-    if not math.isfinite(value):
-        raise OptionError(f"{option} {text!r}: expected {what}")
-    return value
-
-
 def _converter(option: str, kind, what: str, check, *args):
     def convert(text: str):
-        return check(option, _number(option, text, kind, what), *args)
+        try:
+            value = kind(text)
+        except ValueError:
+            value = math.nan
+        if not math.isfinite(value):
+            raise OptionError(f"{option} {text!r}: expected {what}")
+        return check(option, value, *args)
     return convert
 
 

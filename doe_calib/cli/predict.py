@@ -4,7 +4,7 @@ from __future__ import annotations
 import sys
 from dataclasses import replace
 
-from doe_calib.cli.common import effect_file_argument, effect_registry, read_data
+from doe_calib.cli.common import add_options, effect_registry, read_data
 from doe_calib.io.json_file import strict_json
 
 HELP = "marker positions predicted by a result, for validation"
@@ -12,7 +12,7 @@ EXAMPLE = "doe-calib predict --result result.json --data held_out.csv --out pred
 
 
 def add_arguments(c):
-    c.add_argument("--result", required=True, help="identification result JSON")
+    add_options(c, "--result")
     c.add_argument("--data", required=True, nargs="+", metavar="CSV",
                    help="measurement-format CSV(s) of the poses (x,y,z used for the error if "
                         "present)")
@@ -26,7 +26,7 @@ def add_arguments(c):
                         "parameters) or also the tool mounting (frame+tool: the marker "
                         "positions) on these readings before scoring, every robot parameter "
                         "held; needs x,y,z in the data")
-    effect_file_argument(c)   # a result whose model names a user effect needs its file
+    add_options(c, "--effect-file")
 
 
 OUTPUTS = {"out": "file"}

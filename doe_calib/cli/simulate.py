@@ -4,6 +4,7 @@ from __future__ import annotations
 import sys
 
 from doe_calib.cli.common import (
+    add_options,
     check_payloads,
     collision_arguments,
     collision_builder,
@@ -40,7 +41,7 @@ def add_arguments(c):
     c.add_argument("--truth", help="JSON with the true parameters (else random errors)")
     c.add_argument("--tracker", help="tracker placement X,Y,Z,RX,RY,RZ (mm, rotation vector "
                                      "in deg) when errors are random")
-    c.add_argument("--seed", type=count("--seed", 0), help="random seed")
+    add_options(c, "--seed")
     c.add_argument("--out", required=True, help="measurement CSV to write")
     c.add_argument("--truth-out", help="JSON to write the true parameters to")
     c.add_argument("--json", action="store_true", help="print what was written as JSON "

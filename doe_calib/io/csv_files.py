@@ -167,9 +167,7 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
         raise DataError("no valid data rows", table.path)
     _, first_row, config = np.unique(key[rows], return_index=True, return_inverse=True)
     order = np.argsort(first_row)  # configurations in order of first appearance
-    rank = np.empty(len(order), int)
-    rank[order] = np.arange(len(order))
-    config, first_row = rank[config].reshape(-1), rows[first_row[order]]
+    config, first_row = np.argsort(order)[config].reshape(-1), rows[first_row[order]]
     check_not_radians(q[first_row], robot, table.path)
     session = tuple(sessions[r] for r in first_row.tolist())
     cfg = Configurations.from_arrays(q[first_row], wrench[first_row], temp[first_row, None],
@@ -266,17 +264,27 @@ def read_design_csv(path, robot, positions: bool = False) -> tuple:
                                        appr if explicit else derived_approach(q, robot)), xyz)
 
 
-def _configuration_fields(cfg, c, robot) -> list[str]:
-    q = cfg.q[c] * robot.display_factors
-    return [cfg.pose[c], *map(repr, map(float, q)), *map(repr, map(float, cfg.wrench[c]))]
+def _numbers(names, values, unknown_empty: bool = False) -> dict:
+    """Columns ``names`` of ``values`` (R, len(names)) as text that reads back exactly;
+    with ``unknown_empty`` a NaN (not known) is an empty cell."""
+    return {name: [repr(float(v)) if not unknown_empty or np.isfinite(v) else "" for v in col]
+            for name, col in zip(names, np.asarray(values, float).T)}
 
 
-def _write(path, comment, header, rows):
+def _configuration_columns(cfg, c, robot) -> dict:
+    """Columns pose, q1..qN (deg, mm) and the wrench of configurations ``c`` (R,), one row each."""
+    return {"pose": [cfg.pose[i] for i in c],
+            **_numbers(joint_columns(robot), cfg.q[c] * robot.display_factors),
+            **_numbers(WRENCH, cfg.wrench[c])}
+
+
+def _write(path, comment, columns: dict) -> None:
+    """A CSV of ``columns`` (name → cells, one per row) below the line ``# comment``."""
     buf = _io.StringIO()
     buf.write(f"# {comment}\n")
     writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(header)
-    writer.writerows(rows)
+    writer.writerow(columns)
+    writer.writerows(zip(*columns.values()))
     Path(path).write_text(buf.getvalue(), encoding="utf-8")
 
 
@@ -294,8 +302,8 @@ def _approach_needed(cfg, order, robot) -> bool:
         not np.array_equal(approach, derived_approach(cfg.q[order], robot))
 
 
-def _approach_fields(cfg, c) -> list[str]:
-    return [str(int(a)) for a in cfg.approach[c]]
+def _approach_cells(cfg, c, robot) -> dict:
+    return dict(zip(approach_columns(robot), cfg.approach[c].astype(int).astype(str).T.tolist()))
 
 
 def write_measurements(path, measurements, robot, tool, std=None) -> None:
@@ -308,31 +316,24 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     standard deviation of each coordinate, written as the :data:`PREDICTED_STD` columns in
     mm (ignored on reading).
     """
-    cfg = measurements.configurations
-    with_temp = bool(np.isfinite(cfg.temperature).any())
-    order = np.unique(measurements.config, return_index=True)
-    order = order[0][np.argsort(order[1])]  # configurations in order of first appearance
-    with_approach = _approach_needed(cfg, order, robot)
-    sessions = measurements.sessions
-    with_session = len(set(sessions)) > 1
-    with_sigma = not np.isnan(measurements.sigma).all()  # none given: none written
-    header = ["pose", *joint_columns(robot), *WRENCH, "marker", *XYZ,
-              *(["temperature"] if with_temp else []), *(["sigma"] if with_sigma else []),
-              *(approach_columns(robot) if with_approach else []),
-              *(["session"] if with_session else []), *(PREDICTED_STD if std is not None else [])]
-    std_mm = None if std is None else np.asarray(std, float) * 1000.0
-    rows = []
-    for c, j, xyz, s in zip(measurements.config, measurements.marker, measurements.xyz,
-                            measurements.sigma):
-        temp = [repr(float(cfg.env[c, 0])) if np.isfinite(cfg.env[c, 0]) else ""]
-        rows.append([*_configuration_fields(cfg, c, robot), tool.names[j],
-                     *map(repr, map(float, xyz * 1000.0)), *(temp if with_temp else []),
-                     *([repr(float(s * 1000.0)) if np.isfinite(s) else ""] if with_sigma else []),
-                     *(_approach_fields(cfg, c) if with_approach else []),
-                     *([sessions[c]] if with_session else []),
-                     *(map(repr, map(float, std_mm[len(rows)])) if std is not None else [])])
+    cfg, c, sessions = measurements.configurations, measurements.config, measurements.sessions
+    order = np.array(list(dict.fromkeys(c.tolist())), int)  # in order of first appearance
+    columns = {**_configuration_columns(cfg, c, robot),
+               "marker": [tool.names[j] for j in measurements.marker],
+               **_numbers(XYZ, measurements.xyz * 1000.0)}
+    if np.isfinite(cfg.temperature).any():
+        columns.update(_numbers(["temperature"], cfg.env[c, :1], unknown_empty=True))
+    if not np.isnan(measurements.sigma).all():  # none given: none written
+        columns.update(_numbers(["sigma"], measurements.sigma[:, None] * 1000.0,
+                                unknown_empty=True))
+    if _approach_needed(cfg, order, robot):
+        columns.update(_approach_cells(cfg, c, robot))
+    if len(set(sessions)) > 1:
+        columns["session"] = [sessions[i] for i in c]
+    if std is not None:
+        columns.update(_numbers(PREDICTED_STD, np.asarray(std, float) * 1000.0))
     _write(path, "doe_calib measurements: q in deg (mm for prismatic joints), x/y/z and sigma "
-                 "in mm, forces in N, moments in N·m, temperature in °C", header, rows)
+                 "in mm, forces in N, moments in N·m, temperature in °C", columns)
 
 
 def write_design(path, configurations, robot) -> None:
@@ -341,17 +342,11 @@ def write_design(path, configurations, robot) -> None:
     The approach columns are written only when some direction is planned (not
     0) and reading back would not derive the same from the row order.
     """
-    cfg = configurations
-    with_temp = bool(np.isfinite(cfg.temperature).any())
-    with_approach = bool(np.any(cfg.approach != 0)) and \
-        _approach_needed(cfg, np.arange(len(cfg)), robot)
-    header = ["pose", *joint_columns(robot), *WRENCH, *(["temperature"] if with_temp else []),
-              *(approach_columns(robot) if with_approach else [])]
-    rows = []
-    for c in range(len(cfg)):
-        t = cfg.env[c, 0]
-        rows.append(_configuration_fields(cfg, c, robot)
-                    + ([repr(float(t)) if np.isfinite(t) else ""] if with_temp else [])
-                    + (_approach_fields(cfg, c) if with_approach else []))
+    cfg, c = configurations, np.arange(len(configurations))
+    columns = _configuration_columns(cfg, c, robot)
+    if np.isfinite(cfg.temperature).any():
+        columns.update(_numbers(["temperature"], cfg.env[:, :1], unknown_empty=True))
+    if np.any(cfg.approach != 0) and _approach_needed(cfg, c, robot):
+        columns.update(_approach_cells(cfg, c, robot))
     _write(path, "doe_calib design: q in deg (mm for prismatic joints), forces in N, moments "
-                 "in N·m", header, rows)
+                 "in N·m", columns)

@@ -94,8 +94,6 @@ class ProbeReadings:
         The file, for messages.
     session : tuple of str
         Session of each configuration.
-    convention : str
-        The angle convention the file was read with.
     warnings : tuple of str
         Rows accepted with a doubt (a joint a hair past its limit).
     """
@@ -106,7 +104,6 @@ class ProbeReadings:
     line: np.ndarray
     source: str = ""
     session: tuple = ()
-    convention: str = "rpy"
     warnings: tuple = ()
 
     def __len__(self) -> int:
@@ -180,5 +177,5 @@ def read_probe(path, robot, convention: str) -> ProbeReadings:
     if finding is not None:
         raise DataError(finding, table.path)
     return ProbeReadings(cfg, position, angles_to_matrix(angles, convention),
-                         np.array(table.numbers), table.path, session, convention,
+                         np.array(table.numbers), table.path, session,
                          tuple(text for _, text in notes))

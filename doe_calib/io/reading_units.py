@@ -85,14 +85,11 @@ def metres_finding(xyz, robot, q, config, offsets, sessions) -> str | None:
     xyz, config = np.asarray(xyz, float), np.asarray(config)
     if not np.isfinite(xyz).any():
         return None
-    m = len(q)
-    used = np.unique(config)
+    used = np.unique(config)  # sorted
     if len(used) > MAX_CONFIGURATIONS:
         used = used[np.linspace(0, len(used) - 1, MAX_CONFIGURATIONS).astype(int)]
     rows = np.flatnonzero(np.isin(config, used))
-    remap = np.zeros(m, int)
-    remap[used] = np.arange(len(used))
-    nominal = nominal_points(robot, np.asarray(q)[used], remap[config[rows]],
+    nominal = nominal_points(robot, np.asarray(q)[used], np.searchsorted(used, config[rows]),
                              np.asarray(offsets, float)[rows])
     groups = np.asarray(sessions)[rows]
     expected, found = spread(nominal, groups), spread(xyz[rows], groups)

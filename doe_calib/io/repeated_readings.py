@@ -10,6 +10,8 @@ tells nothing of the noise; :func:`copies_words` names each one.
 """
 from __future__ import annotations
 
+from itertools import groupby
+
 import numpy as np
 
 #: Copies named one by one in :func:`copies_words` (the rest by line only).
@@ -67,15 +69,8 @@ def identical_copies(measurements, groups=None) -> np.ndarray:
 
 def line_ranges(lines) -> str:
     """``[2, 3, 4, 9]`` → ``"2–4, 9"``: line numbers, runs shortened, in the given order."""
-    out, start, prev = [], None, None
-    for n in list(lines) + [None]:
-        if start is not None and (n is None or n != prev + 1):
-            out.append(str(start) if prev == start else f"{start}–{prev}")
-            start = None
-        if n is not None and start is None:
-            start = n
-        prev = n
-    return ", ".join(out)
+    runs = [[n for _, n in run] for _, run in groupby(enumerate(lines), lambda p: p[1] - p[0])]
+    return ", ".join(str(r[0]) if len(r) == 1 else f"{r[0]}–{r[-1]}" for r in runs)
 
 
 def copies_words(measurements, marker_names, copies=None) -> str | None:

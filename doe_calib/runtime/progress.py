@@ -29,14 +29,12 @@ class Progress:
         self.stream = sys.stderr if stream is None else stream
         self.active = bool(getattr(self.stream, "isatty", lambda: False)())
         self.start = time.perf_counter()
-        self.done = 0
 
     def __call__(self, done: int, total: int | None, note: str) -> None:
         """Show ``done`` of ``total`` finished (None: the total kept), with ``note`` (a stage
         or a figure): the protocol's ``progress(done, total, note)``."""
         if total is not None:
             self.total = max(int(total), 1)
-        self.done = done
         if not self.active:
             return
         fill = int(self.width * min(done, self.total) / self.total)
