@@ -285,13 +285,13 @@ def sizes_words(sizes, fixed: str = "") -> str:
                      for s in sizes)
 
 
-def _parameters(spec, robot, registry=None) -> tuple:
-    """Names and display units of the effect's parameters (cheap: no model is built)."""
+def effect_parameters(spec, robot, registry=None) -> list:
+    """The parameters of the effect ``spec`` names in ``registry`` (default the built-in one),
+    [] when it cannot be made (cheap: no model is built)."""
     try:
-        pars = parse_effect(spec, registry=registry).parameters(robot)
+        return parse_effect(spec, registry=registry).parameters(robot)
     except (DoeCalibError, ValueError):
-        return (), ()
-    return tuple(p.name for p in pars), tuple(p.display_unit for p in pars)
+        return []
 
 
 def candidate_records(tests, robot, words, cv_rms_before_mm: float, level: float,
@@ -302,8 +302,11 @@ def candidate_records(tests, robot, words, cv_rms_before_mm: float, level: float
     (the proposed spec or None); ``registry`` names the effects (default the built-in one)."""
     out = []
     for t, text in zip(tests, words):
-        names, units = ((tuple(s.name for s in t.sizes), tuple(s.unit for s in t.sizes))
-                        if t.sizes else _parameters(t.spec, robot, registry))
+        if t.sizes:
+            names, units = tuple(s.name for s in t.sizes), tuple(s.unit for s in t.sizes)
+        else:
+            pars = effect_parameters(t.spec, robot, registry)
+            names, units = tuple(p.name for p in pars), tuple(p.display_unit for p in pars)
         chosen = t.spec == proposed
         out.append(replace(t, words=text, parameters=names, units=units,
                            cv_rms_before_mm=cv_rms_before_mm, proposed=chosen,

@@ -76,11 +76,7 @@ def describe(candidate, robot, registry=None) -> str:
 
 def _groups_to_try(tests, level, top):
     """Significant candidates of the ``top`` strongest (effect, joint) groups, every shape."""
-    keys = []
-    for t in tests:
-        if t.p_value < level and (t.effect, t.joint) not in keys:
-            keys.append((t.effect, t.joint))
-    keys = keys[:top]
+    keys = list(dict.fromkeys((t.effect, t.joint) for t in tests if t.p_value < level))[:top]
     return [t for t in tests if t.p_value < level and (t.effect, t.joint) in keys]
 
 

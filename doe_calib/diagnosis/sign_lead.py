@@ -9,8 +9,7 @@ accepts the reversed convention (``--approach-sign reversed``).
 """
 from __future__ import annotations
 
-from doe_calib.diagnosis.candidate import sizes_words
-from doe_calib.errors import DoeCalibError
+from doe_calib.diagnosis.candidate import effect_parameters, sizes_words
 from doe_calib.model.effects import parse_effect
 
 #: An implausible candidate leads the verdict when it removes this many times the
@@ -27,11 +26,7 @@ APPROACH_CAUSES = ("the approach directions are reversed (the file's approach1 â
 def wrong_signs(candidate, robot, registry=None) -> list:
     """(parameter, FittedSize) of the candidate's parameters whose fitted value has the sign
     their bounds forbid (a negative width)."""
-    try:
-        pars = {p.name: p for p in parse_effect(candidate.spec, registry=registry)
-                .parameters(robot)}
-    except (DoeCalibError, ValueError):
-        return []
+    pars = {p.name: p for p in effect_parameters(candidate.spec, robot, registry)}
     out = []
     for size in candidate.sizes:
         p = pars.get(size.name)
