@@ -4,10 +4,10 @@
 (symbolic), :mod:`.compensate` solves it row by row (numeric) and
 :mod:`.result` holds what was found.
 """
-from doe_calib.compensation.nlp import CompensationProblem, build_problem
+from doe_calib.compensation.nlp import build_problem
 from doe_calib.compensation.result import CompensationResult, read_compensated_csv
-from doe_calib.compensation.compensate import compensate, nominal_targets, tcp_point
+from doe_calib.compensation.compensate import compensate
 from doe_calib.compensation.targets import Targets, read_targets
 
-__all__ = ["CompensationProblem", "CompensationResult", "Targets", "build_problem", "compensate",
-           "nominal_targets", "read_compensated_csv", "read_targets", "tcp_point"]
+__all__ = ["CompensationResult", "Targets", "build_problem", "compensate", "read_compensated_csv",
+           "read_targets"]

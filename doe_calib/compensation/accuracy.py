@@ -108,10 +108,8 @@ def row_accuracy(model, result, configurations, point, part: UnseenPart,
     bare = type(configurations).from_arrays(configurations.q, None, configurations.env)
     unloaded = jacobian(bare, frame)
     unseen = part.std_3d(jac, unloaded)
-    if frame == TRACKER:
-        in_tracker = unseen
-    else:
-        in_tracker = part.std_3d(jacobian(configurations, TRACKER), jacobian(bare, TRACKER))
+    in_tracker = unseen if frame == TRACKER else \
+        part.std_3d(jacobian(configurations, TRACKER), jacobian(bare, TRACKER))
     return RowAccuracy(np.hypot(seen, unseen), seen, unseen, in_tracker,
                        tuple(part.largest(jac, unloaded)))
 

@@ -39,8 +39,7 @@ def tcp_point(parameters, tcp) -> tuple[np.ndarray, str | None]:
             raise OptionError(f"--tcp {tcp!r}: no such marker in the result; markers: "
                               f"{', '.join(markers)}, or give X,Y,Z in mm (flange frame)")
         return np.array([parameters[n] for n in names]), tcp
-    point = np.asarray(tcp, float).reshape(3)
-    return point, None
+    return np.asarray(tcp, float).reshape(3), None
 
 
 def nominal_targets(model, parameters, configurations, tcp) -> tuple[np.ndarray, np.ndarray]:

@@ -171,14 +171,11 @@ class CompensationResult:
             buf.write(f"# note: {self.unseen}\n")
         w = csv.writer(buf, lineterminator="\n")
         w.writerow(csv_header(self.robot))
-        k = self.robot.display_factors
+        numbers = np.column_stack([self.q_compensated * self.robot.display_factors, self.wrench,
+                                   self.target * 1000.0, self.shift, self.predicted_std * 1000,
+                                   self.unseen_std * 1000, self.residual * 1000])
         for i in range(len(self)):
-            w.writerow([self.pose[i], *[repr(float(v)) for v in self.q_compensated[i] * k],
-                        *[repr(float(v)) for v in self.wrench[i]],
-                        *[repr(float(v)) for v in self.target[i] * 1000.0],
-                        repr(float(self.shift[i])), repr(float(self.predicted_std[i] * 1000)),
-                        repr(float(self.unseen_std[i] * 1000)),
-                        repr(float(self.residual[i] * 1000)),
+            w.writerow([self.pose[i], *[repr(float(v)) for v in numbers[i]],
                         "true" if self.converged[i] else "false", self.note[i], self.flag[i]])
         Path(path).write_text(buf.getvalue(), encoding="utf-8")
 

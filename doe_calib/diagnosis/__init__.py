@@ -4,11 +4,10 @@
 >>> print(diagnose(model, measurements).summary())   # doctest: +SKIP
 """
 from doe_calib.diagnosis.candidate import Candidate, FittedSize
-from doe_calib.diagnosis.cross_validation import cross_validated_rms, validation_rms
-from doe_calib.diagnosis.effect_tests import CandidateTest, candidate_effects, test_candidates
-from doe_calib.diagnosis.diagnose import describe, diagnose
+from doe_calib.diagnosis.cross_validation import validation_rms
+from doe_calib.diagnosis.effect_tests import candidate_effects
+from doe_calib.diagnosis.diagnose import diagnose
 from doe_calib.diagnosis.result import DiagnosisResult
 
-__all__ = ["diagnose", "DiagnosisResult", "Candidate", "FittedSize", "CandidateTest",
-           "candidate_effects", "test_candidates", "cross_validated_rms", "validation_rms",
-           "describe"]
+__all__ = ["diagnose", "DiagnosisResult", "Candidate", "FittedSize", "candidate_effects",
+           "validation_rms"]

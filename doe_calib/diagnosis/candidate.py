@@ -5,7 +5,7 @@ needs no model and no effect file.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -41,8 +41,7 @@ class FittedSize:
         return f"{self.name} = {self.value:.4g} {std} {self.unit}".rstrip()
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "value": self.value, "std": self.std, "unit": self.unit,
-                "free": self.free}
+        return asdict(self)
 
     @classmethod
     def from_dict(cls, d: dict) -> "FittedSize":
@@ -55,6 +54,9 @@ class FittedSize:
 class Candidate:
     """A candidate effect: its score test, its fitted size and whether it is proposed.
 
+    :func:`~doe_calib.diagnosis.effect_tests.candidate_tests` makes the test (the fields up
+    to ``absorbed_by``); :func:`~doe_calib.diagnosis.diagnose.diagnose` adds the rest.
+
     Attributes
     ----------
     effect : str
@@ -63,10 +65,6 @@ class Candidate:
         The effect string a model takes, e.g. ``cyclic(j3,harmonics=1)``.
     joint : int or None
         1-based joint the effect sits on.
-    words : str
-        The effect in words, e.g. "a cyclic (transmission) error of joint 3 (a3)".
-    parameters, units : tuple of str
-        Its parameters' names and display units.
     n_parameters : int
         Columns the effect adds.
     rank, dof : int
@@ -83,6 +81,13 @@ class Candidate:
         Share of the remaining residual the effect explains (0–1).
     absorbed_fraction : float
         Share of the effect's columns the model already absorbs (0–1).
+    detectability : Detectability or None
+    absorbed_by : tuple of str
+        The model's own parameters that absorb most of its signature (significant ones only).
+    words : str
+        The effect in words, e.g. "a cyclic (transmission) error of joint 3 (a3)".
+    parameters, units : tuple of str
+        Its parameters' names and display units.
     cv_rms_before_mm : float
         Cross-validated RMS of the model without it, mm.
     cv_rms_mm : float or None
@@ -94,17 +99,11 @@ class Candidate:
     why_not, implausible : str
         Why it is not proposed, and what is physically implausible about its fitted size,
         in words ("" when it is, or nothing is).
-    detectability : Detectability or None
-    absorbed_by : tuple of str
-        The model's own parameters that absorb most of its signature (significant ones only).
     """
 
     effect: str
     spec: str
     joint: int | None
-    words: str
-    parameters: tuple
-    units: tuple
     n_parameters: int
     rank: int
     dof: int | None
@@ -114,14 +113,17 @@ class Candidate:
     log10_p: float
     explained_fraction: float
     absorbed_fraction: float
-    cv_rms_before_mm: float
-    cv_rms_mm: float | None
-    sizes: tuple
-    proposed: bool
-    why_not: str
-    implausible: str = ""
     detectability: object = None
     absorbed_by: tuple = ()
+    words: str = ""
+    parameters: tuple = ()
+    units: tuple = ()
+    cv_rms_before_mm: float = float("nan")
+    cv_rms_mm: float | None = None
+    sizes: tuple = ()
+    proposed: bool = False
+    why_not: str = ""
+    implausible: str = ""
 
     @property
     def confounded(self) -> bool:
@@ -159,11 +161,6 @@ class Candidate:
                 return word
         return "implausible" if self.implausible and self.why_not == self.implausible \
             else "beaten"
-
-    @property
-    def fitted(self) -> tuple:
-        """``sizes`` as dicts of name, value, std, unit, free (the JSON rows)."""
-        return tuple(s.to_dict() for s in self.sizes)
 
     def p_words(self, adjusted: bool = False) -> str:
         """The p-value as text; one that underflows to 0 as a power of ten (from ``log10_p``)."""
@@ -223,7 +220,7 @@ class Candidate:
                 "statistic": self.statistic, "p_value": self.p_value,
                 "p_value_raw": self.p_value_raw, "explained_fraction": self.explained_fraction,
                 "absorbed_fraction": self.absorbed_fraction, "log10_p": self.log10_p,
-                "cv_rms_mm": self.cv_rms_mm, "fitted": list(self.fitted),
+                "cv_rms_mm": self.cv_rms_mm, "fitted": [s.to_dict() for s in self.sizes],
                 "implausible": self.implausible, "dof": self.dof, "words": self.words,
                 "parameters": list(self.parameters), "units": list(self.units),
                 "cv_rms_before_mm": self.cv_rms_before_mm, "cv_gain_mm": self.cv_gain_mm,
@@ -245,16 +242,15 @@ class Candidate:
         if why is None:
             why = why_not(d["p_value"], d.get("cv_rms_mm"), d.get("implausible", ""), before,
                           level, min_gain, is_proposed, proposed)
-        return cls(d["effect"], d["spec"], d.get("joint"), d.get("words", ""),
-                   tuple(d.get("parameters", [s.name for s in sizes])),
-                   tuple(d.get("units", [s.unit for s in sizes])), int(d["n_parameters"]),
+        return cls(d["effect"], d["spec"], d.get("joint"), int(d["n_parameters"]),
                    int(d["rank"]), d.get("dof"), float(d["statistic"]), float(d["p_value"]),
                    float(d["p_value_raw"]), float(d["log10_p"]),
                    float(d["explained_fraction"]), float(d["absorbed_fraction"]),
-                   float(before), d.get("cv_rms_mm"), sizes, bool(is_proposed), why,
-                   d.get("implausible", ""),
                    Detectability.from_dict(d["detectability"]) if d.get("detectability")
-                   else None, tuple(d.get("absorbed_by", ())))
+                   else None, tuple(d.get("absorbed_by", ())), d.get("words", ""),
+                   tuple(d.get("parameters", [s.name for s in sizes])),
+                   tuple(d.get("units", [s.unit for s in sizes])), float(before),
+                   d.get("cv_rms_mm"), sizes, bool(is_proposed), why, d.get("implausible", ""))
 
 
 _DECISIONS = (("not significant", "not significant"), ("not cross-validated", "not tried"),
@@ -281,40 +277,39 @@ def why_not(p_value, cv_rms_mm, implausible, cv_rms_before_mm, level, min_gain, 
     return f"{proposed_spec} predicts better" if proposed_spec else "not chosen"
 
 
-def rows_words(rows) -> str:
-    """Fitted rows (dicts of name, value, std or None, unit) in words, e.g.
-    "w_a2 = 0.012 ± 0.001 deg; …"."""
-    return "; ".join(f"{r['name']} = {r['value']:.3g}"
-                     + (f" ± {r['std']:.2g}" if r["std"] is not None else "")
-                     + f" {r['unit']}" for r in rows)
+def sizes_words(sizes, fixed: str = "") -> str:
+    """Fitted sizes (:class:`FittedSize`) in words, e.g. "w_a2 = 0.012 ± 0.001 deg; …";
+    ``fixed`` stands for the std of a fixed parameter."""
+    return "; ".join(f"{s.name} = {s.value:.3g}"
+                     + (fixed if s.std is None else f" ± {s.std:.2g}") + f" {s.unit}"
+                     for s in sizes)
 
 
-def _parameters(spec, robot, registry=None) -> tuple:
-    """Names and display units of the effect's parameters (cheap: no model is built)."""
+def effect_parameters(spec, robot, registry=None) -> list:
+    """The parameters of the effect ``spec`` names in ``registry`` (default the built-in one),
+    [] when it cannot be made (cheap: no model is built)."""
     try:
-        pars = parse_effect(spec, registry=registry).parameters(robot)
+        return parse_effect(spec, registry=registry).parameters(robot)
     except (DoeCalibError, ValueError):
-        return (), ()
-    return tuple(p.name for p in pars), tuple(p.display_unit for p in pars)
+        return []
 
 
 def candidate_records(tests, robot, words, cv_rms_before_mm: float, level: float,
                       min_gain: float, proposed: str | None, registry=None) -> tuple:
-    """The candidates of a diagnosis from its ranked tests (``CandidateTest``), in their order:
-    ``words`` each effect in words, ``cv_rms_before_mm`` the model's cross-validated RMS (mm),
-    ``level`` and ``min_gain`` the diagnosis's, ``proposed`` the proposed spec or None,
-    ``registry`` what names the effects (default the built-in one)."""
+    """The candidates of a diagnosis from its ranked, scored tests, in their order, with
+    ``words`` each effect in words, ``cv_rms_before_mm`` the model's cross-validated RMS
+    (mm) and the decision by ``level`` and ``min_gain`` (the diagnosis's) and ``proposed``
+    (the proposed spec or None); ``registry`` names the effects (default the built-in one)."""
     out = []
     for t, text in zip(tests, words):
-        names, units = _parameters(t.spec, robot, registry)
-        sizes = tuple(FittedSize.from_dict(r) for r in t.fitted)
-        if sizes:
-            names, units = tuple(s.name for s in sizes), tuple(s.unit for s in sizes)
+        if t.sizes:
+            names, units = tuple(s.name for s in t.sizes), tuple(s.unit for s in t.sizes)
+        else:
+            pars = effect_parameters(t.spec, robot, registry)
+            names, units = tuple(p.name for p in pars), tuple(p.display_unit for p in pars)
         chosen = t.spec == proposed
-        out.append(Candidate(
-            t.effect, t.spec, t.joint, text, names, units, t.n_parameters, t.rank, t.dof,
-            t.statistic, t.p_value, t.p_value_raw, t.log10_p, t.explained_fraction,
-            t.absorbed_fraction, cv_rms_before_mm, t.cv_rms_mm, sizes, chosen,
-            why_not(t.p_value, t.cv_rms_mm, t.implausible, cv_rms_before_mm, level, min_gain,
-                    chosen, proposed), t.implausible, t.detection, t.absorbed_by))
+        out.append(replace(t, words=text, parameters=names, units=units,
+                           cv_rms_before_mm=cv_rms_before_mm, proposed=chosen,
+                           why_not=why_not(t.p_value, t.cv_rms_mm, t.implausible,
+                                           cv_rms_before_mm, level, min_gain, chosen, proposed)))
     return tuple(out)

@@ -13,8 +13,9 @@ from __future__ import annotations
 import os
 import warnings
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import replace
 
+from doe_calib.diagnosis.candidate import FittedSize
 from doe_calib.diagnosis.cross_validation import cross_validated_rms
 from doe_calib.errors import DoeCalibError, DoeCalibWarning
 from doe_calib.estimation.effect_signature import grown_parameters
@@ -29,26 +30,7 @@ MAX_WORKERS = 4
 GROWN = FitSettings(select="none", register=False)
 
 
-@dataclass(frozen=True)
-class CandidateScore:
-    """One grown model's cross-validated RMS and its effect's fitted parameters.
-
-    Attributes
-    ----------
-    cv_rms_mm : float
-        Its cross-validated RMS per coordinate, mm.
-    rows : tuple of dict
-        The effect's parameters: value ± std in display units (:func:`fitted_rows`).
-    odd : str
-        Words on those beyond their bounds or plausible range ("" when none).
-    """
-
-    cv_rms_mm: float
-    rows: tuple
-    odd: str
-
-
-def score_candidates(model, effects, params, measurements, folds,
+def score_candidates(model, candidates, effects, params, measurements, folds,
                      workers: int | None = None, progress=None) -> list:
     """Build, fit and cross-validate each model grown from ``model`` by one of ``effects``.
 
@@ -59,8 +41,10 @@ def score_candidates(model, effects, params, measurements, folds,
 
     Returns
     -------
-    list of CandidateScore or None
-        In the order of ``effects``; None where the grown model's fit failed.
+    list of Candidate
+        ``candidates`` (the tests of ``effects``, in their order) with the grown model's
+        cross-validated RMS (mm; NaN where its fit failed), its effect's fitted sizes and
+        what is physically implausible about them (:func:`fitted_sizes`).
     """
     workers = min(MAX_WORKERS, os.cpu_count() or 1) if workers is None else max(1, int(workers))
     def grown(effect):
@@ -69,10 +53,12 @@ def score_candidates(model, effects, params, measurements, folds,
     with warnings.catch_warnings(), ThreadPoolExecutor(max(1, min(workers, len(effects)))) as pool:
         warnings.simplefilter("ignore", DoeCalibWarning)
         if workers == 1 or len(effects) < 2:  # in this thread, as the caller's own fits
-            scores = (_score(grown(e), e, params, measurements, folds) for e in effects)
+            scores = (_score(grown(e), e, c, params, measurements, folds)
+                      for c, e in zip(candidates, effects))
         else:  # each built while the workers fit
-            scores = (f.result() for f in [pool.submit(_score, grown(e), e, params, measurements,
-                                                       folds) for e in effects])
+            scores = (f.result() for f in [pool.submit(_score, grown(e), e, c, params,
+                                                       measurements, folds)
+                                           for c, e in zip(candidates, effects)])
         out = []
         for i, effect in enumerate(effects):
             if progress:
@@ -81,31 +67,32 @@ def score_candidates(model, effects, params, measurements, folds,
         return out
 
 
-def _score(big, effect, params, measurements, folds):
+def _score(big, effect, candidate, params, measurements, folds):
     bp = grown_parameters(big, params)
     try:  # folds start from the grown model's own fit: what they hold fixed is then right
         fit = identify(big, measurements, bp, settings=GROWN)
     except DoeCalibError:
-        return None
+        return replace(candidate, cv_rms_mm=float("nan"))
     new = [n for n in fit.parameters.names if n not in params.names]
-    rows, odd = fitted_rows(fit, new, effect)
-    return CandidateScore(cross_validated_rms(big, measurements, fit.parameters, folds), rows,
-                          odd)
+    sizes, odd = fitted_sizes(fit, new, effect)
+    return replace(candidate, cv_rms_mm=cross_validated_rms(big, measurements, fit.parameters,
+                                                            folds), sizes=sizes, implausible=odd)
 
 
-def fitted_rows(fit, names, effect) -> tuple:
-    """The new parameters' values ± a-posteriori std in display units, and a note on those
-    beyond their bounds or plausible range (the parameters' and ``effect``'s words)."""
+def fitted_sizes(fit, names, effect) -> tuple:
+    """The new parameters' values ± a-posteriori std in display units (:class:`FittedSize`),
+    and a note on those beyond their bounds or plausible range (the parameters' and
+    ``effect``'s words)."""
     ps = fit.parameters
     std = fit.std()
-    rows = []
+    sizes = []
     for name in names:
         i = ps.names.index(name)
         p = ps.parameters[i]
         f = p.display_factor
-        rows.append({"name": name, "value": float(ps.values[i] * f),
-                     "std": float(std[i] * f) if ps.free[i] else None, "unit": p.display_unit,
-                     "free": bool(ps.free[i])})
+        sizes.append(FittedSize(name, float(ps.values[i] * f),
+                                float(std[i] * f) if ps.free[i] else None, p.display_unit,
+                                bool(ps.free[i])))
     odd = []
     wrong = out_of_bounds(ps, std, names)
     if wrong:
@@ -120,4 +107,4 @@ def fitted_rows(fit, names, effect) -> tuple:
         words = [value_words(p, v, std[ps.names.index(p.name)]) for p, v in far]
         odd.append(f"{', '.join(words)}: {effect.implausible_words}")
     note = ("physically implausible: " + "; ".join(odd)) if odd else ""
-    return tuple(rows), note
+    return tuple(sizes), note

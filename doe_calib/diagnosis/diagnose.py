@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.diagnosis.candidate import candidate_records, rows_words
+from doe_calib.diagnosis.candidate import candidate_records, sizes_words
 from doe_calib.diagnosis.candidate_scoring import score_candidates
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
 from doe_calib.diagnosis.effect_tests import candidate_tests
@@ -76,11 +76,7 @@ def describe(candidate, robot, registry=None) -> str:
 
 def _groups_to_try(tests, level, top):
     """Significant candidates of the ``top`` strongest (effect, joint) groups, every shape."""
-    keys = []
-    for t in tests:
-        if t.p_value < level and (t.effect, t.joint) not in keys:
-            keys.append((t.effect, t.joint))
-    keys = keys[:top]
+    keys = list(dict.fromkeys((t.effect, t.joint) for t in tests if t.p_value < level))[:top]
     return [t for t in tests if t.p_value < level and (t.effect, t.joint) in keys]
 
 
@@ -180,7 +176,7 @@ def _verdict_words(model, test, adequate, cv, folds, tests, proposed, follow, fl
     cv_words = f"cross-validated RMS {cv:.3g} mm ({folds.description})"
     if proposed is not None:
         words = describe(proposed, model.robot, registry)
-        size = rows_words(proposed.fitted[:4])
+        size = sizes_words(proposed.sizes[:4])
         text = (f"{words[0].upper()}{words[1:]} is missing: adding {proposed.spec} lowers the "
                 f"{cv_words} to {proposed.cv_rms_mm:.3g} mm "
                 f"({100 * (1 - proposed.cv_rms_mm / cv):.0f} %) and accounts for "
@@ -305,14 +301,9 @@ def diagnose(model, measurements, fit=None, *, settings: DiagnosisSettings | Non
     tried = candidate_tests(model, screen, params, registry=registry)
     tests = list(tried.tests)
     chosen = _groups_to_try(tests, level, s.cv_top)
-    scored = {}
     effects = [parse_effect(t.spec, registry=registry) for t in chosen]
-    scores = score_candidates(model, effects, params, screen, split, s.workers, progress)
-    for t, score in zip(chosen, scores):
-        if score is None:  # the grown model's fit failed
-            scored[t.spec] = t.with_cv(float("nan"))
-            continue
-        scored[t.spec] = t.with_cv(score.cv_rms_mm, score.rows, score.odd)
+    scored = {t.spec: t for t in score_candidates(model, chosen, effects, params, screen, split,
+                                                  s.workers, progress)}
     ranked = sorted(scored.values(), key=lambda t: (_cv_key(t), t.log10_p))
     ranked += [t for t in tests if t.spec not in scored]
     material = _material(ranked, cv, level, min_gain)

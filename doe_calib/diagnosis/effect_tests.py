@@ -17,11 +17,12 @@ are ordered by ``log10 p`` (which does not underflow).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.special import fdtrc
 
+from doe_calib.diagnosis.candidate import Candidate
 from doe_calib.diagnosis.candidate_batch import batched_columns
 from doe_calib.design.detectability import MOSTLY_ABSORBED, absorbing_parameters, assess
 from doe_calib.errors import DoeCalibError
@@ -30,36 +31,6 @@ from doe_calib.estimation.effect_signature import (candidate_effects, fitted_bas
 from doe_calib.estimation.weighted_residuals import weighted_residual
 from doe_calib.model.effects import joint_index
 from doe_calib.model.marker_model import describe_model
-
-
-@dataclass(frozen=True)
-class CandidateTest:
-    """One candidate effect's test against the current residual."""
-
-    effect: str
-    spec: str
-    joint: int | None
-    n_parameters: int
-    rank: int
-    statistic: float
-    p_value: float
-    p_value_raw: float
-    explained_fraction: float
-    absorbed_fraction: float
-    log10_p: float
-    cv_rms_mm: float | None = None
-    fitted: tuple = ()
-    implausible: str = ""
-    dof: int | None = None
-    detection: object = None
-    absorbed_by: tuple = ()
-
-    def with_cv(self, cv_rms_mm: float, fitted: tuple = (),
-                implausible: str = "") -> "CandidateTest":
-        """This test with its cross-validated RMS (mm) and, fitted on all data, its
-        parameters (dicts of name, value, std, unit, free; display units) and a note
-        when a value is physically implausible."""
-        return replace(self, cv_rms_mm=cv_rms_mm, fitted=tuple(fitted), implausible=implausible)
 
 
 def _failure(exc) -> str:
@@ -115,8 +86,9 @@ class CandidateTests:
 
     Attributes
     ----------
-    tests : tuple of CandidateTest
-        Strongest evidence (smallest p, as log10) first; p-values Bonferroni-adjusted
+    tests : tuple of Candidate
+        Each candidate's test (a :class:`~doe_calib.diagnosis.candidate.Candidate` without
+        the decision), strongest evidence (smallest p, as log10) first; p-values Bonferroni-adjusted
         over every candidate tried, those in ``failed`` included.
     failed : tuple of (str, str)
         ``(spec, reason)`` of each candidate whose model or columns could not be built.
@@ -193,15 +165,15 @@ def candidate_tests(model, measurements, params, effects=None,
                 # what the model's own parameters made of the signature the residual asks for
                 theta = np.linalg.lstsq(z, r, rcond=None)[0]
                 by = tuple(absorbing_parameters(params, jacobian(), z @ theta))
-        out.append(CandidateTest(
+        out.append(Candidate(
             e.name, e.spec(), None if e.joint is None else joint_index(model.robot, e.joint) + 1,
-            z.shape[1], q, float(f), float(min(1.0, np.exp(log_p) * n)), float(np.exp(log_p)),
-            frac, absorbed, log_p / np.log(10), dof=dof, detection=detection, absorbed_by=by))
+            z.shape[1], q, dof, float(f), float(min(1.0, np.exp(log_p) * n)),
+            float(np.exp(log_p)), log_p / np.log(10), frac, absorbed, detection, by))
     return CandidateTests(tuple(sorted(out, key=lambda c: (c.log10_p, -c.statistic))),
                           tuple(failed))
 
 
 def test_candidates(model, measurements, params, effects=None,
-                    registry=None) -> list[CandidateTest]:
+                    registry=None) -> list[Candidate]:
     """The tests of :func:`candidate_tests` (those computed), strongest evidence first."""
     return list(candidate_tests(model, measurements, params, effects, registry).tests)

@@ -8,8 +8,9 @@ cross-validated and (with a validation set) validation RMS.
 """
 from __future__ import annotations
 
-from doe_calib.diagnosis.cross_validation import validation_rms
+from doe_calib.diagnosis.candidate import sizes_words
 from doe_calib.diagnosis.candidate_scoring import GROWN
+from doe_calib.diagnosis.cross_validation import validation_rms
 from doe_calib.diagnosis.diagnose import diagnose, settled_fit
 from doe_calib.diagnosis.refine_result import RefineResult, RefineStep
 from doe_calib.diagnosis.settings import RefineSettings
@@ -19,12 +20,6 @@ from doe_calib.io.repeated_readings import copies_words
 from doe_calib.model.effects import parse_effect
 
 __all__ = ["refine", "RefineResult", "RefineStep"]
-
-
-def _size_words(sizes) -> str:
-    return "; ".join(f"{s.name} = {s.value:.3g}"
-                     + (f" ± {s.std:.2g}" if s.std is not None else " (fixed)")
-                     + f" {s.unit}" for s in sizes)
 
 
 def refine(model, measurements, validation=None, *, settings: RefineSettings | None = None,
@@ -90,8 +85,8 @@ def refine(model, measurements, validation=None, *, settings: RefineSettings | N
         model, start = augmented(model, fit.parameters, parse_effect(best.spec, registry=registry))
         fit = identify_quietly(model, measurements, start, settings=GROWN)
         added, effect = best.spec, best
-        reason = (f"added {best.spec}, {best.words}: "
-                  f"{_size_words(best.sizes)}; cross-validated RMS {diag.cv_rms_mm:.4g} → "
+        reason = (f"added {best.spec}, {best.words}: {sizes_words(best.sizes, ' (fixed)')}; "
+                  f"cross-validated RMS {diag.cv_rms_mm:.4g} → "
                   f"{best.cv_rms_mm:.4g} mm (p = {best.p_value:.2g})"
                   + (f"; {best.implausible}" if best.implausible else ""))
     copies = copies_words(measurements, model.tool.names)

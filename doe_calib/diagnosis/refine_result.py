@@ -5,11 +5,10 @@ an effect file (the final fit is written by the CLI to its own file).
 """
 from __future__ import annotations
 
-import textwrap
 from dataclasses import dataclass, field
 
 from doe_calib.diagnosis.candidate import Candidate, FittedSize
-from doe_calib.diagnosis.result import DiagnosisResult
+from doe_calib.diagnosis.result import DiagnosisResult, numbered_notes
 from doe_calib.io.json_file import read_json, write_json
 from doe_calib.io.measurements import ESTIMATED, REPEATED
 
@@ -142,19 +141,14 @@ class RefineResult:
     def summary(self) -> str:
         """The models step by step, each added effect with its size ± std and the CV RMS
         before → after, why refinement stopped."""
-        lines = [f"{'step':<5}{'model':<58}{'fit RMS':>9}{'CV RMS':>9}{'valid.':>9}  adequate",
-                 ]
+        lines = [f"{'step':<5}{'model':<58}{'fit RMS':>9}{'CV RMS':>9}{'valid.':>9}  adequate"]
         for i, s in enumerate(self.steps):
             v = f"{s.validation_rms_mm:9.4f}" if s.validation_rms_mm is not None else f"{'–':>9}"
             lines.append(f"{i:<5}{s.model[:57]:<58}{s.rms_mm:9.4f}{s.cv_rms_mm:9.4f}{v}  "
                          f"{'yes' if s.adequate else 'no'}")
         lines += [f"(mm per coordinate; {self.noise_words} {self.noise_floor_mm:.4f} mm)", "",
                   *[f"step {i}: {s.reason}" for i, s in enumerate(self.steps)], "",
-                  f"stopped: {self.stopped}"]
-        if self.notes:
-            lines += ["", "Notes"]
-            for i, n in enumerate(self.notes, 1):
-                lines += textwrap.wrap(n, 96, initial_indent=f"  {i}. ", subsequent_indent="     ")
+                  f"stopped: {self.stopped}", *numbered_notes(self.notes)]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:

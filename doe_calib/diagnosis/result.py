@@ -16,6 +16,15 @@ from doe_calib.io.measurements import REPEATED
 FORMAT = "doe_calib.diagnosis"
 
 
+def numbered_notes(notes) -> list[str]:
+    """``notes`` as the lines that end a summary: a heading, then each note numbered and
+    wrapped ([] when there are none)."""
+    out = ["", "Notes"] if notes else []
+    for i, n in enumerate(notes, 1):
+        out += textwrap.wrap(n, 96, initial_indent=f"  {i}. ", subsequent_indent="     ")
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class DiagnosisResult:
     """What the residual of one fitted model says.
@@ -181,12 +190,7 @@ class DiagnosisResult:
         if self.flagged:
             lines += ["", f"{len(self.flagged)} poses far outside the noise (kept): " + ", ".join(
                 f"{p['pose']} ({p['rms_mm']:.3f} mm)" for p in self.flagged[:10])]
-        if self.notes:
-            lines += ["", "Notes"]
-            for i, n in enumerate(self.notes, 1):
-                lines += textwrap.wrap(n, 96, initial_indent=f"  {i}. ",
-                                       subsequent_indent="     ")
-        return "\n".join(lines)
+        return "\n".join(lines + numbered_notes(self.notes))
 
     def to_dict(self) -> dict:
         return {"format": FORMAT, "model": self.model, "rms_mm": self.rms_mm,

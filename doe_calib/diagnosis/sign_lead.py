@@ -9,8 +9,7 @@ accepts the reversed convention (``--approach-sign reversed``).
 """
 from __future__ import annotations
 
-from doe_calib.diagnosis.candidate import rows_words
-from doe_calib.errors import DoeCalibError
+from doe_calib.diagnosis.candidate import effect_parameters, sizes_words
 from doe_calib.model.effects import parse_effect
 
 #: An implausible candidate leads the verdict when it removes this many times the
@@ -25,19 +24,15 @@ APPROACH_CAUSES = ("the approach directions are reversed (the file's approach1 â
 
 
 def wrong_signs(candidate, robot, registry=None) -> list:
-    """(parameter, fitted row) of the candidate's parameters whose fitted value has the sign
+    """(parameter, FittedSize) of the candidate's parameters whose fitted value has the sign
     their bounds forbid (a negative width)."""
-    try:
-        pars = {p.name: p for p in parse_effect(candidate.spec, registry=registry)
-                .parameters(robot)}
-    except (DoeCalibError, ValueError):
-        return []
+    pars = {p.name: p for p in effect_parameters(candidate.spec, robot, registry)}
     out = []
-    for row in candidate.fitted:
-        p = pars.get(row["name"])
-        if p is not None and ((p.bounds[0] == 0 and row["value"] < 0)
-                              or (p.bounds[1] == 0 and row["value"] > 0)):
-            out.append((p, row))
+    for size in candidate.sizes:
+        p = pars.get(size.name)
+        if p is not None and ((p.bounds[0] == 0 and size.value < 0)
+                              or (p.bounds[1] == 0 and size.value > 0)):
+            out.append((p, size))
     return out
 
 
@@ -52,7 +47,7 @@ def sign_lead(model, odd, proposed, cv, folds, words: str, registry=None) -> str
     if not wrong or cv - odd.cv_rms_mm < LEAD_FACTOR * best_gain:
         return ""
     effect = parse_effect(odd.spec, registry=registry)
-    values = rows_words(r for _, r in wrong)
+    values = sizes_words(size for _, size in wrong)
     meaning = "; ".join(dict.fromkeys(p.sign for p, _ in wrong if p.sign))
     other = "" if proposed is None else \
         (f", against {100 * best_gain / cv:.0f} % for the best plausible candidate, "

@@ -11,7 +11,7 @@ cubic); the adjusted R² says how much of its variation that variable explains.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -31,8 +31,7 @@ class Follows:
     direction: str
 
     def to_dict(self) -> dict:
-        return {"variable": self.variable, "unit": self.unit, "r2": self.r2,
-                "direction": self.direction}
+        return asdict(self)
 
 
 def configuration_variables(robot, configurations) -> dict:

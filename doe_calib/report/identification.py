@@ -1,6 +1,8 @@
 """The identification report: parameters, correlations and residuals of one fit, as HTML."""
 from __future__ import annotations
 
+from collections import Counter
+
 from doe_calib.diagnosis.residuals import residual_norms_mm
 from doe_calib.diagnosis.variables import reading_columns
 from doe_calib.report import figures
@@ -35,10 +37,8 @@ def parameters_section(result, heading: str = "Identified parameters"):
                         "σ̂/σ."),
               table(["parameter", "unit", "nominal", "value", "std", "std a posteriori"], free)]
     if fixed:
-        by_block = {}
-        for par, f in zip(result.parameters.parameters, result.parameters.free):
-            if not f:
-                by_block[par.block] = by_block.get(par.block, 0) + 1
+        by_block = Counter(par.block for par, f in zip(result.parameters.parameters,
+                                                       result.parameters.free) if not f)
         counts = ", ".join(f"{n} {b}" for b, n in by_block.items())
         blocks += [paragraph(f"{len(fixed)} parameters fixed ({counts}), held at the value "
                              f"shown: mostly ones these data cannot separate from others."),
@@ -85,10 +85,11 @@ def fit_table(result):
     return table(["quantity", "value"], rows, 5)
 
 
-def warnings_section(result):
-    """The numerical trouble reported during the fit, each in its own paragraph."""
-    return section("Warnings", *([paragraph(w) for w in result.warnings]
-                                 or ["No numerical trouble was reported."]))
+def _fit_sections(result) -> list:
+    """The fit statistics, the parameters and the numerical trouble reported during the fit."""
+    return [section("Fit", fit_table(result)), parameters_section(result, "Parameters"),
+            section("Warnings", *([paragraph(w) for w in result.warnings]
+                                  or ["No numerical trouble was reported."]))]
 
 
 def correlation_figure(result, dpi: int = 90):
@@ -108,8 +109,7 @@ def result_html(result, dpi: int = 72) -> str:
     """
     key = (correlation_figure(result, dpi) if result.free_names else
            _bars(result.residuals["per_marker"], "marker", dpi))
-    blocks = [section("Fit", fit_table(result)), parameters_section(result, "Parameters"),
-              warnings_section(result), section("Key figure", key),
+    blocks = [*_fit_sections(result), section("Key figure", key),
               collapsible("text report", preformatted(result.fit_report()))]
     return f'<div class="doe-calib-result">\n{"".join(blocks)}\n</div>'
 
@@ -123,8 +123,7 @@ def identification_report(result, model, measurements, path, dpi: int = 90):
     >>> identification_report(result, model, meas, "report.html")  # doctest: +SKIP
     """
     res = result.residuals
-    sections = [section("Fit", fit_table(result)), parameters_section(result, "Parameters"),
-                warnings_section(result)]
+    sections = _fit_sections(result)
     if result.free_names:
         sections.append(section("Correlation", correlation_figure(result, dpi)))
     cols = reading_columns(model, measurements)
