@@ -34,10 +34,9 @@ def residual_statistics(model, measurements, values) -> dict:
     out["per_marker"] = stats(measurements.marker, list(model.tool.names))
     pose_names, pose_of_config = np.unique(np.asarray(measurements.configurations.pose, object),
                                            return_inverse=True)
-    first = {}  # poses in order of first reading, as in the file
-    for p in np.asarray(pose_names)[pose_of_config[measurements.config]]:
-        first.setdefault(p, None)
     per_pose = stats(pose_of_config[measurements.config], list(pose_names))
+    # poses in order of first reading, as in the file
+    first = dict.fromkeys(np.asarray(pose_names)[pose_of_config[measurements.config]])
     out["per_pose"] = {p: per_pose[p] for p in first}
     return out
 

@@ -30,9 +30,9 @@ def default_normalisation(tool_positions) -> float:
     return float(np.sqrt(np.mean(np.sum(c ** 2, axis=1))))
 
 
-@lru_cache(maxsize=8)
-def _pose_error(model):
-    return build_pose_error(model)
+_pose_error = lru_cache(maxsize=8)(build_pose_error)
+#: Why the pose estimator fixes the marker positions.
+KNOWN = "the pose estimator takes the marker positions as known"
 
 
 def check_tool_fixes_the_pose(markers, source: str = "") -> None:
@@ -85,12 +85,9 @@ def identify_pose(model, measurements, params=None, normalisation: float | None 
     """
     check_tool_fixes_the_pose(model.tool.position_array, model.tool.source)
     params = model.nominal() if params is None else params
-    params = params.fixed(["markers"], "the pose estimator takes the marker positions as known")
-    params, notes, _, absorbed = prepare(model, measurements, params, register)
-    markers = params.values[params.index("markers")].reshape(-1, 3)
-    lam = default_normalisation(markers) if normalisation is None else float(normalisation)
-    rot, trans = reconstruct_poses(measurements, markers)
-    weight = _weights(lam, measurements)
+    params, notes, _, absorbed = prepare(model, measurements, params.fixed(["markers"], KNOWN),
+                                         register)
+    markers, lam, rot, trans, weight = _poses(params, measurements, normalisation)
     free = params.free
     cache = {}
 
@@ -132,19 +129,21 @@ def predict_pose_covariance(model, params, configurations, sigma: float,
 
     from doe_calib.model.simulate import simulate
 
-    params = params.fixed(["markers"], "the pose estimator takes the marker positions as known")
+    params = params.fixed(["markers"], KNOWN)
     meas = simulate(model, params.values, configurations, 0.0)
     meas = replace(meas, sigma=np.full(len(meas), float(sigma)))
-    markers = params.values[params.index("markers")].reshape(-1, 3)
-    lam = default_normalisation(markers) if normalisation is None else float(normalisation)
-    rot, trans = reconstruct_poses(meas, markers)
-    weight = _weights(lam, meas)
+    markers, _, rot, trans, weight = _poses(params, meas, normalisation)
     _, jac = _weighted_pose_error(model, params.values, meas, rot, trans, weight)
     return _sandwich(jac[:, params.free], weight, rot, markers, meas)
 
 
-def _weights(lam, measurements):
-    return np.array([1, 1, 1, lam, lam, lam]) / float(np.median(measurements.sigma))
+def _poses(params, measurements, normalisation):
+    """The markers (n, 3), λ, the reconstructed flange poses and the 6-D residual weights."""
+    markers = params.values[params.index("markers")].reshape(-1, 3)
+    lam = default_normalisation(markers) if normalisation is None else float(normalisation)
+    rot, trans = reconstruct_poses(measurements, markers)
+    weight = np.array([1, 1, 1, lam, lam, lam]) / float(np.median(measurements.sigma))
+    return markers, lam, rot, trans, weight
 
 
 def _weighted_pose_error(model, values, measurements, rot, trans, weight):
