@@ -9,13 +9,12 @@ through the reconstruction (a sandwich estimate), not σ²(JᵀJ)⁻¹.
 """
 from __future__ import annotations
 
-import warnings
 from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from doe_calib.errors import ConvergenceWarning, DataError
+from doe_calib.errors import DataError
 from doe_calib.estimation.assembly import finish
 from doe_calib.estimation.preparation import prepare
 from doe_calib.estimation.registration import register
@@ -103,10 +102,6 @@ def identify_pose(model, measurements, params=None, normalisation: float | None 
                         jac=lambda x: evaluate_at(x)[1][:, free], method="lm",
                         x_scale=params.scales[free], xtol=1e-12, ftol=1e-12, gtol=1e-12,
                         max_nfev=max_iterations * 10)
-    if sol.status <= 0:
-        msg = f"pose estimator stopped before converging: {sol.message}"
-        warnings.warn(msg, ConvergenceWarning, stacklevel=2)
-        notes.append(msg)
     params = params.with_free_values(sol.x)
     cov = _sandwich(evaluate_at(sol.x)[1][:, free], weight, rot, markers, measurements)
     convergence = {"converged": bool(sol.status > 0), "iterations": int(sol.njev or sol.nfev),
@@ -115,7 +110,8 @@ def identify_pose(model, measurements, params=None, normalisation: float | None 
                               f"{sol.message}", "residual_norm2": float(2.0 * sol.cost),
                    "normalisation_m_per_rad": lam}
     return finish(model, measurements, params, "pose", convergence, notes, covariance=cov,
-                  absorbed=absorbed)
+                  absorbed=absorbed, stopped=None if sol.status > 0 else
+                  f"pose estimator stopped before converging: {sol.message}")
 
 
 def predict_pose_covariance(model, params, configurations, sigma: float,
