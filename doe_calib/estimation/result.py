@@ -282,12 +282,11 @@ class IdentificationResult:
         model build and no effect file (only :meth:`predict` needs them)."""
         robot, tool = Robot.from_dict(d["robot"]), Tool.from_dict(d["tool"])
         params = ParameterSet.from_rows(d["parameters"], robot.joint_names)
-        estimated = bool(d.get("sigma_estimated", False))
         return cls(robot, tool, d["model"], d["estimator"], params,
                    np.array(d["covariance_si"], float).reshape(int(params.free.sum()), -1),
                    float(d["sigma_ratio"]), d["residuals"], d["convergence"],
                    int(d["n_observations"]), float(d["sigma_mm"]), tuple(d.get("warnings", ())),
-                   estimated, d.get("sigma_source") or ("estimated" if estimated else "given"),
+                   bool(d.get("sigma_estimated", False)), d.get("sigma_source") or "",
                    dict(d.get("effect_files") or {}),
                    {k: tuple((str(n), float(c)) for n, c in v)
                     for k, v in (d.get("absorbed_si") or {}).items()},
