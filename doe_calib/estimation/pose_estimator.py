@@ -9,6 +9,7 @@ through the reconstruction (a sandwich estimate), not σ²(JᵀJ)⁻¹.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
@@ -21,6 +22,8 @@ from doe_calib.estimation.registration import register
 from doe_calib.model.evaluation import evaluate
 from doe_calib.model.pose_model import build_pose_error
 from doe_calib.model.rotations import skew_matrix
+from doe_calib.model.simulate import simulate
+from doe_calib.model.tool import marker_condition
 
 
 def default_normalisation(tool_positions) -> float:
@@ -40,8 +43,6 @@ def check_tool_fixes_the_pose(markers, source: str = "") -> None:
     The pose estimator reconstructs each configuration's full flange pose,
     which takes at least 3 markers not on one line.
     """
-    from doe_calib.model.tool import marker_condition
-
     markers = np.asarray(markers, float).reshape(-1, 3)
     if len(markers) < 3 or not np.isfinite(marker_condition(markers)):
         raise DataError(f"the pose estimator reconstructs each flange pose from at least 3 "
@@ -121,10 +122,6 @@ def predict_pose_covariance(model, params, configurations, sigma: float,
     Every marker is read at every configuration with noise σ (m); marker
     positions are taken as known, as the pose estimator does.
     """
-    from dataclasses import replace
-
-    from doe_calib.model.simulate import simulate
-
     params = params.fixed(["markers"], KNOWN)
     meas = simulate(model, params.values, configurations, 0.0)
     meas = replace(meas, sigma=np.full(len(meas), float(sigma)))
