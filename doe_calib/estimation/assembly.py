@@ -3,8 +3,11 @@ statistics, assembled into an :class:`~doe_calib.estimation.result.Identificatio
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
+from doe_calib.errors import ConvergenceWarning
 from doe_calib.estimation.covariance import covariance_from_r_factor
 from doe_calib.estimation.measured_region import joint_range
 from doe_calib.estimation.result import IdentificationResult
@@ -34,23 +37,27 @@ def residual_statistics(model, measurements, values) -> dict:
     out["per_marker"] = stats(measurements.marker, list(model.tool.names))
     pose_names, pose_of_config = np.unique(np.asarray(measurements.configurations.pose, object),
                                            return_inverse=True)
-    first = {}  # poses in order of first reading, as in the file
-    for p in np.asarray(pose_names)[pose_of_config[measurements.config]]:
-        first.setdefault(p, None)
     per_pose = stats(pose_of_config[measurements.config], list(pose_names))
+    # poses in order of first reading, as in the file
+    first = dict.fromkeys(np.asarray(pose_names)[pose_of_config[measurements.config]])
     out["per_pose"] = {p: per_pose[p] for p in first}
     return out
 
 
 def finish(model, measurements, params, estimator, convergence, notes, covariance=None,
-           norm2=None, absorbed=None):
+           norm2=None, absorbed=None, stopped=None):
     """Assemble the result: covariance σ²(BᵀWB)⁻¹, σ̂, residual statistics.
 
+    ``stopped``: why the estimator stopped before converging, in words; it is issued as a
+    :class:`~doe_calib.errors.ConvergenceWarning` (to the estimator's caller) and noted.
     ``covariance`` (of the free parameters, SI) and ``norm2`` (‖r‖² at
     ``params``) are computed here, a block of readings at a time, unless given.
     ``absorbed``: what each free parameter absorbs of those fixed as not separable
     (:attr:`~doe_calib.estimation.identifiability.Identifiability.absorbed`).
     """
+    if stopped:
+        warnings.warn(stopped, ConvergenceWarning, stacklevel=3)
+        notes = list(notes) + [stopped]
     n_free = int(params.free.sum())
     if covariance is None or norm2 is None:
         red = reduce_jacobian(model, measurements, params.values, params.free)
@@ -69,10 +76,5 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
         residual_statistics(model, measurements, params.values), convergence, n_obs,
         sigma_mm, tuple(notes), estimated,
         "estimated" if estimated else measurements.sigma_source,
-        effect_files(model.effects), dict(absorbed or {}),
-        joint_range=joint_range(measurements))
-
-
-def effect_files(effects) -> dict:
-    """Effect name → file of each user effect (loaded from a file) among ``effects``."""
-    return {e.name: str(e.source) for e in effects if getattr(e, "source", "")}
+        {e.name: str(e.source) for e in model.effects if getattr(e, "source", "")},  # user effects
+        dict(absorbed or {}), joint_range=joint_range(measurements))

@@ -54,26 +54,11 @@ class CovariancePrediction:
         return "\n".join(lines)
 
 
-def information_matrix(model, params, configurations, sigma: float, markers=None) -> np.ndarray:
-    """BᵀB/σ² over every configuration and marker, free parameters only, shape (F, F).
-
-    Parameters
-    ----------
-    sigma : float
-        Standard deviation of each measured coordinate, metres.
-    markers : sequence of str, optional
-        Markers read at each configuration (default all).
-    """
-    _, b = observation_matrix(model, params.values, configurations)
-    if markers is not None:
-        b = b[:, [model.tool.index(n) for n in markers]]
-    b = b[..., params.free].reshape(-1, int(params.free.sum())) / sigma
-    return b.T @ b
-
-
-def predict_covariance(model, params, configurations, sigma: float,
-                       markers=None) -> CovariancePrediction:
+def predict_covariance(model, params, configurations, sigma: float) -> CovariancePrediction:
     """Predicted covariance σ²(BᵀB)⁻¹ of the free parameters for planned configurations.
+
+    Every marker is read at every configuration; the information matrix BᵀB/σ² is
+    summed over them, free parameters only.
 
     Parameters
     ----------
@@ -85,14 +70,17 @@ def predict_covariance(model, params, configurations, sigma: float,
     sigma : float
         Tracker noise per coordinate, metres, > 0.
     """
-    info = information_matrix(model, params, configurations, positive("sigma", sigma, "m"),
-                              markers)
+    _, b = observation_matrix(model, params.values, configurations)
+    b = b[..., params.free].reshape(-1, int(params.free.sum())) / positive("sigma", sigma, "m")
+    info = b.T @ b
     return CovariancePrediction(params, np.linalg.pinv(info), info)
 
 
-def point_covariance(model, params, covariance, configurations, point=(0.0, 0.0, 0.0),
-                     frame: str = "robot") -> np.ndarray:
+def point_covariance(model, params, covariance, configurations,
+                     point=(0.0, 0.0, 0.0)) -> np.ndarray:
     """Covariance (m²) of a point fixed in the flange frame at each configuration.
+
+    The point's position in the robot base frame: what a robot program sees.
 
     Parameters
     ----------
@@ -100,16 +88,12 @@ def point_covariance(model, params, covariance, configurations, point=(0.0, 0.0,
         Covariance of the free parameters (a prediction or a result).
     point : array_like, shape (3,)
         The point in the flange frame (TCP or a marker), metres.
-    frame : {"robot", "tracker"}
-        ``robot``: position in the robot base frame, what a robot program
-        sees; ``tracker``: in the tracker frame, with base uncertainty.
 
     Returns
     -------
     ndarray, shape (M, 3, 3)
     """
-    f = model.point_robot if frame == "robot" else model.point
-    _, jac = evaluate(f, configurations, params.values, np.asarray(point, float))
+    _, jac = evaluate(model.point_robot, configurations, params.values, np.asarray(point, float))
     jf = jac[..., params.free]
     return np.einsum("mip,pq,mjq->mij", jf, covariance, jf)
 

@@ -158,8 +158,7 @@ def fit_statistics(result) -> FitStatistics:
     dof = int(result.n_observations - n_free)
     estimated = result.sigma_source == "estimated"
     chi2 = float(result.sigma_ratio ** 2 * dof) if dof > 0 else float("nan")
-    p_value = (chi2_survival(chi2, dof) if dof > 0 and not estimated
-               else float("nan"))
+    p_value = chi2_survival(chi2, dof) if dof > 0 and not estimated else float("nan")
 
     def count(key):
         v = conv.get(key)

@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from doe_calib.model.rotations import skew_matrix
+
 _BLOCK_ORDER = ("base", "markers")
 _NO_EFFECT = 1e-9
 #: A kept column whose share of a dependent column's expansion (unit-free, in normalised
@@ -59,7 +61,7 @@ def priority_order(parameter_set, candidates) -> list[int]:
     return sorted(candidates, key=lambda i: (seen.index(blocks[i]), i))
 
 
-def analyse(b, parameter_set, candidates=None, tol: float = 1e-7) -> Identifiability:
+def analyse(b, parameter_set, tol: float = 1e-7) -> Identifiability:
     """Find the free parameters the observation matrix cannot separate.
 
     Parameters
@@ -67,8 +69,7 @@ def analyse(b, parameter_set, candidates=None, tol: float = 1e-7) -> Identifiabi
     b : ndarray, shape (rows, P)
         Weighted observation matrix (rows divided by their σ).
     parameter_set : ParameterSet
-    candidates : sequence of int, optional
-        Parameter indices to analyse; default: the free ones.
+        Its free parameters are analysed.
     tol : float
         Relative remaining length under which a column is dependent.
 
@@ -77,7 +78,7 @@ def analyse(b, parameter_set, candidates=None, tol: float = 1e-7) -> Identifiabi
     effect at all (it holds only rounding errors).
     """
     params = parameter_set.parameters
-    candidates = np.flatnonzero(parameter_set.free) if candidates is None else candidates
+    candidates = np.flatnonzero(parameter_set.free)
     order = priority_order(parameter_set, list(candidates))
     norms = np.linalg.norm(b, axis=0)
     effect = norms * parameter_set.scales
@@ -99,8 +100,6 @@ def analyse(b, parameter_set, candidates=None, tol: float = 1e-7) -> Identifiabi
 
 
 def _residual(col, basis):
-    if basis.shape[1] == 0:
-        return col.copy()
     r = col - basis @ (basis.T @ col)
     return r - basis @ (basis.T @ r)  # second pass for accuracy
 
@@ -186,8 +185,7 @@ def blind_flange_motions(marker_positions) -> int:
     """
     u = np.asarray(marker_positions, float).reshape(-1, 3)
     size = max(float(np.abs(u).max(initial=0.0)), 1e-3)
-    rows = [np.hstack([np.eye(3), -np.array([[0, -p[2], p[1]], [p[2], 0, -p[0]],
-                                            [-p[1], p[0], 0]]) / size]) for p in u]
+    rows = [np.hstack([np.eye(3), -skew_matrix(p) / size]) for p in u]
     return 6 - int(np.linalg.matrix_rank(np.vstack(rows), tol=1e-9))
 
 

@@ -23,7 +23,8 @@ from doe_calib.estimation.assembly import SIGMA_ESTIMATED
 from doe_calib.estimation.fit_statistics import misfit_finding
 from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
 from doe_calib.estimation.selection import SELECTIONS, select as choose
-from doe_calib.estimation.sigma import provisional, resolve_sigma
+from doe_calib.estimation.sigma import resolve_sigma
+from doe_calib.io.measurements import provisional
 from doe_calib.io.repeated_readings import copies_words
 from doe_calib.io.setting_ranges import positive, whole
 from doe_calib.model.marker_model import for_workload

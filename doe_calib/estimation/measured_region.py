@@ -19,8 +19,9 @@ def joint_range(measurements) -> np.ndarray:
     return np.column_stack([q.min(axis=0), q.max(axis=0)])
 
 
-def outside_joints(robot, q, joint_range, margin: float = OUTSIDE_MARGIN) -> tuple:
-    """The joints of each row that leave the measured range by more than ``margin``, in words.
+def outside_joints(robot, q, joint_range) -> tuple:
+    """The joints of each row that leave the measured range by more than :data:`OUTSIDE_MARGIN`
+    of the joint's range between its limits (2π for an unlimited one), in words.
 
     Parameters
     ----------
@@ -29,8 +30,6 @@ def outside_joints(robot, q, joint_range, margin: float = OUTSIDE_MARGIN) -> tup
         rad (m).
     joint_range : ndarray, shape (N, 2), or None
         The calibration's measured range per joint, rad (m); None: not known ("" each).
-    margin : float
-        Share of each joint's range between its limits (2π for an unlimited one).
 
     Returns
     -------
@@ -42,7 +41,7 @@ def outside_joints(robot, q, joint_range, margin: float = OUTSIDE_MARGIN) -> tup
     k = robot.display_factors
     lo, hi = np.asarray(joint_range, float).T * k
     span = np.where(np.isfinite(robot.upper - robot.lower), robot.upper - robot.lower, 2 * np.pi)
-    pad = margin * span * k
+    pad = OUTSIDE_MARGIN * span * k
     return tuple(", ".join(f"{j.name} at {v:.4g} (measured {a:.4g}…{b:.4g} "
                            f"{'deg' if j.kind == 'revolute' else 'mm'})"
                            for j, v, a, b, d in zip(robot.joints, row, lo, hi, pad)
@@ -50,9 +49,9 @@ def outside_joints(robot, q, joint_range, margin: float = OUTSIDE_MARGIN) -> tup
                  for row in np.asarray(q, float) * k)
 
 
-def outside_flags(robot, q, joint_range, margin: float = OUTSIDE_MARGIN) -> tuple:
+def outside_flags(robot, q, joint_range) -> tuple:
     """:func:`outside_joints` as a compensated row's flag: "" inside, else the sentence
     ``"outside the measured region: a2 at 95 (measured -40…60 deg); its std extrapolates
     the model, measure poses there"``."""
     return tuple(f"outside the measured region: {w}; its std extrapolates the model, measure "
-                 f"poses there" if w else "" for w in outside_joints(robot, q, joint_range, margin))
+                 f"poses there" if w else "" for w in outside_joints(robot, q, joint_range))

@@ -34,7 +34,7 @@ class ParameterEstimate:
         The (at most 3) free parameters it is most correlated with, largest
         |ρ| first.
     role : str
-        What the value is (:data:`~doe_calib.estimation.reduced_set.ROLES`):
+        What the value is (:func:`~doe_calib.estimation.reduced_set.role`):
         ``physical``, ``reduced set`` (it absorbs parameters the data cannot
         separate), ``not separable`` or ``fixed``.
     combination : str

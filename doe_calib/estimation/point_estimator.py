@@ -9,10 +9,7 @@ number of readings.
 from __future__ import annotations
 
 import logging
-import warnings
 
-
-from doe_calib.errors import ConvergenceWarning
 from doe_calib.estimation.assembly import finish
 from doe_calib.estimation.covariance import covariance_from_r_factor
 from doe_calib.estimation.point_fit import point_fit
@@ -47,10 +44,6 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
     params, notes, start, absorbed = prepare(model, measurements, params, register)
     sol = point_fit(model, measurements, params, max_iterations, progress, start)
     scale = params.scales[params.free]
-    if not sol.converged:
-        msg = f"Levenberg–Marquardt stopped before converging: {sol.message}"
-        warnings.warn(msg, ConvergenceWarning, stacklevel=2)
-        notes.append(msg)
     log.info("point estimator: %d Jacobian and %d residual passes, status %d", sol.iterations,
              sol.evaluations, sol.status)
     convergence = {"converged": sol.converged, "iterations": sol.iterations,
@@ -58,4 +51,5 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
                    "message": f"Levenberg–Marquardt: {sol.message}", "residual_norm2": sol.norm2}
     return finish(model, measurements, params.with_free_values(sol.x), "point", convergence,
                   notes, covariance_from_r_factor(sol.reduction.r_factor, scale), sol.norm2,
-                  absorbed)
+                  absorbed, None if sol.converged else
+                  f"Levenberg–Marquardt stopped before converging: {sol.message}")

@@ -9,19 +9,21 @@ through the reconstruction (a sandwich estimate), not σ²(JᵀJ)⁻¹.
 """
 from __future__ import annotations
 
-import warnings
+from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from doe_calib.errors import ConvergenceWarning, DataError
+from doe_calib.errors import DataError
 from doe_calib.estimation.assembly import finish
 from doe_calib.estimation.preparation import prepare
 from doe_calib.estimation.registration import register
 from doe_calib.model.evaluation import evaluate
 from doe_calib.model.pose_model import build_pose_error
 from doe_calib.model.rotations import skew_matrix
+from doe_calib.model.simulate import simulate
+from doe_calib.model.tool import marker_condition
 
 
 def default_normalisation(tool_positions) -> float:
@@ -30,9 +32,9 @@ def default_normalisation(tool_positions) -> float:
     return float(np.sqrt(np.mean(np.sum(c ** 2, axis=1))))
 
 
-@lru_cache(maxsize=8)
-def _pose_error(model):
-    return build_pose_error(model)
+_pose_error = lru_cache(maxsize=8)(build_pose_error)
+#: Why the pose estimator fixes the marker positions.
+KNOWN = "the pose estimator takes the marker positions as known"
 
 
 def check_tool_fixes_the_pose(markers, source: str = "") -> None:
@@ -41,8 +43,6 @@ def check_tool_fixes_the_pose(markers, source: str = "") -> None:
     The pose estimator reconstructs each configuration's full flange pose,
     which takes at least 3 markers not on one line.
     """
-    from doe_calib.model.tool import marker_condition
-
     markers = np.asarray(markers, float).reshape(-1, 3)
     if len(markers) < 3 or not np.isfinite(marker_condition(markers)):
         raise DataError(f"the pose estimator reconstructs each flange pose from at least 3 "
@@ -85,12 +85,9 @@ def identify_pose(model, measurements, params=None, normalisation: float | None 
     """
     check_tool_fixes_the_pose(model.tool.position_array, model.tool.source)
     params = model.nominal() if params is None else params
-    params = params.fixed(["markers"], "the pose estimator takes the marker positions as known")
-    params, notes, _, absorbed = prepare(model, measurements, params, register)
-    markers = params.values[params.index("markers")].reshape(-1, 3)
-    lam = default_normalisation(markers) if normalisation is None else float(normalisation)
-    rot, trans = reconstruct_poses(measurements, markers)
-    weight = _weights(lam, measurements)
+    params, notes, _, absorbed = prepare(model, measurements, params.fixed(["markers"], KNOWN),
+                                         register)
+    markers, lam, rot, trans, weight = _poses(params, measurements, normalisation)
     free = params.free
     cache = {}
 
@@ -106,10 +103,6 @@ def identify_pose(model, measurements, params=None, normalisation: float | None 
                         jac=lambda x: evaluate_at(x)[1][:, free], method="lm",
                         x_scale=params.scales[free], xtol=1e-12, ftol=1e-12, gtol=1e-12,
                         max_nfev=max_iterations * 10)
-    if sol.status <= 0:
-        msg = f"pose estimator stopped before converging: {sol.message}"
-        warnings.warn(msg, ConvergenceWarning, stacklevel=2)
-        notes.append(msg)
     params = params.with_free_values(sol.x)
     cov = _sandwich(evaluate_at(sol.x)[1][:, free], weight, rot, markers, measurements)
     convergence = {"converged": bool(sol.status > 0), "iterations": int(sol.njev or sol.nfev),
@@ -118,7 +111,8 @@ def identify_pose(model, measurements, params=None, normalisation: float | None 
                               f"{sol.message}", "residual_norm2": float(2.0 * sol.cost),
                    "normalisation_m_per_rad": lam}
     return finish(model, measurements, params, "pose", convergence, notes, covariance=cov,
-                  absorbed=absorbed)
+                  absorbed=absorbed, stopped=None if sol.status > 0 else
+                  f"pose estimator stopped before converging: {sol.message}")
 
 
 def predict_pose_covariance(model, params, configurations, sigma: float,
@@ -128,23 +122,21 @@ def predict_pose_covariance(model, params, configurations, sigma: float,
     Every marker is read at every configuration with noise σ (m); marker
     positions are taken as known, as the pose estimator does.
     """
-    from dataclasses import replace
-
-    from doe_calib.model.simulate import simulate
-
-    params = params.fixed(["markers"], "the pose estimator takes the marker positions as known")
+    params = params.fixed(["markers"], KNOWN)
     meas = simulate(model, params.values, configurations, 0.0)
     meas = replace(meas, sigma=np.full(len(meas), float(sigma)))
-    markers = params.values[params.index("markers")].reshape(-1, 3)
-    lam = default_normalisation(markers) if normalisation is None else float(normalisation)
-    rot, trans = reconstruct_poses(meas, markers)
-    weight = _weights(lam, meas)
+    markers, _, rot, trans, weight = _poses(params, meas, normalisation)
     _, jac = _weighted_pose_error(model, params.values, meas, rot, trans, weight)
     return _sandwich(jac[:, params.free], weight, rot, markers, meas)
 
 
-def _weights(lam, measurements):
-    return np.array([1, 1, 1, lam, lam, lam]) / float(np.median(measurements.sigma))
+def _poses(params, measurements, normalisation):
+    """The markers (n, 3), λ, the reconstructed flange poses and the 6-D residual weights."""
+    markers = params.values[params.index("markers")].reshape(-1, 3)
+    lam = default_normalisation(markers) if normalisation is None else float(normalisation)
+    rot, trans = reconstruct_poses(measurements, markers)
+    weight = np.array([1, 1, 1, lam, lam, lam]) / float(np.median(measurements.sigma))
+    return markers, lam, rot, trans, weight
 
 
 def _weighted_pose_error(model, values, measurements, rot, trans, weight):

@@ -7,12 +7,10 @@ the reason in words.
 from __future__ import annotations
 
 import warnings
-from typing import NamedTuple
 
 from doe_calib.errors import ConditioningWarning, DataError, IdentifiabilityWarning
 from doe_calib.estimation.identifiability import analyse, blind_motion_words
 from doe_calib.estimation.registration import register
-from doe_calib.estimation.least_squares import Reduction
 from doe_calib.estimation.weighted_residuals import marker_points, reduce_jacobian
 from doe_calib.model.rotations import matrix_to_rotation_vector
 
@@ -88,20 +86,11 @@ def fix_unidentifiable(model, measurements, params, tol: float = 1e-7, reduction
     return params, notes, ident.absorbed
 
 
-def check_counts(measurements, params):
-    """Raise a DataError when there are fewer observations than unknowns."""
-    n_free = int(params.free.sum())
-    if measurements.n_coordinates < n_free:
-        raise DataError(f"{measurements.n_coordinates} observed coordinates for {n_free} unknown "
-                        f"parameters: measure more poses or markers, or use a smaller model",
-                        measurements.source or "<measurements>")
+def prepare(model, measurements, params=None, register: bool = True) -> tuple:
+    """Common start of every estimator: start values, base registration, rank analysis.
 
-
-class Prepared(NamedTuple):
-    """What :func:`prepare` gives an estimator.
-
-    Attributes
-    ----------
+    Returns
+    -------
     params : ParameterSet
         Start values, with the parameters the data cannot separate fixed.
     notes : list of str
@@ -112,22 +101,22 @@ class Prepared(NamedTuple):
     absorbed : dict
         Kept parameter → the fixed ones it absorbs, with coefficients
         (:attr:`~doe_calib.estimation.identifiability.Identifiability.absorbed`).
+
+    Raises
+    ------
+    DataError
+        No readings, or fewer observed coordinates than free parameters.
     """
-
-    params: object
-    notes: list
-    reduction: Reduction
-    absorbed: dict
-
-
-def prepare(model, measurements, params=None, register: bool = True) -> Prepared:
-    """Common start of every estimator: start values, base registration, rank analysis."""
     params = model.nominal() if params is None else params
+    where = measurements.source or "<measurements>"
     if len(measurements) == 0:
-        raise DataError("no readings to identify from", measurements.source or "<measurements>")
+        raise DataError("no readings to identify from", where)
     if register and params.free[params.index("base")].all():
         params = register_base(model, measurements, params)
-    check_counts(measurements, params)
+    n_free = int(params.free.sum())
+    if measurements.n_coordinates < n_free:
+        raise DataError(f"{measurements.n_coordinates} observed coordinates for {n_free} unknown "
+                        f"parameters: measure more poses or markers, or use a smaller model", where)
     red = reduce_jacobian(model, measurements, params.values)
     params, notes, absorbed = fix_unidentifiable(model, measurements, params, reduction=red)
-    return Prepared(params, notes, red, absorbed)
+    return params, notes, red, absorbed

@@ -14,14 +14,6 @@ from dataclasses import dataclass
 
 from doe_calib.estimation.preparation import not_separable
 
-#: What a parameter's value is, by :func:`role`.
-ROLES = {"physical": "identified: the physical value",
-         "reduced set": "identified as the value of the reduced set: it absorbs parameters "
-                        "the data cannot separate (see its combination)",
-         "not separable": "not identified: the data cannot separate it; held at the value "
-                          "it was fixed at",
-         "fixed": "not identified: fixed"}
-
 
 @dataclass(frozen=True)
 class Combination:
@@ -68,7 +60,13 @@ class Combination:
 
 
 def role(result, name: str) -> str:
-    """``physical``, ``reduced set``, ``not separable`` or ``fixed`` (keys of :data:`ROLES`)."""
+    """What the value of ``name`` is.
+
+    ``physical`` (identified: the physical value), ``reduced set`` (identified as the value
+    of the reduced set: it absorbs parameters the data cannot separate, see its
+    combination), ``not separable`` (not identified: held at the value it was fixed at) or
+    ``fixed`` (not identified: fixed).
+    """
     p = result.parameters
     i = p.position(name)
     if p.free[i]:

@@ -224,30 +224,29 @@ class IdentificationResult:
             import pandas as pd
         except ImportError as exc:
             raise ImportError("to_dataframe needs pandas: pip install pandas") from exc
-        rows = []
-        for name in self.parameters.names:
-            e = self[name]
-            k = e.display_factor
-            rows.append({"name": name, "block": e.block, "value": e.value * k,
-                         "std": e.std * k, "std_apriori": e.std_apriori * k,
-                         "nominal": e.nominal * k, "unit": e.display_unit, "free": e.free,
-                         "fixed_reason": e.fixed_reason, "role": e.role,
-                         "description": e.description})
-        return pd.DataFrame(rows).set_index("name")
+        return pd.DataFrame(self._rows(), columns=[
+            "name", "block", "value", "std", "std_apriori", "nominal", "unit", "free",
+            "fixed_reason", "role", "description"]).set_index("name")
 
     def summary(self) -> str:
         """The :meth:`fit_report` (correlations above 0.3)."""
         return self.fit_report()
 
-    def to_dict(self) -> dict:
-        """JSON-able dict (formats.md §5): parameters in display units (mm, deg, µrad/(N·m)),
-        ``std`` σ̂-scaled and ``std_apriori`` for the a-priori σ."""
+    def _rows(self) -> list[dict]:
+        """The parameter rows in display units (mm, deg, µrad/(N·m)), with ``std``
+        σ̂-scaled, ``std_apriori`` for the a-priori σ and ``role``."""
         rows = self.parameters.to_list()
         for r, par, s, s0 in zip(rows, self.parameters.parameters, self.std(),
                                  self.std(apriori=True)):
             r["std"] = s * par.display_factor
             r["std_apriori"] = s0 * par.display_factor
             r["role"] = role(self, par.name)
+        return rows
+
+    def to_dict(self) -> dict:
+        """JSON-able dict (formats.md §5): the parameter rows of :meth:`_rows`, the covariance,
+        the fit statistics and what the fit found."""
+        rows = self._rows()
         return {"format": "doe_calib.identification", "version": FORMAT_VERSION,
                 "model": self.model, "estimator": self.estimator,
                 "parameters": rows,
@@ -283,12 +282,11 @@ class IdentificationResult:
         model build and no effect file (only :meth:`predict` needs them)."""
         robot, tool = Robot.from_dict(d["robot"]), Tool.from_dict(d["tool"])
         params = ParameterSet.from_rows(d["parameters"], robot.joint_names)
-        estimated = bool(d.get("sigma_estimated", False))
         return cls(robot, tool, d["model"], d["estimator"], params,
                    np.array(d["covariance_si"], float).reshape(int(params.free.sum()), -1),
                    float(d["sigma_ratio"]), d["residuals"], d["convergence"],
                    int(d["n_observations"]), float(d["sigma_mm"]), tuple(d.get("warnings", ())),
-                   estimated, d.get("sigma_source") or ("estimated" if estimated else "given"),
+                   bool(d.get("sigma_estimated", False)), d.get("sigma_source") or "",
                    dict(d.get("effect_files") or {}),
                    {k: tuple((str(n), float(c)) for n, c in v)
                     for k, v in (d.get("absorbed_si") or {}).items()},

@@ -151,11 +151,9 @@ def reregister(model, params, measurements, what: str = "frame",
     old_v, new_v = params.values[base], new.values[base]
     turn = rotation_vector_to_matrix(new_v[3:]) @ rotation_vector_to_matrix(old_v[3:]).T
     angle = float(np.degrees(np.arccos(np.clip((np.trace(turn) - 1) / 2, -1.0, 1.0))))
-    shifts = {}
-    if "markers" in blocks:
-        for name in model.tool.names:
-            idx = params.index([f"marker_{name}_{c}" for c in "xyz"])
-            shifts[name] = float(np.linalg.norm(new.values[idx] - params.values[idx]) * 1000.0)
+    moved = {n: params.index([f"marker_{n}_{c}" for c in "xyz"]) for n in model.tool.names}
+    shifts = {n: float(np.linalg.norm(new.values[i] - params.values[i]) * 1000.0)
+              for n, i in moved.items()} if "markers" in blocks else {}
     notes = () if sol.converged else (f"Levenberg–Marquardt: {sol.message}",)
     return Reregistration(what, new, (new_v[:3] - old_v[:3]) * 1000.0, angle, shifts, before,
                           after, sol.converged, notes)

@@ -39,14 +39,10 @@ from doe_calib.io.measurements import (
     GIVEN,
     PER_READING,
     REPEATED,
-    SIGMA_SOURCES,
     Measurements,
     provisional,
 )
 from doe_calib.model.marker_model import for_workload
-
-__all__ = ["GIVEN", "PER_READING", "ESTIMATED", "REPEATED", "SIGMA_SOURCES", "SettledSigma",
-           "resolve_sigma", "with_sigma", "provisional"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,7 +73,8 @@ class SettledSigma:
 
 
 def with_sigma(measurements, sigma: float, source: str = GIVEN) -> Measurements:
-    """``measurements`` with every reading's σ set to ``sigma`` (m), from ``source``.
+    """``measurements`` with every reading's σ set to ``sigma`` (m), from ``source``
+    (one of :data:`~doe_calib.io.measurements.SIGMA_SOURCES`).
 
     Raises
     ------
@@ -86,11 +83,8 @@ def with_sigma(measurements, sigma: float, source: str = GIVEN) -> Measurements:
     """
     if not (np.isfinite(sigma) and sigma > 0):
         raise OptionError(f"σ must be a positive number of metres, got {sigma!r}")
-    if source not in SIGMA_SOURCES:
-        raise OptionError(f"unknown σ source {source!r}; one of {', '.join(SIGMA_SOURCES)}")
     return replace(measurements, sigma=np.full(len(measurements), float(sigma)),
                    sigma_source=source, sigma_estimated=False)
-
 
 
 def resolve_sigma(model, measurements, sigma: float | None = None, params=None, fit=None,

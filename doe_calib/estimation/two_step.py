@@ -9,11 +9,9 @@ reported is the joint one at that minimiser.
 """
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 
-from doe_calib.errors import ConvergenceWarning, SolverError
+from doe_calib.errors import SolverError
 from doe_calib.estimation.assembly import finish
 from doe_calib.estimation.preparation import prepare
 from doe_calib.estimation.weighted_residuals import weighted_residual
@@ -37,9 +35,8 @@ def identify_two_step(model, measurements, params=None, max_iterations: int = 50
     steps = [params.free & blocks, params.free & ~blocks]
     scale = params.scales
     values = params.values.copy()
-    moved = np.inf
-    history = []
-    for _ in range(max_iterations):
+    moved, done = np.inf, 0
+    while done < max_iterations and not moved < tol:
         moved = 0.0
         for cols in steps:
             if not cols.any():
@@ -50,19 +47,14 @@ def identify_two_step(model, measurements, params=None, max_iterations: int = 50
             moved = max(moved, float(np.max(np.abs(step) / scale[cols])))
         if not np.all(np.isfinite(values)):
             raise SolverError("the two-step alternation diverged (non-finite parameters)")
-        history.append(moved)
-        if moved < tol:
-            break
+        done += 1
     converged = moved < tol
-    if not converged:
-        msg = (f"two-step alternation stopped after {max_iterations} iterations; last relative "
-               f"step {moved:.2g} (tolerance {tol:g})")
-        warnings.warn(msg, ConvergenceWarning, stacklevel=2)
-        notes.append(msg)
     r, _ = weighted_residual(model, measurements, values, jacobian=False)
-    convergence = {"converged": bool(converged), "iterations": len(history),
-                   "evaluations": 2 * len(history), "status": int(converged),
-                   "message": f"two-step: {len(history)} alternations, last relative step "
+    convergence = {"converged": bool(converged), "iterations": done,
+                   "evaluations": 2 * done, "status": int(converged),
+                   "message": f"two-step: {done} alternations, last relative step "
                               f"{moved:.2g}", "residual_norm2": float(r @ r)}
     return finish(model, measurements, params.with_values(values), "two-step", convergence,
-                  notes, absorbed=absorbed)
+                  notes, absorbed=absorbed, stopped=None if converged else
+                  f"two-step alternation stopped after {max_iterations} iterations; last "
+                  f"relative step {moved:.2g} (tolerance {tol:g})")
