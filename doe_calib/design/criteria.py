@@ -49,16 +49,6 @@ def log_det(m: np.ndarray) -> float:
     return float(value) if sign > 0 else -np.inf
 
 
-def _neg_trace(m: np.ndarray, root: np.ndarray | None) -> float:
-    """−tr(R M⁻¹ Rᵀ) (R = ``root``; −tr M⁻¹ when None); −inf when M is singular."""
-    try:
-        if root is None:
-            return -float(np.trace(np.linalg.inv(m)))
-        return -float(np.trace(root @ np.linalg.solve(m, root.T)))
-    except np.linalg.LinAlgError:
-        return -np.inf
-
-
 @dataclass(frozen=True, eq=False)
 class Criterion:
     """A design criterion: a function of the scaled information M, larger is better.
@@ -93,8 +83,14 @@ class Criterion:
         return self.name
 
     def value(self, m: np.ndarray) -> float:
-        """The criterion of M (−inf when M is singular)."""
-        raise NotImplementedError
+        """The criterion of M (−inf when M is singular); here −tr(R M⁻¹ Rᵀ) of :meth:`_root`."""
+        root = self._root()
+        try:
+            if root is None:
+                return -float(np.trace(np.linalg.inv(m)))
+            return -float(np.trace(root @ np.linalg.solve(m, root.T)))
+        except np.linalg.LinAlgError:
+            return -np.inf
 
     def smooth_value(self, m: np.ndarray) -> float:
         """The criterion, or for E its smooth surrogate; what line searches maximise."""
@@ -117,7 +113,11 @@ class Criterion:
         surrogate (tr M^-k)^(-1/k), k = :data:`E_ORDER`, and c turns it into a
         bound on λ_min.
         """
-        raise NotImplementedError
+        inv, root = np.linalg.inv(m), self._root()
+        if root is None:
+            return inv @ inv / np.trace(inv), 1.0
+        c = root.T @ root
+        return inv @ c @ inv / np.trace(c @ inv), 1.0
 
     def scale_value(self, value: float, n: float, p: int) -> float:
         """The criterion of n·M from that of M (−tr/n for A and task)."""
@@ -246,13 +246,6 @@ class AOptimal(Criterion):
     words: ClassVar[str] = "the smallest sum of (scaled) parameter variances (−tr M⁻¹)"
     statistic: ClassVar[str] = "max_i tr(M⁻² M_i) / tr(M⁻¹)"
 
-    def value(self, m):
-        return _neg_trace(m, None)
-
-    def sensitivity(self, m):
-        inv = np.linalg.inv(m)
-        return inv @ inv / np.trace(inv), 1.0
-
     def cvxpy_value(self, m):
         import cvxpy as cp
         return -cp.tr_inv(m)
@@ -339,14 +332,6 @@ class TaskOptimal(Criterion):
 
     def _root(self):
         return self.task
-
-    def value(self, m):
-        return _neg_trace(m, self.task)
-
-    def sensitivity(self, m):
-        inv = np.linalg.inv(m)
-        c = self.task.T @ self.task
-        return inv @ c @ inv / np.trace(c @ inv), 1.0
 
     def cvxpy_value(self, m):
         import cvxpy as cp

@@ -127,14 +127,14 @@ def refine_discovery(model, params, cand, chosen, sigma: float, feasibility, eff
     if home is not None:
         q1, far = revert_unreachable(collision, q1, q0, home, model.robot, constraints)
     b1, z1 = _columns(model, params, chosen_variants(cand, chosen, q1), effects, sigma)
-    need = np.minimum(np.asarray(targets, float), _lambda(b0, z0)) if len(effects) else []
+    need = np.minimum(np.asarray(targets, float), _lambda(b0, z0))
 
     def mixed(refined):
         pick = refined[:, None, None]
         return (np.where(pick, b1, b0), [np.where(pick, a, b) for a, b in zip(z1, z0)])
 
     def short(refined):
-        return float(shortfall(_lambda(*mixed(refined)), need)) if len(effects) else 0.0
+        return float(shortfall(_lambda(*mixed(refined)), need))
 
     refined, reverted = np.ones(len(q0), bool), 0
     while refined.any() and short(refined) > 1e-9:
