@@ -18,8 +18,10 @@ def pose_clearances(collision, q: np.ndarray) -> tuple:
 
 def collision_note(collision, removed: dict, drawn: int, clearances) -> str:
     """One sentence: clearance asked, poses rejected (most by which pair), least clearance kept."""
-    rejected = {k[len("collision: "):]: v for k, v in removed.items()
-                if k.startswith("collision: ")}
+    def by(prefix):  # the counts of the keys starting with prefix, by the rest of the key
+        return {k[len(prefix):]: v for k, v in removed.items() if k.startswith(prefix)}
+
+    rejected, blocked = by("collision: "), by("line of sight: blocked by ")
     text = (f"collision check: {1000 * collision.clearance:g} mm clearance from tool, payloads "
             f"and cell ({1000 * collision.self_clearance:g} mm between the robot's links), "
             f"{len(collision.pairs)} pairs checked, {len(collision.disabled)} never "
@@ -30,8 +32,6 @@ def collision_note(collision, removed: dict, drawn: int, clearances) -> str:
                  f"{worst} ({rejected[worst]})")
     else:
         text += f"none of {drawn} drawn poses rejected"
-    blocked = {k[len("line of sight: blocked by "):]: v for k, v in removed.items()
-               if k.startswith("line of sight: blocked by ")}
     if blocked:
         worst = max(blocked, key=blocked.get)
         text += (f"; {sum(blocked.values())} with a tracker beam blocked, most by {worst} "

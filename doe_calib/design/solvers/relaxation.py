@@ -305,7 +305,6 @@ def convex_relaxation(blocks: np.ndarray, criterion="D", task: np.ndarray | None
     weights = np.clip(w.value, 0.0, None)
     weights /= weights.sum()
     m_w = information(blocks, weights)
-    h, c = crit.sensitivity(m_w)
     return DesignOutcome("relaxation", crit, weights, crit.value(m_w),
                          int(problem.solver_stats.num_iters or 0), str(problem.status), p,
-                         ratio=max(float(c * traces(blocks, h).max()), 1.0))
+                         ratio=max(equivalence_ratio(blocks, m_w, crit), 1.0))
