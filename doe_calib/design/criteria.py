@@ -119,17 +119,14 @@ class Criterion:
         c = root.T @ root
         return inv @ c @ inv / np.trace(c @ inv), 1.0
 
-    def scale_value(self, value: float, n: float, p: int) -> float:
-        """The criterion of n·M from that of M (−tr/n for A and task)."""
-        return value / n
-
     def bound_value(self, value: float, ratio: float, n: float, p: int) -> float:
         """Upper bound on the criterion of any n-point design over the candidates.
 
         ``value`` is the criterion of a normalised relaxation M(w) and ``ratio``
-        = c · max_i ψ_i ≥ 1 its equivalence-theorem ratio.
+        = c · max_i ψ_i ≥ 1 its equivalence-theorem ratio; the criterion of n·M
+        is that of M over n (A and task), plus p log n (D), times n (E).
         """
-        return self.scale_value(value, n, p) / ratio
+        return value / n / ratio
 
     def efficiency(self, value: float, reference: float, p: int) -> float:
         """Φ(design) / Φ(reference) from criterion values: 1 as good as the reference."""
@@ -203,11 +200,8 @@ class DOptimal(Criterion):
     def sensitivity(self, m):
         return np.linalg.inv(m) / m.shape[0], 1.0
 
-    def scale_value(self, value, n, p):
-        return value + p * np.log(n)
-
     def bound_value(self, value, ratio, n, p):
-        return self.scale_value(value, n, p) + p * np.log(ratio)
+        return value + p * np.log(n) + p * np.log(ratio)
 
     def efficiency(self, value, reference, p):
         return float(np.exp((value - reference) / p))
@@ -280,11 +274,8 @@ class EOptimal(Criterion):
         h = (vec * rel) @ vec.T / np.sum(rel * ev)
         return h, float(np.sum(rel * ev) / (ev[0] * rel.sum()))
 
-    def scale_value(self, value, n, p):
-        return value * n
-
     def bound_value(self, value, ratio, n, p):
-        return self.scale_value(value, n, p) * ratio
+        return value * n * ratio
 
     def efficiency(self, value, reference, p):
         return float(value / reference)
