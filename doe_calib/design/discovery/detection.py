@@ -19,6 +19,8 @@ only as the model's own parameters can; ``why`` says which, in words.
 """
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 from doe_calib.design.detectability import assess
@@ -77,13 +79,9 @@ def detectability(model, params, measurements, effects, alpha: float = 0.05,
     """
     alpha, power = level_and_power(alpha, power)
     _, q_basis = fitted_basis(model, measurements, params)
-    jac = []  # the model's free weighted Jacobian, made once and only if words need it
-
-    def jacobian():
-        if not jac:
-            jac.append(weighted_residual(model, measurements, params.values)[1][:, params.free])
-        return jac[0]
-
+    # the model's free weighted Jacobian, made once and only if words need it
+    jacobian = cache(lambda: weighted_residual(model, measurements,
+                                               params.values)[1][:, params.free])
     out = []
     for effect in effects:
         z, zp = projected_columns(model, measurements, params, effect, q_basis)
