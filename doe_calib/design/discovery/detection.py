@@ -82,12 +82,9 @@ def detectability(model, params, measurements, effects, alpha: float = 0.05,
     # the model's free weighted Jacobian, made once and only if words need it
     jacobian = cache(lambda: weighted_residual(model, measurements,
                                                params.values)[1][:, params.free])
-    out = []
-    for effect in effects:
-        z, zp = projected_columns(model, measurements, params, effect, q_basis)
-        new = effect.parameters(model.robot)
-        out.append(assess(effect.spec(), new, params, z, zp, jacobian, alpha, power))
-    return tuple(out)
+    return tuple(assess(e.spec(), e.parameters(model.robot), params,
+                        *projected_columns(model, measurements, params, e, q_basis), jacobian,
+                        alpha, power) for e in effects)
 
 
 def with_detectability(design, model, spec: str, alpha: float = 0.05, power: float = 0.8,

@@ -145,8 +145,7 @@ def _cover(blocks, chosen, pool, bins, min_bins, crit):
 
 def _allowed(bins, chosen, slot, candidates, min_bins):
     """Which candidates may replace ``chosen[slot]`` without dropping below ``min_bins`` bins."""
-    used = bins[chosen]
-    rest = np.delete(used, slot)
+    rest = np.delete(bins[chosen], slot)
     after = len(set(rest) - {-1}) + (~np.isin(bins[candidates], rest) & (bins[candidates] >= 0))
     return after >= min_bins
 
