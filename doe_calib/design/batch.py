@@ -20,17 +20,6 @@ _MAPS_KEPT = 16
 _LOCAL = threading.local()
 
 
-def chunks(m: int, size: int = CHUNK):
-    """(rows of the result, padded row indices of one chunk) covering range(m) in chunks.
-
-    Every chunk has ``min(size, m)`` indices, the last one padded with index 0.
-    """
-    size = min(size, m)
-    for start in range(0, m, size):
-        index = np.arange(start, start + size)
-        yield slice(start, min(start + size, m)), np.where(index < m, index, 0)
-
-
 class _Mapped:
     """A Function of one pose mapped over ``m`` poses, with numpy buffers it reads and writes.
 
@@ -98,8 +87,11 @@ def map_poses(function: ca.Function, q: np.ndarray) -> list:
     [[2.0, 3.0], [12.0, 7.0]]
     """
     q = np.atleast_2d(np.asarray(q, float))
-    out = [np.empty((len(q), *function.size_out(i))) for i in range(function.n_out())]
-    for rows, index in chunks(len(q)):
-        for o, r in zip(out, _mapped(function, len(index))(q[index])):
-            o[rows] = r[: rows.stop - rows.start]
+    m = len(q)
+    size = min(CHUNK, m)  # every chunk this size, the last one padded with pose 0
+    out = [np.empty((m, *function.size_out(i))) for i in range(function.n_out())]
+    for start in range(0, m, size):
+        stop, index = min(start + size, m), np.arange(start, start + size)
+        for o, r in zip(out, _mapped(function, size)(q[np.where(index < m, index, 0)])):
+            o[start:stop] = r[:stop - start]
     return out

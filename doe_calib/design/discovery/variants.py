@@ -130,8 +130,7 @@ def variants(q, cases, joints, n_joints: int, every: bool = False) -> Variants:
     case_ids = ([EVERY] if every else list(range(len(cases)))) if cases else [-1]
     rows = [(i, c, s) for i in range(len(q)) for c in case_ids for s in sides]
     approach = np.zeros((len(rows), n_joints))
-    for r, (_, _, s) in enumerate(rows):
-        approach[r, list(joints)] = s
+    approach[:, list(joints)] = np.reshape([s for _, _, s in rows], (len(rows), len(joints)))
     return Variants(np.array([r[0] for r in rows]), np.array([r[1] for r in rows]), approach,
                     np.asarray(q), tuple(cases), tuple(joints))
 
