@@ -1,19 +1,10 @@
-"""Evaluations split over threads give the serial numbers, bit for bit.
-
-The policy (:func:`split_workers`: one thread off the main thread, with BLAS
-free to run its own threads, or in a pool's worker), :func:`run_parts`, and
-each threaded path against its serial run: the pose maps (several chunks),
-the packed information (several chunks) and the relaxation built on it.
+"""The thread-split policy (:func:`split_workers`: one thread off the main thread, with BLAS
+free to run its own threads, or in a pool's worker) and :func:`run_parts`.
 """
 import threading
 
-import casadi as ca
-import numpy as np
 import pytest
-from numpy.testing import assert_array_equal
 
-from doe_calib.design.batch import CHUNK, map_poses
-from doe_calib.design.solvers.relaxation import packed_information, relax
 from doe_calib.runtime.parallel import default_workers
 from doe_calib.runtime.split import run_parts, split_workers
 from doe_calib.runtime.threads import BLAS_THREADS
@@ -54,27 +45,3 @@ def test_parts_run_at_once_in_order():
     assert run_parts(lambda i: i + 1, [4]) == [5]
     assert run_parts(lambda i: i, []) == []
 
-
-def test_pose_map_in_threads_is_the_serial_one():
-    q = ca.SX.sym("q", 3)
-    f = ca.Function("f", [q], [ca.horzcat(ca.sin(q[0]) * q[1], ca.exp(q[2]) / (1 + q[1] ** 2)),
-                               ca.cos(q[0] * q[2])])
-    poses = np.random.default_rng(7).normal(size=(3 * CHUNK + 5, 3))  # four chunks, one padded
-    serial = map_poses(f, poses, workers=1)
-    for workers in (2, 3, 8):
-        for a, b in zip(map_poses(f, poses, workers=workers), serial):
-            assert_array_equal(a, b)
-
-
-def test_packed_information_and_relaxation_in_threads_are_the_serial_ones():
-    blocks = np.random.default_rng(8).normal(size=(3000, 6, 9))  # three chunks of candidates
-    serial = packed_information(blocks, workers=1)
-    for workers in (2, 3, 5):
-        assert_array_equal(packed_information(blocks, workers=workers), serial)
-    out = np.empty((3010, serial.shape[1]))
-    packed_information(blocks, out=out[:3000], workers=2)  # into rows of a larger array
-    assert_array_equal(out[:3000], serial)
-    a = relax(None, packed=serial)
-    b = relax(None, packed=packed_information(blocks, workers=2))
-    assert_array_equal(a.weights, b.weights)
-    assert a.value == b.value and a.ratio == b.ratio and a.iterations == b.iterations

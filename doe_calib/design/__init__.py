@@ -16,21 +16,15 @@ from doe_calib.runtime.lazy_exports import lazy_exports
 #: Public name → the module of this package that defines it. Each is imported on first
 #: use, so that a diagnosis's detectability (:mod:`.detectability`) does not load the
 #: solvers, the criteria and CasADi's design expressions first.
-_HOMES = {"read_constraints": "candidates.constraint_file", "Box": "candidates.constraints",
-          "Coverage": "candidates.constraints", "DesignConstraints": "candidates.constraints",
-          "LineOfSight": "candidates.constraints", "CRITERIA": "criteria",
-          "AOptimal": "criteria", "Criterion": "criteria", "DOptimal": "criteria",
-          "EOptimal": "criteria", "TaskOptimal": "criteria", "criterion": "criteria",
-          "efficiency": "criteria",
-          "log_det": "criteria",
-          "exact_design": "solvers.exchange",
-          "LoadCase": "problem", "blocks_for": "problem", "design_parameters": "problem",
-          "load_configurations": "problem", "task_matrix": "problem",
-          "DesignOutcome": "solvers.outcome", "PredictedStd": "predicted_std",
-          "StdMapping": "predicted_std", "convex_relaxation": "solvers.relaxation",
-          "equivalence_ratio": "solvers.relaxation", "information": "solvers.relaxation",
-          "relax": "solvers.relaxation",
-          "variances": "solvers.relaxation"}
+_HOMES = {"read_constraints": "candidates.constraint_file",
+          "DesignConstraints": "candidates.constraints", "LineOfSight": "candidates.constraints",
+          "CRITERIA": "criteria", "AOptimal": "criteria", "Criterion": "criteria",
+          "DOptimal": "criteria", "EOptimal": "criteria", "TaskOptimal": "criteria",
+          "criterion": "criteria", "efficiency": "criteria", "log_det": "criteria",
+          "exact_design": "solvers.exchange", "LoadCase": "problem", "blocks_for": "problem",
+          "design_parameters": "problem", "load_configurations": "problem",
+          "convex_relaxation": "solvers.relaxation", "information": "solvers.relaxation",
+          "relax": "solvers.relaxation", "variances": "solvers.relaxation"}
 
 __all__ = list(_HOMES)
 

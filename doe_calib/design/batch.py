@@ -6,10 +6,7 @@ chunk is padded). The chunks are small: building a map takes time in
 proportion to its poses (70 ms for 2048 poses of the KR 270's blocks), while
 evaluating 256 poses at a time costs no more per pose. Each map is evaluated
 through CasADi's buffers straight into numpy arrays (no DM conversion). The
-maps are kept per thread, a few at a time. With more than one chunk, the
-chunks are shared out to threads (:func:`doe_calib.runtime.split.split_workers`),
-each with its own map and buffers: every chunk is evaluated as alone, so the
-result is the serial one, bit for bit.
+maps are kept per thread, a few at a time.
 """
 from __future__ import annotations
 
@@ -18,22 +15,9 @@ import threading
 import casadi as ca
 import numpy as np
 
-from doe_calib.runtime.split import run_parts, split_workers
-
 CHUNK = 256
 _MAPS_KEPT = 16
 _LOCAL = threading.local()
-
-
-def chunks(m: int, size: int = CHUNK):
-    """(rows of the result, padded row indices of one chunk) covering range(m) in chunks.
-
-    Every chunk has ``min(size, m)`` indices, the last one padded with index 0.
-    """
-    size = min(size, m)
-    for start in range(0, m, size):
-        index = np.arange(start, start + size)
-        yield slice(start, min(start + size, m)), np.where(index < m, index, 0)
 
 
 class _Mapped:
@@ -66,24 +50,21 @@ class _Mapped:
                 zip(self.res, shapes)]
 
 
-def _maps(function: ca.Function, size: int, count: int) -> list:
-    """``count`` maps of ``function`` over ``size`` poses, each with its own buffers, kept in
-    this thread (built here: CasADi's symbolic construction is not thread-safe)."""
+def _mapped(function: ca.Function, size: int) -> _Mapped:
+    """The map of ``function`` over ``size`` poses with its buffers, kept in this thread (built
+    here: CasADi's symbolic construction is not thread-safe, nor are shared buffers)."""
     maps = getattr(_LOCAL, "maps", None)
     if maps is None:
         maps = _LOCAL.maps = {}
-    out = []
-    for slot in range(count):
-        key = (id(function), size, slot)
-        if key not in maps or maps[key].function is not function:  # the Function, not a reused id
-            if len(maps) >= _MAPS_KEPT:
-                maps.pop(next(iter(maps)))
-            maps[key] = _Mapped(function, size)
-        out.append(maps[key])
-    return out
+    key = (id(function), size)
+    if key not in maps or maps[key].function is not function:  # the Function, not a reused id
+        if len(maps) >= _MAPS_KEPT:
+            maps.pop(next(iter(maps)))
+        maps[key] = _Mapped(function, size)
+    return maps[key]
 
 
-def map_poses(function: ca.Function, q: np.ndarray, workers: int | None = None) -> list:
+def map_poses(function: ca.Function, q: np.ndarray) -> list:
     """A Function of one pose, ``f(q) -> (y_1, …)``, at every row of q (M, N).
 
     Parameters
@@ -91,15 +72,12 @@ def map_poses(function: ca.Function, q: np.ndarray, workers: int | None = None) 
     function : casadi.Function
         Of one pose (N,), each output (rows, cols).
     q : ndarray, shape (M, N)
-        Poses, rad (m).
-    workers : int, optional
-        Threads sharing the chunks of :data:`CHUNK` poses (default
-        :func:`doe_calib.runtime.split.split_workers`; at most one per chunk).
+        Poses, rad (m), evaluated in chunks of :data:`CHUNK`.
 
     Returns
     -------
     list of ndarray
-        One per output, shape (M, rows, cols); the same, bit for bit, for any ``workers``.
+        One per output, shape (M, rows, cols).
 
     Examples
     --------
@@ -110,16 +88,10 @@ def map_poses(function: ca.Function, q: np.ndarray, workers: int | None = None) 
     """
     q = np.atleast_2d(np.asarray(q, float))
     m = len(q)
-    shapes = [function.size_out(i) for i in range(function.n_out())]
-    out = [np.empty((m, *s)) for s in shapes]
-    spans = list(chunks(m))
-    workers = min(split_workers() if workers is None else max(1, int(workers)), len(spans))
-    maps = _maps(function, len(spans[0][1]), workers) if spans else []
-
-    def evaluate(slot):
-        for rows, index in spans[slot::workers]:
-            for o, r in zip(out, maps[slot](q[index])):
-                o[rows] = r[: rows.stop - rows.start]
-
-    run_parts(evaluate, range(workers))
+    size = min(CHUNK, m)  # every chunk this size, the last one padded with pose 0
+    out = [np.empty((m, *function.size_out(i))) for i in range(function.n_out())]
+    for start in range(0, m, size):
+        stop, index = min(start + size, m), np.arange(start, start + size)
+        for o, r in zip(out, _mapped(function, size)(q[np.where(index < m, index, 0)])):
+            o[start:stop] = r[:stop - start]
     return out

@@ -224,7 +224,7 @@ def compare(sources, labels=None, sigma: float | None = None, task=None,
         raise OptionError(f"the tracker σ (--sigma) must be positive, got {1000 * sigma:g} mm")
     if task is not None and any(s.robot.n_joints != task.q.shape[1] for s in sources):
         raise DataError("the task poses and every source must have the same number of joints")
-    names, units, stds, tcp, sigmas = {}, {}, [], [], []
+    units, stds, tcp, sigmas = {}, [], [], []  # units: name → unit, in first-seen order
     for source in sources:
         model, params, cov, s = _covariance(source, sigma, registry)
         sigmas.append(1000.0 * s)
@@ -232,19 +232,18 @@ def compare(sources, labels=None, sigma: float | None = None, task=None,
         d = std_from_covariance(cov)
         stds.append({p.name: v * p.display_factor for p, v in zip(free, d)})
         for p in params.parameters:
-            names.setdefault(p.name, None)
             units.setdefault(p.name, p.display_unit)
         if task is not None:
             c = point_covariance(model, params, cov, task, task_point)
             tcp.append(1000.0 * np.sqrt(np.trace(c, axis1=1, axis2=2)))
-    std = np.array([[s.get(n, np.nan) for s in stds] for n in names])
+    std = np.array([[s.get(n, np.nan) for s in stds] for n in units])
     counts = [(len(s.poses()), 3 * s.tool.n_markers * len(s.configurations))
               if isinstance(s, DesignResult) else (0, s.n_observations) for s in sources]
     return Comparison(labels, tuple("design" if isinstance(s, DesignResult) else
                                     "identification" for s in sources),
                       tuple(s.model for s in sources), tuple(c[0] for c in counts),
-                      tuple(c[1] for c in counts), tuple(sigmas), tuple(names),
-                      tuple(units[n] for n in names), std,
+                      tuple(c[1] for c in counts), tuple(sigmas), tuple(units),
+                      tuple(units.values()), std,
                       () if task is None else tuple(task.pose),
                       tuple(1000.0 * np.asarray(task_point, float)),
                       np.zeros((0, len(sources))) if task is None else np.array(tcp).T)

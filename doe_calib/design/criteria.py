@@ -49,16 +49,6 @@ def log_det(m: np.ndarray) -> float:
     return float(value) if sign > 0 else -np.inf
 
 
-def _neg_trace(m: np.ndarray, root: np.ndarray | None) -> float:
-    """−tr(R M⁻¹ Rᵀ) (R = ``root``; −tr M⁻¹ when None); −inf when M is singular."""
-    try:
-        if root is None:
-            return -float(np.trace(np.linalg.inv(m)))
-        return -float(np.trace(root @ np.linalg.solve(m, root.T)))
-    except np.linalg.LinAlgError:
-        return -np.inf
-
-
 @dataclass(frozen=True, eq=False)
 class Criterion:
     """A design criterion: a function of the scaled information M, larger is better.
@@ -93,8 +83,14 @@ class Criterion:
         return self.name
 
     def value(self, m: np.ndarray) -> float:
-        """The criterion of M (−inf when M is singular)."""
-        raise NotImplementedError
+        """The criterion of M (−inf when M is singular); here −tr(R M⁻¹ Rᵀ) of :meth:`_root`."""
+        root = self._root()
+        try:
+            if root is None:
+                return -float(np.trace(np.linalg.inv(m)))
+            return -float(np.trace(root @ np.linalg.solve(m, root.T)))
+        except np.linalg.LinAlgError:
+            return -np.inf
 
     def smooth_value(self, m: np.ndarray) -> float:
         """The criterion, or for E its smooth surrogate; what line searches maximise."""
@@ -117,19 +113,20 @@ class Criterion:
         surrogate (tr M^-k)^(-1/k), k = :data:`E_ORDER`, and c turns it into a
         bound on λ_min.
         """
-        raise NotImplementedError
-
-    def scale_value(self, value: float, n: float, p: int) -> float:
-        """The criterion of n·M from that of M (−tr/n for A and task)."""
-        return value / n
+        inv, root = np.linalg.inv(m), self._root()
+        if root is None:
+            return inv @ inv / np.trace(inv), 1.0
+        c = root.T @ root
+        return inv @ c @ inv / np.trace(c @ inv), 1.0
 
     def bound_value(self, value: float, ratio: float, n: float, p: int) -> float:
         """Upper bound on the criterion of any n-point design over the candidates.
 
         ``value`` is the criterion of a normalised relaxation M(w) and ``ratio``
-        = c · max_i ψ_i ≥ 1 its equivalence-theorem ratio.
+        = c · max_i ψ_i ≥ 1 its equivalence-theorem ratio; the criterion of n·M
+        is that of M over n (A and task), plus p log n (D), times n (E).
         """
-        return self.scale_value(value, n, p) / ratio
+        return value / n / ratio
 
     def efficiency(self, value: float, reference: float, p: int) -> float:
         """Φ(design) / Φ(reference) from criterion values: 1 as good as the reference."""
@@ -203,11 +200,8 @@ class DOptimal(Criterion):
     def sensitivity(self, m):
         return np.linalg.inv(m) / m.shape[0], 1.0
 
-    def scale_value(self, value, n, p):
-        return value + p * np.log(n)
-
     def bound_value(self, value, ratio, n, p):
-        return self.scale_value(value, n, p) + p * np.log(ratio)
+        return value + p * np.log(n) + p * np.log(ratio)
 
     def efficiency(self, value, reference, p):
         return float(np.exp((value - reference) / p))
@@ -246,13 +240,6 @@ class AOptimal(Criterion):
     words: ClassVar[str] = "the smallest sum of (scaled) parameter variances (−tr M⁻¹)"
     statistic: ClassVar[str] = "max_i tr(M⁻² M_i) / tr(M⁻¹)"
 
-    def value(self, m):
-        return _neg_trace(m, None)
-
-    def sensitivity(self, m):
-        inv = np.linalg.inv(m)
-        return inv @ inv / np.trace(inv), 1.0
-
     def cvxpy_value(self, m):
         import cvxpy as cp
         return -cp.tr_inv(m)
@@ -287,11 +274,8 @@ class EOptimal(Criterion):
         h = (vec * rel) @ vec.T / np.sum(rel * ev)
         return h, float(np.sum(rel * ev) / (ev[0] * rel.sum()))
 
-    def scale_value(self, value, n, p):
-        return value * n
-
     def bound_value(self, value, ratio, n, p):
-        return self.scale_value(value, n, p) * ratio
+        return value * n * ratio
 
     def efficiency(self, value, reference, p):
         return float(value / reference)
@@ -339,14 +323,6 @@ class TaskOptimal(Criterion):
 
     def _root(self):
         return self.task
-
-    def value(self, m):
-        return _neg_trace(m, self.task)
-
-    def sensitivity(self, m):
-        inv = np.linalg.inv(m)
-        c = self.task.T @ self.task
-        return inv @ c @ inv / np.trace(c @ inv), 1.0
 
     def cvxpy_value(self, m):
         import cvxpy as cp

@@ -9,8 +9,5 @@ from doe_calib.collision import Workspace, clearance
 def pose_clearances(collision, q: np.ndarray) -> tuple:
     """``(clearance_mm, pair)`` of each pose of q (M, N): the pair with least distance to spare."""
     ws = Workspace(collision)
-    out = []
-    for pose in np.atleast_2d(q):
-        c = clearance(collision, pose, ws)
-        out.append((c.mm, c.pair))
-    return tuple(out)
+    found = [clearance(collision, pose, ws) for pose in np.atleast_2d(q)]
+    return tuple((c.mm, c.pair) for c in found)

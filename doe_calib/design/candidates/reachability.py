@@ -96,8 +96,7 @@ def _joined(collision, home, pose, ws) -> bool:
         collision, home, pose, settings=collision.planner, workspace=ws) is not None
 
 
-def unreachable(collision, q, home, robot, lower, upper,
-                workspace: Workspace | None = None, workers: int | None = None) -> list:
+def unreachable(collision, q, home, robot, lower, upper, workers: int | None = None) -> list:
     """For each pose of q (M, N), why a program cannot use it, or the angles it is reached at.
 
     Parameters
@@ -121,8 +120,7 @@ def unreachable(collision, q, home, robot, lower, upper,
         is joined).
     """
     q = np.atleast_2d(q)
-    ws = Workspace(collision) if workspace is None else workspace
-    shared = (collision, q, home, robot, lower, upper, ws)  # each worker has its copy of ws
+    shared = (collision, q, home, robot, lower, upper, Workspace(collision))  # a copy per worker
     # without a planner every pose is a straight check: not worth the processes
     return forked_map(_reached, shared, len(q), 1 if collision.planner is None else workers)
 

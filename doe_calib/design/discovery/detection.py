@@ -19,6 +19,8 @@ only as the model's own parameters can; ``why`` says which, in words.
 """
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 from doe_calib.design.detectability import assess
@@ -77,19 +79,12 @@ def detectability(model, params, measurements, effects, alpha: float = 0.05,
     """
     alpha, power = level_and_power(alpha, power)
     _, q_basis = fitted_basis(model, measurements, params)
-    jac = []  # the model's free weighted Jacobian, made once and only if words need it
-
-    def jacobian():
-        if not jac:
-            jac.append(weighted_residual(model, measurements, params.values)[1][:, params.free])
-        return jac[0]
-
-    out = []
-    for effect in effects:
-        z, zp = projected_columns(model, measurements, params, effect, q_basis)
-        new = effect.parameters(model.robot)
-        out.append(assess(effect.spec(), new, params, z, zp, jacobian, alpha, power))
-    return tuple(out)
+    # the model's free weighted Jacobian, made once and only if words need it
+    jacobian = cache(lambda: weighted_residual(model, measurements,
+                                               params.values)[1][:, params.free])
+    return tuple(assess(e.spec(), e.parameters(model.robot), params,
+                        *projected_columns(model, measurements, params, e, q_basis), jacobian,
+                        alpha, power) for e in effects)
 
 
 def with_detectability(design, model, spec: str, alpha: float = 0.05, power: float = 0.8,

@@ -19,12 +19,8 @@ import numpy as np
 from doe_calib.design.solvers.constrained_exchange import (information_parts,
                                                           projected_information, shortfall)
 from doe_calib.design.criteria import log_det
-from doe_calib.design.discovery.variants import (
-    EVERY,
-    effect_columns,
-    observation_rows,
-    within_torque_limits,
-)
+from doe_calib.design.discovery.variants import (effect_columns, observation_rows,
+                                                  within_torque_limits)
 from doe_calib.design.solvers.pose_refinement import refine as refine_poses
 from doe_calib.design.candidates.reachability import revert_unreachable
 
@@ -64,11 +60,6 @@ def chosen_variants(cand, chosen, q=None):
     return replace(cand, q=cand.q[cand.pose[chosen]] if q is None else np.asarray(q),
                    pose=np.arange(len(chosen)), case=cand.case[chosen],
                    approach=cand.approach[chosen])
-
-
-def _load_cases(cand, k):
-    c = int(cand.case[k])
-    return list(cand.cases) if c == EVERY else [cand.cases[c]] if c >= 0 else []
 
 
 def _columns(model, params, sub, effects, sigma):
@@ -115,7 +106,8 @@ def refine_discovery(model, params, cand, chosen, sigma: float, feasibility, eff
     sub0 = chosen_variants(cand, chosen)
     q0 = sub0.q
     outcome = refine_poses(model, params, (), sigma, q0, feasibility, "D", collision=collision,
-                           variants=[(_load_cases(cand, k), cand.approach[k]) for k in chosen])
+                           variants=[([cand.cases[c] for c in cand.load_cases(k)], cand.approach[k])
+                                     for k in chosen])
     b0, z0 = _columns(model, params, sub0, effects, sigma)
     if not outcome.accepted:
         return RefinedDiscovery(q0, b0, outcome, 0, 0)
@@ -127,14 +119,14 @@ def refine_discovery(model, params, cand, chosen, sigma: float, feasibility, eff
     if home is not None:
         q1, far = revert_unreachable(collision, q1, q0, home, model.robot, constraints)
     b1, z1 = _columns(model, params, chosen_variants(cand, chosen, q1), effects, sigma)
-    need = np.minimum(np.asarray(targets, float), _lambda(b0, z0)) if len(effects) else []
+    need = np.minimum(np.asarray(targets, float), _lambda(b0, z0))
 
     def mixed(refined):
         pick = refined[:, None, None]
         return (np.where(pick, b1, b0), [np.where(pick, a, b) for a, b in zip(z1, z0)])
 
     def short(refined):
-        return float(shortfall(_lambda(*mixed(refined)), need)) if len(effects) else 0.0
+        return float(shortfall(_lambda(*mixed(refined)), need))
 
     refined, reverted = np.ones(len(q0), bool), 0
     while refined.any() and short(refined) > 1e-9:

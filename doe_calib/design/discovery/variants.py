@@ -68,6 +68,11 @@ class Variants:
         return Variants(self.pose[keep], self.case[keep], self.approach[keep], self.q,
                         self.cases, self.approach_joints)
 
+    def load_cases(self, k) -> list:
+        """The indices into ``cases`` of the load cases variant ``k`` is measured under."""
+        c = int(self.case[k])
+        return list(range(len(self.cases))) if c == EVERY else [c] if c >= 0 else []
+
     def configurations(self, model, values, chosen=None, ids=None) -> Configurations:
         """Each variant's readings: unloaded, then (if it has one) under its load case."""
         chosen = np.arange(len(self)) if chosen is None else np.asarray(chosen)
@@ -75,9 +80,9 @@ class Variants:
         q, w, a, pose = [], [], [], []
         wrench = {}
         for k, name in zip(chosen, ids):
-            qi, c = self.q[self.pose[k]], int(self.case[k])
+            qi = self.q[self.pose[k]]
             rows = [np.zeros(6)]
-            for case in (range(len(self.cases)) if c == EVERY else [c] if c >= 0 else []):
+            for case in self.load_cases(k):
                 key = (int(self.pose[k]), case)
                 if key not in wrench:
                     wrench[key] = self.cases[case].wrench(model, values, qi[None])[0]
@@ -97,20 +102,14 @@ def within_torque_limits(model, values, constraints, cand: Variants) -> np.ndarr
     centre of mass ``c`` — the force and the moment ``(c − o) × F`` of the centre's
     offset at the flange — on the nominal chain (:mod:`.feasibility`).
     """
-    ok = np.ones(len(cand), bool)
     if constraints.torque_limits is None or not cand.cases:
-        return ok
+        return np.ones(len(cand), bool)
     limits = np.asarray(constraints.torque_limits, float)
     tau = map_poses(build_feasibility(model, values, constraints, cand.cases).geometry,
                     cand.q)[2]  # (P, N, C)
     within = np.all((np.abs(tau) <= limits[None, :, None] * (1 + 1e-9))
                     | ~np.isfinite(limits)[None, :, None], axis=1)  # (P, C)
-    for k, (i, c) in enumerate(zip(cand.pose, cand.case)):
-        if c == EVERY:
-            ok[k] = within[i].all()
-        elif c >= 0:
-            ok[k] = within[i, c]
-    return ok
+    return np.array([within[i, cand.load_cases(k)].all() for k, i in enumerate(cand.pose)])
 
 
 def approach_joints(model, effects) -> tuple:
@@ -131,8 +130,7 @@ def variants(q, cases, joints, n_joints: int, every: bool = False) -> Variants:
     case_ids = ([EVERY] if every else list(range(len(cases)))) if cases else [-1]
     rows = [(i, c, s) for i in range(len(q)) for c in case_ids for s in sides]
     approach = np.zeros((len(rows), n_joints))
-    for r, (_, _, s) in enumerate(rows):
-        approach[r, list(joints)] = s
+    approach[:, list(joints)] = np.reshape([s for _, _, s in rows], (len(rows), len(joints)))
     return Variants(np.array([r[0] for r in rows]), np.array([r[1] for r in rows]), approach,
                     np.asarray(q), tuple(cases), tuple(joints))
 

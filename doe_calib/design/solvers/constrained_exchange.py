@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from doe_calib.design.criteria import DOptimal, log_det
 from doe_calib.design.solvers.outcome import DesignOutcome
-from doe_calib.design.criteria import DOptimal
 
 _TINY = 1e-300
 _BATCH = 512
@@ -48,9 +48,7 @@ def projected_information(m, c, a) -> np.ndarray:
 
 
 def shortfall(lam: np.ndarray, targets: np.ndarray) -> np.ndarray:
-    """``Σ_e max(0, log t_e − log λ_e)`` (effects on the first axis)."""
-    if len(targets) == 0:
-        return np.zeros(lam.shape[1:]) if lam.ndim > 1 else 0.0
+    """``Σ_e max(0, log t_e − log λ_e)`` (effects on the first axis; 0 without any)."""
     t = np.asarray(targets, float).reshape((-1,) + (1,) * (lam.ndim - 1))
     return np.maximum(0.0, np.log(t) - np.log(np.maximum(lam, _TINY))).sum(axis=0)
 
@@ -85,9 +83,8 @@ def constrained_exchange(blocks, zblocks, targets, start, pose_of, pool=None,
     pool = np.arange(k) if pool is None else np.asarray(pool)
     chosen = [int(i) for i in start]
     m, c, a = information_parts(blocks, zblocks, chosen)
-    value = np.linalg.slogdet(m)
-    value = value[1] if value[0] > 0 else -np.inf
-    short = float(shortfall(projected_information(m, c, a), targets)) if len(targets) else 0.0
+    value = log_det(m)
+    short = float(shortfall(projected_information(m, c, a), targets))
     sweeps = 0
     for _ in range(max_sweeps):
         sweeps, improved = sweeps + 1, False
@@ -106,13 +103,10 @@ def constrained_exchange(blocks, zblocks, targets, start, pose_of, pool=None,
                 mj = m_minus + np.swapaxes(bj, 1, 2) @ bj
                 sign, ld = np.linalg.slogdet(mj)
                 ld = np.where(sign > 0, ld, -np.inf)
-                if len(targets):
-                    cj = [ce + np.swapaxes(bj, 1, 2) @ z[js] for ce, z in zip(c_minus, zblocks)]
-                    aj = [ae + np.swapaxes(z[js], 1, 2) @ z[js] for ae, z in zip(a_minus, zblocks)]
-                    sj = shortfall(projected_information(mj, cj, aj), targets)
-                else:
-                    sj = np.zeros(len(js))
-                sj = np.where(np.isfinite(ld), sj, np.inf)
+                cj = [ce + np.swapaxes(bj, 1, 2) @ z[js] for ce, z in zip(c_minus, zblocks)]
+                aj = [ae + np.swapaxes(z[js], 1, 2) @ z[js] for ae, z in zip(a_minus, zblocks)]
+                sj = np.where(np.isfinite(ld), shortfall(projected_information(mj, cj, aj),
+                                                         targets), np.inf)
                 for t in np.flatnonzero(sj <= sj.min() + 1e-9):
                     key = (float(sj[t]), float(ld[t]))
                     if key[0] < best[0] - 1e-9 or (key[0] <= best[0] + 1e-9 and key[1] > best[1]):

@@ -22,6 +22,7 @@ from doe_calib.errors import SolverError
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
 _NOISE = 1e-6  # relaxation weights below this fraction of the largest rank as zero
 _RIDGE = 1e-10
+_BATCH = 64  # candidates of the D search evaluated exactly at once
 
 
 def regularised(m: np.ndarray) -> np.ndarray:
@@ -31,7 +32,7 @@ def regularised(m: np.ndarray) -> np.ndarray:
 
 
 def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray,
-               packed: np.ndarray | None = None, batch: int = 64) -> tuple[int, float]:
+               packed: np.ndarray | None = None) -> tuple[int, float]:
     """The candidate j maximising the criterion of M + B_jᵀB_j among ``allowed``, and that value.
 
     The same answer as ``argmax`` of the criterion's ``added_values`` at the
@@ -53,8 +54,6 @@ def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray
     blocks : ndarray, shape (K, r, p)
     allowed : ndarray of bool, shape (K,)
     packed : ndarray, shape (K, p(p+1)/2), optional
-    batch : int
-        Candidates evaluated exactly at once.
 
     Returns
     -------
@@ -85,10 +84,10 @@ def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray
     rank = np.argsort(-bound, kind="stable")
     order, bound = index[rank], bound[rank]
     best, value = -1, -np.inf
-    for s in range(0, order.size, batch):
+    for s in range(0, order.size, _BATCH):
         if bound[s] <= value:
             break
-        values = criterion.added_values(m, blocks[order[s:s + batch]])
+        values = criterion.added_values(m, blocks[order[s:s + _BATCH]])
         j = int(np.argmax(values))
         if values[j] > value:
             best, value = int(order[s + j]), float(values[j])
@@ -146,8 +145,7 @@ def _cover(blocks, chosen, pool, bins, min_bins, crit):
 
 def _allowed(bins, chosen, slot, candidates, min_bins):
     """Which candidates may replace ``chosen[slot]`` without dropping below ``min_bins`` bins."""
-    used = bins[chosen]
-    rest = np.delete(used, slot)
+    rest = np.delete(bins[chosen], slot)
     after = len(set(rest) - {-1}) + (~np.isin(bins[candidates], rest) & (bins[candidates] >= 0))
     return after >= min_bins
 

@@ -65,10 +65,6 @@ class DesignOutcome:
     seconds: float = 0.0
     stepped_back: int = 0
 
-    def __post_init__(self):
-        if self.stage not in STAGES:
-            raise ValueError(f"unknown design stage {self.stage!r}; one of {', '.join(STAGES)}")
-
     @property
     def gap(self) -> float:
         """p (ratio − 1): for D the duality gap max_i d_i − p (relaxation)."""

@@ -24,7 +24,6 @@ import numpy as np
 from doe_calib.design.criteria import Criterion
 from doe_calib.design.solvers.outcome import DesignOutcome
 from doe_calib.errors import OptionError
-from doe_calib.runtime.split import run_parts, split_workers
 
 _CHUNK = 4096  # candidates per step when sweeping all of them (bounds memory)
 #: With ``screen``: rounds while candidates outside the working set still violate the
@@ -87,18 +86,14 @@ def packed_size(p: int) -> int:
     return p * (p + 1) // 2
 
 
-def packed_information(blocks: np.ndarray, out: np.ndarray | None = None,
-                       workers: int | None = None) -> np.ndarray:
+def packed_information(blocks: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """Upper triangles of every M_i = B_iᵀB_i (row-major), shape (K, p(p+1)/2).
 
     M_i is symmetric, so its p(p+1)/2 distinct entries say all of it: the
     relaxation's sums over candidates then read half the memory. Built by
-    batched matrix products, in chunks of :data:`_PACK_CHUNK` candidates,
-    shared out to ``workers`` threads (default
-    :func:`doe_calib.runtime.split.split_workers`; at most one per chunk): each
-    M_i is the same product whichever thread makes it. ``out``, an array of
-    that shape (e.g. rows of a larger one, so that more candidates can join
-    without a copy), is filled and returned.
+    batched matrix products, in chunks of :data:`_PACK_CHUNK` candidates.
+    ``out``, an array of that shape (e.g. rows of a larger one, so that more
+    candidates can join without a copy), is filled and returned.
 
     Examples
     --------
@@ -112,20 +107,14 @@ def packed_information(blocks: np.ndarray, out: np.ndarray | None = None,
     elif out.shape != (k, packed_size(p)):
         raise OptionError(f"out has shape {out.shape}; {k} blocks of {p} columns pack into "
                          f"({k}, {packed_size(p)})")
-    starts = range(0, k, _PACK_CHUNK)
-    workers = min(split_workers() if workers is None else max(1, int(workers)), len(starts))
-
-    def fill(slot):
-        products = np.empty((min(k, _PACK_CHUNK), p, p))  # one buffer for the thread's chunks
-        for s in starts[slot::workers]:
-            b = blocks[s:s + _PACK_CHUNK]
-            g = np.matmul(b.transpose(0, 2, 1), b, out=products[:len(b)])
-            start = 0
-            for row in range(p):  # row by row: contiguous copies, far faster than a gather
-                out[s:s + _PACK_CHUNK, start:start + p - row] = g[:, row, row:]
-                start += p - row
-
-    run_parts(fill, range(workers))
+    products = np.empty((min(k, _PACK_CHUNK), p, p))  # one buffer for every chunk
+    for s in range(0, k, _PACK_CHUNK):
+        b = blocks[s:s + _PACK_CHUNK]
+        g = np.matmul(b.transpose(0, 2, 1), b, out=products[:len(b)])
+        start = 0
+        for row in range(p):  # row by row: contiguous copies, far faster than a gather
+            out[s:s + _PACK_CHUNK, start:start + p - row] = g[:, row, row:]
+            start += p - row
     return out
 
 
@@ -316,7 +305,6 @@ def convex_relaxation(blocks: np.ndarray, criterion="D", task: np.ndarray | None
     weights = np.clip(w.value, 0.0, None)
     weights /= weights.sum()
     m_w = information(blocks, weights)
-    h, c = crit.sensitivity(m_w)
     return DesignOutcome("relaxation", crit, weights, crit.value(m_w),
                          int(problem.solver_stats.num_iters or 0), str(problem.status), p,
-                         ratio=max(float(c * traces(blocks, h).max()), 1.0))
+                         ratio=max(equivalence_ratio(blocks, m_w, crit), 1.0))
