@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from doe_calib import examples
+from doe_calib import __version__, examples
 from doe_calib.cli import (
     compare,
     compensate,
@@ -45,6 +45,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="doe-calib", description="Robot calibration from "
                                 "multi-marker tracker measurements, and the design of the "
                                 "measurement experiment.", epilog=FORMATS_NOTE)
+    p.add_argument("--version", action="version",
+                   version=f"doe-calib {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     for name, module in COMMANDS.items():
         c = sub.add_parser(name, help=module.HELP, description=module.HELP,

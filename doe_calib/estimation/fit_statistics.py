@@ -103,8 +103,15 @@ class FitStatistics:
                    f"{self.message}")
         return out
 
-    def __str__(self) -> str:
+    def summary(self) -> str:
+        """The statistics as text, one ``name = value`` line each."""
         return "\n".join(self.lines())
+
+    __str__ = summary
+
+    def _repr_pretty_(self, printer, cycle) -> None:
+        """What IPython and Jupyter show: the summary, not the dataclass's fields."""
+        printer.text(self.summary())
 
 
 def misfit_finding(stats: FitStatistics, sigma_mm: float) -> str | None:
