@@ -7,10 +7,11 @@ one module and its name in :data:`COMMANDS`. File formats: ``docs/formats.md``.
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
 import sys
 from pathlib import Path
 
-from doe_calib import __version__, examples
+from doe_calib import examples
 from doe_calib.cli import (
     compare,
     compensate,
@@ -46,7 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
                                 "multi-marker tracker measurements, and the design of the "
                                 "measurement experiment.", epilog=FORMATS_NOTE)
     p.add_argument("--version", action="version",
-                   version=f"doe-calib {__version__}")
+                   version=f"doe-calib {importlib.metadata.version('doe_calib')}")
     sub = p.add_subparsers(dest="command", required=True)
     for name, module in COMMANDS.items():
         c = sub.add_parser(name, help=module.HELP, description=module.HELP,
