@@ -18,9 +18,11 @@ import numpy as np
 
 from doe_calib.errors import ModelError
 
-_REVOLUTE = {"JointModelRX": (1, 0, 0), "JointModelRY": (0, 1, 0), "JointModelRZ": (0, 0, 1),
-             "JointModelRUBX": (1, 0, 0), "JointModelRUBY": (0, 1, 0), "JointModelRUBZ": (0, 0, 1)}
-_PRISMATIC = {"JointModelPX": (1, 0, 0), "JointModelPY": (0, 1, 0), "JointModelPZ": (0, 0, 1)}
+#: Pinocchio joint types a chain may hold: kind, and axis (None: the joint's own, unaligned).
+_TYPES = {**{f"JointModel{r}{a}": ("revolute", a) for r in ("R", "RUB") for a in "XYZ"},
+          **{f"JointModelP{a}": ("prismatic", a) for a in "XYZ"},
+          "JointModelRevoluteUnaligned": ("revolute", None),
+          "JointModelPrismaticUnaligned": ("prismatic", None)}
 _UNBOUNDED = 1e10  # |limit| above this means "no limit" (URDF continuous joints)
 
 
@@ -157,16 +159,10 @@ class Robot:
         translation : ndarray, shape (M, 3)
             Metres.
         """
-        import pinocchio as pin
+        from doe_calib.model.skeleton import chain_poses
 
-        from doe_calib.model.skeleton import chain_model
-
-        model = chain_model(self)
-        data = model.createData()
-        flange = model.getFrameId("flange")
         rot, trans = [], []
-        for pose in np.atleast_2d(np.asarray(q, float)):
-            pin.framesForwardKinematics(model, data, pose)
+        for data, flange in chain_poses(self, q):
             rot.append(data.oMf[flange].rotation.copy())
             trans.append(data.oMf[flange].translation.copy())
         return np.array(rot), np.array(trans)
@@ -301,17 +297,11 @@ def _joint_from_model(model, jid: int, path, body) -> Joint:
     jm = model.joints[jid]
     short = jm.shortname()
     name = model.names[jid]
-    if short in _REVOLUTE:
-        kind, axis = "revolute", _REVOLUTE[short]
-    elif short == "JointModelRevoluteUnaligned":
-        kind, axis = "revolute", tuple(np.asarray(jm.extract().axis, float))
-    elif short in _PRISMATIC:
-        kind, axis = "prismatic", _PRISMATIC[short]
-    elif short == "JointModelPrismaticUnaligned":
-        kind, axis = "prismatic", tuple(np.asarray(jm.extract().axis, float))
-    else:
+    if short not in _TYPES:
         raise ModelError(f"{path}: joint {name!r} is of type {short}; only revolute and prismatic "
                          f"joints are supported")
+    kind, axis = _TYPES[short]
+    axis = np.eye(3)["XYZ".index(axis)] if axis else np.asarray(jm.extract().axis, float)
     lo, hi, speed, effort = -np.inf, np.inf, 0.0, 0.0
     if jm.nq == 1:
         lo = float(model.lowerPositionLimit[jm.idx_q])
