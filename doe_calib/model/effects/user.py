@@ -190,21 +190,18 @@ class UserEffect(Effect):
                              f"return {what} (a list or a casadi SX column)")
         return self._checked(ca.reshape(x, n, 1), s, function)
 
-    def joint_correction(self, s: ChainSymbols):
-        if "joint_correction" not in self.functions:
-            return None
-        out = self._call("joint_correction", s)
+    def _per_joint(self, function: str, s: ChainSymbols, extra=None):
+        """The file's ``function`` (joint correction or deflection): N values, or None."""
+        out = self._call(function, s, extra) if function in self.functions else None
         n = s.robot.n_joints
         return None if out is None else \
-            self._vector(out, n, s, "joint_correction", f"{n} values, one per joint")
+            self._vector(out, n, s, function, f"{n} values, one per joint")
+
+    def joint_correction(self, s: ChainSymbols):
+        return self._per_joint("joint_correction", s)
 
     def deflection(self, s: ChainSymbols, tau: ca.SX):
-        if "deflection" not in self.functions:
-            return None
-        out = self._call("deflection", s, tau)
-        n = s.robot.n_joints
-        return None if out is None else \
-            self._vector(out, n, s, "deflection", f"{n} values, one per joint")
+        return self._per_joint("deflection", s, tau)
 
     def placement(self, s: ChainSymbols, k: int):
         if k != s.robot.n_joints or "flange_correction" not in self.functions:
