@@ -55,10 +55,6 @@ class Cyclic(Effect):
         return [cls(f"j{k + 1}", harmonics=h) for k, j in enumerate(robot.joints)
                 if j.kind == "revolute" for h in (1, 2, 3)]
 
-    @property
-    def harmonics(self) -> int:
-        return self._harmonics
-
     def _revolute(self, robot):
         k = joint_index(robot, self.joint)
         j = robot.joints[k]

@@ -48,11 +48,6 @@ class Thermal(Effect):
         else:
             super().__init__(t_ref=f"{self._t_ref:g}")
 
-    @property
-    def t_ref(self) -> float:
-        """Reference temperature, °C."""
-        return self._t_ref
-
     def parameters(self, robot) -> list:
         return [Parameter("alpha_thermal", self.name, "1/K", 0.0, 1e-5,
                           f"thermal expansion of the links (relative length change per K "
