@@ -321,13 +321,12 @@ def _build(description, compile: bool) -> Model:
                        native=observation is not vm.observation)
     robot, tool, effects, params = (description.robot, description.tool, description.effects,
                                     description.parameters)
-    names = [par.name for par in params]
     q = ca.SX.sym("q", robot.n_joints)
     w = ca.SX.sym("w", 6)
     env = ca.SX.sym("env", len(env_fields(robot.n_joints)))
     p = ca.SX.sym("p", len(params))
     t = ca.SX.sym("t", 3)
-    by_name = {n: p[i] for i, n in enumerate(names)}
+    by_name = {par.name: p[i] for i, par in enumerate(params)}
     rot_f, pos_f = flange_pose(ChainSymbols(robot, q, env, by_name), effects, w)
     rot_b = rotation_vector(p[3:6])
     pos_b = p[0:3]

@@ -308,10 +308,8 @@ def _joint_from_model(model, jid: int, path, body) -> Joint:
         hi = float(model.upperPositionLimit[jm.idx_q])
         lo = -np.inf if abs(lo) > _UNBOUNDED else lo
         hi = np.inf if abs(hi) > _UNBOUNDED else hi
-        speed = float(model.velocityLimit[jm.idx_v])
-        speed = speed if 0 < speed < _UNBOUNDED else 0.0
-        effort = float(model.effortLimit[jm.idx_v])
-        effort = effort if 0 < effort < _UNBOUNDED else 0.0
+        speed, effort = (float(v) if 0 < v < _UNBOUNDED else 0.0
+                         for v in (model.velocityLimit[jm.idx_v], model.effortLimit[jm.idx_v]))
     placement = tuple(model.jointPlacements[jid].homogeneous.ravel())
     return Joint(name, kind, tuple(float(a) for a in axis), placement, lo, hi,
                  float(body.mass), tuple(float(c) for c in body.lever), speed, effort)
