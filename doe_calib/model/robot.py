@@ -259,19 +259,17 @@ def _flange_frame(model, flange, path) -> int:
 
     bodies = [i for i, f in enumerate(model.frames) if f.type == pin.FrameType.BODY]
     if flange is not None:
-        for i in bodies:
-            if model.frames[i].name == flange:
-                return i
+        named = [i for i in bodies if model.frames[i].name == flange]
+        if named:
+            return named[0]
         names = ", ".join(model.frames[i].name for i in bodies)
         raise ModelError(f"{path}: no link named {flange!r}; links are: {names}")
-    # Default: the deepest link, provided the actuated joints form one chain.
-    children = {}
-    for j in range(1, model.njoints):
-        children.setdefault(model.parents[j], []).append(j)
-    if any(len(c) > 1 for c in children.values()):
+    # Default: the deepest link, provided the actuated joints form one chain (no joint is the
+    # parent of two).
+    parents = list(model.parents)[1:]
+    if len(set(parents)) < len(parents):
         raise ModelError(f"{path}: the robot is a tree, not a single chain; name the flange link "
                          f"(--flange LINK)")
-
     # Frames are stored in URDF traversal order: the last body on the last joint is the tip.
     return max(bodies, key=lambda i: (model.frames[i].parentJoint, i))
 
