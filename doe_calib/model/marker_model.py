@@ -39,12 +39,9 @@ def base_parameters() -> list:
 
 def marker_parameters(tool) -> list:
     """Marker positions in the flange frame (m), nominal from the tool file."""
-    out = []
-    for name, pos in zip(tool.names, tool.positions):
-        out += [Parameter(f"marker_{name}_{a}", "markers", "m", float(v), 1e-3,
-                          f"marker {name} position {a} (flange frame)")
-                for a, v in zip("xyz", pos)]
-    return out
+    return [Parameter(f"marker_{name}_{a}", "markers", "m", float(v), 1e-3,
+                      f"marker {name} position {a} (flange frame)")
+            for name, pos in zip(tool.names, tool.positions) for a, v in zip("xyz", pos)]
 
 
 class _Described:

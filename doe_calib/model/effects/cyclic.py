@@ -65,13 +65,10 @@ class Cyclic(Effect):
 
     def parameters(self, robot) -> list:
         _, name = self._revolute(robot)
-        out = []
-        for h in range(1, self._harmonics + 1):
-            out += [Parameter(f"cyc_{name}_{f[0]}{h}", self.name, "rad", 0.0, 1e-4,
-                              f"cyclic error of joint {name}: {f}({h}·q) term",
-                              plausible=(-LIMIT, LIMIT))
-                    for f in ("sin", "cos")]
-        return out
+        return [Parameter(f"cyc_{name}_{f[0]}{h}", self.name, "rad", 0.0, 1e-4,
+                          f"cyclic error of joint {name}: {f}({h}·q) term",
+                          plausible=(-LIMIT, LIMIT))
+                for h in range(1, self._harmonics + 1) for f in ("sin", "cos")]
 
     def joint_correction(self, s: ChainSymbols):
         k, name = self._revolute(s.robot)
