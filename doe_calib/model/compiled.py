@@ -92,13 +92,12 @@ def load_function(function: ca.Function, path: Path) -> ca.Function:
     RuntimeError
         The library cannot be loaded or holds no such Function.
     """
+    def signature(f):
+        return (f.name_in(), f.name_out(), [f.sparsity_in(i) for i in range(f.n_in())],
+                [f.sparsity_out(i) for i in range(f.n_out())])
+
     loaded = ca.external(function.name(), str(path))
-    same = (loaded.name_in() == function.name_in() and loaded.name_out() == function.name_out()
-            and all(loaded.sparsity_in(i) == function.sparsity_in(i)
-                    for i in range(function.n_in()))
-            and all(loaded.sparsity_out(i) == function.sparsity_out(i)
-                    for i in range(function.n_out())))
-    if not same:
+    if signature(loaded) != signature(function):
         raise RuntimeError(f"{path} does not hold a function matching {function}")
     return loaded
 
