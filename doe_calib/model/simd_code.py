@@ -86,12 +86,17 @@ typedef double vec __attribute__((vector_size({bytes})));
 static const double zeros[{zeros}];
 """
 
+#: An entry point; it refuses to run AVX code on a CPU without it (a cache shared between
+#: machines).
 _ENTRY = """\
 EXPORT int {entry}(const double** arg, double** res, casadi_int* iw, double* w, int mem) {{
   const double *a[{n_a}];
   double *r[{n_r}];
   vec W[{n_w}];
-{guard}{setup}{calls}
+#if defined(__AVX__) && defined(__GNUC__)
+  if (!__builtin_cpu_supports("avx")) return 1;
+#endif
+{setup}{calls}
   CLEAN_UPPER();
   return 0;
 }}
@@ -119,12 +124,6 @@ EXPORT int {entry}_work(casadi_int* sz_arg, casadi_int* sz_res, casadi_int* sz_i
   *sz_arg = {n_in}; *sz_res = {n_out}; *sz_iw = 0; *sz_w = {sz_w};
   return 0;
 }}
-"""
-#: Refuse to run AVX code on a CPU without it (a cache shared between machines).
-_GUARD = """\
-#if defined(__AVX__) && defined(__GNUC__)
-  if (!__builtin_cpu_supports("avx")) return 1;
-#endif
 """
 
 
@@ -242,9 +241,8 @@ def simd_source(function: ca.Function, lanes: int = 2) -> str | None:
                              f"{{{rows}, {cols * times}, 1}};")
                 sparsity.append((kind, f"case {i}: return s_{entry}_{kind}{i};"))
         parts.append(_ENTRY.format(
-            entry=entry, n_in=n_in, n_out=n_out, n_a=lanes * max(n_in, 1),
+            entry=entry, n_in=n_in, n_out=n_out, n_a=lanes * max(n_in, 1), sz_w=lanes * total,
             n_r=lanes * max(n_out, 1), setup="".join(setup), n_w=n_w, calls=calls,
-            guard=_GUARD, sz_w=lanes * total,
             names_in=" ".join(f'case {i}: return "{function.name_in(i)}";' for i in range(n_in)),
             names_out=" ".join(f'case {i}: return "{function.name_out(i)}";'
                                for i in range(n_out)),
