@@ -92,17 +92,15 @@ class Tool:
         """
         path = Path(path)
         try:
-            text = path.read_text(encoding="utf-8")
+            node = yaml.compose(path.read_text(encoding="utf-8"))
         except OSError as exc:
             raise DataError(f"cannot read the tool file: {exc.strerror}", path) from exc
-        try:
-            node = yaml.compose(text)
         except yaml.YAMLError as exc:
             mark = getattr(exc, "problem_mark", None)
             raise DataError(f"not valid YAML: {getattr(exc, 'problem', exc)}", path,
                             mark.line + 1 if mark else None,
                             mark.column + 1 if mark else None) from exc
-        if node is None or not isinstance(node, yaml.MappingNode):
+        if not isinstance(node, yaml.MappingNode):  # None: an empty file
             raise DataError("expected a mapping with a 'markers' entry", path, 1, 1)
         top = {k.value: v for k, v in node.value}
         if "markers" not in top or not isinstance(top["markers"], yaml.MappingNode):
