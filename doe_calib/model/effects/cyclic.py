@@ -23,7 +23,7 @@ import casadi as ca
 import numpy as np
 
 from doe_calib.errors import ModelError
-from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
+from doe_calib.model.effects.base import ChainSymbols, Effect, at_joint, joint_index
 from doe_calib.model.parameters import Parameter
 
 #: Largest plausible size of one cyclic-error term, rad (2°): a transmission's cyclic error
@@ -77,6 +77,4 @@ class Cyclic(Effect):
         for h in range(1, self._harmonics + 1):
             dq = dq + s.p[f"cyc_{name}_s{h}"] * ca.sin(h * q) \
                 + s.p[f"cyc_{name}_c{h}"] * ca.cos(h * q)
-        out = ca.SX.zeros(s.robot.n_joints, 1)
-        out[k] = dq
-        return out
+        return at_joint(s, k, dq)
