@@ -93,10 +93,7 @@ class Backlash(Effect):
         if mode not in MODES:
             raise ModelError(f"backlash mode {mode!r}: use one of {', '.join(MODES)}")
         self._mode = mode
-        if mode == MODES[0]:
-            super().__init__(joint)
-        else:
-            super().__init__(joint, mode=mode)
+        super().__init__(joint, **({} if mode == MODES[0] else {"mode": mode}))
 
     @classmethod
     def candidates(cls, robot, configurations=None) -> list:
