@@ -72,16 +72,15 @@ def _source(function: ca.Function) -> str:
     return gen.dump()
 
 
-def _library_path(name: str, source: str, compiler: str, flags) -> Path:
+def library_path(name: str, source: str, flags=FLAGS, compiler=None) -> Path | None:
+    """Where :func:`compile_functions` keeps the library of ``source`` made by ``compiler``
+    (default :func:`find_compiler`; None: no compiler)."""
+    compiler = compiler or find_compiler()
+    if compiler is None:
+        return None
     key = hashlib.sha256("\0".join([source, _compiler_identity(compiler), *flags,
                                     sys.platform]).encode()).hexdigest()
     return cache_dir() / f"{name}-{key[:24]}{_SUFFIX}"
-
-
-def library_path(name: str, source: str, flags=FLAGS) -> Path | None:
-    """Where :func:`compile_functions` keeps the library of ``source`` (None: no compiler)."""
-    compiler = find_compiler()
-    return None if compiler is None else _library_path(name, source, compiler, flags)
 
 
 def load_function(function: ca.Function, path: Path) -> ca.Function:
@@ -93,13 +92,12 @@ def load_function(function: ca.Function, path: Path) -> ca.Function:
     RuntimeError
         The library cannot be loaded or holds no such Function.
     """
+    def signature(f):
+        return (f.name_in(), f.name_out(), [f.sparsity_in(i) for i in range(f.n_in())],
+                [f.sparsity_out(i) for i in range(f.n_out())])
+
     loaded = ca.external(function.name(), str(path))
-    same = (loaded.name_in() == function.name_in() and loaded.name_out() == function.name_out()
-            and all(loaded.sparsity_in(i) == function.sparsity_in(i)
-                    for i in range(function.n_in()))
-            and all(loaded.sparsity_out(i) == function.sparsity_out(i)
-                    for i in range(function.n_out())))
-    if not same:
+    if signature(loaded) != signature(function):
         raise RuntimeError(f"{path} does not hold a function matching {function}")
     return loaded
 
@@ -166,7 +164,7 @@ def compile_functions(functions, flags=FLAGS, sources=None) -> list:
         except RuntimeError as err:
             _fail(f, f"CasADi cannot generate C code for it ({_first_line(err)})")
             continue
-        path = _library_path(f.name(), source, compiler, own_flags)
+        path = library_path(f.name(), source, own_flags, compiler)
         if path.exists():
             try:
                 out[i] = load_function(f, path)
@@ -203,14 +201,12 @@ def _build_all(pending, compiler):
         return [(i, f, path, f"the cache directory {cache_dir()} is not writable ({err})")
                 for i, f, _, path, _ in pending]
     with work as tmp:
-        queue = list(pending)
         running = []
         try:
-            while queue or running:
-                while queue and len(running) < jobs:
-                    i, f, source, path, flags = queue.pop(0)
-                    running.append(_start(i, f, source, path, compiler, flags, Path(tmp)))
-                results.append(_finish(*running.pop(0)))
+            for k, (i, f, source, path, flags) in enumerate(pending):
+                running.append(_start(i, f, source, path, compiler, flags, Path(tmp)))
+                while running and (len(running) >= jobs or k == len(pending) - 1):
+                    results.append(_finish(*running.pop(0)))
         finally:  # interrupted: stop the compilers still running
             for job in running:
                 if not isinstance(job[4], OSError):

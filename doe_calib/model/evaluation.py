@@ -37,11 +37,8 @@ class _Batch:
         # plain map takes every input per call (the shared ones' buffers hold a copy per call):
         # a map that repeats them itself is a wrapper built in time and memory ∝ M (1.4 s for
         # 33 000 configurations), the plain one at once
-        count = _lanes_of(lanes, function, shared) if lanes is not None and m > 1 else 1
-        if count > 1:
-            self.unit, calls = lanes, -(-m // count)
-        else:
-            self.unit, calls = function, m
+        self.unit = lanes if lanes is not None and m > 1 else function
+        calls = -(-m // self.unit.size_in(0)[1])  # q is N × L on L lanes
         self.mapped = self.unit.map(calls, "serial") if calls > 1 else self.unit
         self.m, self.shared = m, frozenset(shared)
         self.args = [np.zeros(self.mapped.size_in(i)[::-1]) for i in range(self.mapped.n_in())]
@@ -68,18 +65,6 @@ class _Batch:
                 for r, (rows, cols) in zip(self.res, self.shapes)]
 
 
-def _lanes_of(lanes: ca.Function, function: ca.Function, shared: tuple) -> int:
-    """L if ``lanes`` is ``function`` on L configurations with these ``shared`` inputs, else 1."""
-    varying = [i for i in range(function.n_in()) if i not in shared]
-    if lanes.n_in() != function.n_in() or not varying:
-        return 1
-    count = lanes.size_in(varying[0])[1] // max(function.size_in(varying[0])[1], 1)
-    same = all(lanes.size_in(i) == (function.size_in(i)[0],
-                                    function.size_in(i)[1] * (1 if i in shared else count))
-               for i in range(function.n_in()))
-    return count if same else 1
-
-
 class Workspace:
     """Scratch memory for evaluating Functions: mapped Functions and their buffers.
 
@@ -91,8 +76,7 @@ class Workspace:
     one, each thread gets its own (:func:`thread_workspace`).
     """
 
-    def __init__(self, max_batches: int = _CACHE_SIZE, max_bytes: int = _CACHE_BYTES):
-        self.max_batches, self.max_bytes = max_batches, max_bytes
+    def __init__(self):
         self._batches = OrderedDict()
 
     def batch(self, function: ca.Function, m: int, shared: tuple, lanes=None) -> _Batch:
@@ -105,8 +89,8 @@ class Workspace:
             return hit[2]
         batch = _Batch(function, m, shared, lanes)
         self._batches[key] = (function, lanes, batch)
-        while len(self._batches) > 1 and (len(self._batches) > self.max_batches or
-                                          self.nbytes > self.max_bytes):
+        while len(self._batches) > 1 and (len(self._batches) > _CACHE_SIZE or
+                                          self.nbytes > _CACHE_BYTES):
             self._batches.popitem(last=False)
         return batch
 

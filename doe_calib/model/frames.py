@@ -30,17 +30,16 @@ CONVENTIONS = {
 }
 
 
-def fixed_frames(path) -> dict:
-    """Every frame of the URDF that does not move with a joint: name → 4×4 placement in the root.
+def fixed_frames(model) -> dict:
+    """Every frame that does not move with a joint: name → 4×4 placement in the root.
 
     Parameters
     ----------
-    path : path-like
-        The URDF (Pinocchio reads it).
+    model : pinocchio.Model
+        Read from the URDF.
     """
     import pinocchio as pin
 
-    model = pin.buildModelFromUrdf(str(path))
     data = model.createData()
     pin.framesForwardKinematics(model, data, pin.neutral(model))
     return {f.name: data.oMf[i].homogeneous.copy() for i, f in enumerate(model.frames)
@@ -70,21 +69,20 @@ def frame_placement(robot, name: str) -> np.ndarray:
     >>> frame_placement(robot, "base")[:3, :3].round(6)      # doctest: +SKIP
     array([[-1., -0.,  0.], [ 0., -1.,  0.], [ 0.,  0.,  1.]])
     """
-    urdf = bool(robot.source) and Path(robot.source).is_file()
-    frames = fixed_frames(robot.source) if urdf else {}
+    model = None
+    if robot.source and Path(robot.source).is_file():
+        import pinocchio as pin
+
+        model = pin.buildModelFromUrdf(str(robot.source))
+    frames = {} if model is None else fixed_frames(model)
     if name in frames:
         return frames[name]
     if name in CONVENTIONS:
         return CONVENTIONS[name].copy()
     moving = ""
-    if urdf:
-        import pinocchio as pin
-
-        model = pin.buildModelFromUrdf(str(robot.source))
-        if model.existFrame(name):
-            joint = model.names[model.frames[model.getFrameId(name)].parentJoint]
-            moving = (f"; {name!r} moves with joint {joint}: a file's frame must be fixed to "
-                      "the base")
+    if model is not None and model.existFrame(name):
+        joint = model.names[model.frames[model.getFrameId(name)].parentJoint]
+        moving = f"; {name!r} moves with joint {joint}: a file's frame must be fixed to the base"
     known = sorted(set(frames) | set(CONVENTIONS))
     raise ModelError(f"no fixed frame {name!r} in {robot.source or robot.name}{moving}; frames "
                      f"there are {', '.join(known)}")

@@ -54,14 +54,15 @@ def _motion(joint, x):
 
 
 def _forward(robot, placements, flange, x):
-    """Joint frames (before motion) and flange pose for joint coordinates x."""
+    """Joint frames before and after their motion, and the flange pose, for joint coordinates x."""
     frame = (ca.SX.eye(3), ca.SX.zeros(3, 1))
-    joints = []
+    before, after = [], []
     for k, joint in enumerate(robot.joints):
         frame = _compose(frame, placements[k])
-        joints.append(frame)
+        before.append(frame)
         frame = _compose(frame, _motion(joint, x[k]))
-    return joints, _compose(frame, flange)
+        after.append(frame)
+    return before, after, _compose(frame, flange)
 
 
 def joint_torques(robot, joint_frames, flange_position, wrench) -> ca.SX:
@@ -92,14 +93,12 @@ def gravity_torques(robot, q) -> ca.SX:
     torque the load exerts, i.e. minus Pinocchio's ``computeGeneralizedGravity``.
     """
     g = ca.DM(GRAVITY)
-    frame = (ca.SX.eye(3), ca.SX.zeros(3, 1))
-    axes, origins, coms = [], [], []
-    for k, joint in enumerate(robot.joints):
-        frame = _compose(frame, _constant(joint.placement_matrix))
-        axes.append(frame[0] @ ca.DM(np.asarray(joint.axis, float).reshape(3, 1)))
-        origins.append(frame[1])
-        frame = _compose(frame, _motion(joint, q[k]))
-        coms.append(frame[0] @ ca.DM(np.asarray(joint.com, float).reshape(3, 1)) + frame[1])
+    before, after, _ = _nominal_forward(robot, q)
+    origins = [origin for _, origin in before]
+    axes = [rot @ ca.DM(np.asarray(j.axis, float).reshape(3, 1))
+            for j, (rot, _) in zip(robot.joints, before)]
+    coms = [rot @ ca.DM(np.asarray(j.com, float).reshape(3, 1)) + origin
+            for j, (rot, origin) in zip(robot.joints, after)]
     tau = []
     for k, joint in enumerate(robot.joints):
         weights = [(robot.joints[i].mass, coms[i]) for i in range(k, robot.n_joints)]
@@ -136,7 +135,7 @@ def flange_pose(s: ChainSymbols, effects, wrench: ca.SX):
         tau = nominal_torques(robot, s.q, wrench)
         for e in deflecting:
             x = x + e.deflection(s, tau)
-    return _forward(robot, placements, flange, x)[1]
+    return _forward(robot, placements, flange, x)[2]
 
 
 def nominal_torques(robot, q, wrench) -> ca.SX:
@@ -151,12 +150,13 @@ def nominal_torques(robot, q, wrench) -> ca.SX:
     whose placements are off by 2 mm / 0.3° (measured against a simulation with
     the true chain's torques), far below a tracker's noise.
     """
-    joints, (_, p_f) = _nominal_forward(robot, q)
+    joints, _, (_, p_f) = _nominal_forward(robot, q)
     return joint_torques(robot, joints, p_f, wrench)
 
 
 def _nominal_forward(robot, q):
-    """Joint frames and flange pose ``(R, t)`` of the nominal chain at ``q``, SX."""
+    """Joint frames before and after their motion and flange pose ``(R, t)`` of the nominal
+    chain at ``q``, SX."""
     placements = [_constant(j.placement_matrix) for j in robot.joints]
     flange = _constant(np.array(robot.flange_placement, float).reshape(4, 4))
     return _forward(robot, placements, flange, q)
@@ -172,7 +172,7 @@ def payload_torque_function(robot) -> ca.Function:
     """``tau(q, m, c)``: joint torques (N·m or N) of a mass ``m`` (kg) hung at ``c`` (flange
     frame, m), nominal chain, gravity :data:`GRAVITY`: τ = J_θᵀ F of its wrench at the flange."""
     q, m, c = ca.SX.sym("q", robot.n_joints), ca.SX.sym("m"), ca.SX.sym("c", 3)
-    joints, (rot, p_f) = _nominal_forward(robot, q)
+    joints, _, (rot, p_f) = _nominal_forward(robot, q)
     f = m * ca.DM(GRAVITY)
     wrench = ca.vertcat(f, ca.cross(rot @ c, f))
     return ca.Function("tau_payload", [q, m, c], [joint_torques(robot, joints, p_f, wrench)],

@@ -39,12 +39,9 @@ def base_parameters() -> list:
 
 def marker_parameters(tool) -> list:
     """Marker positions in the flange frame (m), nominal from the tool file."""
-    out = []
-    for name, pos in zip(tool.names, tool.positions):
-        out += [Parameter(f"marker_{name}_{a}", "markers", "m", float(v), 1e-3,
-                          f"marker {name} position {a} (flange frame)")
-                for a, v in zip("xyz", pos)]
-    return out
+    return [Parameter(f"marker_{name}_{a}", "markers", "m", float(v), 1e-3,
+                      f"marker {name} position {a} (flange frame)")
+            for name, pos in zip(tool.names, tool.positions) for a, v in zip("xyz", pos)]
 
 
 class _Described:
@@ -321,13 +318,12 @@ def _build(description, compile: bool) -> Model:
                        native=observation is not vm.observation)
     robot, tool, effects, params = (description.robot, description.tool, description.effects,
                                     description.parameters)
-    names = [par.name for par in params]
     q = ca.SX.sym("q", robot.n_joints)
     w = ca.SX.sym("w", 6)
     env = ca.SX.sym("env", len(env_fields(robot.n_joints)))
     p = ca.SX.sym("p", len(params))
     t = ca.SX.sym("t", 3)
-    by_name = {n: p[i] for i, n in enumerate(names)}
+    by_name = {par.name: p[i] for i, par in enumerate(params)}
     rot_f, pos_f = flange_pose(ChainSymbols(robot, q, env, by_name), effects, w)
     rot_b = rotation_vector(p[3:6])
     pos_b = p[0:3]

@@ -18,9 +18,11 @@ import numpy as np
 
 from doe_calib.errors import ModelError
 
-_REVOLUTE = {"JointModelRX": (1, 0, 0), "JointModelRY": (0, 1, 0), "JointModelRZ": (0, 0, 1),
-             "JointModelRUBX": (1, 0, 0), "JointModelRUBY": (0, 1, 0), "JointModelRUBZ": (0, 0, 1)}
-_PRISMATIC = {"JointModelPX": (1, 0, 0), "JointModelPY": (0, 1, 0), "JointModelPZ": (0, 0, 1)}
+#: Pinocchio joint types a chain may hold: kind, and axis (None: the joint's own, unaligned).
+_TYPES = {**{f"JointModel{r}{a}": ("revolute", a) for r in ("R", "RUB") for a in "XYZ"},
+          **{f"JointModelP{a}": ("prismatic", a) for a in "XYZ"},
+          "JointModelRevoluteUnaligned": ("revolute", None),
+          "JointModelPrismaticUnaligned": ("prismatic", None)}
 _UNBOUNDED = 1e10  # |limit| above this means "no limit" (URDF continuous joints)
 
 
@@ -157,16 +159,10 @@ class Robot:
         translation : ndarray, shape (M, 3)
             Metres.
         """
-        import pinocchio as pin
+        from doe_calib.model.skeleton import chain_poses
 
-        from doe_calib.model.skeleton import chain_model
-
-        model = chain_model(self)
-        data = model.createData()
-        flange = model.getFrameId("flange")
         rot, trans = [], []
-        for pose in np.atleast_2d(np.asarray(q, float)):
-            pin.framesForwardKinematics(model, data, pose)
+        for data, flange in chain_poses(self, q):
             rot.append(data.oMf[flange].rotation.copy())
             trans.append(data.oMf[flange].translation.copy())
         return np.array(rot), np.array(trans)
@@ -263,19 +259,17 @@ def _flange_frame(model, flange, path) -> int:
 
     bodies = [i for i, f in enumerate(model.frames) if f.type == pin.FrameType.BODY]
     if flange is not None:
-        for i in bodies:
-            if model.frames[i].name == flange:
-                return i
+        named = [i for i in bodies if model.frames[i].name == flange]
+        if named:
+            return named[0]
         names = ", ".join(model.frames[i].name for i in bodies)
         raise ModelError(f"{path}: no link named {flange!r}; links are: {names}")
-    # Default: the deepest link, provided the actuated joints form one chain.
-    children = {}
-    for j in range(1, model.njoints):
-        children.setdefault(model.parents[j], []).append(j)
-    if any(len(c) > 1 for c in children.values()):
+    # Default: the deepest link, provided the actuated joints form one chain (no joint is the
+    # parent of two).
+    parents = list(model.parents)[1:]
+    if len(set(parents)) < len(parents):
         raise ModelError(f"{path}: the robot is a tree, not a single chain; name the flange link "
                          f"(--flange LINK)")
-
     # Frames are stored in URDF traversal order: the last body on the last joint is the tip.
     return max(bodies, key=lambda i: (model.frames[i].parentJoint, i))
 
@@ -301,27 +295,19 @@ def _joint_from_model(model, jid: int, path, body) -> Joint:
     jm = model.joints[jid]
     short = jm.shortname()
     name = model.names[jid]
-    if short in _REVOLUTE:
-        kind, axis = "revolute", _REVOLUTE[short]
-    elif short == "JointModelRevoluteUnaligned":
-        kind, axis = "revolute", tuple(np.asarray(jm.extract().axis, float))
-    elif short in _PRISMATIC:
-        kind, axis = "prismatic", _PRISMATIC[short]
-    elif short == "JointModelPrismaticUnaligned":
-        kind, axis = "prismatic", tuple(np.asarray(jm.extract().axis, float))
-    else:
+    if short not in _TYPES:
         raise ModelError(f"{path}: joint {name!r} is of type {short}; only revolute and prismatic "
                          f"joints are supported")
+    kind, axis = _TYPES[short]
+    axis = np.eye(3)["XYZ".index(axis)] if axis else np.asarray(jm.extract().axis, float)
     lo, hi, speed, effort = -np.inf, np.inf, 0.0, 0.0
     if jm.nq == 1:
         lo = float(model.lowerPositionLimit[jm.idx_q])
         hi = float(model.upperPositionLimit[jm.idx_q])
         lo = -np.inf if abs(lo) > _UNBOUNDED else lo
         hi = np.inf if abs(hi) > _UNBOUNDED else hi
-        speed = float(model.velocityLimit[jm.idx_v])
-        speed = speed if 0 < speed < _UNBOUNDED else 0.0
-        effort = float(model.effortLimit[jm.idx_v])
-        effort = effort if 0 < effort < _UNBOUNDED else 0.0
+        speed, effort = (float(v) if 0 < v < _UNBOUNDED else 0.0
+                         for v in (model.velocityLimit[jm.idx_v], model.effortLimit[jm.idx_v]))
     placement = tuple(model.jointPlacements[jid].homogeneous.ravel())
     return Joint(name, kind, tuple(float(a) for a in axis), placement, lo, hi,
                  float(body.mass), tuple(float(c) for c in body.lever), speed, effort)

@@ -21,9 +21,9 @@ The source holds two entry points, loaded with ``casadi.external``:
 ``<name>``
     One configuration; the Function's own name, inputs and outputs.
 ``<name>_lanes``
-    L configurations (L = the lanes): every input not in ``shared`` and
+    L configurations (L = the lanes): every input but the parameters (:data:`SHARED`) and
     every output L times as wide (side by side), the signature of
-    ``function.map(L)`` with ``shared`` inputs not repeated (:func:`lanes_signature`).
+    ``function.map(L)`` with the parameters not repeated (:func:`lanes_signature`).
 """
 from __future__ import annotations
 
@@ -37,11 +37,16 @@ from doe_calib.model import compiled
 
 #: Statements per C function (see ``_body``).
 PART = 1000
+#: The inputs every configuration shares: the parameters ``p``.
+SHARED = (3,)
 #: Most bytes of work vectors on the stack (a thread's stack may be 512 kB); a Function
 #: needing more keeps CasADi's code.
 MAX_WORK_BYTES = 128 * 1024
 
-_BINARY = {ca.OP_ADD: "+", ca.OP_SUB: "-", ca.OP_MUL: "*", ca.OP_DIV: "/"}
+#: C for the instructions computed on whole vectors (``one``: a vector of ones).
+_VECTOR = {ca.OP_ADD: "{x} + {y}", ca.OP_SUB: "{x} - {y}", ca.OP_MUL: "{x} * {y}",
+           ca.OP_DIV: "{x} / {y}", ca.OP_NEG: "-{x}", ca.OP_SQ: "{x} * {x}",
+           ca.OP_TWICE: "{x} + {x}", ca.OP_INV: "{one} / {x}"}
 #: Scalar C for the instructions computed lane by lane, as CasADi's code generator writes it.
 _LANEWISE = {
     **{getattr(ca, f"OP_{f.upper()}"): f + "({x})" for f in (
@@ -81,12 +86,17 @@ typedef double vec __attribute__((vector_size({bytes})));
 static const double zeros[{zeros}];
 """
 
+#: An entry point; it refuses to run AVX code on a CPU without it (a cache shared between
+#: machines).
 _ENTRY = """\
 EXPORT int {entry}(const double** arg, double** res, casadi_int* iw, double* w, int mem) {{
   const double *a[{n_a}];
   double *r[{n_r}];
   vec W[{n_w}];
-{guard}{setup}{calls}
+#if defined(__AVX__) && defined(__GNUC__)
+  if (!__builtin_cpu_supports("avx")) return 1;
+#endif
+{setup}{calls}
   CLEAN_UPPER();
   return 0;
 }}
@@ -115,12 +125,6 @@ EXPORT int {entry}_work(casadi_int* sz_arg, casadi_int* sz_res, casadi_int* sz_i
   return 0;
 }}
 """
-#: Refuse to run AVX code on a CPU without it (a cache shared between machines).
-_GUARD = """\
-#if defined(__AVX__) && defined(__GNUC__)
-  if (!__builtin_cpu_supports("avx")) return 1;
-#endif
-"""
 
 
 @lru_cache(maxsize=1)
@@ -144,17 +148,16 @@ def flags(lanes: int) -> tuple:
     return (*compiled.FLAGS, "-ffp-contract=off", *(("-mavx",) if lanes == 4 else ()))
 
 
-def lanes_signature(function: ca.Function, lanes: int, shared=(3,)) -> ca.Function:
-    """``function`` mapped over ``lanes`` configurations, ``shared`` inputs not repeated.
+def lanes_signature(function: ca.Function, lanes: int) -> ca.Function:
+    """``function`` mapped over ``lanes`` configurations, :data:`SHARED` inputs not repeated.
 
     The reference the ``<name>_lanes`` entry point is checked against when
     loaded, and what it computes.
     """
-    return function.map(f"{function.name()}_lanes", "serial", lanes, list(shared), [])
+    return function.map(f"{function.name()}_lanes", "serial", lanes, list(SHARED), [])
 
 
-def load_lanes(function: ca.Function, source: str, lanes: int,
-               shared=(3,)) -> ca.Function | None:
+def load_lanes(function: ca.Function, source: str, lanes: int) -> ca.Function | None:
     """The ``<name>_lanes`` Function of ``source`` once :func:`~doe_calib.model.compiled.\
 compile_functions` has compiled it (with :func:`flags`); None when its library is not there.
     """
@@ -162,20 +165,18 @@ compile_functions` has compiled it (with :func:`flags`); None when its library i
     if path is None or not path.exists():
         return None
     try:
-        return compiled.load_function(lanes_signature(function, lanes, shared), path)
+        return compiled.load_function(lanes_signature(function, lanes), path)
     except RuntimeError:
         return None
 
 
-def simd_source(function: ca.Function, shared=(3,), lanes: int = 2) -> str | None:
+def simd_source(function: ca.Function, lanes: int = 2) -> str | None:
     """C source of ``function`` on ``lanes`` SIMD lanes, or None when it cannot be written.
 
     Parameters
     ----------
     function : casadi.Function
         An SX Function with dense inputs and outputs (a model's ``observation``).
-    shared : tuple of int
-        Inputs the configurations share (the parameters ``p``: input 3).
     lanes : int
         2, or 4 (AVX, compiled with ``-mavx``: :func:`simd_lanes`, :func:`flags`).
 
@@ -222,7 +223,7 @@ def simd_source(function: ca.Function, shared=(3,), lanes: int = 2) -> str | Non
         setup = []
         for lane in range(lanes):
             for i in range(n_in):
-                step = nnz_in[i] * lane if wide and i not in shared else 0
+                step = nnz_in[i] * lane if wide and i not in SHARED else 0
                 setup.append(f"  a[{lane * n_in + i}] = arg[{i}] ? arg[{i}] + {step} : zeros;\n")
             for i in range(n_out):
                 scratch = f"w + {lanes * offsets[i] + lane * nnz_out[i]}"
@@ -235,14 +236,13 @@ def simd_source(function: ca.Function, shared=(3,), lanes: int = 2) -> str | Non
                                   ("out", n_out, function.size_out)):
             for i in range(count):
                 rows, cols = size(i)
-                times = lanes if wide and not (kind == "in" and i in shared) else 1
+                times = lanes if wide and not (kind == "in" and i in SHARED) else 1
                 parts.append(f"static const casadi_int s_{entry}_{kind}{i}[3] = "
                              f"{{{rows}, {cols * times}, 1}};")
                 sparsity.append((kind, f"case {i}: return s_{entry}_{kind}{i};"))
         parts.append(_ENTRY.format(
-            entry=entry, n_in=n_in, n_out=n_out, n_a=lanes * max(n_in, 1),
+            entry=entry, n_in=n_in, n_out=n_out, n_a=lanes * max(n_in, 1), sz_w=lanes * total,
             n_r=lanes * max(n_out, 1), setup="".join(setup), n_w=n_w, calls=calls,
-            guard=_GUARD, sz_w=lanes * total,
             names_in=" ".join(f'case {i}: return "{function.name_in(i)}";' for i in range(n_in)),
             names_out=" ".join(f'case {i}: return "{function.name_out(i)}";'
                                for i in range(n_out)),
@@ -295,21 +295,12 @@ def _statement(function: ca.Function, k: int, lanes: int, n_in: int, n_out: int)
     if op == ca.OP_CONST:
         return f"  W[{out[0]}] = {_constant(float(function.instruction_constant(k)), lanes)};"
     x = f"W[{ins[0]}]" if ins else ""
-    if op in _BINARY:
-        expr = f"{x} {_BINARY[op]} W[{ins[1]}]"
-    elif op == ca.OP_NEG:
-        expr = f"-{x}"
-    elif op == ca.OP_SQ:
-        expr = f"{x} * {x}"
-    elif op == ca.OP_TWICE:
-        expr = f"{x} + {x}"
-    elif op == ca.OP_INV:
-        expr = f"{_constant(1.0, lanes)} / {x}"
+    y = f"W[{ins[1]}]" if len(ins) > 1 else ""
+    if op in _VECTOR:
+        expr = _VECTOR[op].format(x=x, y=y, one=_constant(1.0, lanes))
     elif op in _LANEWISE:
-        expr = "(vec){" + ", ".join(
-            _LANEWISE[op].format(x=f"{x}[{lane}]",
-                                 y=f"W[{ins[1]}][{lane}]" if len(ins) > 1 else "")
-            for lane in range(lanes)) + "}"
+        expr = "(vec){" + ", ".join(_LANEWISE[op].format(x=f"{x}[{lane}]", y=f"{y}[{lane}]")
+                                    for lane in range(lanes)) + "}"
     else:
         return None
     clean = "CLEAN_UPPER(); " if op in _LANEWISE else ""

@@ -45,9 +45,9 @@ def simulate(model, values, configurations, sigma: float, rng=None, markers=None
     config = np.repeat(np.arange(m), len(idx))
     marker = np.tile(idx, m)
     xyz = x[config, marker] + sigma * rng.standard_normal((len(config), 3))
-    return Measurements(configurations, config, marker, xyz, np.full(len(config), sigma)
-                        if sigma > 0 else np.full(len(config), 1e-6), np.zeros(len(config), int),
-                        source)
+    return Measurements(configurations, config, marker, xyz,
+                        np.full(len(config), sigma if sigma > 0 else 1e-6),
+                        np.zeros(len(config), int), source)
 
 
 def random_configurations(robot, m: int, rng=None, margin: float = 0.05):

@@ -32,6 +32,19 @@ def chain_model(robot):
     return model
 
 
+def chain_poses(robot, q):
+    """Pinocchio's data of the robot's chain (:func:`chain_model`) at each pose of ``q``
+    ((M, N), rad or m), with the flange frame's id: (data, flange) M times, one data reused."""
+    import pinocchio as pin
+
+    model = chain_model(robot)
+    data = model.createData()
+    flange = model.getFrameId("flange")
+    for pose in np.atleast_2d(np.asarray(q, float)):
+        pin.framesForwardKinematics(model, data, pose)
+        yield data, flange
+
+
 def skeleton_points(robot, q) -> np.ndarray:
     """Base origin, each joint frame's origin and the flange at each pose, robot base frame.
 
@@ -46,15 +59,6 @@ def skeleton_points(robot, q) -> np.ndarray:
     ndarray, shape (M, N + 2, 3)
         Points in m, from the base to the flange.
     """
-    import pinocchio as pin
-
-    model = chain_model(robot)
-    data = model.createData()
-    flange = model.getFrameId("flange")
-    out = []
-    for pose in np.atleast_2d(np.asarray(q, float)):
-        pin.framesForwardKinematics(model, data, pose)
-        out.append([np.zeros(3)] + [data.oMi[j].translation.copy() for j in
-                                    range(1, model.njoints)] + [data.oMf[flange].translation])
-    return np.array(out)
-
+    return np.array([[np.zeros(3)] + [data.oMi[j].translation.copy()
+                                      for j in range(1, len(data.oMi))]
+                     + [data.oMf[flange].translation] for data, flange in chain_poses(robot, q)])

@@ -92,17 +92,15 @@ class Tool:
         """
         path = Path(path)
         try:
-            text = path.read_text(encoding="utf-8")
+            node = yaml.compose(path.read_text(encoding="utf-8"))
         except OSError as exc:
             raise DataError(f"cannot read the tool file: {exc.strerror}", path) from exc
-        try:
-            node = yaml.compose(text)
         except yaml.YAMLError as exc:
             mark = getattr(exc, "problem_mark", None)
             raise DataError(f"not valid YAML: {getattr(exc, 'problem', exc)}", path,
                             mark.line + 1 if mark else None,
                             mark.column + 1 if mark else None) from exc
-        if node is None or not isinstance(node, yaml.MappingNode):
+        if not isinstance(node, yaml.MappingNode):  # None: an empty file
             raise DataError("expected a mapping with a 'markers' entry", path, 1, 1)
         top = {k.value: v for k, v in node.value}
         if "markers" not in top or not isinstance(top["markers"], yaml.MappingNode):
@@ -114,18 +112,10 @@ class Tool:
                 raise DataError(f"marker {key.value!r} is defined twice", *where)
             if not isinstance(val, yaml.SequenceNode) or len(val.value) != 3:
                 raise DataError(f"marker {key.value!r} needs [x, y, z] in mm", *where)
-            xyz = []
-            for item in val.value:
-                try:
-                    v = float(item.value)
-                except (TypeError, ValueError):
-                    v = float("nan")
-                if not np.isfinite(v):
-                    raise DataError(f"marker {key.value!r}: {item.value!r} is not a finite number",
-                                    path, item.start_mark.line + 1, item.start_mark.column + 1)
-                xyz.append(v / 1000.0)
             names.append(key.value)
-            positions.append(tuple(xyz))
+            positions.append(tuple(_millimetres(item, path, f"marker {key.value!r}: "
+                                                f"{item.value!r} is not a finite number")
+                                   for item in val.value))
         if not names:
             raise DataError("a tool needs at least one marker; found none", path,
                             top["markers"].start_mark.line + 1, 1)
@@ -134,6 +124,17 @@ class Tool:
         flange = top["flange"].value if "flange" in top else None
         sizes = _collision_sizes(top.get("collision"), path)
         return cls(tuple(names), tuple(positions), flange, str(path), *sizes)
+
+
+def _millimetres(node, path, error: str, low: float = -np.inf) -> float:
+    """The YAML scalar ``node`` (mm) in metres; ``error`` (at the node) unless finite and ≥ low."""
+    try:
+        v = float(node.value)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not np.isfinite(v) or v < low:
+        raise DataError(error, path, node.start_mark.line + 1, node.start_mark.column + 1)
+    return v / 1000.0
 
 
 def _collision_sizes(node, path) -> tuple[float, float]:
@@ -145,19 +146,12 @@ def _collision_sizes(node, path) -> tuple[float, float]:
         raise DataError("collision: expected a mapping {marker_radius: MM, rod_radius: MM}",
                         path, node.start_mark.line + 1, node.start_mark.column + 1)
     for key, val in node.value:
-        where = (path, val.start_mark.line + 1, val.start_mark.column + 1)
         if key.value not in out:
             raise DataError(f"collision: unknown entry {key.value!r}; expected marker_radius or "
                             f"rod_radius (mm)", path, key.start_mark.line + 1,
                             key.start_mark.column + 1)
-        try:
-            v = float(val.value)
-        except (TypeError, ValueError):
-            v = float("nan")
-        if not np.isfinite(v) or v < 0:
-            raise DataError(f"collision {key.value}: {val.value!r} is not a size in mm (≥ 0)",
-                            *where)
-        out[key.value] = v / 1000.0
+        out[key.value] = _millimetres(val, path, f"collision {key.value}: {val.value!r} is not a "
+                                      f"size in mm (≥ 0)", low=0.0)
     if out["marker_radius"] <= 0:
         raise DataError("collision marker_radius: a marker needs a positive size (mm)", path)
     return out["marker_radius"], out["rod_radius"]
@@ -199,12 +193,11 @@ def _check_layout(positions, path) -> None:
     three or more all on one line, are refused.
     """
     p = np.asarray(positions, float)
-    for i in range(len(p)):
-        for j in range(i):
-            if np.linalg.norm(p[i] - p[j]) < 1e-6:
-                raise ModelError(f"{path}: markers {j + 1} and {i + 1} are collinear or "
-                                 f"coincident (at the same position): give each marker its "
-                                 f"own place on the tool")
+    close = np.argwhere(np.tril(np.linalg.norm(p[:, None] - p[None], axis=-1) < 1e-6, -1))
+    if close.size:
+        i, j = close[0]
+        raise ModelError(f"{path}: markers {j + 1} and {i + 1} are collinear or coincident (at "
+                         f"the same position): give each marker its own place on the tool")
     if len(p) >= 3 and not np.isfinite(marker_condition(p)):
         raise ModelError(f"{path}: the markers are collinear or coincident (condition number "
                          f"of their centred positions is infinite), so the rotation about "

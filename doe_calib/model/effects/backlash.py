@@ -55,7 +55,7 @@ import numpy as np
 
 from doe_calib.errors import ModelError
 from doe_calib.io.measurements import ENV_FIELDS
-from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
+from doe_calib.model.effects.base import ChainSymbols, Effect, at_joint, joint_index
 from doe_calib.model.parameters import Parameter
 
 #: Torque (N·m, or force in N) over which the dead band is crossed.
@@ -93,10 +93,7 @@ class Backlash(Effect):
         if mode not in MODES:
             raise ModelError(f"backlash mode {mode!r}: use one of {', '.join(MODES)}")
         self._mode = mode
-        if mode == MODES[0]:
-            super().__init__(joint)
-        else:
-            super().__init__(joint, mode=mode)
+        super().__init__(joint, **({} if mode == MODES[0] else {"mode": mode}))
 
     @classmethod
     def candidates(cls, robot, configurations=None) -> list:
@@ -131,9 +128,7 @@ class Backlash(Effect):
         if self._mode != "approach":
             return None
         k = joint_index(s.robot, self.joint)
-        out = ca.SX.zeros(s.robot.n_joints, 1)
-        out[k] = -self._half_width(s, k) * s.env[len(ENV_FIELDS) + k]
-        return out
+        return at_joint(s, k, -self._half_width(s, k) * s.env[len(ENV_FIELDS) + k])
 
     def deflection(self, s: ChainSymbols, tau: ca.SX):
         if self._mode == "approach":
@@ -144,6 +139,4 @@ class Backlash(Effect):
         side = ca.tanh(tau[k] / TORQUE_SCALE)
         if self._mode == "both":
             side = side - (1 - side ** 2) * s.env[len(ENV_FIELDS) + k]
-        out = ca.SX.zeros(s.robot.n_joints, 1)
-        out[k] = self._half_width(s, k) * side
-        return out
+        return at_joint(s, k, self._half_width(s, k) * side)

@@ -81,6 +81,13 @@ def joint_index(robot, joint) -> int:
                      f"or one of {', '.join(names)}")
 
 
+def at_joint(s: ChainSymbols, k: int, value) -> ca.SX:
+    """A correction of one joint: SX (N, 1), ``value`` at joint ``k`` (0-based), 0 elsewhere."""
+    out = ca.SX.zeros(s.robot.n_joints, 1)
+    out[k] = value
+    return out
+
+
 class Effect:
     """Base class: no parameters and no correction. Subclasses override.
 

@@ -32,7 +32,7 @@ import casadi as ca
 import numpy as np
 
 from doe_calib.errors import ModelError
-from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
+from doe_calib.model.effects.base import ChainSymbols, Effect, at_joint, joint_index
 from doe_calib.model.effects.joint_compliance import BOUNDS, INERT, SIGN
 from doe_calib.model.parameters import Parameter
 
@@ -177,6 +177,4 @@ class ComplianceByAngle(Effect):
 
     def deflection(self, s: ChainSymbols, tau: ca.SX):
         k, j = self._joint(s.robot)
-        out = ca.SX.zeros(s.robot.n_joints, 1)
-        out[k] = self._chi(s, k, j.name) * tau[k]
-        return out
+        return at_joint(s, k, self._chi(s, k, j.name) * tau[k])

@@ -23,7 +23,7 @@ import casadi as ca
 import numpy as np
 
 from doe_calib.errors import ModelError
-from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
+from doe_calib.model.effects.base import ChainSymbols, Effect, at_joint, joint_index
 from doe_calib.model.parameters import Parameter
 
 #: Largest plausible size of one cyclic-error term, rad (2°): a transmission's cyclic error
@@ -55,10 +55,6 @@ class Cyclic(Effect):
         return [cls(f"j{k + 1}", harmonics=h) for k, j in enumerate(robot.joints)
                 if j.kind == "revolute" for h in (1, 2, 3)]
 
-    @property
-    def harmonics(self) -> int:
-        return self._harmonics
-
     def _revolute(self, robot):
         k = joint_index(robot, self.joint)
         j = robot.joints[k]
@@ -69,13 +65,10 @@ class Cyclic(Effect):
 
     def parameters(self, robot) -> list:
         _, name = self._revolute(robot)
-        out = []
-        for h in range(1, self._harmonics + 1):
-            out += [Parameter(f"cyc_{name}_{f[0]}{h}", self.name, "rad", 0.0, 1e-4,
-                              f"cyclic error of joint {name}: {f}({h}·q) term",
-                              plausible=(-LIMIT, LIMIT))
-                    for f in ("sin", "cos")]
-        return out
+        return [Parameter(f"cyc_{name}_{f[0]}{h}", self.name, "rad", 0.0, 1e-4,
+                          f"cyclic error of joint {name}: {f}({h}·q) term",
+                          plausible=(-LIMIT, LIMIT))
+                for h in range(1, self._harmonics + 1) for f in ("sin", "cos")]
 
     def joint_correction(self, s: ChainSymbols):
         k, name = self._revolute(s.robot)
@@ -84,6 +77,4 @@ class Cyclic(Effect):
         for h in range(1, self._harmonics + 1):
             dq = dq + s.p[f"cyc_{name}_s{h}"] * ca.sin(h * q) \
                 + s.p[f"cyc_{name}_c{h}"] * ca.cos(h * q)
-        out = ca.SX.zeros(s.robot.n_joints, 1)
-        out[k] = dq
-        return out
+        return at_joint(s, k, dq)

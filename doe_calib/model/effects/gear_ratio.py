@@ -8,9 +8,7 @@ affine in the true position.
 """
 from __future__ import annotations
 
-import casadi as ca
-
-from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
+from doe_calib.model.effects.base import ChainSymbols, Effect, at_joint, joint_index
 from doe_calib.model.parameters import Parameter
 
 
@@ -31,6 +29,4 @@ class GearRatio(Effect):
 
     def joint_correction(self, s: ChainSymbols):
         k = joint_index(s.robot, self.joint)
-        out = ca.SX.zeros(s.robot.n_joints, 1)
-        out[k] = s.p[f"eps_{s.robot.joints[k].name}"] * s.q[k]
-        return out
+        return at_joint(s, k, s.p[f"eps_{s.robot.joints[k].name}"] * s.q[k])

@@ -9,6 +9,8 @@ from doe_calib.model.parameters import Parameter
 from doe_calib.model.rotations import rotation_xyz
 
 _AXES = "xyz"
+#: A frame's correction: translations (m), then rotations (rad).
+_PARTS = (("t", "m", "translation along"), ("r", "rad", "rotation about"))
 
 
 def frame_names(robot) -> list[str]:
@@ -29,14 +31,10 @@ class Geometry(Effect):
     phrase = "link geometry errors"
 
     def parameters(self, robot) -> list:
-        out = []
-        for f in frame_names(robot):
-            where = "the flange" if f == "flange" else f"joint {f}"
-            out += [Parameter(f"g_{f}_t{a}", self.name, "m", 0.0, 1e-3,
-                              f"placement of {where}: translation along {a}") for a in _AXES]
-            out += [Parameter(f"g_{f}_r{a}", self.name, "rad", 0.0, 1e-3,
-                              f"placement of {where}: rotation about {a}") for a in _AXES]
-        return out
+        return [Parameter(f"g_{f}_{r}{a}", self.name, unit, 0.0, 1e-3,
+                          f"placement of {'the flange' if f == 'flange' else f'joint {f}'}: "
+                          f"{what} {a}")
+                for f in frame_names(robot) for r, unit, what in _PARTS for a in _AXES]
 
     def placement(self, s: ChainSymbols, k: int):
         f = frame_names(s.robot)[k]

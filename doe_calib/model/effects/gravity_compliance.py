@@ -23,7 +23,7 @@ from __future__ import annotations
 import casadi as ca
 
 from doe_calib.errors import ModelError
-from doe_calib.model.effects.base import ChainSymbols, Effect, joint_index
+from doe_calib.model.effects.base import ChainSymbols, Effect, at_joint, joint_index
 from doe_calib.model.effects.joint_compliance import BOUNDS
 from doe_calib.model.parameters import Parameter
 
@@ -58,6 +58,4 @@ class GravityCompliance(Effect):
 
     def deflection(self, s: ChainSymbols, tau: ca.SX):
         k = joint_index(s.robot, self.joint)
-        out = ca.SX.zeros(s.robot.n_joints, 1)
-        out[k] = s.p[f"kg_{s.robot.joints[k].name}"] * s.gravity[k]
-        return out
+        return at_joint(s, k, s.p[f"kg_{s.robot.joints[k].name}"] * s.gravity[k])

@@ -77,10 +77,8 @@ class LinkCompliance(Effect):
         self._min_length = float(min_length)
         if self._min_length < 0:
             raise ModelError(f"link_compliance: min_length must be ≥ 0 m, got {min_length}")
-        if self._min_length == MIN_LENGTH:
-            super().__init__()
-        else:
-            super().__init__(min_length=f"{self._min_length:g}")
+        super().__init__(**({} if self._min_length == MIN_LENGTH
+                            else {"min_length": f"{self._min_length:g}"}))
 
     @classmethod
     def candidates(cls, robot, configurations=None) -> list:

@@ -43,15 +43,7 @@ class Thermal(Effect):
 
     def __init__(self, t_ref: float = T_REF):
         self._t_ref = float(t_ref)
-        if self._t_ref == T_REF:
-            super().__init__()
-        else:
-            super().__init__(t_ref=f"{self._t_ref:g}")
-
-    @property
-    def t_ref(self) -> float:
-        """Reference temperature, °C."""
-        return self._t_ref
+        super().__init__(**({} if self._t_ref == T_REF else {"t_ref": f"{self._t_ref:g}"}))
 
     def parameters(self, robot) -> list:
         return [Parameter("alpha_thermal", self.name, "1/K", 0.0, 1e-5,

@@ -1,6 +1,6 @@
 """User-defined effects: a Python file declaring one effect, loaded with ``--effect-file``.
 
-:func:`load_effect_file` makes the file's effect class(es) and changes
+:func:`load_effect_file` makes the file's effect class and changes
 nothing else; a registry that holds them
 (:meth:`~doe_calib.model.effects.registry.EffectRegistry.with_file`, or
 :func:`~doe_calib.model.effects.registry_with_files`) lets model strings,
@@ -190,21 +190,18 @@ class UserEffect(Effect):
                              f"return {what} (a list or a casadi SX column)")
         return self._checked(ca.reshape(x, n, 1), s, function)
 
-    def joint_correction(self, s: ChainSymbols):
-        if "joint_correction" not in self.functions:
-            return None
-        out = self._call("joint_correction", s)
+    def _per_joint(self, function: str, s: ChainSymbols, extra=None):
+        """The file's ``function`` (joint correction or deflection): N values, or None."""
+        out = self._call(function, s, extra) if function in self.functions else None
         n = s.robot.n_joints
         return None if out is None else \
-            self._vector(out, n, s, "joint_correction", f"{n} values, one per joint")
+            self._vector(out, n, s, function, f"{n} values, one per joint")
+
+    def joint_correction(self, s: ChainSymbols):
+        return self._per_joint("joint_correction", s)
 
     def deflection(self, s: ChainSymbols, tau: ca.SX):
-        if "deflection" not in self.functions:
-            return None
-        out = self._call("deflection", s, tau)
-        n = s.robot.n_joints
-        return None if out is None else \
-            self._vector(out, n, s, "deflection", f"{n} values, one per joint")
+        return self._per_joint("deflection", s, tau)
 
     def placement(self, s: ChainSymbols, k: int):
         if k != s.robot.n_joints or "flange_correction" not in self.functions:
@@ -231,10 +228,6 @@ class UserEffect(Effect):
             rot = self._checked(rot, s, "flange_correction")
         t = self._vector(t, 3, s, "flange_correction", "a translation of 3 values")
         return rot, [t[i] for i in range(3)]
-
-
-def _field(decl, key, default=None):
-    return decl.get(key, default) if isinstance(decl, dict) else getattr(decl, key, default)
 
 
 #: What a PARAMETERS row's optional fifth item may say.
@@ -291,10 +284,10 @@ def _parameter_specs(rows, path: str, name: str) -> tuple:
     return tuple(out)
 
 
-def _functions(decl, path: str, name: str) -> dict:
+def _functions(module, path: str, name: str) -> dict:
     out = {}
     for fname, args in FUNCTIONS.items():
-        f = _field(decl, fname)
+        f = getattr(module, fname, None)
         if f is None:
             continue
         if not callable(f):
@@ -316,26 +309,26 @@ def _functions(decl, path: str, name: str) -> dict:
     return out
 
 
-def _effect_class(decl, path: str, module: str) -> type:
-    name = _field(decl, "NAME")
+def _effect_class(module, path: str) -> type:
+    name = getattr(module, "NAME", None)
     if not isinstance(name, str) or not _IDENTIFIER.match(name):
         raise ModelError(f"{path}: NAME must be a word of letters, digits and _, e.g. "
                          f'NAME = "my_effect", got {name!r}')
-    per_joint = _field(decl, "PER_JOINT", False)
+    per_joint = getattr(module, "PER_JOINT", False)
     if not isinstance(per_joint, bool):
         raise ModelError(f"{path}: PER_JOINT of effect {name} must be True or False, "
                          f"got {per_joint!r}")
     words = {}
     for key, attr in (("PHRASE", "phrase"), ("IMPLAUSIBLE", "implausible_words")):
-        text = _field(decl, key)
+        text = getattr(module, key, None)
         if text is not None and not isinstance(text, str):
             raise ModelError(f"{path}: {key} of effect {name} must be words, got {text!r}")
         if text is not None:
             words[attr] = text
     attrs = {"name": name, "source": path, "per_joint": per_joint, **words,
-             "parameter_specs": _parameter_specs(_field(decl, "PARAMETERS"), path, name),
-             "functions": MappingProxyType(_functions(decl, path, name)),
-             "__doc__": f"User effect {name} from {path}.", "__module__": module}
+             "parameter_specs": _parameter_specs(getattr(module, "PARAMETERS", None), path, name),
+             "functions": MappingProxyType(_functions(module, path, name)),
+             "__doc__": f"User effect {name} from {path}.", "__module__": module.__name__}
     return type(f"UserEffect_{name}", (UserEffect,), attrs)
 
 
@@ -358,28 +351,26 @@ def _import(path: str):
 
 
 def load_effect_file(path) -> list[type]:
-    """Import a user effect file and make its effect class(es); nothing is registered.
+    """Import a user effect file and make its effect class; nothing is registered.
 
     Parameters
     ----------
     path : str or Path
-        A Python file following the protocol of :mod:`doe_calib.model.effects.user`;
-        it may instead declare ``EFFECTS``, a list of dicts with the same keys.
+        A Python file following the protocol of :mod:`doe_calib.model.effects.user`.
 
     Returns
     -------
     list of type
-        The :class:`UserEffect` subclasses, in declaration order; each call
-        makes new classes from the file's current content.
+        The file's :class:`UserEffect` subclass; each call makes a new class from
+        the file's current content.
 
     Raises
     ------
     DataError
         The file is missing or cannot be run (with the line).
     ModelError
-        A declaration is missing or wrong, or two effects of the file share a
-        name. (A name already taken by a built-in effect or another file is
-        refused by the registry that would hold both.)
+        A declaration is missing or wrong. (A name already taken by a built-in
+        effect or another file is refused by the registry that would hold both.)
     """
     path = Path(path)
     if not path.is_file():
@@ -387,11 +378,4 @@ def load_effect_file(path) -> list[type]:
                         "PARAMETERS and the effect's functions (example: "
                         "doe_calib/examples/example_effect.py)", path)
     source = str(path.resolve())
-    module = _import(source)
-    decls = _field(module, "EFFECTS", None)
-    decls = [module] if decls is None else list(decls)
-    classes = [_effect_class(d, source, module.__name__) for d in decls]
-    names = [c.name for c in classes]
-    if len(set(names)) != len(names):
-        raise ModelError(f"{source}: two effects are named the same; give each its own NAME")
-    return classes
+    return [_effect_class(_import(source), source)]
