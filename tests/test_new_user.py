@@ -34,3 +34,54 @@ def test_fit_statistics_show_as_their_summary_in_a_notebook():
     stats._repr_pretty_(Printer(), False)
     assert shown == [stats.summary()]
     assert "degrees of freedom     = 24" in shown[0] and "FitStatistics(" not in shown[0]
+
+
+def test_readme_states_the_demo_figures_it_prints(tmp_path):
+    """The README's first paragraph gives the held-out error before and after refine as the
+    demo (its default settings) prints them."""
+    import re
+
+    from doe_calib.examples.demo import run_demo
+
+    text = " ".join((ROOT / "README.md").read_text().split())
+    before, after = re.search(r"held-out error fall from ([\d.]+) mm to ([\d.]+) mm",
+                              text).groups()
+    out = run_demo(tmp_path / "demo", say=lambda s: None)
+    rms = list(out["held_out_rms_mm"].values())
+    assert (f"{rms[0]:.{len(before) - 2}f}", f"{rms[-1]:.{len(after) - 2}f}") == (before, after)
+    page = Path(out["report"]).read_text(encoding="utf-8")
+    # the final model is adequate: its report does not send the user after a trend of noise
+    final = page.split("Final model: ")[1]
+    assert "The model is adequate: its residual is at the noise level" in final
+    assert "The residual size follows" not in final
+    # the compensated program's table is preformatted text, not a run-on paragraph
+    assert re.search(r"The compensated program</h2>\s*<pre>", page)
+
+
+@pytest.mark.skipif(__import__("shutil").which("chromium") is None,
+                    reason="chromium is not installed")
+def test_a_wide_table_stays_inside_the_page(tmp_path):
+    """A candidate table with long effect strings wraps inside the page (1100 px wide, centred
+    in a 1400 px window) instead of running past it and clipping its last column."""
+    import subprocess
+
+    from matplotlib.pyplot import imread
+
+    from doe_calib.report.html import section, table, write_report
+
+    effect = "compliance_by_angle(j2,nodes_deg=-138.002;-50.9495;-7.0019;12.5;40.25)"
+    header = ["#", "effect", "in words", "F", "dof", "p", "explains (%)", "CV RMS",
+              "fitted size ± std", "decision"]
+    rows = [[i, effect, "a compliance of joint 2 that changes with its angle", 4928.1, "2, 231",
+             1.27e-304, 99.77, "0.7499 → 0.03645 mm (−95.1 %)",
+             "chi_a2_1 = 0.4503 ± 0.0015 µrad/(N·m); chi_a2_2 = 0.3367 ± 0.0034 µrad/(N·m)",
+             f"{effect} predicts better"] for i in range(4)]
+    page = write_report(tmp_path / "t.html", "wide", [section("Candidates", table(header, rows))])
+    shot = tmp_path / "t.png"
+    subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu",
+                    "--hide-scrollbars", f"--screenshot={shot}", "--window-size=1400,1500",
+                    page.as_uri()], check=True, capture_output=True, timeout=60)
+    image = imread(shot)[..., :3]
+    drawn = (image < 0.8).any(axis=(0, 2))
+    assert drawn[:700].any()  # the table is drawn
+    assert not drawn[1265:].any()  # nothing right of the page's 1100 px (150 … 1250)

@@ -6,7 +6,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from doe_calib.design.detectability import Detectability
-from doe_calib.design.notes import design_notes, effect_words
+from doe_calib.design.notes import CRITERION_WORDS, design_notes, effect_words
 from doe_calib.design.predicted_std import PredictedStd, StdMapping, predicted_std
 from doe_calib.errors import DataError
 from doe_calib.io.design_json import FORMAT, pose_configurations
@@ -306,13 +306,17 @@ class DesignResult:
             lines.append("efficiency against each certified bound: " + ", ".join(
                 f"{k} {v:.3f}" for k, v in self.efficiencies.items()))
         if self.criteria:
-            lines.append("criteria: " + ", ".join(f"{k} {v:.6g}" for k, v in self.criteria.items()))
+            lines.append("criteria of these poses (M: information of the scaled parameters, "
+                         "σ = 1; larger is better): " + "; ".join(
+                             f"{k} {v:.6g}, {CRITERION_WORDS.get(k, k)}"
+                             for k, v in self.criteria.items()))
         if self.equivalence:
             e = self.equivalence
             lines.append(f"equivalence theorem: {e.statistic} = {e.relaxation:.4g} at the "
-                         f"relaxation, {e.design:.4g} at the design (target {e.target:g}; "
-                         f"design efficiency against the approximate optimum ≥ "
-                         f"{e.design_efficiency_at_least:.3f})")
+                         f"relaxation, {e.design:.4g} at the design (target {e.target:g}); "
+                         f"from this check alone the efficiency is ≥ "
+                         f"{e.design_efficiency_at_least:.3f} (target ÷ design), a weaker "
+                         f"bound than the certified {self.efficiency:.3f} above")
         if self.candidates:
             c = self.candidates
             lines.append(f"candidates: {c.kept} kept of {c.drawn} drawn" + "".join(

@@ -60,7 +60,7 @@ def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> 
     ``held_out_rms_mm`` per model (mm), ``added`` effects, ``noise_floor_mm`` and ``report``."""
     from doe_calib.report import design_sections, refine_sections, write_report
     from doe_calib.report.diagnosis import diagnosis_sections
-    from doe_calib.report.html import paragraph, section
+    from doe_calib.report.html import paragraph, preformatted, section
     from doe_calib.report.identification import parameters_section
 
     out.mkdir(parents=True, exist_ok=True)
@@ -146,12 +146,12 @@ def run_demo(out: Path, seed: int = 2024, candidates: int = 5000, say=print) -> 
         f"starting model lacks, identified, diagnosed, refined, and compensated a program of "
         f"held-out poses with the refined model.", f"Refinement stopped: {grown.stopped}")])]
     story += design_sections(design)
-    story.append(section("The measurement program", paragraph(checked.summary()),
+    story.append(section("The measurement program", preformatted(checked.summary()),
                          _first_lines(programs[0])))
     story += diagnosis_sections(d, start, meas, fit, title="Starting model: ")
     story += refine_sections(grown, final, meas)
     story.append(parameters_section(grown.fit, "Identified parameters of the final model"))
-    story.append(section("The compensated program", paragraph(compensated.summary()),
+    story.append(section("The compensated program", preformatted(compensated.summary()),
                          _first_lines(comp_programs[0])))
     report = write_report(out / "report.html", "doe_calib demo: design → measure → identify → "
                           "diagnose → refine → compensate", story)

@@ -5,6 +5,7 @@ from dataclasses import asdict
 
 import numpy as np
 
+from doe_calib.design.notes import CRITERION_WORDS
 from doe_calib.report import figures
 from doe_calib.report.figures import to_png as png
 from doe_calib.report.html import (
@@ -139,15 +140,25 @@ def design_sections(design, dpi: int = 90) -> list:
 
 def efficiency_section(design):
     """The section with the criterion, its certified bound, the efficiencies and the checks."""
-    eff = [["criterion", design.criterion], ["value", design.value],
-           ["certified bound", design.bound], ["efficiency", design.efficiency]]
-    eff += [[f"efficiency ({c})", v] for c, v in design.efficiencies.items()]
-    eff += [[f"criterion {c}", v] for c, v in design.criteria.items()]
-    blocks = [table(["quantity", "value"], eff)]
+    c = design.criterion
+    eff = [["criterion", c, f"what the poses were chosen for: "
+                            f"{CRITERION_WORDS.get(c, c)}"],
+           ["value", design.value, f"criterion {c} of these poses (M: information of the "
+                                   f"scaled parameters, σ = 1; larger is better)"],
+           ["certified bound", design.bound, "no choice of as many poses from the candidates "
+                                             "(and the refined poses) does better"],
+           ["efficiency", design.efficiency, "how near the bound, in the criterion's terms "
+                                             "(D: (det M / det M_bound)^(1/p)); 1 is the best"]]
+    eff += [[f"efficiency ({k})", v, f"against criterion {k}'s own certified bound"]
+            for k, v in design.efficiencies.items()]
+    eff += [[f"criterion {k}", v, CRITERION_WORDS.get(k, k)] for k, v in design.criteria.items()]
+    blocks = [table(["quantity", "value", "meaning"], eff)]
     if design.equivalence:
         blocks += ["Equivalence-theorem check (the statistic is at most its target at the "
-                   "approximate optimum):", table(["equivalence", "value"],
-                                                  flatten(asdict(design.equivalence)))]
+                   "approximate optimum); design_efficiency_at_least = target ÷ design is the "
+                   "efficiency this check alone proves, a weaker bound than the certified "
+                   "efficiency above:", table(["equivalence", "value"],
+                                              flatten(asdict(design.equivalence)))]
     if design.refinement:
         blocks.append(table(["refinement", "value"], flatten(design.refinement)))
     return section("Efficiency against the bound", *blocks)

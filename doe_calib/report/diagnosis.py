@@ -53,6 +53,9 @@ def failure_sections(diagnosis, model, measurements, fit, dpi: int = 90,
         ["model", "fit RMS (mm)", "CV RMS (mm)", "noise floor (mm)", "σ̂/σ"],
         [[diagnosis.model, diagnosis.rms_mm, diagnosis.cv_rms_mm, diagnosis.noise_floor_mm,
           diagnosis.chi2.get("sigma_ratio", float("nan"))]], 4), paragraph(
+        f"The model is adequate: its residual is at the noise level, so what its size "
+        f"seems to follow ({follow or 'nothing in particular'}) is the noise's, not a missing "
+        f"effect's." if diagnosis.adequate else
         f"The residual size follows: {follow or 'nothing in particular'}."), *by_direction,
         figure(to_png(residual_scatter(norms, columns), dpi),
                "residual of each reading against every variable",

@@ -228,6 +228,9 @@ def robot_poses(skeletons_mm, markers_mm, titles, tracker_mm=None, floor_mm=0.0,
         ax.set(xlim=lim[0], ylim=lim[1], zlim=lim[2])
         ax.set_box_aspect((1, 1, 1))
         ax.view_init(elev=20, azim=-60)
-        ax.tick_params(labelsize=5, pad=0)
-        ax.set_title(titles[i], fontsize=7)
+        if i:  # the same axes in every panel: their numbers once, in the first
+            ax.set(xticklabels=[], yticklabels=[], zticklabels=[])
+        ax.tick_params(labelsize=7, pad=0)
+        ax.set_title(titles[i], fontsize=9)
+    fig.subplots_adjust(wspace=0.02, hspace=0.12)
     return fig
