@@ -10,10 +10,9 @@ from doe_calib.cli.common import add_options, effect_registry, report_warnings
 from doe_calib.cli.options import refuse_input
 from doe_calib.io.json_file import strict_json
 
-HELP = ("write a calibrated URDF (offsets and geometry folded into the joint origins, the "
-        "robot's own root kept), a YAML of the parameters a URDF cannot hold, the tracker "
-        "frame as a fixed transform from the root (NAME_tracker.yaml) and, for a UR arm, "
-        "ur_description's kinematics file (NAME_kinematics.yaml)")
+HELP = ("write a calibrated URDF (offsets and geometry in the joint origins, the robot's own "
+        "root kept) and beside it YAMLs of what it cannot hold, of the tracker frame and, for a "
+        "UR arm, ur_description's kinematics")
 EXAMPLE = "doe-calib export-urdf --result result.json --out robot_calibrated.urdf"
 
 

@@ -130,8 +130,10 @@ def base_placement(parameters) -> np.ndarray:
 
 def calibrated_urdf(model, parameters, tracker_frame: bool = False
                     ) -> tuple[ET.ElementTree, str, str]:
-    """The calibrated URDF tree, the name of its flange link and of its root link, from
-    ``model``'s URDF (``robot.source``) and the identified ``parameters`` (SI).
+    """The calibrated URDF tree and the names of its flange link and its root link.
+
+    From ``model``'s URDF (``robot.source``) and the identified ``parameters`` (SI); the
+    root is the URDF's own.
 
     ``tracker_frame``: also hang a fixed link ``tracker`` (the tracker frame) from the root.
 

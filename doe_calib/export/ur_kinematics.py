@@ -50,7 +50,7 @@ def ur_kinematics(tree) -> dict | None:
         values = ([float(v) for v in o.get("xyz", "0 0 0").split()]
                   + [float(v) for v in o.get("rpy", "0 0 0").split()]) if o is not None \
             else [0.0] * 6
-        kin[key] = dict(zip(_KEYS, values))
+        kin[key] = dict(zip(_KEYS, (v + 0.0 for v in values)))   # no -0.0
     digest = hashlib.sha256(repr(sorted((k, tuple(v.values())) for k, v in kin.items()))
                             .encode()).hexdigest()[:16]
     kin["hash"] = f"doe_calib_{digest}"
