@@ -11,6 +11,7 @@ from doe_calib.export.calibrated_urdf import (
     OWN_WEIGHT_POSES,
     export_urdf,
     pinocchio_configuration,
+    rpy_to_matrix,
 )
 from doe_calib.model.simulate import random_configurations, random_truth
 
@@ -22,14 +23,18 @@ def _result(model, values):
                                 np.eye(n) * 1e-12, 1.0, {"rms_mm": 0.0}, {}, 300, 0.02)
 
 
-def _urdf_markers(urdf, robot, flange, points, q):
-    """Marker positions the written URDF gives (Pinocchio FK), m."""
-    pm = pin.buildModelFromUrdf(str(urdf))
+def _urdf_markers(files, robot, flange, points, q):
+    """Marker positions the written URDF gives (Pinocchio FK), placed in the tracker frame by
+    the tracker file, m."""
+    doc = yaml.safe_load(files.tracker.read_text())
+    tracker = pin.SE3(rpy_to_matrix(doc["rpy"]), np.array(doc["xyz"]))
+    pm = pin.buildModelFromUrdf(str(files.urdf))
     data, frame = pm.createData(), pm.getFrameId(flange)
     out = []
     for qi in q:
         pin.framesForwardKinematics(pm, data, pinocchio_configuration(pm, robot, qi))
-        out.append(points @ data.oMf[frame].rotation.T + data.oMf[frame].translation)
+        placement = tracker.actInv(data.oMf[frame])
+        out.append(points @ placement.rotation.T + placement.translation)
     return np.array(out)
 
 
@@ -44,6 +49,7 @@ def ur10():
     return Robot.from_urdf(path, flange="tool0"), tool
 
 
+@pytest.mark.filterwarnings("ignore:r_kinematics.yaml:doe_calib.errors.DataWarning")
 def test_own_weight_deflection_is_named_and_sized(ur10, tmp_path):
     robot6, tool6 = ur10
     model = build_model(robot6, tool6, "joint_offset+geometry+gravity_compliance(j2)+"
@@ -52,14 +58,14 @@ def test_own_weight_deflection_is_named_and_sized(ur10, tmp_path):
     values = model.nominal().with_values(random_truth(model, rng)).updated(
         kg_shoulder_lift_joint=4e-6, kg_elbow_joint=6e-6).values
     result = _result(model, values)
-    urdf, extra = export_urdf(result, tmp_path / "r.urdf", model)
-    doc = yaml.safe_load(extra.read_text())
+    files = export_urdf(result, tmp_path / "r.urdf", model)
+    doc = yaml.safe_load(files.yaml.read_text())
     own = doc["own_weight"]
     assert own["effects"] == ["gravity_compliance(j2)", "gravity_compliance(j3)"], own
     # independent truth: the written URDF (Pinocchio) against the model unloaded, same poses
     q = random_configurations(robot6, OWN_WEIGHT_POSES, np.random.default_rng(0), margin=0.0)
     points = np.array([doc["markers_mm"][m] for m in tool6.names]) / 1000.0
-    rigid = _urdf_markers(urdf, robot6, doc["flange_link"], points, q)
+    rigid = _urdf_markers(files, robot6, doc["flange_link"], points, q)
     loaded = marker_positions(model, values, Configurations.from_arrays(q))
     gap = np.linalg.norm(loaded - rigid, axis=2).max() * 1000.0
     assert gap > 0.5                                   # a deflection worth saying
@@ -73,7 +79,6 @@ def test_own_weight_deflection_is_named_and_sized(ur10, tmp_path):
 def test_without_gravity_effects_nothing_is_said(robot6, tool6, tmp_path):
     model = build_model(robot6, tool6, "joint_offset+geometry+joint_compliance")
     result = _result(model, random_truth(model, np.random.default_rng(9)))
-    _, extra = export_urdf(result, tmp_path / "r.urdf", model)
-    doc = yaml.safe_load(extra.read_text())
+    doc = yaml.safe_load(export_urdf(result, tmp_path / "r.urdf", model).yaml.read_text())
     assert doc["own_weight"] is None and not any("own weight" in n for n in doc["notes"])
     assert "the URDF alone is the robot unloaded" in doc["notes"][1]

@@ -54,13 +54,15 @@ def _joint_effects(result, q, approach):
 
 
 def _fk(urdf, flange, robot, q, point):
+    """``point`` on the flange in the URDF's tracker frame (``export-urdf --tracker-frame``)."""
     model = pin.buildModelFromUrdf(str(urdf))
     data = model.createData()
-    frame = model.getFrameId(flange)
+    frame, tracker = model.getFrameId(flange), model.getFrameId("tracker")
     out = []
     for qi in q:
         pin.framesForwardKinematics(model, data, pinocchio_configuration(model, robot, qi))
-        out.append(data.oMf[frame].rotation @ point + data.oMf[frame].translation)
+        placement = data.oMf[tracker].actInv(data.oMf[frame])
+        out.append(placement.rotation @ point + placement.translation)
     return np.array(out)
 
 
@@ -70,7 +72,8 @@ def test_compensated_postures_reach_their_targets_through_the_calibrated_urdf(tm
     assert fold["model"] == MODEL and fold["targets"] == POSTURES
     assert fold["reached"] == POSTURES and not fold["not_reached"]
     result_json, urdf = tmp_path / f"{name}_result.json", tmp_path / "tiago_calibrated.urdf"
-    assert main(["export-urdf", "--result", str(result_json), "--out", str(urdf)]) == 0
+    assert main(["export-urdf", "--result", str(result_json), "--out", str(urdf),
+                 "--tracker-frame"]) == 0
     flange = yaml.safe_load(urdf.with_suffix(".yaml").read_text())["flange_link"]
     result = IdentificationResult.from_json(result_json)
     programmed = read_targets(tmp_path / f"{name}_targets.csv", result.robot).configurations.q

@@ -2,14 +2,26 @@
 
 Folded exactly: ``joint_offset`` and ``geometry`` (the origin ``O_k`` of each chain joint
 becomes ``O_k · E_k · X_k(dq_k)``, the offset about or along the joint axis, which
-commutes with its motion), the flange correction ``E_f`` on the joint to the flange
-link, and the base (a fixed joint from a new root link ``tracker``). Everything else
-goes to a YAML file beside it, with the identified marker positions.
+commutes with its motion) and the flange correction ``E_f`` on the joint to the flange
+link. Everything else goes to a YAML file beside it, with the identified marker positions.
+
+The URDF keeps the robot's own root link. The identified base (the robot's root in the
+tracker frame) is not folded into the robot: it goes to ``NAME_tracker.yaml`` (a fixed
+transform, the tracker in the root frame), and on request into the URDF as a fixed link
+``tracker``, a child of the root, so the root stays the root of the tree.
+
+Meshes stay on their link: no visual, collision or inertial origin is rewritten except
+the flange link's. A corrected joint origin moves its child link's frame, and the
+link's meshes with it, as the physical link moves on its real axis. ``E_f`` instead
+corrects where the flange frame sits on the last link's body, so the flange link's own
+visual, collision and inertial origins are composed with ``E_f⁻¹``: they stay where they
+were on the body; links hung below the flange (a tool) follow the corrected flange.
 """
 from __future__ import annotations
 
 import warnings
 import xml.etree.ElementTree as ET
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
@@ -18,6 +30,7 @@ import yaml
 
 from doe_calib.collision.model import pinocchio_configurations
 from doe_calib.errors import DataWarning, ModelError
+from doe_calib.export.ur_kinematics import layout_mismatch, ur_kinematics
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.effects.base import ChainSymbols, Effect
 from doe_calib.model.evaluation import evaluate, marker_positions
@@ -107,14 +120,28 @@ def _motion(joint, dq: float) -> np.ndarray:
     return out
 
 
-def calibrated_urdf(model, parameters) -> tuple[ET.ElementTree, str]:
-    """The calibrated URDF tree and the name of its flange link, from ``model``'s URDF
-    (``robot.source``) and the identified ``parameters`` (SI).
+def base_placement(parameters) -> np.ndarray:
+    """The identified base: the robot's root link frame in the tracker frame, 4×4 (m)."""
+    out = np.eye(4)
+    out[:3, :3] = rotation_vector_to_matrix(parameters.values[3:6])
+    out[:3, 3] = parameters.values[0:3]
+    return out
+
+
+def calibrated_urdf(model, parameters, tracker_frame: bool = False
+                    ) -> tuple[ET.ElementTree, str, str]:
+    """The calibrated URDF tree and the names of its flange link and its root link.
+
+    From ``model``'s URDF (``robot.source``) and the identified ``parameters`` (SI); the
+    root is the URDF's own.
+
+    ``tracker_frame``: also hang a fixed link ``tracker`` (the tracker frame) from the root.
 
     Raises
     ------
     ModelError
-        The URDF cannot be read, misses a chain joint, or has a link named ``tracker``.
+        The URDF cannot be read, misses a chain joint, or (``tracker_frame``) has a link
+        named ``tracker``.
     """
     robot = model.robot
     path = Path(robot.source)
@@ -125,7 +152,7 @@ def calibrated_urdf(model, parameters) -> tuple[ET.ElementTree, str]:
     root = tree.getroot()
     joints = {j.get("name"): j for j in root.findall("joint")}
     links = {lk.get("name") for lk in root.findall("link")}
-    if TRACKER_LINK in links:
+    if tracker_frame and TRACKER_LINK in links:
         raise ModelError(f"{path}: already has a link named {TRACKER_LINK!r}")
     out = corrections(model)(np.asarray(parameters.values, float))
     e = [np.asarray(x) for x in out[:-1]]
@@ -136,30 +163,51 @@ def calibrated_urdf(model, parameters) -> tuple[ET.ElementTree, str]:
         el = joints[joint.name]
         _set_origin(el, _origin(el) @ e[k] @ _motion(joint, dq[k]))
     flange = _fold_flange(root, joints, robot, e[-1])
-    base = np.eye(4)
-    base[:3, :3] = rotation_vector_to_matrix(parameters.values[3:6])
-    base[:3, 3] = parameters.values[0:3]
     children = {j.find("child").get("link") for j in joints.values()}
     root_link = next(lk.get("name") for lk in root.findall("link")
                      if lk.get("name") not in children)
-    root.insert(0, ET.Element("link", name=TRACKER_LINK))
-    _fixed_joint(root, f"{TRACKER_LINK}_to_{root_link}", TRACKER_LINK, root_link, base)
-    return tree, flange
+    if tracker_frame:
+        root.append(ET.Element("link", name=TRACKER_LINK))
+        _fixed_joint(root, f"{root_link}_to_{TRACKER_LINK}", root_link, TRACKER_LINK,
+                     np.linalg.inv(base_placement(parameters)))
+    return tree, flange, root_link
 
 
 def _fold_flange(root, joints, robot, e_flange) -> str:
-    """Apply the flange correction on the last fixed joint to the flange link; its name."""
+    """Apply the flange correction on the last fixed joint to the flange link, its own
+    meshes and inertia kept in place on the body; return the flange link's name."""
     by_child = {j.find("child").get("link"): j for j in joints.values()}
     last = joints[robot.joints[-1].name].find("child").get("link")
     if robot.flange != last and robot.flange in by_child:
         el = by_child[robot.flange]
         _set_origin(el, _origin(el) @ e_flange)
+        back = np.linalg.inv(e_flange)
+        link = next(lk for lk in root.findall("link") if lk.get("name") == robot.flange)
+        for body in (*link.findall("visual"), *link.findall("collision"),
+                     *link.findall("inertial")):
+            _set_origin(body, back @ _origin(body))
         return robot.flange
     # The flange is the last joint's own link: hang a calibrated flange link from it.
     name = f"{robot.flange}_calibrated"
     root.append(ET.Element("link", name=name))
     _fixed_joint(root, f"{name}_joint", robot.flange, name, e_flange)
     return name
+
+
+def tracker_frame_doc(parameters, root_link: str) -> dict:
+    """``NAME_tracker.yaml``: the tracker frame as a fixed transform from the robot's root
+    (what ``tf2_ros static_transform_publisher`` takes), and the identified base."""
+    base = base_placement(parameters)
+    inverse = np.linalg.inv(base)
+
+    def pose(m):
+        return {"xyz": [float(v) for v in m[:3, 3]],
+                "rpy": [float(v) for v in matrix_to_rpy(m[:3, :3])]}
+
+    return {"format": "doe_calib.tracker_frame", "parent": root_link, "child": TRACKER_LINK,
+            **pose(inverse), "root_in_tracker": pose(base),
+            "notes": [f"xyz (m) and rpy (rad, URDF convention) place the tracker frame in "
+                      f"{root_link}; root_in_tracker is the identified base, its inverse"]}
 
 
 def pinocchio_configuration(pin_model, robot, q) -> np.ndarray:
@@ -210,28 +258,76 @@ def _own_weight(model, params) -> dict | None:
                                                                axis=1).max() * 1000.0)}
 
 
-def export_urdf(result, out, model=None) -> tuple[Path, Path]:
-    """Write the calibrated URDF ``out`` and, beside it (``.yaml``), what it cannot hold;
-    return both paths. ``model``: built from ``result`` when not given.
+@dataclass(frozen=True)
+class UrdfFiles:
+    """The files :func:`export_urdf` wrote.
+
+    Attributes
+    ----------
+    urdf : Path
+        The calibrated URDF.
+    yaml : Path
+        What the URDF cannot hold (``NAME.yaml``).
+    tracker : Path
+        The tracker frame in the robot's root (``NAME_tracker.yaml``, :func:`tracker_frame_doc`).
+    ur_kinematics : Path or None
+        ``NAME_kinematics.yaml`` for a UR arm (:mod:`~doe_calib.export.ur_kinematics`).
+    """
+
+    urdf: Path
+    yaml: Path
+    tracker: Path
+    ur_kinematics: Path | None = None
+
+    def paths(self) -> list[Path]:
+        """The files written, in this order."""
+        return [p for p in (self.urdf, self.yaml, self.tracker, self.ur_kinematics) if p]
+
+
+def output_paths(out) -> list[Path]:
+    """Every file :func:`export_urdf` may write for the URDF ``out``."""
+    out = Path(out)
+    return [out, out.with_suffix(".yaml")] + [out.with_name(f"{out.stem}_{tail}.yaml")
+                                              for tail in ("tracker", "kinematics")]
+
+
+def _dump(path: Path, doc: dict) -> None:
+    path.write_text(yaml.safe_dump(doc, sort_keys=False, allow_unicode=True), encoding="utf-8")
+
+
+def export_urdf(result, out, model=None, *, tracker_frame: bool = False) -> UrdfFiles:
+    """Write the calibrated URDF ``out`` (rooted at the robot's own root link) and beside it
+    ``NAME.yaml`` (what the URDF cannot hold), ``NAME_tracker.yaml`` (the tracker frame, a
+    fixed transform from the root) and, for a UR arm, ``NAME_kinematics.yaml``
+    (:mod:`~doe_calib.export.ur_kinematics`). ``model``: built from ``result`` when not given;
+    ``tracker_frame``: also put the tracker frame in the URDF, as a child of the root.
 
     Examples
     --------
-    >>> export_urdf(result, "robot_calibrated.urdf")   # doctest: +SKIP
-    (PosixPath('robot_calibrated.urdf'), PosixPath('robot_calibrated.yaml'))
+    >>> export_urdf(result, "robot_calibrated.urdf").paths()   # doctest: +SKIP
+    [PosixPath('robot_calibrated.urdf'), PosixPath('robot_calibrated.yaml'),
+     PosixPath('robot_calibrated_tracker.yaml')]
     """
     from doe_calib.model.marker_model import build_model
 
     model = build_model(result.robot, result.tool, result.model) if model is None else model
-    tree, flange = calibrated_urdf(model, result.parameters)
-    out = Path(out)
+    tree, flange, root_link = calibrated_urdf(model, result.parameters, tracker_frame)
+    out, yaml_path, tracker_path, kin_path = output_paths(out)
     ET.indent(tree)
     tree.write(out, encoding="unicode", xml_declaration=False)
+    _dump(tracker_path, tracker_frame_doc(result.parameters, root_link))
+    kinematics = ur_kinematics(tree)
+    if kinematics is not None:
+        _dump(kin_path, kinematics)
     rigid_at_rest = [e.spec() for e in model.effects if e.name not in FOLDED and
                      (type(e).joint_correction is not Effect.joint_correction or
                       type(e).placement is not Effect.placement)]
     own_weight = _own_weight(model, result.parameters)
-    notes = [f"{TRACKER_LINK} is the tracker frame (the identified base placement); the joint "
-             f"values are the controller's, as in the original URDF",
+    notes = [f"the URDF keeps the robot's root link {root_link}; the tracker frame (the "
+             f"identified base) is in {tracker_path.name}"
+             + (f" and in the URDF as link {TRACKER_LINK}, a child of {root_link}"
+                if tracker_frame else "")
+             + "; the joint values are the controller's, as in the original URDF",
              "compliance and every effect listed here act on top of the URDF: the URDF alone "
              "is the robot unloaded"
              + (" and without its own weight's deflection" if own_weight else "")]
@@ -247,16 +343,26 @@ def export_urdf(result, out, model=None) -> tuple[Path, Path]:
         warnings.warn(f"effects {', '.join(rigid_at_rest)} cannot be written in a URDF; the "
                       f"URDF leaves them out (see {out.with_suffix('.yaml')})", DataWarning,
                       stacklevel=2)
+    if kinematics is not None:
+        notes.append(f"{kin_path.name}: the six joint origins as ur_description reads them "
+                     f"(joint offsets folded into their rpy); it cannot hold the flange "
+                     f"correction, which stays on the URDF's joint to {flange}")
+        mismatch = layout_mismatch(tree)
+        if mismatch:
+            notes.append(f"{kin_path.name} holds this URDF's origins, not ur_description's: "
+                         f"{mismatch}; export from a URDF made by ur_description's xacro")
+            warnings.warn(f"{kin_path.name}: {mismatch}; the origins are this URDF's, which "
+                          f"ur_description's xacro would misplace", DataWarning, stacklevel=2)
     params = result.parameters
     doc = {"format": "doe_calib.calibrated_urdf", "urdf": out.name, "source": result.robot.source,
-           "model": result.model, "root_link": TRACKER_LINK, "flange_link": flange,
-           "folded_into_urdf": [e.spec() for e in model.effects if e.name in FOLDED] + ["base"],
+           "model": result.model, "root_link": root_link, "flange_link": flange,
+           "tracker_frame": {"file": tracker_path.name, "in_urdf": tracker_frame},
+           "ur_kinematics": kin_path.name if kinematics is not None else None,
+           "folded_into_urdf": [e.spec() for e in model.effects if e.name in FOLDED],
            "markers_mm": {m: [float(params[f"marker_{m}_{a}"] * 1000) for a in "xyz"]
                           for m in result.tool.names},
            "not_in_urdf": leftovers(model, params, result.std()),
            "own_weight": own_weight,
            "notes": notes}
-    yaml_path = out.with_suffix(".yaml")
-    yaml_path.write_text(yaml.safe_dump(doc, sort_keys=False, allow_unicode=True),
-                         encoding="utf-8")
-    return out, yaml_path
+    _dump(yaml_path, doc)
+    return UrdfFiles(out, yaml_path, tracker_path, kin_path if kinematics is not None else None)
