@@ -85,3 +85,17 @@ def test_a_wide_table_stays_inside_the_page(tmp_path):
     drawn = (image < 0.8).any(axis=(0, 2))
     assert drawn[:700].any()  # the table is drawn
     assert not drawn[1265:].any()  # nothing right of the page's 1100 px (150 … 1250)
+
+
+def test_a_payload_without_a_size_is_said_to_be_drawn_as_a_steel_sphere():
+    from doe_calib.design.notes import collision_words
+    from doe_calib.design.result import CandidateCount
+
+    collision = {"clearance_mm": 20, "self_clearance_mm": 5, "pairs_checked": 87,
+                 "pairs_not_checked": []}
+    count = CandidateCount(drawn=100, kept=90, removed={})
+    said = collision_words(collision, count, (), ["250@0,0,200", "0@0,0,0", "40@0,0,100:150"])
+    radius_mm = 1000 * (3 * 250 / (4 * 3.141592653589793 * 7850)) ** (1 / 3)  # steel, 7850 kg/m³
+    assert f"the 250 kg payload is drawn as a steel sphere of radius {radius_mm:.0f} mm" in said
+    assert "--load 250@0,0,200:R_MM" in said
+    assert said.count("steel sphere") == 1  # not the massless load, not the one with a size

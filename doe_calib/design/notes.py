@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from doe_calib.collision.shapes import load_radius
 from doe_calib.design.criteria import AOptimal, DOptimal, EOptimal, TaskOptimal
 
 #: What each criterion maximises, by name.
@@ -83,13 +84,15 @@ def criterion_words(d) -> list:
                      f"{1000 * np.sqrt(-d.criteria['task'] / r.task_poses):.4g} mm "
                      f"(σ = {d.sigma_mm:g} mm)")
     if "collision" in d.constraints:
-        notes.append(collision_words(d.constraints["collision"], d.candidates, d.clearances))
+        notes.append(collision_words(d.constraints["collision"], d.candidates, d.clearances,
+                                     d.constraints.get("loads", ())))
     return notes
 
 
-def collision_words(collision: dict, candidates, clearances) -> str:
+def collision_words(collision: dict, candidates, clearances, loads=()) -> str:
     """The collision check (``collision``: the model's summary) in one sentence: clearance
-    asked, candidates rejected (most by which pair), least clearance kept."""
+    asked, candidates rejected (most by which pair), least clearance kept, and the payloads
+    (``loads``: ``--load`` specs) drawn as a steel sphere because no size was given."""
     rejected, blocked = ({k[len(head):]: v for k, v in candidates.removed.items()
                           if k.startswith(head)}
                          for head in ("collision: ", "line of sight: blocked by "))
@@ -104,6 +107,12 @@ def collision_words(collision: dict, candidates, clearances) -> str:
         text += f"; {sum(blocked.values())} with a tracker beam blocked, most by {_most(blocked)}"
     if clearances:
         text += "; least clearance of the design {:.1f} mm ({})".format(*min(clearances))
+    for spec in loads:
+        kg = float(spec.partition("@")[0])
+        if kg > 0 and ":" not in spec:
+            text += (f"; the {kg:g} kg payload is drawn as a steel sphere of radius "
+                     f"{1000 * load_radius(kg):.0f} mm (no size given: --load {spec}:R_MM "
+                     f"gives its radius)")
     return text
 
 
