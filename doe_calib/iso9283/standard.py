@@ -45,7 +45,7 @@ def cube_points(centre, edge: float) -> dict:
     Examples
     --------
     >>> p = cube_points([0.0, 0.0, 0.0], 1.0)
-    >>> p["P1"].tolist(), [round(v, 3) for v in p["P2"]]
+    >>> p["P1"].tolist(), p["P2"].round(3).tolist()
     ([0.0, 0.0, 0.0], [-0.4, -0.4, -0.4])
     """
     centre = np.asarray(centre, float).reshape(3)
