@@ -21,7 +21,7 @@ def _cycles(seed=0, n=N):
     return commanded, attained
 
 
-def _hand(points, commanded):
+def hand_ap_rp(points, commanded):
     """AP, APx, APy, APz and RP of ISO 9283 §7.2.1 and §7.2.2, term by term."""
     n = len(points)
     mean = [sum(points[j][k] for j in range(n)) / n for k in range(3)]
@@ -39,7 +39,7 @@ def test_ap_and_rp_equal_the_standards_formulas():
     campaign = Campaign.from_cycles("before", attained, commanded)
     assert [p.pose for p in campaign.poses] == ["P1", "P2", "P3", "P4", "P5"]
     for pose, points in attained.items():
-        ap, (apx, apy, apz), rp = _hand(points.tolist(), commanded[pose].tolist())
+        ap, (apx, apy, apz), rp = hand_ap_rp(points.tolist(), commanded[pose].tolist())
         got = campaign[pose]
         assert got.n == N
         assert abs(got.ap_mm - ap) < 1e-9 and abs(got.rp_mm - rp) < 1e-9

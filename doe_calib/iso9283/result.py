@@ -200,14 +200,14 @@ class Iso9283Result:
         lines = [f"ISO 9283 pose accuracy and repeatability, TCP {self.tcp} ({self.frame})"]
         for c in self.campaigns:
             lines += ["", f"campaign {c.name}:",
-                      f"{'pose':<6}{'n':>4}{'AP':>10}{'APx':>10}{'APy':>10}{'APz':>10}"
-                      f"{'RP':>10}  mm"]
-            lines += [f"{p.pose:<6}{p.n:>4}{p.ap_mm:10.4f}{p.apx_mm:10.4f}{p.apy_mm:10.4f}"
-                      f"{p.apz_mm:10.4f}{p.rp_mm:10.4f}" for p in c.poses]
+                      f"{'pose':<6}{'n':>4}{'AP':>11}{'APx':>11}{'APy':>11}{'APz':>11}"
+                      f"{'RP':>11}  mm"]
+            lines += [f"{p.pose:<6}{p.n:>4}{p.ap_mm:11.4f}{p.apx_mm:11.4f}{p.apy_mm:11.4f}"
+                      f"{p.apz_mm:11.4f}{p.rp_mm:11.4f}" for p in c.poses]
             if any(p.orientation_deg for p in c.poses):
-                lines.append(f"{'pose':<6}" + "".join(f"{k[:4]:>10}" for k in ORIENTATION_KEYS)
+                lines.append(f"{'pose':<10}" + "".join(f"{k[:4]:>11}" for k in ORIENTATION_KEYS)
                              + "  deg")
-                lines += [f"{p.pose:<6}" + "".join(f"{v:10.4f}" for v in p.orientation_deg)
+                lines += [f"{p.pose:<10}" + "".join(f"{v:11.4f}" for v in p.orientation_deg)
                           for p in c.poses if p.orientation_deg]
             d = c.distance
             if d is not None:
