@@ -91,12 +91,34 @@ def test_a_cube_given_is_used(files):
     assert block["targets_mm"]["P4"] == pytest.approx([1960, 160, 1360])
 
 
+def _program_rows(path):
+    return list(csv.DictReader(line for line in path.open() if not line.startswith("#")))
+
+
 def test_the_test_is_exported_in_cycle_order(design, tmp_path, capsys):
     assert main(["export", str(design), "--format", "csv", "--out", str(tmp_path)]) == 0
-    rows = list(csv.DictReader(line for line in (tmp_path / "doe_calib.csv").open()
-                               if not line.startswith("#")))
+    rows = _program_rows(tmp_path / "doe_calib.csv")
     assert [r["pose"] for r in rows] == [f"{p}-{c:02d}" for c in range(1, CYCLES + 1)
                                          for p in POSES]
+    # --turns design (the command's advice): each pose at one set of joint values
+    assert main(["export", str(design), "--format", "csv", "--turns", "design", "--out",
+                 str(tmp_path / "design_turns")]) == 0
+    q = {}
+    for r in _program_rows(tmp_path / "design_turns" / "doe_calib.csv"):
+        q.setdefault(r["pose"][:2], set()).add(tuple(r[f"q{k}"] for k in range(1, 7)))
+    assert all(len(v) == 1 for v in q.values())
+
+
+def test_in_a_cell_the_poses_are_free_and_the_program_passes_the_check(tmp_path, capsys):
+    out = tmp_path / "cell.json"
+    assert main(["iso9283", "design", *ROBOT, "--tcp", "A", "--load", "250@0,0,200",
+                 "--constraints", examples.CELL_YAML, "--cycles", "3", "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["constraints"]["collision"]["clearance_mm"] > 0
+    capsys.readouterr()
+    assert main(["export", str(out), "--format", "krl", "--turns", "design", "--out",
+                 str(tmp_path / "prog"), "--json"]) == 0
+    checked = json.loads(capsys.readouterr().out)["collision"]
+    assert checked["moves"] > 15 and not checked["collisions"]
 
 
 def _hand_report(paths, result_path, design_path):

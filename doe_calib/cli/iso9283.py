@@ -8,7 +8,14 @@ from __future__ import annotations
 import argparse
 import sys
 
-from doe_calib.cli.common import add_options, check_payloads, parse_floats, parse_load
+from doe_calib.cli.common import (
+    add_options,
+    check_payloads,
+    collision_arguments,
+    collision_builder,
+    parse_floats,
+    parse_load,
+)
 from doe_calib.cli.options import count
 from doe_calib.errors import OptionError
 
@@ -39,10 +46,12 @@ def add_arguments(c):
     d.add_argument("--cube", metavar="X,Y,Z,EDGE",
                    help="the cube's centre and edge, mm, robot base frame (default: the "
                         "largest found whose five test points the robot reaches at one "
-                        "flange orientation; collisions are not searched)")
+                        "flange orientation, each free of collisions; the moves and the "
+                        "tracker's beams are checked by export)")
     d.add_argument("--cycles", type=count("--cycles", 2, "cycles"), default=30,
                    help="cycles (default 30, the standard's)")
     add_options(d, "--seed")
+    collision_arguments(d)
     d.add_argument("--out", required=True, metavar="ISO.json", help="design JSON to write")
     r = sub.add_parser("report", help="AP, RP, AD, RD of the measured cycles",
                        description="ISO 9283 §7.2–7.4 from the readings of the test's visits; "
@@ -89,8 +98,10 @@ def _design(args):
         if values[3] <= 0:
             raise OptionError(f"--cube {args.cube}: the edge must be positive (mm)")
         cube = (values[:3], float(values[3]))
+    build = collision_builder(args, robot, tool, constraints)
+    collision = None if build is None else build(() if load is None else (load,))
     design, plan = design_test(robot, tool, args.tcp, load, constraints, cube, args.cycles,
-                               args.seed or 0)
+                               args.seed or 0, collision)
     data = {**design.to_dict(), KEY: plan.to_dict()}
     write_json(data, args.out)
     if args.json:
@@ -101,8 +112,9 @@ def _design(args):
         for pose, x in plan.targets_mm.items():
             print(f"{pose}: {', '.join(f'{v:.1f}' for v in x)} mm, flange "
                   f"{', '.join(f'{v:.2f}' for v in plan.rpy_deg[pose])} deg (a, b, c)")
-    print(f"\nwritten: {args.out} (run it with: doe-calib export {args.out} --format ...)",
-          file=sys.stderr)
+    # shortest turns would put a pose's joints a turn apart between cycles (one from home)
+    print(f"\nwritten: {args.out} (run it with: doe-calib export {args.out} --format FORMAT "
+          f"--turns design, each pose at the same joint values in every cycle)", file=sys.stderr)
 
 
 def _report(args):
@@ -111,11 +123,11 @@ def _report(args):
     from doe_calib.estimation.result import IdentificationResult
     from doe_calib.io.json_file import read_json
     from doe_calib.iso9283.measured import campaigns
-    from doe_calib.iso9283.plan import TestPlan
+    from doe_calib.iso9283.plan import IsoPlan
     from doe_calib.iso9283.result import Iso9283Result
 
     data = read_json(args.design, "doe_calib.design", "doe_calib design file")
-    plan = TestPlan.from_design(data, args.design)
+    plan = IsoPlan.from_design(data, args.design)
     if args.tcp is not None and args.tcp != plan.tcp:
         raise OptionError(f"--tcp {args.tcp}: the test was designed for marker {plan.tcp}, "
                           f"whose positions it commands")

@@ -14,13 +14,13 @@ _EDGES = [(a, b) for a, b in itertools.combinations(itertools.product((-1, 1), r
 
 
 def _figure(result, plan):
-    """The cube with the commanded and mean attained points (mm), then AP and RP bars."""
+    """The cube with the commanded points (mm), then AP and RP bars of each campaign."""
     fig = new_figure(11.0, 3.8)
     ax = fig.add_subplot(1, 3, 1, projection="3d")
     centre, half = np.asarray(plan.cube["centre_mm"]), 0.5 * plan.cube["edge_mm"]
     for a, b in _EDGES:
         ax.plot(*np.column_stack([centre + half * np.array(a), centre + half * np.array(b)]),
-                color="0.7", lw=0.7)
+                color="tab:blue", lw=0.8)
     target = np.array(list(plan.targets_mm.values()))
     ax.scatter(*target.T, color="k", s=18, label="commanded")
     for pose, x in plan.targets_mm.items():
@@ -40,15 +40,15 @@ def _figure(result, plan):
             got = {p.pose: getattr(p, key) for p in c.poses}
             bars.bar(np.arange(len(poses)) + (i - (len(result.campaigns) - 1) / 2) * width,
                      [got.get(p, np.nan) for p in poses], width, label=c.name)
+        plain_ticks(bars)
         bars.set_xticks(range(len(poses)), poses)
         bars.set_title(what, fontsize=9)
-        plain_ticks(bars)
         bars.legend(fontsize=7)
     return fig
 
 
 def write_iso_report(path, result, plan) -> None:
-    """Write the HTML report of ``result`` (Iso9283Result) for the test ``plan`` (TestPlan)."""
+    """Write the HTML report of ``result`` (Iso9283Result) for the test ``plan`` (IsoPlan)."""
     names = [c.name for c in result.campaigns]
     rows = []
     for pose in plan.targets_mm:

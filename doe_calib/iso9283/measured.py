@@ -26,7 +26,7 @@ def campaigns(meas, plan, markers, base=None) -> tuple:
     ----------
     meas : Measurements
         Readings of the test (tracker frame, or the base frame when ``base`` is None).
-    plan : TestPlan
+    plan : IsoPlan
     markers : dict
         Marker name → its position on the flange (3,), m (nominal or identified): the
         orientation's reference; the TCP must be one of them.

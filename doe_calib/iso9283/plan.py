@@ -36,7 +36,7 @@ def parse_visit(pose_id: str) -> tuple | None:
 
 
 @dataclass(frozen=True)
-class TestPlan:
+class IsoPlan:
     """The test a design plans.
 
     Attributes
@@ -53,8 +53,6 @@ class TestPlan:
         ``KG@X,Y,Z`` carried through the test ("" unloaded).
     cycles : int
     """
-
-    __test__ = False  # a plan of a test, not a pytest test class
 
     targets_mm: dict
     rpy_deg: dict
@@ -74,7 +72,7 @@ class TestPlan:
                 "cube": self.cube, "load": self.load, "cycles": self.cycles}
 
     @classmethod
-    def from_design(cls, data: dict, path=None) -> "TestPlan":
+    def from_design(cls, data: dict, path=None) -> "IsoPlan":
         """The plan of a design file's JSON ``data`` (a DataError when it has none)."""
         block = data.get(KEY) if isinstance(data, dict) else None
         if not isinstance(block, dict):
