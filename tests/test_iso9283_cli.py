@@ -144,7 +144,14 @@ def _hand_report(paths, result_path, design_path):
 
 
 def test_report_equals_a_hand_computation_side_by_side(files, design, result, capsys):
-    before, after = _cycles(files, design, "before", 3), _cycles(files, design, "after", 4)
+    """Before: the design's joint values; after: the program compensate makes of the
+    targets CSV the design wrote beside it, both run on the simulated true robot."""
+    before = _cycles(files, design, "before", 3)
+    assert main(["compensate", "--result", str(result), "--targets",
+                 str(files / "iso_targets.csv"), "--targets-frame", "base_link", "--tcp", "A",
+                 "--out", str(files / "comp.csv"), "--format", "csv", "--program-out",
+                 str(files / "comp")]) == 0
+    after = _cycles(files, files / "comp" / "compensated.csv", "after", 4)
     out, html = files / "rep.json", files / "rep.html"
     assert main(["iso9283", "report", "--design", str(design), "--data", str(before),
                  str(after), "--result", str(result), "--tcp", "A", "--out", str(out),
@@ -159,9 +166,11 @@ def test_report_equals_a_hand_computation_side_by_side(files, design, result, ca
             ap, _, rp = expected[pose]
             assert got["n"] == CYCLES
             assert abs(got["AP_mm"] - ap) < 1e-9 and abs(got["RP_mm"] - rp) < 1e-9
-            # the true joint offsets, not compensated: AP of mm; σ 0.01 mm: RP under 0.1 mm
-            assert 0.1 < got["AP_mm"] < 10.0 and got["RP_mm"] < 0.1
-            assert abs(got["AP_a_deg"]) < 1.0 and got["RP_a_deg"] < 0.1
+            assert got["RP_mm"] < 0.1 and got["RP_a_deg"] < 0.1  # σ 0.01 mm
+            assert abs(got["AP_a_deg"]) < 1.0
+        # the true joint offsets: AP of mm before, of the identification's error after
+        aps = [campaign["poses"][p]["AP_mm"] for p in POSES]
+        assert min(aps) > 0.3 if campaign["name"] == "before" else max(aps) < 0.05
         assert campaign["distance"]["poses"] == ["P2", "P4"]
         assert campaign["distance"]["n"] == CYCLES
     assert report["poses"] == report["campaigns"][-1]["poses"]

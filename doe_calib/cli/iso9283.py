@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from doe_calib.cli.common import (
     add_options,
@@ -52,7 +53,10 @@ def add_arguments(c):
                    help="cycles (default 30, the standard's)")
     add_options(d, "--seed")
     collision_arguments(d)
-    d.add_argument("--out", required=True, metavar="ISO.json", help="design JSON to write")
+    d.add_argument("--out", required=True, metavar="ISO.json",
+                   help="design JSON to write; ISO_targets.csv beside it holds the commanded "
+                        "positions, for the program after compensation (compensate --targets "
+                        "ISO_targets.csv --targets-frame base_link)")
     r = sub.add_parser("report", help="AP, RP, AD, RD of the measured cycles",
                        description="ISO 9283 §7.2–7.4 from the readings of the test's visits; "
                                    "each session (a 'session' column, or one --data file "
@@ -81,10 +85,11 @@ def _design(args):
     from doe_calib.design import LoadCase, read_constraints
     from doe_calib.io.json_file import strict_json, write_json
     from doe_calib.iso9283.design import design_test
-    from doe_calib.iso9283.plan import KEY
+    from doe_calib.iso9283.plan import KEY, write_targets
     from doe_calib.model.robot import Robot
     from doe_calib.model.tool import Tool
 
+    targets = _beside(args.out)
     tool = Tool.from_yaml(args.tool)
     robot = Robot.from_urdf(args.robot, flange=args.flange or tool.flange)
     load = None
@@ -104,6 +109,7 @@ def _design(args):
                                args.seed or 0, collision)
     data = {**design.to_dict(), KEY: plan.to_dict()}
     write_json(data, args.out)
+    targets = write_targets(targets, design, plan)
     if args.json:
         print(strict_json({"format": data["format"], KEY: data[KEY],
                            "visits": len(design.configurations), "out": args.out}))
@@ -113,8 +119,20 @@ def _design(args):
             print(f"{pose}: {', '.join(f'{v:.1f}' for v in x)} mm, flange "
                   f"{', '.join(f'{v:.2f}' for v in plan.rpy_deg[pose])} deg (a, b, c)")
     # shortest turns would put a pose's joints a turn apart between cycles (one from home)
-    print(f"\nwritten: {args.out} (run it with: doe-calib export {args.out} --format FORMAT "
-          f"--turns design, each pose at the same joint values in every cycle)", file=sys.stderr)
+    print(f"\nwritten: {args.out}, {targets}\nrun it with: doe-calib export {args.out} "
+          f"--format FORMAT --turns design (each pose at the same joint values in every "
+          f"cycle); after compensation: doe-calib compensate --result R.json --targets "
+          f"{targets} --targets-frame base_link --tcp {plan.tcp} --out C.csv --format FORMAT",
+          file=sys.stderr)
+
+
+def _beside(out: str) -> Path:
+    """``ISO_targets.csv`` beside ``--out ISO.json``; refuses an ``--out`` not ending .json."""
+    path = Path(out)
+    if path.suffix.lower() != ".json":
+        raise OptionError(f"--out {out}: the test is written as JSON (with its targets CSV "
+                          f"beside it): give a .json name")
+    return path.with_name(f"{path.stem}_targets.csv")
 
 
 def _report(args):

@@ -22,14 +22,18 @@ from doe_calib.model.rotations import rotation_vector_to_matrix
 def campaigns(meas, plan, markers, base=None) -> tuple:
     """The :class:`~.result.Campaign` of each session of ``meas``.
 
+    Configurations whose pose id is not a visit (a home pose, a check point) and visits
+    without a reading of the TCP are left out.
+
     Parameters
     ----------
     meas : Measurements
         Readings of the test (tracker frame, or the base frame when ``base`` is None).
     plan : IsoPlan
     markers : dict
-        Marker name → its position on the flange (3,), m (nominal or identified): the
-        orientation's reference; the TCP must be one of them.
+        Marker name → its position on the flange (3,), m (nominal or identified), in the
+        order of the tool the readings were read with (``meas.marker`` indexes it): the
+        orientation's reference.
     base : array_like, shape (6,), optional
         Tracker pose of the robot base, ``[t (m), rotation vector (rad)]``.
 
@@ -41,7 +45,6 @@ def campaigns(meas, plan, markers, base=None) -> tuple:
     rotation, origin = (np.eye(3), np.zeros(3)) if base is None else \
         (rotation_vector_to_matrix(np.asarray(base[3:], float)), np.asarray(base[:3], float))
     in_base = (meas.xyz - origin) @ rotation   # Rᵀ (x − t), row by row
-    names = np.asarray(meas.marker)
     tool_names = list(markers)
     sessions = meas.sessions
     out = {}
@@ -50,7 +53,7 @@ def campaigns(meas, plan, markers, base=None) -> tuple:
         if visit is None:
             continue
         rows = np.flatnonzero(meas.config == c)
-        read = {tool_names[names[r]]: 1000.0 * in_base[r] for r in rows}
+        read = {tool_names[meas.marker[r]]: 1000.0 * in_base[r] for r in rows}
         if plan.tcp not in read:
             continue
         runs = out.setdefault(sessions[c], {})

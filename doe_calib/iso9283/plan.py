@@ -6,16 +6,24 @@ flange's commanded orientation (``rpy_deg``: a, b, c about the base x, y, z,
 :func:`~doe_calib.iso9283.standard.roll_pitch_yaw`), both in the robot base frame (the
 URDF root), the cube they come from, the TCP marker, the load carried and the cycles.
 Its poses are ``P1-01`` … ``P5-30``: pose, dash, cycle.
+
+The campaign after compensation runs the program ``compensate`` makes of the targets CSV
+:func:`write_targets` writes (the visits with their commanded positions, in the URDF
+root's frame ``base_link``): the identified robot then puts the measured TCP itself on
+each commanded position.
 """
 from __future__ import annotations
 
+import csv
 import re
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from doe_calib.errors import DataError
+from doe_calib.io.configuration_columns import WRENCH, XYZ, joint_columns
 from doe_calib.iso9283.standard import POSES
 
 #: The block's key in a design file.
@@ -86,3 +94,20 @@ class IsoPlan:
         except (KeyError, TypeError, ValueError) as exc:
             raise DataError(f"the \"{KEY}\" block is incomplete ({exc!r} is missing or "
                             f"malformed)", path) from None
+
+
+def write_targets(path, design, plan: IsoPlan) -> Path:
+    """Write the targets CSV of the test (``compensate --targets``, formats.md §12): each
+    visit's pose id, q (deg, mm), wrench and commanded TCP position ``x, y, z`` (mm, robot
+    base frame: ``--targets-frame base_link``); return the path."""
+    cfg, robot = design.configurations, design.robot
+    path = Path(path)
+    with path.open("w", newline="", encoding="utf-8") as fh:
+        fh.write("# doe_calib ISO 9283 targets: q in deg (mm for prismatic joints), forces in N, "
+                 "moments in N·m, x/y/z in mm (robot base frame, base_link)\n")
+        out = csv.writer(fh, lineterminator="\n")
+        out.writerow(["pose", *joint_columns(robot), *WRENCH, *XYZ])
+        for pose, q, w in zip(cfg.pose, cfg.q * robot.display_factors, cfg.wrench):
+            target = plan.targets_mm[parse_visit(pose)[0]]
+            out.writerow([pose, *map(repr, map(float, [*q, *w, *target]))])
+    return path
