@@ -35,8 +35,8 @@ from doe_calib.model.marker_model import build_model
 
 #: Random configurations whose TCP is a candidate centre (or a seed for a cube given).
 CANDIDATES = 200
-#: Bisection steps of the edge: the edge found is within 2⁻¹⁰ of the robot's reach below
-#: the largest reachable from that centre.
+#: Bisection steps of the edge, from 0 to the chain's length: the edge found is within
+#: 2⁻¹⁰ of that length below the largest reachable from the centre.
 BISECTIONS = 10
 #: Largest error (m, rad) of a test point reached.
 REACHED = 1e-9
@@ -99,7 +99,8 @@ def _largest(reach, centres, rotations, seeds, constraints, top: float) -> tuple
     """(edge, centre index, joint values) of the largest cube over the candidate centres."""
     best = (0.0, None, None)
     for k, (centre, rot, seed) in enumerate(zip(centres, rotations, seeds)):
-        # a centre that cannot hold the best cube so far cannot beat it
+        # a centre that cannot hold the best cube so far is passed over: a larger cube
+        # there is almost never reached when a smaller one is not
         lo = best[0]
         found = reach.cube(centre, lo, rot, seed) if lo > 0 and _in_cell(
             centre, lo, constraints) else None
