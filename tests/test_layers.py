@@ -1,7 +1,7 @@
 """Imports run downhill: no module imports a layer above its own.
 
 The layers, lowest first: errors, runtime, io, model, estimation, collision, design,
-diagnosis, compensation, export, report, examples, cli, then the top-level API
+diagnosis, compensation, export, report, iso9283, examples, cli, then the top-level API
 (``doe_calib/__init__.py``, ``__main__.py``, ``result_files.py``), which may import
 every layer. Every import is walked, inside functions too: ``import x``, ``from x
 import y`` (relative ones resolved) and ``import_module("x")`` with a literal name.
@@ -11,7 +11,7 @@ from pathlib import Path
 
 PKG = Path(__file__).resolve().parents[1] / "doe_calib"
 LAYERS = ("errors", "runtime", "io", "model", "estimation", "collision", "design",
-          "diagnosis", "compensation", "export", "report", "examples", "cli")
+          "diagnosis", "compensation", "export", "report", "iso9283", "examples", "cli")
 TOP = len(LAYERS)
 
 

@@ -90,8 +90,8 @@ def test_no_flat_modules_beside_the_layers():
 
 
 @pytest.mark.parametrize("layer", ["model", "io", "estimation", "design", "diagnosis",
-                                   "compensation", "collision", "export", "report", "cli",
-                                   "examples", "runtime"])
+                                   "compensation", "collision", "export", "report", "iso9283",
+                                   "cli", "examples", "runtime"])
 def test_each_layer_is_a_documented_package(layer):
     init = PKG / layer / "__init__.py"
     assert init.exists() and ast.get_docstring(ast.parse(init.read_text(encoding="utf-8")))

@@ -21,6 +21,7 @@ from doe_calib.cli import (
     export,
     export_urdf,
     identify,
+    iso9283,
     predict,
     refine,
     simulate,
@@ -38,7 +39,7 @@ FORMATS_NOTE = ("file formats: docs/formats.md in the doe_calib repository; exam
 #: name ('-' as '_').
 COMMANDS = {m.__name__.rpartition(".")[2].replace("_", "-"): m for m in (
     demo, simulate, identify, predict, diagnose, refine, design, study, export, compare,
-    compensate, export_urdf)}
+    compensate, export_urdf, iso9283)}
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -64,7 +64,9 @@ def read_poses_to_run(path, tool=None) -> PosesToRun:
 
 def _design(data: dict, tool, path) -> PosesToRun:
     design = DesignResult.from_dict(data)
-    return PosesToRun(design, DESIGN, f"the design's {len(design.poses())} poses")
+    # an ISO 9283 test (its "iso9283" block) visits its poses in the standard's cycle order
+    return PosesToRun(design, DESIGN, f"the design's {len(design.poses())} poses",
+                      as_given="iso9283" in data)
 
 
 def _augmentation(data: dict, tool, path) -> PosesToRun:
