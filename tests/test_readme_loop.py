@@ -40,7 +40,8 @@ def test_readme_loop_runs_in_order(tmp_path, monkeypatch):
                 assert out.is_file() or (out.is_dir() and any(out.iterdir())), line
         ran.append(argv[1])
     assert ran == ["design", "export", "simulate", "simulate", "identify", "diagnose", "refine",
-                   "export", "compensate", "export-urdf"]
+                   "export", "compensate", "export-urdf", "iso9283", "export", "simulate",
+                   "compensate", "simulate", "iso9283"]
     for name in ("design.csv", "program/doe_calib.src", "program/doe_calib.dat", "truth.json",
                  "refined_refine.json", "compensated/compensated.src", "kr270_calibrated.yaml"):
         assert (tmp_path / name).is_file(), name
@@ -52,3 +53,9 @@ def test_readme_loop_runs_in_order(tmp_path, monkeypatch):
     missed = [r for r in rows if r["converged"] != "true"]
     assert len(rows) == 30 and len(missed) <= 3, missed
     assert all("at the limit of" in r["note"] for r in missed), missed
+    # the acceptance test: compensation brings every pose's AP from mm to the noise's scale
+    import json
+    before, after = json.loads((tmp_path / "iso_report.json").read_text())["campaigns"]
+    for pose in ("P1", "P2", "P3", "P4", "P5"):
+        assert before["poses"][pose]["AP_mm"] > 1.0 > 0.1 > after["poses"][pose]["AP_mm"], pose
+        assert after["poses"][pose]["RP_mm"] < 0.2 and after["poses"][pose]["n"] == 30, pose
