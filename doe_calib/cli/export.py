@@ -200,7 +200,8 @@ def run(args):
         print(strict_json({"design": args.design, "source": source.format, "runs": source.note,
                            "format": args.format, "name": args.name,
                           "poses": n_poses, "measurements": len(design.configurations),
-                          "cycle_time": None if cycle is None else cycle.to_dict(), "files": [str(p) for p in paths],
+                          "cycle_time": None if cycle is None else cycle.to_dict(),
+                          "files": [str(p) for p in paths],
                           "collision": None if checked is None else {
                               "moves": checked.moves, "poses_checked": checked.samples,
                               "routed": list(checked.routed),
