@@ -231,3 +231,43 @@ def test_a_compensated_program_is_checked_with_its_rows_load(tmp_path, capsys):
     assert main([*args, "--load-radius", "350", "--allow-collisions", "--name", "kept"]) == 0
     assert "warning: written with a colliding move" in capsys.readouterr().err
     assert (tmp_path / "prog" / "kept.src").is_file()
+
+
+@pytest.fixture(scope="module")
+def kr270_design():
+    from doe_calib import build_model, examples
+    from doe_calib.design import LoadCase
+    from doe_calib.design.optimal import optimal_design
+
+    robot, tool = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
+    return optimal_design(build_model(robot, tool, "joint_offset"), 4,
+                          [LoadCase(250.0, (0.0, 0.0, 0.2))], candidates=200, refine=False,
+                          rng=np.random.default_rng(3))
+
+
+def test_steps_times_and_payloads(kr270_design, tmp_path):
+    """The rows' times are the cycle-time model's; the tool alone is declared first, tool plus
+    load at the stop; without a dwell the trajectory has no point that holds nothing."""
+    from doe_calib.export import Payload, Plan, Settings, cycle_time, export_design
+    from doe_calib.export.joint_program import steps
+
+    d = kr270_design
+    plan = Plan(home=tuple(d.configurations.q[0]))
+    visits = moves(d, plan)
+    tool = Payload(2.0, (0.0, 0.0, 0.05))
+    rows = steps(d, visits, Settings(dwell=3.0, tool=tool, load_change=120.0, handshake=4))
+    assert rows[-1].time == pytest.approx(cycle_time(visits, d.robot, 3.0, 120.0).total)
+    assert rows[0].kind == "home" and rows[0].payload == tool
+    (stop,) = [r for r in rows if r.kind == "stop"]
+    assert stop.payload.mass == 252.0 and "hang 250 kg" in stop.note
+    assert all("handshake on digital I/O 4" in r.note for r in rows if r.kind == "trigger")
+    (path,) = export_design(d, "ros2", tmp_path / "t.yaml", dwell=0.0, plan=plan,
+                            load_change_time=0.0)
+    points = yaml.safe_load(path.read_text())["points"]
+    t = [p["time_from_start"]["sec"] + 1e-9 * p["time_from_start"]["nanosec"] for p in points]
+    assert np.all(np.diff(t) > 0)
+    moving = [r for r in steps(d, visits, Settings(dwell=0.0, load_change=0.0))
+              if r.kind not in ("stop", "trigger")]
+    # home is a pose of the design: the moves to it from home and from the load-change pose
+    # are no motion, and no point either
+    assert len(points) == len({r.time for r in moving}) < len(moving)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import math
 from dataclasses import dataclass
 
@@ -64,8 +65,9 @@ def steps(design, visits, settings) -> list[Step]:
         t = out[-1].time if out else 0.0
         moved = 0.0 if not out or kind in ("stop", "trigger") else move_time(out[-1].urdf,
                                                                                urdf, speed)
+        first = not out and kind != "stop"  # the program declares the tool alone first
         out.append(Step(kind, pose, q, urdf, t + moved + wait, ascii_text(note),
-                        settings.tool if not out else payload))
+                        settings.tool if first else payload))
 
     for m, changed in zip(visits, load_changes(visits)):
         if changed:
@@ -128,7 +130,8 @@ def ros2_trajectory(design, visits, settings) -> dict:
            f"trajectory_msgs/msg/JointTrajectory: positions in rad (m for prismatic joints), "
            f"each reached at rest; stops and triggers are comments above the point that "
            f"holds them",
-           "joint_names: [" + ", ".join(robot.joint_names) + "]", "points:"]
+           "joint_names: [" + ", ".join(json.dumps(n) for n in robot.joint_names) + "]",
+           "points:"]
     last = None
     for s in steps(design, visits, settings):
         out.append(f"  # {s.kind}: {s.note}" + ("" if s.kind != "stop" or s.payload is None else
