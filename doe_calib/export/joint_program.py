@@ -74,8 +74,11 @@ def steps(design, visits, settings) -> list[Step]:
             here = out[-1] if out else None
             urdf = here.urdf if here else m.urdf_q if m.urdf_pre is None else m.urdf_pre
             q = here.q if here else (m.pre if m.pre is not None else m.q)
-            add("stop", m.pose, urdf, q, m.instruction(), settings.payload(m.payload),
-                settings.load_change)
+            payload = settings.payload(m.payload)
+            add("stop", m.pose, urdf, q, m.instruction() + (
+                "" if payload is not None else "; payload not known (a wrench without its "
+                                               "mass): set it on the pendant"),
+                payload, settings.load_change)
         for w in m.via:
             add("via", m.pose, w.urdf, w.q, w.why)
         if m.urdf_pre is not None:
