@@ -118,7 +118,6 @@ def _checked(args, design, home, load_pose):
     from doe_calib.export import FORMATS, check_program, moves
     from doe_calib.export.compensated_program import compensated_plan
 
-    FORMATS[args.format].check_robot(design.robot)
     constraints = None if args.constraints is None else read_constraints(
         args.constraints, design.robot, design.tool)
     models = program_collision_models(args, design, constraints)
@@ -133,6 +132,7 @@ def run(args):
     from doe_calib.compensation.base_points import read_base_points
     from doe_calib.export.compensated_program import compensated_design, export_compensated
     from doe_calib.estimation.result import IdentificationResult
+    from doe_calib.export import FORMATS
     from doe_calib.model.marker_model import build_model
 
     if args.program_out is not None and args.format is None:
@@ -140,6 +140,8 @@ def run(args):
                           "poses)")
     registry = effect_registry(args)
     result = IdentificationResult.from_json(args.result)
+    if args.format:  # a robot the program cannot drive is refused before any work
+        FORMATS[args.format].check_robot(result.robot)
     tcp = _tcp(args.tcp, result)
     base = None if args.base_points is None else \
         read_base_points(args.base_points, result.sigma_mm / 1000.0)
