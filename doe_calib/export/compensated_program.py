@@ -1,4 +1,4 @@
-"""The compensated program written through the design exporters (KRL, RAPID, URScript, CSV).
+"""The compensated program written through the exporters of :mod:`doe_calib.export` (any format).
 
 A compensated row carries the wrench of its load in the base frame, which
 turns with the pose; the load itself — the mass and centre of mass the
