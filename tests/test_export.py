@@ -167,7 +167,7 @@ def test_waits_and_operator_stops(design, tmp_path):
 
 
 def test_csv_is_the_design_csv_in_program_order(design, tmp_path, robot6):
-    (path,) = export_design(design, "csv", tmp_path / "plan.csv")
+    (path,) = export_design(design, "poses", tmp_path / "plan.csv")
     assert path.name == "plan.csv"
     cfg = read_design(path, robot6)
     rows = [m.row for m in moves(design)]

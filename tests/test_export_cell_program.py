@@ -298,7 +298,7 @@ def test_ur10_moves_take_the_nearest_equivalents(ur10, tmp_path):
     assert travel < np.abs(np.diff(design, axis=0)).sum()
     assert np.any(np.abs(q - design) > 1.0)  # some joint was really turned
     # the design CSV of the program says the angles the program moves to
-    (csv,) = export_design(ur10, "csv", tmp_path / "plan.csv", plan=plan)
+    (csv,) = export_design(ur10, "poses", tmp_path / "plan.csv", plan=plan)
     cfg = read_design(csv, robot)
     assert len(cfg) == len(ur10.configurations) and np.allclose(cfg.q, measured, atol=1e-9)
     apart = {p for p, q in zip(cfg.pose, cfg.q) if not np.allclose(q, cfg.q[cfg.pose.index(p)])}

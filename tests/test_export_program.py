@@ -152,12 +152,12 @@ def test_bad_axis_map(backlash, text, match):
 
 
 def test_csv_reads_back_with_the_program_s_approach(backlash, tmp_path, robot6):
-    (path,) = export_design(backlash, "csv", tmp_path / "plan.csv")
+    (path,) = export_design(backlash, "poses", tmp_path / "plan.csv")
     cfg = read_design(path, robot6)
     visits = moves(backlash)
     assert np.array_equal(cfg.approach, realised_approach(visits, robot6))
     with pytest.raises(OptionError, match="--axis-map"):
-        export_design(backlash, "csv", tmp_path, plan=Plan(axis_map=AxisMap.identity(6)))
+        export_design(backlash, "poses", tmp_path, plan=Plan(axis_map=AxisMap.identity(6)))
 
 
 def test_design_json_carries_the_planned_approach(backlash, tmp_path):

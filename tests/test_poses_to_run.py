@@ -48,7 +48,7 @@ def test_an_augmentation_is_exported_as_its_new_poses(augmentation, capsys):
     new = result.configurations
     assert result.tool is not None and result.constraints["loads"] == ["150@0,0,200"]
     capsys.readouterr()
-    assert main(["export", str(path), "--format", "csv", "--out", str(tmp / "plan.csv")]) == 0
+    assert main(["export", str(path), "--format", "poses", "--out", str(tmp / "plan.csv")]) == 0
     assert "runs the augmentation's 3 new poses (the 12 configurations measured before are " \
            "not run)" in capsys.readouterr().err
     plan = read_design(tmp / "plan.csv", result.robot)
@@ -82,7 +82,7 @@ def test_a_compensation_result_runs_its_compensated_rows_in_order(tmp_path, caps
     result.to_json(path)
     with pytest.raises(DataError, match="names no tool, whose markers the collision check"):
         read_poses_to_run(path)
-    assert main(["export", str(path), "--tool", examples.TOOL_YAML, "--format", "csv",
+    assert main(["export", str(path), "--tool", examples.TOOL_YAML, "--format", "poses",
                  "--no-collision", "--out", str(tmp_path / "c.csv"), "--json"]) == 0
     out = capsys.readouterr()
     assert json.loads(out.out)["source"] == "doe_calib.compensation"

@@ -216,7 +216,7 @@ def test_ur5_in_a_cell_with_its_own_360_limits(tmp_path, capsys):
     tool = Tool.from_yaml(tmp_path / "tool.yaml")
     _check(program, robot, tool, UR5_BOXES, -0.9, UR_LOAD, (-1.5, 0.3, 0.6), 5)
     # each pose logged at one q: the loaded pass keeps its first pass's turns (export/turns.py)
-    assert main(["export", str(design), "--format", "csv", "--out", str(tmp_path / "p.csv")]) \
+    assert main(["export", str(design), "--format", "poses", "--out", str(tmp_path / "p.csv")]) \
         == 0
     cfg = read_design(tmp_path / "p.csv", robot)
     apart = [p for p, q in zip(cfg.pose, cfg.q) if not np.allclose(q, cfg.q[cfg.pose.index(p)])]

@@ -20,7 +20,11 @@ CV_GROUPINGS = ("auto", "pose", "session", "region")
 #: :data:`doe_calib.export.FORMATS`: format name → its description.
 EXPORT_FORMATS = {"krl": "KUKA KRL .src/.dat", "rapid": "ABB RAPID module",
                   "urscript": "Universal Robots URScript",
-                  "csv": "design CSV (docs/formats.md section 4)"}
+                  "csv": "joint program for any robot: home, via points, load-change stops, "
+                         "triggers, checked",
+                  "ros2": "ROS 2 trajectory_msgs/JointTrajectory YAML of the checked program",
+                  "poses": "pose list: the design CSV (docs/formats.md section 4) in the "
+                           "program's order, unchecked"}
 #: :data:`doe_calib.export.sequence.GROUPINGS` and :data:`~doe_calib.export.sequence.ORDERS`.
 EXPORT_GROUPINGS = ("load", "none")
 EXPORT_ORDERS = ("travel", "design")

@@ -9,6 +9,7 @@ from pathlib import Path
 from doe_calib.cli.choices import EXPORT_FORMATS, MAX_SHIFT
 from doe_calib.cli.common import (
     add_options,
+    collision_arguments,
     effect_registry,
     parse_floats,
     report_warnings,
@@ -63,6 +64,16 @@ def add_arguments(c):
                         "parameter (dq_a1:0.02deg); default each parameter's typical "
                         "deviation, 1 mm and 0.0573 deg")
     program_arguments(c, home="none")
+    c.add_argument("--constraints", metavar="CELL.yaml",
+                   help="constraints YAML whose floor and keep-out boxes the program's moves "
+                        "keep clear of (default: none; the floor is the base plane)")
+    c.add_argument("--load-radius", type=positive("--load-radius", "mm"), metavar="MM",
+                   help="radius of the sphere each load the rows' wrenches carry is drawn as "
+                        "in the collision check, mm (default: a steel sphere of its mass)")
+    collision_arguments(c)
+    c.add_argument("--allow-collisions", action="store_true",
+                   help="write the program even if a move collides (each is listed as a "
+                        "warning); default: refuse, naming the move and the pair")
     c.add_argument("--json", action="store_true", help="print the result as JSON")
     add_options(c, "--effect-file")
 
@@ -99,17 +110,38 @@ def _tcp(text: str, result):
     return text
 
 
+def _checked(args, design, home, load_pose):
+    """The visits of the compensated ``design``, collision-checked as ``export`` checks a
+    program (None: not checked, with --no-collision or the pose list)."""
+    from doe_calib.cli.export import checked_visits, program_collision_models
+    from doe_calib.design import read_constraints
+    from doe_calib.export import FORMATS, check_program, moves
+    from doe_calib.export.compensated_program import compensated_plan
+
+    constraints = None if args.constraints is None else read_constraints(
+        args.constraints, design.robot, design.tool)
+    models = program_collision_models(args, design, constraints)
+    if models is None or FORMATS[args.format].render is None:
+        return None
+    visits = moves(design, compensated_plan(home, load_pose))
+    return checked_visits(check_program(visits, models, design.robot), args.allow_collisions)
+
+
 def run(args):
     from doe_calib.compensation import build_problem, compensate, read_targets
     from doe_calib.compensation.base_points import read_base_points
     from doe_calib.export.compensated_program import compensated_design, export_compensated
     from doe_calib.estimation.result import IdentificationResult
+    from doe_calib.export import FORMATS
     from doe_calib.model.marker_model import build_model
 
     if args.program_out is not None and args.format is None:
-        raise OptionError("--program-out needs --format (krl, rapid, urscript or csv)")
+        raise OptionError("--program-out needs --format (krl, rapid, urscript, csv, ros2 or "
+                          "poses)")
     registry = effect_registry(args)
     result = IdentificationResult.from_json(args.result)
+    if args.format:  # a robot the program cannot drive is refused before any work
+        FORMATS[args.format].check_robot(result.robot)
     tcp = _tcp(args.tcp, result)
     base = None if args.base_points is None else \
         read_base_points(args.base_points, result.sigma_mm / 1000.0)
@@ -130,12 +162,15 @@ def run(args):
     if args.format:
         where = args.program_out if args.program_out is not None else Path(args.out).parent
         try:
-            design = compensated_design(out, result.tool, model)
+            radius = None if args.load_radius is None else args.load_radius / 1000.0
+            design = compensated_design(out, result.tool, model, radius)
             fields, _ = stations(args, design)
+            visits = _checked(args, design, fields["home"], fields["load_pose"])
             paths = export_compensated(out, result.tool, args.format, where, name=args.name,
                                        model=model, home=fields["home"],
                                        load_pose=fields["load_pose"], trigger=args.trigger,
-                                       tool_payload=tool_payload(args))
+                                       tool_payload=tool_payload(args), design=design,
+                                       visits=visits)
         except DataError as exc:
             raise DataError(f"compensated program: {exc}") from exc
         kept = [p for p, ok in zip(out.pose, out.converged) if not ok]

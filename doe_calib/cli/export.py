@@ -1,9 +1,11 @@
 """``doe-calib export``: the poses of a design, augmentation or compensation result
-(:mod:`doe_calib.export.poses_to_run`) as a robot program (KRL, RAPID, URScript) or CSV.
+(:mod:`doe_calib.export.poses_to_run`) as a robot program (KRL, RAPID, URScript), a joint
+program for any robot (CSV, ROS 2 JointTrajectory YAML) or a plain pose list.
 
-Every move of the program is checked for collisions with the collision model
+Every move of a program is checked for collisions with the collision model
 the design was made with (its clearances, loads and constraints file) and
-routed round them when it can be (:mod:`doe_calib.export.safety`).
+routed round them when it can be (:mod:`doe_calib.export.safety`); the pose
+list moves nothing and is not checked.
 """
 from __future__ import annotations
 
@@ -18,7 +20,8 @@ from doe_calib.errors import DataError, OptionError
 from doe_calib.io.json_file import strict_json
 
 HELP = ("write the poses of a design, an augmentation or a compensation as a KUKA KRL, ABB "
-        "RAPID or URScript program, or a design CSV")
+        "RAPID or URScript program, a joint program for any robot (CSV, ROS 2 YAML) or a "
+        "pose list")
 EXAMPLE = ("doe-calib export design.json --format krl --out programs/ --name calib --handshake 5 "
            "--axis-map a1:-1:0,a3:1:-90")
 
@@ -31,8 +34,9 @@ def add_arguments(c):
                    help="the tool, for a compensation result (which names none)")
     c.add_argument("--format", required=True, choices=list(EXPORT_FORMATS),
                    help="; ".join(f"{k}: {d}" for k, d in EXPORT_FORMATS.items()))
-    c.add_argument("--out", help="directory (files NAME.src/.dat/.mod/.script/.csv) or file "
-                                 "(its stem is the program name); default: the design's folder")
+    c.add_argument("--out", help="directory (files NAME.src/.dat/.mod/.script/.csv/.yaml) or "
+                                 "file (its stem is the program name); default: the design's "
+                                 "folder")
     c.add_argument("--name", default="doe_calib", help="program name (default doe_calib)")
     c.add_argument("--dwell", type=at_least("--dwell", 0.0, "s"), default=3.0,
                    help="seconds to stand still at each pose (default 3)")
@@ -95,18 +99,32 @@ def _constraints(args, design):
     return read_constraints(path, design.robot, design.tool)
 
 
-def _models(args, design, constraints):
-    """The collision model of each load case (:func:`program_models`); None with --no-collision."""
+def program_collision_models(args, design, constraints):
+    """The collision model of each load of ``design`` (:func:`program_models`; its load cases,
+    or the loads its rows carry); None with --no-collision."""
     from doe_calib.design import LoadCase
     from doe_calib.export import program_models
+    from doe_calib.export.program import load_cases
 
     build = collision_builder(args, design.robot, design.tool, constraints,
                               design.constraints.get("collision"))
     if build is None:
         return None
-    loads = [LoadCase(kg, com, r) for kg, com, r in
-             (parse_load(spec) for spec in design.constraints.get("loads", []))]
+    loads = [LoadCase(kg, com, r) for kg, com, r in map(parse_load, load_cases(design))]
     return program_models(loads, build)
+
+
+def checked_visits(checked, allow_collisions: bool) -> tuple:
+    """The visits of a :class:`~doe_calib.export.ProgramCheck`, its summary and each collision
+    printed; raises :class:`~doe_calib.errors.CollisionError` on a colliding move unless
+    ``allow_collisions``."""
+    print(checked.summary(), file=sys.stderr)
+    if not allow_collisions:
+        checked.raise_if_colliding()
+    for c in checked.collisions:
+        print(f"warning: written with a colliding move (--allow-collisions): {c}",
+              file=sys.stderr)
+    return checked.visits
 
 
 def _is_free(models):
@@ -119,7 +137,15 @@ def _is_free(models):
 
 
 def run(args):
-    from doe_calib.export import AxisMap, Plan, check_program, cycle_time, export_design, moves
+    from doe_calib.export import (
+        FORMATS,
+        AxisMap,
+        Plan,
+        check_program,
+        cycle_time,
+        export_design,
+        moves,
+    )
     from doe_calib.export.poses_to_run import read_poses_to_run
     from doe_calib.export.sequence import NO_LOAD
     from doe_calib.export.turns import blocked_turns
@@ -129,10 +155,12 @@ def run(args):
         source = read_poses_to_run(args.design, None if args.tool is None else
                                    Tool.from_yaml(args.tool))
         design = source.design
+        form = FORMATS[args.format]
+        form.check_robot(design.robot)  # before any collision or routing work
         print(f"runs {source.note}", file=sys.stderr)
         axis_map = None if args.axis_map is None else AxisMap.parse(args.axis_map, design.robot)
         constraints = _constraints(args, design)
-        models = _models(args, design, constraints)
+        models = program_collision_models(args, design, constraints)
         limits = None if constraints is None else (constraints.lower, constraints.upper)
         where, home = stations(args, design, _is_free(models), limits)
         if home is not None:
@@ -146,34 +174,34 @@ def run(args):
                     axis_map, turns=turns, blocked=blocked, **where)
         out = args.out if args.out is not None else Path(args.design).parent
         visits = moves(design, plan)
-        # the design CSV lists the measurements in the program's order but moves nothing
-        checked = None if models is None or args.format == "csv" else check_program(
+        # the pose list names the measurements in the program's order but moves nothing
+        pose_list = form.render is None
+        checked = None if models is None or pose_list else check_program(
             visits, models, design.robot, axis_map)
         if checked is not None:
-            print(checked.summary(), file=sys.stderr)
-            if not args.allow_collisions:
-                checked.raise_if_colliding()
-            visits = checked.visits
-            for c in checked.collisions:
-                print(f"warning: written with a colliding move (--allow-collisions): {c}",
-                      file=sys.stderr)
+            visits = checked_visits(checked, args.allow_collisions)
         paths = export_design(design, args.format, out, name=args.name, dwell=args.dwell,
                               handshake=args.handshake, plan=plan, visits=visits,
-                              trigger=args.trigger, tool=tool_payload(args))
-        cycle = cycle_time(visits, design.robot, args.dwell, args.load_change_time)
+                              trigger=args.trigger, tool=tool_payload(args),
+                              load_change_time=args.load_change_time)
+        cycle = None if pose_list else cycle_time(visits, design.robot, args.dwell,
+                                                  args.load_change_time)
     except DataError as exc:
         if exc.path is not None:
             raise
         raise DataError(str(exc), args.design) from exc
     n_poses = len(design.poses())
     print(f"{n_poses} poses, {len(design.configurations)} measurements", file=sys.stderr)
-    print(cycle.summary(), file=sys.stderr)
+    print("a pose list, not a program: no move checked for collisions, no cycle time (--format "
+          "csv writes the checked joint program)" if cycle is None else cycle.summary(),
+          file=sys.stderr)
     print(f"written: {', '.join(map(str, paths))}", file=sys.stderr)
     if args.json:
         print(strict_json({"design": args.design, "source": source.format, "runs": source.note,
                            "format": args.format, "name": args.name,
                           "poses": n_poses, "measurements": len(design.configurations),
-                          "cycle_time": cycle.to_dict(), "files": [str(p) for p in paths],
+                          "cycle_time": None if cycle is None else cycle.to_dict(),
+                          "files": [str(p) for p in paths],
                           "collision": None if checked is None else {
                               "moves": checked.moves, "poses_checked": checked.samples,
                               "routed": list(checked.routed),

@@ -1,4 +1,5 @@
-"""Robot programs that visit a design's poses: KUKA KRL, ABB RAPID, URScript, and the design CSV.
+"""Robot programs that visit a design's poses: KUKA KRL, ABB RAPID, URScript, a joint program
+for any robot (CSV, ROS 2 JointTrajectory YAML), and the plain pose list (design CSV).
 
 Each pose is visited once per load case in the order of a :class:`.sequence.Plan`
 (:func:`.program.moves`), limits re-checked; the program stops for the operator where
@@ -15,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from doe_calib.errors import DataError, OptionError
-from doe_calib.export import dialects
+from doe_calib.export import dialects, joint_program
 from doe_calib.export.axis_map import AxisMap
 from doe_calib.export.cycle import CycleTime, cycle_time
 from doe_calib.export.payload import Payload
@@ -30,19 +31,35 @@ from doe_calib.io.measurements import Configurations
 @dataclass(frozen=True)
 class Format:
     """An export format: its file suffixes and ``render(design, visits, settings)`` → suffix →
-    file text (None: the design CSV, :func:`program_configurations`)."""
+    file text (None: the pose list, a design CSV, :func:`program_configurations`, which
+    moves nothing and is not checked); ``language``: the :func:`.dialects.six_axes`
+    language of a program for 6 axes only (None: any robot); ``controller``: whether it
+    takes the controller's joint values (an axis map)."""
 
     description: str
     suffixes: tuple
     render: Callable | None
+    language: str | None = None
+    controller: bool = True
+
+    def check_robot(self, robot) -> None:
+        """Raise :class:`~doe_calib.errors.ModelError` for a robot this format cannot drive."""
+        if self.language is not None:
+            dialects.six_axes(robot, self.language)
 
 
 #: Format name → Format.
 FORMATS = {
-    "krl": Format("KUKA KRL .src/.dat", (".src", ".dat"), dialects.krl),
-    "rapid": Format("ABB RAPID module", (".mod",), dialects.rapid),
-    "urscript": Format("Universal Robots URScript", (".script",), dialects.urscript),
-    "csv": Format("design CSV (docs/formats.md section 4)", (".csv",), None),
+    "krl": Format("KUKA KRL .src/.dat", (".src", ".dat"), dialects.krl, "KRL"),
+    "rapid": Format("ABB RAPID module", (".mod",), dialects.rapid, "RAPID"),
+    "urscript": Format("Universal Robots URScript", (".script",), dialects.urscript,
+                       "URScript"),
+    "csv": Format("joint program for any robot: home, via points, load-change stops, "
+                  "triggers, checked", (".csv",), joint_program.csv_program),
+    "ros2": Format("ROS 2 trajectory_msgs/JointTrajectory YAML of the checked program",
+                   (".yaml",), joint_program.ros2_trajectory, controller=False),
+    "poses": Format("pose list: the design CSV (docs/formats.md section 4) in the program's "
+                    "order, unchecked", (".csv",), None, controller=False),
 }
 
 
@@ -62,18 +79,19 @@ def program_configurations(design, visits) -> Configurations:
 def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float = 3.0,
                   handshake: int | None = None, plan: Plan | None = None,
                   visits=None, trigger: str | None = None,
-                  tool: Payload | None = None) -> list[Path]:
-    """Write ``design`` as a robot program (or design CSV); return the files written.
+                  tool: Payload | None = None, load_change_time: float = 300.0) -> list[Path]:
+    """Write ``design`` as a robot program (or pose list); return the files written.
 
     Parameters
     ----------
     design : DesignResult
-    fmt : {"krl", "rapid", "urscript", "csv"}
+    fmt : {"krl", "rapid", "urscript", "csv", "ros2", "poses"}
     out : path-like
         A directory (files ``name`` + suffix) or a file path, whose stem is then the
         program name (KRL needs file and program names to match).
-    dwell, handshake, trigger, tool
-        As :class:`.program.Settings` (dwell in s; tool default: mass 0).
+    dwell, handshake, trigger, tool, load_change_time
+        As :class:`.program.Settings` (dwell and load_change_time in s; tool default:
+        mass 0).
     plan : Plan, optional
         Grouping, order, pre-poses, stations and axis map (the CSV keeps URDF values).
     visits : sequence of Move, optional
@@ -89,7 +107,7 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
         A robot the format cannot drive (6 axes).
     OptionError
         A negative dwell, a handshake not an I/O number ≥ 1, a trigger not one line of
-        ASCII, or an axis map with the design CSV.
+        ASCII, or an axis map with a format of URDF values (ros2, poses).
 
     Examples
     --------
@@ -106,9 +124,11 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
     out = Path(out)  # a path with a suffix names the file
     stem, name = (out.with_suffix(""), out.stem) if out.suffix else (out / name, name)
     form = FORMATS[fmt]
-    if form.render is None and plan is not None and plan.axis_map is not None:
-        raise OptionError("--axis-map: the design CSV keeps the URDF's joint values; the axis "
-                          "map is for robot programs (krl, rapid, urscript)")
+    form.check_robot(design.robot)
+    if not form.controller and plan is not None and plan.axis_map is not None:
+        raise OptionError(f"--axis-map: the {fmt} format keeps the URDF's joint values; the "
+                          f"axis map is for the controllers' programs (krl, rapid, urscript, "
+                          f"csv)")
     visits = moves(design, plan) if visits is None else list(visits)
     if form.render is None:
         stem.parent.mkdir(parents=True, exist_ok=True)
@@ -116,7 +136,8 @@ def export_design(design, fmt: str, out, name: str = "doe_calib", dwell: float =
                      design.robot)
         return [stem.with_suffix(".csv")]
     texts = form.render(design, visits, Settings(name, dwell, handshake, trigger,
-                                                 Payload() if tool is None else tool))
+                                                 Payload() if tool is None else tool,
+                                                 load_change_time))
     stem.parent.mkdir(parents=True, exist_ok=True)
     paths = [stem.with_suffix(s) for s in form.suffixes]
     for path in paths:

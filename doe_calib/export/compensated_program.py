@@ -1,9 +1,11 @@
-"""The compensated program written through the design exporters (KRL, RAPID, URScript, CSV).
+"""The compensated program written through the exporters of :mod:`doe_calib.export` (any format).
 
 A compensated row carries the wrench of its load in the base frame, which
 turns with the pose; the load itself — the mass and centre of mass the
 operator hangs — is recovered from it (:func:`row_loads`), so the program
-changes the load only where the load changes and declares its payload there.
+changes the load only where the load changes and declares its payload there,
+and the collision check hangs it on the flange as a sphere of its declared
+radius (else a steel sphere of its mass).
 """
 from __future__ import annotations
 
@@ -79,7 +81,7 @@ def row_loads(q, wrench, model=None) -> list:
     return out
 
 
-def compensated_design(result, tool, model=None) -> DesignResult:
+def compensated_design(result, tool, model=None, radius: float | None = None) -> DesignResult:
     """The compensated rows as a design the exporters can write, in the program's order.
 
     A pose id that appears on several rows (one pose under several loads) gets
@@ -87,7 +89,9 @@ def compensated_design(result, tool, model=None) -> DesignResult:
     was not reached keeps its programmed q (the solver's last iterate is no
     joint value to send to a robot). Each row's load is named from its wrench
     (:func:`row_loads`, with ``model`` for the centre of mass), so rows under
-    the same load are one load case.
+    the same load are one load case; ``radius`` (m) is the declared size of each
+    load whose centre of mass is known, the sphere the collision check draws it as
+    (None: a steel sphere of its mass).
     """
     counts, seen, ids = Counter(result.pose), Counter(), []
     for pose in result.pose:
@@ -96,6 +100,8 @@ def compensated_design(result, tool, model=None) -> DesignResult:
     q = np.where(result.converged[:, None], result.q_compensated, result.q)
     cfg = Configurations.from_arrays(q, result.wrench, pose=ids)
     loads = row_loads(result.q, result.wrench, model)
+    if radius is not None:
+        loads = [s + f":{1000.0 * radius:g}" if s and not s.endswith("@") else s for s in loads]
     return DesignResult(robot=result.robot, tool=tool, model=result.model, configurations=cfg,
                         criterion="compensated", value=math.nan, bound=math.nan,
                         efficiency=math.nan, predicted_std={},
@@ -105,17 +111,25 @@ def compensated_design(result, tool, model=None) -> DesignResult:
 
 def export_compensated(result, tool, fmt: str, out, name: str = "compensated", dwell: float = 0.0,
                        handshake: int | None = None, model=None, home=None, load_pose=None,
-                       trigger: str | None = None, tool_payload: Payload | None = None) -> list:
+                       trigger: str | None = None, tool_payload: Payload | None = None,
+                       design=None, visits=None) -> list:
     """Write the compensated program with :func:`doe_calib.export.export_design`.
 
     The rows keep their order (:data:`AS_GIVEN`): it is the user's program,
     not a measurement plan. ``home`` and ``load_pose`` (rad/m; None: none)
     are the :class:`~doe_calib.export.Plan`'s; ``model`` names the loads'
     centres of mass (:func:`row_loads`); ``trigger`` and ``tool_payload`` are
-    :func:`~doe_calib.export.export_design`'s ``trigger`` and ``tool``.
-    Returns the files written.
+    :func:`~doe_calib.export.export_design`'s ``trigger`` and ``tool``;
+    ``design`` and ``visits``: the :func:`compensated_design` and its visits
+    as :func:`~doe_calib.export.check_program` checked them (default: made
+    here, unchecked). Returns the files written.
     """
-    plan = replace(AS_GIVEN, home=home, load_pose=load_pose)
-    return export_design(compensated_design(result, tool, model), fmt, out, name=name,
-                         dwell=dwell, handshake=handshake, plan=plan, trigger=trigger,
+    design = compensated_design(result, tool, model) if design is None else design
+    return export_design(design, fmt, out, name=name, dwell=dwell, handshake=handshake,
+                         plan=compensated_plan(home, load_pose), visits=visits, trigger=trigger,
                          tool=tool_payload)
+
+
+def compensated_plan(home=None, load_pose=None) -> Plan:
+    """:data:`AS_GIVEN` from ``home`` to ``home`` through ``load_pose`` (rad/m; None: none)."""
+    return replace(AS_GIVEN, home=home, load_pose=load_pose)

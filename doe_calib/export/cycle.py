@@ -58,6 +58,13 @@ class CycleTime:
                 "load_change_s": self.load_change}
 
 
+def move_time(a, b, speed) -> float:
+    """Seconds of the PTP move from ``a`` to ``b`` (rad, m) at joint ``speed`` (rad/s, m/s):
+    the slowest axis plus :data:`RAMP`; 0 when nothing moves."""
+    t = float(move_times(a, b, speed)[0, 0])
+    return t + RAMP if t > 0 else 0.0
+
+
 def cycle_time(visits, robot, dwell: float, load_change: float) -> CycleTime:
     """Estimate the duration of a program visiting ``visits`` (module notes), standing
     ``dwell`` s at each pose and ``load_change`` s at each change of load.
@@ -71,9 +78,8 @@ def cycle_time(visits, robot, dwell: float, load_change: float) -> CycleTime:
                                         *(() if m.urdf_pre is None else (m.urdf_pre,)),
                                         m.urdf_q)]
     speed = SPEED_FRACTION * axis_speeds(robot)
-    steps = [float(move_times(a, b, speed)[0, 0]) for a, b in zip(path[:-1], path[1:])]
-    moving = [t for t in steps if t > 0]
+    moving = [t for t in (move_time(a, b, speed) for a, b in zip(path[:-1], path[1:])) if t > 0]
     changes = int(np.sum(load_changes(visits)))
-    return CycleTime(travel=sum(moving) + RAMP * len(moving), moves=len(moving),
+    return CycleTime(travel=sum(moving), moves=len(moving),
                      dwell=dwell * sum(m.measures for m in visits), load_changes=changes,
                      load_change=load_change * changes)

@@ -73,7 +73,8 @@ def check_name(name: str, max_length: int) -> str:
 
 def six_axes(robot, language: str) -> None:
     """Raise :class:`ModelError` unless ``robot`` has the 6 axes a ``language`` program drives;
-    URScript programs drive the 6 revolute joints of a UR arm."""
+    URScript programs drive the 6 revolute joints of a UR arm. The exporters ask it before
+    any other work (:meth:`doe_calib.export.Format.check_robot`)."""
     if language == "URScript" and (robot.n_joints != 6
                                    or any(j.kind != "revolute" for j in robot.joints)):
         raise ModelError(f"URScript export needs 6 revolute joints; {robot.name} has "
@@ -161,7 +162,6 @@ def _e6axis(q) -> str:
 
 def krl(design, visits, settings) -> dict:
     """Text of the KRL ``.src`` and ``.dat`` files, keyed by suffix."""
-    six_axes(design.robot, "KRL")
     name = check_name(settings.name, 24)
 
     def change(m):
@@ -192,7 +192,6 @@ def _loaddata(payload) -> str:
 
 def rapid(design, visits, settings) -> dict:
     """Text of the RAPID ``.mod`` file, keyed by suffix."""
-    six_axes(design.robot, "RAPID")
     name = check_name(settings.name, 32)
     tool = "tool0" if settings.tool.mass == 0 else "tCalib"
     out = [f"MODULE {name}", *_headline(design, visits, "  ! ",
@@ -239,7 +238,6 @@ def _movej(q) -> str:
 
 def urscript(design, visits, settings) -> dict:
     """Text of the URScript ``.script`` file, keyed by suffix."""
-    six_axes(design.robot, "URScript")
     name = check_name(settings.name, 32)
 
     def change(m):

@@ -44,6 +44,9 @@ class Settings:
         dwell, e.g. URScript ``set_digital_out(2, True)``.
     tool : Payload
         The tool's own mass, declared at the start and added to each load.
+    load_change : float
+        Seconds the operator takes to change the load (the joint programs' times,
+        :mod:`.joint_program`).
     """
 
     name: str = "doe_calib"
@@ -51,6 +54,7 @@ class Settings:
     handshake: int | None = None
     trigger: str | None = None
     tool: Payload = Payload()
+    load_change: float = 300.0
 
     def __post_init__(self):
         if self.trigger is not None and (not self.trigger.strip() or self.trigger != ascii_text(
@@ -191,6 +195,15 @@ def _load_specs(design) -> list:
         named = len(rows) == len(specs) + 1 and not np.any(cfg.wrench[rows[0]])
         out.append(specs[case - 1] if named and case > 0 else "" if not np.any(w) else None)
     return out
+
+
+def load_cases(design) -> list[str]:
+    """The loads of ``design`` as ``KG@X,Y,Z[:R]`` specs (mm): its load cases, else the loads
+    its rows carry whose centre of mass is known (a compensated program's ``row_loads``)."""
+    if "row_loads" not in design.constraints:
+        return list(design.constraints.get("loads", []))
+    return [s for s in dict.fromkeys(design.constraints["row_loads"])
+            if s and not s.endswith("@")]
 
 
 def _loads(design) -> tuple:
