@@ -99,3 +99,20 @@ def test_a_payload_without_a_size_is_said_to_be_drawn_as_a_steel_sphere():
     assert f"the 250 kg payload is drawn as a steel sphere of radius {radius_mm:.0f} mm" in said
     assert "--load 250@0,0,200:R_MM" in said
     assert said.count("steel sphere") == 1  # not the massless load, not the one with a size
+
+
+def test_export_writes_its_file_again_and_never_over_its_input(tmp_path, capsys):
+    from doe_calib import examples
+
+    design = tmp_path / "d.json"
+    assert main(["design", "--robot", examples.THREE_DOF_URDF, "--tool",
+                 examples.THREE_DOF_TOOL_YAML, "--model", "joint_offset", "--poses", "4",
+                 "--candidates", "200", "--seed", "1", "--no-collision", "--out",
+                 str(design)]) == 0
+    out = tmp_path / "program.csv"
+    for _ in range(2):  # the second run replaced the file; it said "is a file, not a folder"
+        assert main(["export", str(design), "--format", "poses", "--out", str(out)]) == 0
+    assert out.is_file()
+    capsys.readouterr()
+    assert main(["export", str(design), "--format", "poses", "--out", str(design)]) == 2
+    assert "is the input" in capsys.readouterr().err

@@ -80,7 +80,7 @@ def add_arguments(c):
                                                        "files written as JSON")
 
 
-OUTPUTS = {"out": "folder"}
+OUTPUTS = {"out": "file or folder"}
 
 
 def _constraints(args, design):

@@ -7,8 +7,9 @@ range checks are the library's own (:mod:`doe_calib.io.setting_ranges`), so an
 option and the keyword argument it becomes refuse the same values.
 
 Each command module may declare ``OUTPUTS``: option destination → ``"file"``
-(written as given: its folder must exist) or ``"folder"`` (created if needed:
-its nearest existing ancestor must be a writable folder). :func:`check_outputs`
+(written as given: its folder must exist), ``"folder"`` (created if needed:
+its nearest existing ancestor must be a writable folder) or ``"file or folder"``
+(a file when the path has a suffix and is not an existing folder, else a folder). :func:`check_outputs`
 checks them all before the command runs, and refuses an output file that is
 one of the command's input files (any option naming an existing file: data,
 URDF, tool, design, result …), compared as resolved paths (symlinks,
@@ -127,7 +128,8 @@ def check_outputs(args, outputs: dict) -> None:
     ----------
     args : argparse.Namespace
     outputs : dict
-        Option destination (``"out"``, ``"truth_out"``) → ``"file"`` or ``"folder"``.
+        Option destination (``"out"``, ``"truth_out"``) → ``"file"``, ``"folder"`` or
+        ``"file or folder"``.
 
     Raises
     ------
@@ -142,6 +144,8 @@ def check_outputs(args, outputs: dict) -> None:
         if value is None:
             continue
         option, path = _option_name(dest), Path(value)
+        if kind == "file or folder":
+            kind = "file" if path.suffix and not path.is_dir() else "folder"
         (_check_file if kind == "file" else _check_folder)(option, path)
         if kind == "file":
             refuse_input(option, path, inputs)
