@@ -3,6 +3,7 @@ its export, and the report of simulated cycles against a hand computation."""
 import csv
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -274,3 +275,10 @@ def test_report_puts_the_predicted_beside_the_measured(files, identified_design,
     assert report["predicted"] == predicted
     assert all(report["poses"][p]["AP_mm"] < 4 * predicted[p]["AP_mm"] for p in POSES)
     assert "predicted" in html.read_text()
+    # formats.md §14 names every key the design's block and the report write
+    doc = (Path(__file__).parents[1] / "docs" / "formats.md").read_text(encoding="utf-8")
+    block = json.loads(identified_design.read_text())["iso9283"]
+    campaign = report["campaigns"][0]
+    keys = {*block, *block["cube"], *predicted["P1"], *report, *campaign,
+            *campaign["poses"]["P1"], *campaign["distance"]}
+    assert not [k for k in keys if f"`{k}`" not in doc]
