@@ -33,7 +33,8 @@ def add_arguments(c):
     d = sub.add_parser("design", help="the test's cube, poses and cycles as a design JSON",
                        description="P1 at the cube's centre, P2 … P5 on its diagonal plane at "
                                    "10 % of the diagonal from the corners (ISO 9283 §6), "
-                                   "reached by inverse kinematics on the nominal model, visited "
+                                   "reached by inverse kinematics on the nominal model (with "
+                                   "--result, the identified one), visited "
                                    "P1 … P5 in turn --cycles times (ids P1-01 … P5-30)")
     add_options(d, "--robot", "--flange")
     d.add_argument("--tool", required=True, help="tool YAML with marker positions (mm)")
