@@ -3,6 +3,7 @@ its export, and the report of simulated cycles against a hand computation."""
 import csv
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +12,10 @@ from test_iso9283 import hand_ap_rp
 
 from doe_calib import examples
 from doe_calib.cli import main
+from doe_calib.estimation.predict import result_model
+from doe_calib.estimation.result import IdentificationResult
+from doe_calib.io.measurements import Configurations
+from doe_calib.iso9283.predicted import predicted_accuracy
 from doe_calib.model.robot import Robot
 from doe_calib.model.tool import Tool
 
@@ -42,6 +47,14 @@ def result(files):
     assert main(["identify", *common, "--data", str(files / "calib.csv"), "--sigma", "0.01",
                  "--out", str(files / "result.json")]) == 0
     return files / "result.json"
+
+
+@pytest.fixture(scope="module")
+def identified_design(files, result):
+    out = files / "iso_identified.json"
+    assert main(["iso9283", "design", *ROBOT, "--tcp", "A", "--load", "250@0,0,200",
+                 "--cycles", str(CYCLES), "--result", str(result), "--out", str(out)]) == 0
+    return out
 
 
 def _cycles(files, design, name, seed):
@@ -199,3 +212,75 @@ def test_report_refuses_a_design_without_the_test(files, tmp_path, capsys):
     assert main(["iso9283", "report", "--design", str(plain), "--data",
                  str(files / "before.csv"), "--out", str(tmp_path / "r.json")]) == 2
     assert "not an ISO 9283 test design" in capsys.readouterr().err
+
+
+def _test_poses(design):
+    """The test poses' joint values (5, N), rad, and their targets (5, 3), mm."""
+    design = json.loads(design.read_text())
+    q = np.radians([p["q_deg"] for p in design["poses"][:5]])
+    return q, np.array([design["iso9283"]["targets_mm"][p] for p in POSES])
+
+
+def test_design_with_a_result_reaches_the_targets_on_the_identified_robot(identified_design,
+                                                                          result):
+    params = IdentificationResult.from_json(result).parameters
+    robot = Robot.from_urdf(examples.ROBOT_URDF)
+    q, targets = _test_poses(identified_design)
+    # Pinocchio with the identified joint offsets and marker: on the targets
+    rot, origin = robot.flange_poses(q + [params[f"dq_{j.name}"] for j in robot.joints])
+    tcp = 1000.0 * (origin + rot @ [params[f"marker_A_{a}"] for a in "xyz"])
+    assert np.abs(tcp - targets).max() < 1e-6
+    predicted = json.loads(identified_design.read_text())["iso9283"]["predicted"]
+    assert list(predicted) == POSES
+    assert all(0 < p["AP_mm"] < 0.05 and len(p["std_mm"]) == 3 for p in predicted.values())
+
+
+def test_predicted_std_equals_a_monte_carlo_of_the_joint_offsets(identified_design, result):
+    """The joint offsets alone uncertain (the other rows of the covariance zeroed): 2000
+    offset vectors drawn from it, the TCP by Pinocchio, in the robot base frame."""
+    d = json.loads(result.read_text())
+    free = [p["name"] for p in d["parameters"] if p["free"]]
+    offsets = np.array([n.startswith("dq_") for n in free])
+    cov = np.array(d["covariance_si"])
+    cov[~offsets], cov[:, ~offsets] = 0.0, 0.0
+    d["covariance_si"] = cov.tolist()
+    res = IdentificationResult.from_dict(d)
+    q, _ = _test_poses(identified_design)
+    model, params = result_model(res)
+    predicted = predicted_accuracy(model, res, Configurations.from_arrays(q), "A", POSES,
+                                   CYCLES)
+    robot = Robot.from_urdf(examples.ROBOT_URDF)
+    names = [f"dq_{j.name}" for j in robot.joints]
+    dq = np.tile([params[n] for n in names], (2000, 1))
+    drawn = [names.index(n) for n in np.array(free)[offsets]]
+    dq[:, drawn] = np.random.default_rng(0).multivariate_normal(
+        dq[0, drawn], cov[np.ix_(offsets, offsets)] * res.sigma_ratio ** 2, 2000)
+    marker = [params[f"marker_A_{a}"] for a in "xyz"]
+    for k, pose in enumerate(POSES):
+        rot, origin = robot.flange_poses(q[k] + dq)
+        tcp = 1000.0 * (origin + rot @ marker)
+        assert np.allclose(tcp.std(axis=0), predicted[pose]["std_mm"], rtol=0.15)
+        rms = math.sqrt(tcp.var(axis=0).sum() + 3 * (res.sigma_ratio * res.sigma_mm) ** 2
+                        / CYCLES)
+        assert abs(predicted[pose]["AP_mm"] / rms - 1) < 0.15
+
+
+def test_report_puts_the_predicted_beside_the_measured(files, identified_design, result):
+    """Reached on the identified robot, the test measures about what its design predicted."""
+    cycles = _cycles(files, identified_design, "identified", 5)
+    out, html = files / "rep_predicted.json", files / "rep_predicted.html"
+    assert main(["iso9283", "report", "--design", str(identified_design), "--data",
+                 str(cycles), "--result", str(result), "--out", str(out), "--report",
+                 str(html)]) == 0
+    report = json.loads(out.read_text())
+    predicted = json.loads(identified_design.read_text())["iso9283"]["predicted"]
+    assert report["predicted"] == predicted
+    assert all(report["poses"][p]["AP_mm"] < 4 * predicted[p]["AP_mm"] for p in POSES)
+    assert "predicted" in html.read_text()
+    # formats.md §14 names every key the design's block and the report write
+    doc = (Path(__file__).parents[1] / "docs" / "formats.md").read_text(encoding="utf-8")
+    block = json.loads(identified_design.read_text())["iso9283"]
+    campaign = report["campaigns"][0]
+    keys = {*block, *block["cube"], *predicted["P1"], *report, *campaign,
+            *campaign["poses"]["P1"], *campaign["distance"]}
+    assert not [k for k in keys if f"`{k}`" not in doc]

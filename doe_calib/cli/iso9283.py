@@ -33,7 +33,8 @@ def add_arguments(c):
     d = sub.add_parser("design", help="the test's cube, poses and cycles as a design JSON",
                        description="P1 at the cube's centre, P2 … P5 on its diagonal plane at "
                                    "10 % of the diagonal from the corners (ISO 9283 §6), "
-                                   "reached by inverse kinematics on the nominal model, visited "
+                                   "reached by inverse kinematics on the nominal model (with "
+                                   "--result, the identified one), visited "
                                    "P1 … P5 in turn --cycles times (ids P1-01 … P5-30)")
     add_options(d, "--robot", "--flange")
     d.add_argument("--tool", required=True, help="tool YAML with marker positions (mm)")
@@ -51,6 +52,9 @@ def add_arguments(c):
                         "tracker's beams are checked by export)")
     d.add_argument("--cycles", type=count("--cycles", 2, "cycles"), default=30,
                    help="cycles (default 30, the standard's)")
+    d.add_argument("--result", help="identification result JSON: the poses are reached on "
+                                    "its model, and the AP and RP it predicts after "
+                                    "compensation are written and printed")
     add_options(d, "--seed")
     collision_arguments(d)
     d.add_argument("--out", required=True, metavar="ISO.json",
@@ -105,8 +109,13 @@ def _design(args):
         cube = (values[:3], float(values[3]))
     build = collision_builder(args, robot, tool, constraints)
     collision = None if build is None else build(() if load is None else (load,))
+    result = None
+    if args.result is not None:
+        from doe_calib.estimation.result import IdentificationResult
+
+        result = IdentificationResult.from_json(args.result)
     design, plan = design_test(robot, tool, args.tcp, load, constraints, cube, args.cycles,
-                               args.seed or 0, collision)
+                               args.seed or 0, collision, result)
     data = {**design.to_dict(), KEY: plan.to_dict()}
     write_json(data, args.out)
     targets = write_targets(targets, design, plan)
@@ -118,6 +127,13 @@ def _design(args):
         for pose, x in plan.targets_mm.items():
             print(f"{pose}: {', '.join(f'{v:.1f}' for v in x)} mm, flange "
                   f"{', '.join(f'{v:.2f}' for v in plan.rpy_deg[pose])} deg (a, b, c)")
+        if plan.predicted:
+            print(f"\npredicted after compensation by {args.result} (its covariance; AP as "
+                  f"the RMS √(tr Σ + 3σ²/n), RP of the readings' noise alone):")
+            for pose, p in plan.predicted.items():
+                print(f"{pose}: AP {p['AP_mm']:.4f} mm, std x, y, z "
+                      f"{', '.join(f'{v:.4f}' for v in p['std_mm'])} mm, RP "
+                      f"{p['RP_noise_mm']:.4f} mm + the robot's repeatability")
     # shortest turns would put a pose's joints a turn apart between cycles (one from home)
     print(f"\nwritten: {args.out}, {targets}\nrun it with: doe-calib export {args.out} "
           f"--format FORMAT --turns design (each pose at the same joint values in every "
@@ -167,7 +183,8 @@ def _report(args):
         if len(set(meas.sessions)) > 1:
             notes.append("every campaign is taken into the base frame by the one identified "
                          "base: the tracker must not have moved between them")
-    report = Iso9283Result(campaigns(meas, plan, markers, base), plan.tcp, frame, tuple(notes))
+    report = Iso9283Result(campaigns(meas, plan, markers, base), plan.tcp, frame, tuple(notes),
+                           plan.predicted)
     report.to_json(args.out)
     written = [args.out]
     if args.report:

@@ -13,8 +13,10 @@ floor, inside the keep-in box and out of the keep-out boxes of the constraints. 
 between the poses are not searched: ``export`` checks them.
 
 Inverse kinematics is the compensation's problem (:mod:`doe_calib.compensation.nlp`) on
-the nominal model (base and markers only, the base at the tracker origin): the joint
-values nearest the candidate's that put the TCP on the point.
+the nominal model (base and markers only), or on an identification result's model and
+parameters, its TCP marker the identified one, without load (the compensation's program
+accounts for it); the base at the tracker origin, so that the tracker frame is the robot
+base frame: the joint values nearest the candidate's that put the TCP on the point.
 """
 from __future__ import annotations
 
@@ -23,12 +25,15 @@ import math
 import numpy as np
 
 from doe_calib.collision import blocked_beams, check_segment
+from doe_calib.compensation.compensate import tcp_point
 from doe_calib.compensation.nlp import build_problem
 from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.result import DesignResult
 from doe_calib.errors import OptionError
+from doe_calib.estimation.predict import result_model
 from doe_calib.io.measurements import Configurations
 from doe_calib.iso9283.plan import IsoPlan, visit_id
+from doe_calib.iso9283.predicted import predicted_accuracy
 from doe_calib.iso9283.standard import POSES, cube_points, roll_pitch_yaw
 from doe_calib.model.loads import hanging_mass_wrench
 from doe_calib.model.marker_model import build_model
@@ -43,13 +48,21 @@ REACHED = 1e-9
 
 
 class _Reach:
-    """Inverse kinematics of the nominal robot's TCP, within the joint bounds."""
+    """Inverse kinematics of the robot's TCP, within the joint bounds: the nominal robot, or
+    the one ``result`` identified (its base at the tracker origin)."""
 
-    def __init__(self, robot, tool, tcp: str, lower, upper, is_free=None):
-        self.model = build_model(robot, tool, "")
+    def __init__(self, robot, tool, tcp: str, lower, upper, is_free=None, result=None):
+        if result is None:
+            self.model = build_model(robot, tool, "")
+            self.values = self.model.nominal().values
+            self.point = tool.position_array[tool.index(tcp)]
+        else:
+            self.model, params = result_model(result)
+            base = params.index("base")
+            self.values = params.values.copy()
+            self.values[base] = self.model.nominal().values[base]
+            self.point = tcp_point(params, tcp)[0]
         self.problem = build_problem(self.model, position_only=robot.n_joints < 6)
-        self.values = self.model.nominal().values
-        self.point = tool.position_array[tool.index(tcp)]
         self.env = Configurations.from_arrays(np.zeros((1, robot.n_joints))).env[0]
         self.lower, self.upper = lower, upper
         self.is_free = is_free
@@ -67,12 +80,16 @@ class _Reach:
         if not self.problem.position_only:
             # the error vector, sin θ · axis, vanishes at θ = π too: the flange turned half
             # a turn has a negative trace of R_tᵀ R
-            r = np.asarray(self.model.flange(q, *args[:3])[0])
+            r = self.flange(q)
             turned = np.trace(np.asarray(rotation).T @ r) < 0
             bad = math.inf if turned else max(bad, float(np.linalg.norm(np.asarray(e_rot))))
         if bad >= REACHED or (self.is_free is not None and not self.is_free(q)):
             return None
         return q
+
+    def flange(self, q) -> np.ndarray:
+        """The flange's rotation (3, 3) at joint values ``q`` (N,), base frame, no load."""
+        return np.asarray(self.model.flange(q, np.zeros(6), self.env, self.values)[0])
 
     def cube(self, centre, edge: float, rotation, seed) -> dict | None:
         """Pose → joint values reaching the five test points of the cube; None if one fails."""
@@ -119,7 +136,7 @@ def _largest(reach, centres, rotations, seeds, constraints, top: float) -> tuple
 
 def design_test(robot, tool, tcp: str, load=None, constraints: DesignConstraints | None = None,
                 cube: tuple | None = None, cycles: int = 30, seed: int = 0,
-                collision=None) -> tuple:
+                collision=None, result=None) -> tuple:
     """The ISO 9283 pose test as a design: ``P1-01`` … ``P5-<cycles>`` in cycle order.
 
     Parameters
@@ -139,6 +156,9 @@ def design_test(robot, tool, tcp: str, load=None, constraints: DesignConstraints
     collision : CollisionModel, optional
         The cell with the load (:func:`doe_calib.collision.build_collision_model`): each
         test pose keeps its clearances and the tracker's beams; None: not checked.
+    result : IdentificationResult, optional
+        The poses are reached on its model (module notes), and the plan holds the accuracy
+        it predicts after compensation (:mod:`.predicted`).
 
     Returns
     -------
@@ -168,7 +188,8 @@ def design_test(robot, tool, tcp: str, load=None, constraints: DesignConstraints
     lower, upper = constraints.bounds(robot)
     is_free = None if collision is None else (
         lambda q: check_segment(collision, q, q).free and not blocked_beams(collision, q))
-    reach = _Reach(robot, tool, tcp, lower, upper, is_free)
+    reach = _Reach(robot, tool, tcp, lower, upper, is_free, result)
+    which = "nominal" if result is None else "identified"
     rng = np.random.default_rng(seed)
     seeds = rng.uniform(lower, upper, (CANDIDATES, robot.n_joints))
     rot, origin = robot.flange_poses(seeds)
@@ -182,7 +203,7 @@ def design_test(robot, tool, tcp: str, load=None, constraints: DesignConstraints
                               + ": give one with --cube")
         centre = centres[k]
         chosen = (f"the largest of {CANDIDATES} random centres (seed {seed}) whose five test "
-                  f"points the nominal robot reaches at one flange orientation"
+                  f"points the {which} robot reaches at one flange orientation"
                   + (", free of collisions" if collision else ""))
     else:
         centre, edge = np.asarray(cube[0], float), float(cube[1])
@@ -192,28 +213,30 @@ def design_test(robot, tool, tcp: str, load=None, constraints: DesignConstraints
             if q is not None:
                 break
         if q is None:
-            raise OptionError(f"the nominal robot does not reach the five test points of the "
+            raise OptionError(f"the {which} robot does not reach the five test points of the "
                               f"cube given at one flange orientation"
                               f"{' free of collisions' if collision else ''} from any of "
                               f"{CANDIDATES} starts: move or shrink it")
-        chosen = "given"
+        chosen = f"given; the {which} robot reaches its five test points"
     used = constraints.to_dict(robot, tool) if constraints.source else {}
     if collision is not None:
         used["collision"] = collision.summary()
-    return _design(robot, tool, reach, q, centre, edge, chosen, tcp, load, used, cycles)
+    return _design(robot, tool, reach, q, centre, edge, chosen, tcp, load, used, cycles, result)
 
 
-def _design(robot, tool, reach, q, centre, edge, chosen, tcp, load, used, cycles):
+def _design(robot, tool, reach, q, centre, edge, chosen, tcp, load, used, cycles, result):
     q_test = np.array([q[p] for p in POSES])
-    flange_rot, _ = robot.flange_poses(q_test)
+    flange_rot = np.array([reach.flange(x) for x in q_test])
     points = cube_points(centre, edge)
+    wrench = np.zeros((len(POSES), 6)) if load is None else hanging_mass_wrench(
+        reach.model, reach.values, q_test, load.mass, load.com)
+    predicted = {} if result is None else predicted_accuracy(
+        reach.model, result, Configurations.from_arrays(q_test, wrench), tcp, POSES, cycles)
     plan = IsoPlan({p: 1000.0 * points[p] for p in POSES},
                     dict(zip(POSES, np.degrees(roll_pitch_yaw(flange_rot)))), tcp,
                     {"centre_mm": (1000.0 * np.asarray(centre)).tolist(),
                      "edge_mm": 1000.0 * edge, "chosen": chosen},
-                    "" if load is None else load.spec(), cycles)
-    wrench = np.zeros((len(POSES), 6)) if load is None else hanging_mass_wrench(
-        reach.model, reach.values, q_test, load.mass, load.com)
+                    "" if load is None else load.spec(), cycles, predicted)
     ids = [visit_id(p, c) for c in range(1, cycles + 1) for p in POSES]
     cfg = Configurations.from_arrays(np.tile(q_test, (cycles, 1)), np.tile(wrench, (cycles, 1)),
                                      pose=ids)

@@ -32,14 +32,17 @@ def _figure(result, plan):
     ax.set_aspect("equal")
     ax.legend(fontsize=7, loc="upper left")
     poses = list(plan.targets_mm)
-    width = 0.8 / len(result.campaigns)
-    for k, (key, what) in enumerate((("ap_mm", "AP, position accuracy (mm)"),
-                                     ("rp_mm", "RP, position repeatability (mm)"))):
+    series = [(c.name, [{p.pose: p.ap_mm for p in c.poses}, {p.pose: p.rp_mm for p in c.poses}])
+              for c in result.campaigns]
+    if result.predicted:
+        series.append(("predicted", [{p: v[k] for p, v in result.predicted.items()}
+                                     for k in ("AP_mm", "RP_noise_mm")]))
+    width = 0.8 / len(series)
+    for k, what in enumerate(("AP, position accuracy (mm)", "RP, position repeatability (mm)")):
         bars = fig.add_subplot(1, 3, k + 2)
-        for i, c in enumerate(result.campaigns):
-            got = {p.pose: getattr(p, key) for p in c.poses}
-            bars.bar(np.arange(len(poses)) + (i - (len(result.campaigns) - 1) / 2) * width,
-                     [got.get(p, np.nan) for p in poses], width, label=c.name)
+        for i, (name, got) in enumerate(series):
+            bars.bar(np.arange(len(poses)) + (i - (len(series) - 1) / 2) * width,
+                     [got[k].get(p, np.nan) for p in poses], width, label=name)
         plain_ticks(bars)
         bars.set_xticks(range(len(poses)), poses)
         bars.set_title(what, fontsize=9)
@@ -50,6 +53,7 @@ def _figure(result, plan):
 def write_iso_report(path, result, plan) -> None:
     """Write the HTML report of ``result`` (Iso9283Result) for the test ``plan`` (IsoPlan)."""
     names = [c.name for c in result.campaigns]
+    turned = any(p.orientation_deg for c in result.campaigns for p in c.poses)
     rows = []
     for pose in plan.targets_mm:
         for c in result.campaigns:
@@ -57,7 +61,10 @@ def write_iso_report(path, result, plan) -> None:
             if p is not None:
                 rows.append([pose, c.name, p.n, p.ap_mm, p.apx_mm, p.apy_mm, p.apz_mm, p.rp_mm,
                              *p.orientation_deg])
-    turned = any(p.orientation_deg for c in result.campaigns for p in c.poses)
+        if pose in result.predicted:
+            p = result.predicted[pose]
+            rows.append([pose, "predicted", "", p["AP_mm"], "", "", "", p["RP_noise_mm"]]
+                        + [""] * (6 if turned else 0))
     header = ["pose", "campaign", "n", "AP (mm)", "APx (mm)", "APy (mm)", "APz (mm)",
               "RP (mm)"] + ([f"{k[:4]} (deg)" for k in ORIENTATION_KEYS] if turned else [])
     distance = [[c.name, f"{c.distance.poses[0]}–{c.distance.poses[1]}", c.distance.n,
@@ -76,7 +83,11 @@ def write_iso_report(path, result, plan) -> None:
         ("Pose accuracy and repeatability (ISO 9283 §7.2)",
          [table(header, rows, digits=4),
           "AP = |x̄ − x_c|, RP = l̄ + 3 S_l; orientation: AP_a = ā − a_c, RP_a = ±3 S_a "
-          "(a, b, c about the base x, y, z)."]),
+          "(a, b, c about the base x, y, z)."
+          + (" Predicted: after compensation, from the identification's covariance when the "
+             "test was designed: AP as the RMS √(tr Σ + 3σ²/n) of the TCP's error, RP of the "
+             "readings' noise σ alone (the robot's repeatability adds to it)."
+             if result.predicted else "")]),
         ("Distance accuracy and repeatability (ISO 9283 §7.3, §7.4)",
          [table(["campaign", "poses", "n", "AD (mm)", "RD ± (mm)", "D̄ (mm)", "D_c (mm)"],
                 distance, digits=5) if distance else "not measured: a pose of the pair "

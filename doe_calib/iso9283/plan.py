@@ -4,7 +4,9 @@ A test design is a plain design JSON (``doe_calib.design``, so ``export`` runs i
 more key, ``"iso9283"``: the commanded positions of the TCP (``targets_mm``, mm) and the
 flange's commanded orientation (``rpy_deg``: a, b, c about the base x, y, z,
 :func:`~doe_calib.iso9283.standard.roll_pitch_yaw`), both in the robot base frame (the
-URDF root), the cube they come from, the TCP marker, the load carried and the cycles.
+URDF root), the cube they come from, the TCP marker, the load carried, the cycles and,
+designed with an identification result, the accuracy it predicts after compensation
+(``predicted``, :mod:`~doe_calib.iso9283.predicted`).
 Its poses are ``P1-01`` … ``P5-30``: pose, dash, cycle.
 
 The campaign after compensation runs the program ``compensate`` makes of the targets CSV
@@ -16,7 +18,7 @@ from __future__ import annotations
 
 import csv
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -60,6 +62,9 @@ class IsoPlan:
     load : str
         ``KG@X,Y,Z`` carried through the test ("" unloaded).
     cycles : int
+    predicted : dict
+        Pose → ``{"AP_mm", "std_mm", "RP_noise_mm"}`` predicted after compensation
+        (:mod:`~doe_calib.iso9283.predicted`); empty when designed without a result.
     """
 
     targets_mm: dict
@@ -68,6 +73,7 @@ class IsoPlan:
     cube: dict
     load: str = ""
     cycles: int = 30
+    predicted: dict = field(default_factory=dict)
 
     def rotation(self, pose: str) -> np.ndarray:
         """The commanded flange orientation of ``pose``, base frame, (3, 3)."""
@@ -77,7 +83,8 @@ class IsoPlan:
         return {"targets_mm": {p: list(map(float, v)) for p, v in self.targets_mm.items()},
                 "rpy_deg": {p: list(map(float, v)) for p, v in self.rpy_deg.items()},
                 "frame": "robot base frame (the URDF root)", "tcp": self.tcp,
-                "cube": self.cube, "load": self.load, "cycles": self.cycles}
+                "cube": self.cube, "load": self.load, "cycles": self.cycles,
+                **({"predicted": self.predicted} if self.predicted else {})}
 
     @classmethod
     def from_design(cls, data: dict, path=None) -> "IsoPlan":
@@ -90,7 +97,8 @@ class IsoPlan:
             targets = {p: np.asarray(block["targets_mm"][p], float).reshape(3) for p in POSES}
             rpy = {p: np.asarray(block["rpy_deg"][p], float).reshape(3) for p in POSES}
             return cls(targets, rpy, str(block["tcp"]), dict(block.get("cube", {})),
-                       str(block.get("load", "")), int(block.get("cycles", 30)))
+                       str(block.get("load", "")), int(block.get("cycles", 30)),
+                       dict(block.get("predicted", {})))
         except (KeyError, TypeError, ValueError) as exc:
             raise DataError(f"the \"{KEY}\" block is incomplete ({exc!r} is missing or "
                             f"malformed)", path) from None

@@ -5,7 +5,7 @@ holds them side by side. Lengths in mm, angles in degrees, as the standard repor
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -178,6 +178,9 @@ class Iso9283Result:
     frame : str
         How the readings were taken into the robot base frame, in words.
     notes : tuple of str
+    predicted : dict
+        Pose → ``{"AP_mm", "std_mm", "RP_noise_mm"}`` the test's design predicted after
+        compensation (:mod:`~doe_calib.iso9283.predicted`); empty when it has none.
 
     Examples
     --------
@@ -190,6 +193,7 @@ class Iso9283Result:
     tcp: str
     frame: str
     notes: tuple = ()
+    predicted: dict = field(default_factory=dict)
 
     @property
     def poses(self) -> dict:
@@ -214,6 +218,11 @@ class Iso9283Result:
                 lines.append(f"distance {d.poses[0]}–{d.poses[1]} ({d.n} cycles): AD "
                              f"{d.ad_mm:.4f} mm, RD ±{d.rd_mm:.4f} mm (D̄ {d.mean_mm:.4f}, "
                              f"D_c {d.commanded_mm:.4f} mm)")
+        if self.predicted:
+            lines += ["", "predicted after compensation (the design's; AP as an RMS, RP of the "
+                          "readings' noise alone):"]
+            lines += [f"{pose:<10}{p['AP_mm']:11.4f}{'':33}{p['RP_noise_mm']:11.4f}"
+                      for pose, p in self.predicted.items()]
         return "\n".join(lines + [f"note: {n}" for n in self.notes])
 
     def __str__(self) -> str:
@@ -222,7 +231,8 @@ class Iso9283Result:
     def to_dict(self) -> dict:
         return {"format": FORMAT, "tcp": self.tcp, "frame": self.frame,
                 "poses": {p: v.to_dict() for p, v in self.poses.items()},
-                "campaigns": [c.to_dict() for c in self.campaigns], "notes": list(self.notes)}
+                "campaigns": [c.to_dict() for c in self.campaigns], "notes": list(self.notes),
+                **({"predicted": self.predicted} if self.predicted else {})}
 
     def to_json(self, path=None) -> str:
         """JSON text; also written to ``path`` when given."""
@@ -232,7 +242,7 @@ class Iso9283Result:
     def from_dict(cls, d: dict) -> "Iso9283Result":
         """The result of :meth:`to_dict` (its ``poses`` are the last campaign's, re-derived)."""
         return cls(tuple(Campaign.from_dict(c) for c in d["campaigns"]), d["tcp"], d["frame"],
-                   tuple(d.get("notes", ())))
+                   tuple(d.get("notes", ())), dict(d.get("predicted", {})))
 
     @classmethod
     def from_json(cls, path) -> "Iso9283Result":
