@@ -2,12 +2,15 @@
 import re
 import warnings
 
+import casadi as ca
 import numpy as np
 import pinocchio as pin
+import pytest
 from scipy.spatial.transform import Rotation
 
 from doe_calib import Configurations, IdentificationResult, Robot, Tool, build_model, examples
 from doe_calib.compensation import Targets, compensate
+from doe_calib.compensation.nlp import orientation_equations, rotation_error
 from doe_calib.errors import ConvergenceWarning
 
 #: Wrist limits (rad) narrow enough that neither a6 nor a wrist flip (a4 + π, −a5) can turn
@@ -67,3 +70,20 @@ def test_half_a_turn_is_named_not_reached(tmp_path):
     assert abs(np.degrees(out.rotation_residual[1]) - angle[1]) < 1e-6
     assert any(issubclass(w.category, ConvergenceWarning) and "turned (" in str(w.message)
                for w in caught)
+
+
+def test_orientation_equations_vanish_at_the_target_only():
+    """vee (sin θ · axis) is ~0 near θ = π; g grows there as tan(θ/2); below 90° g is vee."""
+    r_t, r = ca.SX.sym("R_t", 3, 3), ca.SX.sym("R", 3, 3)
+    f = ca.Function("f", [r_t, r], [orientation_equations(r_t, r), rotation_error(r_t, r)])
+    axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    r_target = Rotation.from_rotvec([0.2, 1.0, -0.4]).as_matrix()
+    for deg in (1e-6, 30.0, 89.0, 91.0, 150.0, 179.999):
+        turned = r_target @ Rotation.from_rotvec(np.radians(deg) * axis).as_matrix()
+        g, vee = (np.asarray(v).ravel() for v in f(r_target, turned))
+        theta = np.radians(deg)
+        assert np.linalg.norm(vee) == pytest.approx(np.sin(theta), rel=1e-6)
+        expected = np.sin(theta) if deg <= 90 else np.tan(theta / 2)
+        assert g == pytest.approx(expected * axis, rel=1e-6)
+        if deg <= 90:
+            assert np.array_equal(g, vee)
