@@ -58,6 +58,13 @@ def nominal_targets(model, parameters, configurations, tcp) -> tuple[np.ndarray,
 SINGULAR_CONDITION = 1e4
 
 
+def rotation_angle(vee, r_target, r) -> float:
+    """Angle θ (rad, 0 to π) of ``R_targetᵀ R`` from its vector part ``vee`` (sin θ · axis)
+    and its trace (1 + 2 cos θ): the vector part alone is 0 at θ = π as at θ = 0."""
+    cos = (np.trace(np.asarray(r_target).T @ np.asarray(r)) - 1.0) / 2.0
+    return float(np.arctan2(np.linalg.norm(np.asarray(vee)), cos))
+
+
 def _reason(status: str, pos: float, rot: float, at_limit: list, condition: float) -> str:
     words = []
     if status not in _SOLVED:
@@ -175,12 +182,11 @@ def _solve_rows(problem, model, values, cfg, point, x_t, r_nom) -> dict:
         status = problem.solver.stats()["return_status"]
         # IPOPT relaxes the bounds by ~1e-8: the program must stay inside them
         q = out["q"][i] = np.clip(np.asarray(sol["x"]).ravel(), lower, upper)
-        for key, at in (("position", q), ("distance", cfg.q[i])):
+        for key, turn, at in (("position", "rotation", q), ("distance", "angle", cfg.q[i])):
             e_pos, e_rot = problem.error(at, *args, x_t[i], r_nom[i])
             out[key][i] = float(np.linalg.norm(np.asarray(e_pos)))
-            turn = "rotation" if key == "position" else "angle"
-            out[turn][i] = 0.0 if problem.position_only else \
-                float(np.arcsin(min(1.0, np.linalg.norm(np.asarray(e_rot)))))
+            out[turn][i] = 0.0 if problem.position_only else rotation_angle(
+                e_rot, r_nom[i], model.flange(at, *args[:3])[0])
         at_limit = [j.name for j, v in zip(robot.joints, q)
                     if min(v - j.lower, j.upper - v) < 1e-9]
         jac = np.asarray(problem.jacobian(q, *args, x_t[i], r_nom[i]))

@@ -4,12 +4,14 @@ For a target pose ``(x_t, R_t)`` in the tracker frame, the TCP ``t`` (flange fra
 the row's wrench: the q′ inside the joint limits nearest the programmed q
 (``½ ‖q′ − q‖²``) with::
 
-    (x(q′) − x_t) / 1 mm = 0,    L · vee(R_tᵀ R(q′)) / 1 mm = 0
+    (x(q′) − x_t) / 1 mm = 0,    L · g(R_tᵀ R(q′)) / 1 mm = 0
 
 ``(R, x)`` the TCP pose the *identified* model predicts (deflection under the wrench
-included), ``vee`` the rotation error (sin θ · axis, rad) and L (m) making it a length;
-a position-only problem drops the orientation. Construction only: :mod:`.compensate`
-evaluates the Functions.
+included), ``g`` the orientation error (rad, :func:`orientation_equations`: the vector
+part of ``R_tᵀ R``, sin θ · axis, up to θ = 90°, tan(θ/2) · axis beyond) and L (m)
+making it a length; a position-only problem drops the orientation. The vector part alone
+is zero at θ = π too: a flange turned half a turn would satisfy the equations.
+Construction only: :mod:`.compensate` evaluates the Functions.
 """
 from __future__ import annotations
 
@@ -33,6 +35,18 @@ def rotation_error(r_target, r) -> ca.SX:
     return 0.5 * ca.vertcat(e[2, 1] - e[1, 2], e[0, 2] - e[2, 0], e[1, 0] - e[0, 1])
 
 
+def orientation_equations(r_target, r) -> ca.SX:
+    """The orientation error g (rad), SX (3, 1): ``vee`` (:func:`rotation_error`,
+    sin θ · axis) up to θ = 90°, ``vee / (1 + cos θ)`` (tan(θ/2) · axis) beyond, θ the angle
+    of ``R_targetᵀ R`` (cos θ = (tr − 1) / 2).
+
+    Its norm grows with θ, from 0 at θ = 0 (its only zero; ``vee`` is zero at θ = π too)
+    to no bound as θ → π. It is ``vee`` to the bit where θ ≤ 90°.
+    """
+    vee, cos = rotation_error(r_target, r), 0.5 * (ca.trace(r_target.T @ r) - 1.0)
+    return ca.if_else(cos >= 0.0, vee, vee / (1.0 + cos))
+
+
 @dataclass(frozen=True, eq=False)
 class CompensationProblem:
     """The compensation NLP of one model and one TCP, frozen.
@@ -43,7 +57,8 @@ class CompensationProblem:
         Whether the orientation is left free.
     error : casadi.Function
         ``error(q, w, env, p, t, x_t, R_t) -> (position, rotation)``: position
-        error (3, m) and rotation error ``vee(R_tᵀ R)`` (3, rad).
+        error (3, m) and rotation error ``vee(R_tᵀ R)`` (3, rad, sin θ · axis: zero at
+        θ = π too; the angle needs the trace as well).
     jacobian : casadi.Function
         ``jacobian(q, w, env, p, t, x_t, R_t) -> J``: ∂(target equations)/∂q′,
         (3 or 6, N), mm/rad; its condition number tells a singular configuration.
@@ -96,7 +111,7 @@ def build_problem(model, position_only: bool = False) -> CompensationProblem:
                         ["q", "w", "env", "p", "t", "x_t", "R_t"], ["position", "rotation"])
     residual = _MM * e_pos
     if not position_only:
-        residual = ca.vertcat(residual, _MM * ORIENTATION_LENGTH * e_rot)
+        residual = ca.vertcat(residual, _MM * ORIENTATION_LENGTH * orientation_equations(r_t, r_f))
     jacobian = ca.Function("jacobian", [q, w, env, p, t, x_t, r_t],
                            [ca.densify(ca.jacobian(residual, q))],
                            ["q", "w", "env", "p", "t", "x_t", "R_t"], ["J"])
