@@ -15,7 +15,7 @@ body { font-family: sans-serif; max-width: 1100px; margin: 2em auto; color: #222
 h1 { border-bottom: 2px solid #446; } h2 { margin-top: 1.6em; color: #334; }
 table { border-collapse: collapse; margin: 0.8em 0; font-size: 0.9em; max-width: 100%; }
 th, td { border: 1px solid #bbb; padding: 2px 8px; text-align: right; }
-th { background: #e8e8f0; } td.text, th.text { text-align: left; overflow-wrap: anywhere; }
+th { background: #e8e8f0; } td.text, th.text { text-align: left; }
 figure { margin: 1em 0; } figcaption { font-size: 0.9em; color: #555; }
 img { max-width: 100%; height: auto; }
 pre { background: #f4f4f4; padding: 0.6em; overflow-x: auto; font-size: 0.85em; }
@@ -46,7 +46,9 @@ def _cell(value, tag: str, digits: int) -> str:
         return f"<{tag}>{value:.{digits}g}</{tag}>"
     if isinstance(value, int) and not isinstance(value, bool):
         return f"<{tag}>{value}</{tag}>"
-    return f'<{tag} class="text">{escape(value)}</{tag}>'
+    # a line may break after a comma or semicolon: a long effect string keeps its table narrow
+    text = escape(value).replace(",", ",<wbr>").replace(";", ";<wbr>")
+    return f'<{tag} class="text">{text}</{tag}>'
 
 
 def table(header, rows, digits: int = 6) -> Html:
