@@ -107,7 +107,8 @@ def _sight(cm) -> _Sight:
 
 
 def _placements(cm, q, ws):
-    """Every object's placement at each pose of q (M, N): rotations (M, G, 3, 3), origins (M, G, 3)."""
+    """Every object's placement at each pose of q (M, N): rotations (M, G, 3, 3) and
+    origins (M, G, 3), m."""
     import pinocchio as pin
 
     objects = cm.geometry.geometryObjects
@@ -124,7 +125,7 @@ def _placements(cm, q, ws):
 
 
 def _segment_distance(p, u, a, b):
-    """Distance (m) between segments p→u and a→b (… × 3 each), the latter possibly a point."""
+    """Distance (m) between the segments p→u and a→b (… × 3 each; a→b may be a point)."""
     d1, d2, r = u - p, b - a, p - a
     aa, e, f = (d1 * d1).sum(-1), (d2 * d2).sum(-1), (d2 * r).sum(-1)
     c, bb = (d1 * r).sum(-1), (d1 * d2).sum(-1)
@@ -172,9 +173,11 @@ def _verdicts(cm, sight, q, ws) -> np.ndarray:
                 state[:, a, k] = np.where(d > _BAND, _FREE, np.where(d < -_BAND, _BLOCKED, _ASK))
             else:
                 lower, upper = sight.box[k]
-                into = lambda x: np.einsum("mji,mj->mi", rotation[:, k], x - origin[:, k])  # noqa: E731
-                missed = _misses(into(np.broadcast_to(tracker, end.shape)), into(end),
-                                 lower - BEAM_RADIUS - _BAND, upper + BEAM_RADIUS + _BAND)
+                ends = np.einsum("mji,mpj->mpi", rotation[:, k],  # in the object's frame
+                                 np.stack([np.broadcast_to(tracker, end.shape), end], 1)
+                                 - origin[:, k, None])
+                missed = _misses(ends[:, 0], ends[:, 1], lower - BEAM_RADIUS - _BAND,
+                                 upper + BEAM_RADIUS + _BAND)
                 state[:, a, k] = np.where(missed, _FREE, _ASK)
         state[~on, a] = _FREE
     return state
