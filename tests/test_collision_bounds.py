@@ -283,3 +283,21 @@ def test_beams_screened_at_once_are_those_coal_finds_pose_by_pose(cell):
     assert 30 < sum(map(bool, truth)) < 270  # both kinds of pose are tested
     for x, found in zip(q[:40], truth):
         assert tuple((b.marker, b.body) for b in blocked_beams(cm, x, ws)) == found
+
+
+def test_poses_screened_in_shares_are_screened_as_one(cell, monkeypatch):
+    """The candidates' screening split among forked processes keeps and counts the poses as
+    one process screening them all does."""
+    from doe_calib.design.candidates import draw
+
+    robot, cm = cell
+    lo, hi = _limits(robot)
+    q = np.random.default_rng(37).uniform(lo, hi, (600, robot.n_joints))
+    ok = np.random.default_rng(38).random(len(q)) < 0.9
+    monkeypatch.setattr(draw, "_SHARE", 10**6)
+    one, one_masks = draw.screen_collisions(cm, q, ok, Workspace(cm))
+    monkeypatch.setattr(draw, "_SHARE", 70)
+    many, many_masks = draw.screen_collisions(cm, q, ok, Workspace(cm))
+    assert one.any() and (~one & ok).any()
+    assert np.array_equal(one, many) and list(one_masks) == list(many_masks)
+    assert all(np.array_equal(one_masks[k], many_masks[k]) for k in one_masks)
