@@ -102,6 +102,7 @@ class Workspace:
         self.results = list(self.geometry.collisionResults)
         self.bounded = bounded
         self._motion = False  # not computed yet
+        self.sight = None  # what the tracker's beams are checked against (.beams, computed once)
 
     def motion(self, cm) -> np.ndarray | None:
         """Per pair and joint, how fast the pair can close (:func:`.bounds.motion_weights`,

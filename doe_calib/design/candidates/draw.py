@@ -8,8 +8,11 @@ import numpy as np
 from doe_calib.collision import Workspace, screen_beams, too_close
 from doe_calib.design.result import CandidateCount
 from doe_calib.errors import SolverError
+from doe_calib.runtime.forked import forked_map
 
 _MAX_DRAWS = 50  # draw at most this many poses per candidate wanted
+_SHARE = 2000  # fewest poses screened by one process
+_SHARES = 8  # most shares the poses of one round are screened in
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,16 +97,33 @@ def feasible_candidates(feasibility, robot, n: int, rng, collision=None) -> Cand
 
 
 def screen_collisions(collision, q, ok, workspace) -> tuple[np.ndarray, dict]:
-    """Poses of ``q`` still ok once too-close pairs are rejected; pair → mask of rejected."""
-    hit = np.full(len(q), -1)
-    hit[ok] = too_close(collision, q[ok], workspace=workspace)
+    """Poses of ``q`` still ok once too-close pairs are rejected; pair → mask of rejected.
+
+    The poses are screened in shares of at least :data:`_SHARE` by forked processes
+    (:func:`~doe_calib.runtime.forked.forked_map`, one per CPU); each pose's answer is its
+    own, so the result does not depend on the shares.
+    """
+    shares = np.array_split(np.flatnonzero(ok), max(1, min(_SHARES, ok.sum() // _SHARE)))
+    found = forked_map(_screen, (collision, q, shares, workspace), len(shares))
+    hit, bodies = np.full(len(q), -1), np.full(len(q), None, dtype=object)
+    for share, (hits, blocked) in zip(shares, found):
+        hit[share], bodies[share] = hits, blocked
     masks = {f"collision: {collision.pair_name(k)}": hit == k for k in np.unique(hit[hit >= 0])}
     ok = ok & (hit < 0)
+    for body in sorted({b for b in bodies if b is not None}):
+        masks[f"line of sight: blocked by {body}"] = bodies == body
+    return ok & np.array([b is None for b in bodies]), masks
+
+
+def _screen(shared, i: int) -> tuple:
+    """The first pair too close (−1: none) at each pose of share i, and the first body on a
+    blocked beam of each pose found free (None: every beam free, or not checked)."""
+    collision, q, shares, workspace = shared
+    poses = q[shares[i]]
+    hit = too_close(collision, poses, workspace=workspace)
+    bodies = [None] * len(poses)
     if collision.tracker is not None:
-        bodies = np.full(len(q), None, dtype=object)
-        bodies[ok] = [None if b is None else b.body
-                      for b in screen_beams(collision, q[ok], workspace)]
-        for body in sorted({b for b in bodies if b is not None}):
-            masks[f"line of sight: blocked by {body}"] = bodies == body
-        ok = ok & np.array([b is None for b in bodies])
-    return ok, masks
+        free = np.flatnonzero(hit < 0)
+        for k, b in zip(free, screen_beams(collision, poses[free], workspace)):
+            bodies[k] = None if b is None else b.body
+    return hit, bodies
