@@ -192,6 +192,9 @@ def _told(first, kept):
 
 def _estimate(model, measurements, params, estimator, progress, options):
     """One fit by the estimator named."""
+    if measurements.contact.any() and estimator != "point":
+        raise OptionError(f"estimator={estimator!r} takes tracker readings only; the socket "
+                          f"contacts of these readings need the point estimator")
     if estimator == "point":
         return identify_point(model, measurements, params, progress=progress, **options)
     if estimator == "two-step":
