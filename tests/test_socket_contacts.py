@@ -11,6 +11,7 @@ import csv
 
 import independent_sim as sim
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from doe_calib import Robot, Tool
@@ -155,3 +156,44 @@ def test_socket_campaign_predicts_new_configurations(ur10, truth, campaign, caps
     assert similar <= 0.03  # what contacts can see: all but a rigid motion and the scale
     # the scale rides on the one link length held at the URDF's (0.08 mm off here, 1.3e-4)
     assert after <= 0.15
+
+
+def test_contacts_mix_with_tracker_readings(ur10, truth, campaign, tmp_path):
+    """Tracker readings of the ball (base 2 m away, turned) and the contacts in one file: the
+    base is fitted from the tracker rows, the sockets land where they are in the tracker
+    frame, and new configurations are predicted there with no registration."""
+    from dataclasses import replace
+
+    from doe_calib.estimation.identify import FitSettings, identify
+    from doe_calib.estimation.sockets import socket_points
+    from doe_calib.model.marker_model import build_model
+
+    d, q_new = campaign
+    rot = pin.exp3(np.array([0.3, -0.2, 1.9]))
+    placed = replace(truth, base_rotvec=pin.log3(rot), base_position=np.array([2.0, -0.5, 0.3]))
+    rng = np.random.default_rng(3)
+    q = sim.random_configurations(ur10, 20, rng, within=np.c_[-np.pi * np.ones(6),
+                                                              np.pi * np.ones(6)])
+    x = sim.marker_positions(ur10, placed, q, np.zeros((20, 6)))[:, 0]
+    x = (x + rng.normal(scale=SEATING_MM * 1e-3, size=x.shape)) * 1e3
+    lines = (d / "contacts.csv").read_text().splitlines()
+    lines += [",".join([f"t{i}", *_q_columns(qi).values(), "ball", "", *(repr(float(v)) for v in xi)])
+              for i, (qi, xi) in enumerate(zip(q, x))]
+    (tmp_path / "mixed.csv").write_text("\n".join(lines) + "\n")
+    robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
+    tool = Tool.from_yaml(d / "tool.yaml")
+    meas = read_measurements(tmp_path / "mixed.csv", robot, tool, sigma=SEATING_MM * 1e-3)
+    assert meas.contact.sum() == 45 and (~meas.contact).sum() == 20
+    model = build_model(robot, tool, "joint_offset+geometry")
+    result = identify(model, meas, settings=FitSettings(select="none"))
+    assert not any("socket contacts cannot see" in n for n in result.warnings)
+    found = socket_points(model, meas, result.parameters.values)
+    for name, point in SOCKETS_M.items():  # the tracker frame: base ∘ root-frame point
+        assert np.linalg.norm(found[name] - (rot @ point + placed.base_position)) < 5e-5
+    from doe_calib.io.measurements import Configurations
+
+    predicted = result.predict(Configurations.from_arrays(q_new), model).xyz
+    true = sim.marker_positions(ur10, placed, q_new, np.zeros((40, 6)))[:, 0]
+    rms = np.sqrt(np.mean(np.sum((predicted - true) ** 2, axis=1))) * 1e3
+    print(f"mixed file: {rms:.4f} mm at new configurations, tracker frame, no registration")
+    assert rms < 0.03
