@@ -166,14 +166,11 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
     where = measurements.source or "<measurements>"
     if len(measurements) == 0:
         raise DataError("no readings to identify from", where)
-    notes = []
     tracked = ~measurements.contact
     if not tracked.any():
         params = fix_unseen_by_contacts(model.robot, params)
-        warnings.warn(BASE_UNSEEN, IdentifiabilityWarning, stacklevel=3)
-        notes.append(BASE_UNSEEN)
-        notes += sorted({why for why in params.fixed_reason
-                         if why.startswith((ARM_UNSEEN, SCALE_UNSEEN))})
+        warnings.warn(BASE_UNSEEN, IdentifiabilityWarning, stacklevel=3)  # the report
+        # groups the fixed parameters by these reasons: no note of its own
     elif register and params.free[params.index("base")].all():
         params = register_base(model, measurements.subset(tracked), params)
     n_free = int(params.free.sum())
@@ -181,5 +178,5 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
         raise DataError(f"{measurements.n_coordinates} observed coordinates for {n_free} unknown "
                         f"parameters: measure more poses or markers, or use a smaller model", where)
     red = reduce_jacobian(model, measurements, params.values)
-    params, found, absorbed = fix_unidentifiable(model, measurements, params, reduction=red)
-    return params, notes + found, red, absorbed
+    params, notes, absorbed = fix_unidentifiable(model, measurements, params, reduction=red)
+    return params, notes, red, absorbed

@@ -6,9 +6,21 @@ A socket's point is not a parameter of the fit (the residuals eliminate it:
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from doe_calib.estimation.weighted_residuals import marker_points, socket_mean
+
+
+#: How the note of :func:`socket_note` begins.
+_NOTE = re.compile(r"\d+ socket contacts in \d+ sockets ")
+
+
+def is_socket_note(text: str) -> bool:
+    """Whether ``text`` is a fit's :func:`socket_note` (each fit has its own: a refit's
+    replaces it)."""
+    return bool(_NOTE.match(text))
 
 
 def socket_points(model, measurements, values) -> dict:
