@@ -172,7 +172,8 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
         warnings.warn(BASE_UNSEEN, IdentifiabilityWarning, stacklevel=3)  # the report
         # groups the fixed parameters by these reasons: no note of its own
     elif register and params.free[params.index("base")].all():
-        params = register_base(model, measurements.subset(tracked), params)
+        params = register_base(model, measurements if tracked.all() else
+                               measurements.subset(tracked), params)
     n_free = int(params.free.sum())
     if measurements.n_coordinates < n_free:
         raise DataError(f"{measurements.n_coordinates} observed coordinates for {n_free} unknown "

@@ -149,7 +149,7 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
                                                                f"{sig[i]}", "sigma")
     sigma_m = np.where(np.isnan(sig), np.nan if sigma is None else sigma, sig / 1000.0)
     xyz = numbers(table, problems, 9, XYZ, None if require_xyz else np.nan) / 1000.0
-    socket_ids = texts(table, problems, 9, "socket")
+    socket_ids = texts(table, problems, 9, "socket") if contacts else None
     if contacts:
         _check_contacts(table, problems, socket_ids, xyz, tracked_xyz)
     appr = approach(table, problems, 10, robot) if explicit else None
@@ -190,10 +190,10 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
                         session, not given,
                         PER_READING if "sigma" in table.columns else GIVEN if given else ESTIMATED,
                         **(_sockets([socket_ids[r] for r in rows.tolist()]) if contacts else {}))
-    tracked = ~meas.contact
-    finding = metres_finding(meas.xyz[tracked], robot, meas.configurations.q,
-                             meas.config[tracked], tool.position_array[meas.marker[tracked]],
-                             meas.sessions[meas.config[tracked]])
+    tracked = meas.subset(~meas.contact) if contacts else meas  # the tracker's readings
+    finding = metres_finding(tracked.xyz, robot, tracked.configurations.q, tracked.config,
+                             tool.position_array[tracked.marker],
+                             tracked.sessions[tracked.config])
     if finding is not None:
         raise DataError(finding, meas.source)
     return meas
