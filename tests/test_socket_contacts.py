@@ -165,7 +165,7 @@ def test_contacts_mix_with_tracker_readings(ur10, truth, campaign, tmp_path):
     from dataclasses import replace
 
     from doe_calib.estimation.identify import FitSettings, identify
-    from doe_calib.estimation.sockets import socket_points
+    from doe_calib.estimation.sockets import located_sockets
     from doe_calib.model.marker_model import build_model
 
     d, q_new = campaign
@@ -187,9 +187,12 @@ def test_contacts_mix_with_tracker_readings(ur10, truth, campaign, tmp_path):
     model = build_model(robot, tool, "joint_offset+geometry")
     result = identify(model, meas, settings=FitSettings(select="none"))
     assert not any("socket contacts cannot see" in n for n in result.warnings)
-    found = socket_points(model, meas, result.parameters.values)
+    found = located_sockets(model, meas, result.parameters, result.covariance)
     for name, point in SOCKETS_M.items():  # the tracker frame: base ∘ root-frame point
-        assert np.linalg.norm(found[name] - (rot @ point + placed.base_position)) < 5e-5
+        where, std = found[name]
+        error = where - (rot @ point + placed.base_position)
+        assert np.linalg.norm(error) < 5e-5 and np.all(np.abs(error) < 4 * std)
+        assert np.all(std < 2e-5)
     from doe_calib.io.measurements import Configurations
 
     predicted = result.predict(Configurations.from_arrays(q_new), model).xyz

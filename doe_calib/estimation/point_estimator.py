@@ -15,7 +15,6 @@ from doe_calib.estimation.covariance import covariance_from_r_factor
 from doe_calib.estimation.point_fit import point_fit
 from doe_calib.estimation.preparation import prepare
 from doe_calib.estimation.result import IdentificationResult
-from doe_calib.estimation.sockets import socket_note
 
 log = logging.getLogger(__name__)
 
@@ -50,9 +49,7 @@ def identify_point(model, measurements, params=None, max_iterations: int = 200,
     convergence = {"converged": sol.converged, "iterations": sol.iterations,
                    "evaluations": sol.evaluations, "status": sol.status,
                    "message": f"Levenberg–Marquardt: {sol.message}", "residual_norm2": sol.norm2}
-    fitted = params.with_free_values(sol.x)
-    notes = notes + [n for n in [socket_note(model, measurements, fitted.values)] if n]
-    return finish(model, measurements, fitted, "point", convergence,
+    return finish(model, measurements, params.with_free_values(sol.x), "point", convergence,
                   notes, covariance_from_r_factor(sol.reduction.r_factor, scale), sol.norm2,
                   absorbed, None if sol.converged else
                   f"Levenberg–Marquardt stopped before converging: {sol.message}")
