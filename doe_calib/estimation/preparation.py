@@ -1,8 +1,10 @@
 """What every estimator does first: start values, base registration, the rank analysis.
 
-The base pose starts from a point-set registration of all readings; the
-parameters the data cannot separate are fixed (at their current values) with
-the reason in words.
+The base pose starts from a point-set registration of the tracker's readings;
+the parameters the data cannot separate are fixed (at their current values) with
+the reason in words. Readings that are all socket contacts cannot see the base
+pose, a rigid motion of the whole arm or its scale: those are fixed first, said
+in words of their own (:func:`fix_unseen_by_contacts`).
 """
 from __future__ import annotations
 
