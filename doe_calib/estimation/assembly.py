@@ -11,6 +11,7 @@ from doe_calib.errors import ConvergenceWarning
 from doe_calib.estimation.covariance import covariance_from_r_factor
 from doe_calib.estimation.measured_region import joint_range
 from doe_calib.estimation.result import IdentificationResult
+from doe_calib.estimation.sockets import socket_note
 from doe_calib.estimation.weighted_residuals import marker_residuals, reduce_jacobian
 
 #: The note a fit that estimates σ leads its notes with (its σ̂ follows, mm).
@@ -68,9 +69,12 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
     ratio = float(np.sqrt(norm2 / dof)) if dof > 0 else float("nan")
     sigma_mm = float(np.median(measurements.sigma) * 1000.0)
     estimated = bool(measurements.sigma_estimated and np.isfinite(ratio))
+    scale = ratio ** 2 if estimated else 1.0
     if estimated:  # σ unknown: σ̂ becomes σ and scales the covariance (statsmodels' scale)
         covariance, sigma_mm, ratio = covariance * ratio ** 2, sigma_mm * ratio, 1.0
         notes = [f"{SIGMA_ESTIMATED}: {sigma_mm:.3g} mm"] + list(notes)
+    located = socket_note(model, measurements, params, covariance, scale)
+    notes = list(notes) + [located] if located else notes
     return IdentificationResult(
         model.robot, model.tool, model.spec, estimator, params, covariance, ratio,
         residual_statistics(model, measurements, params.values), convergence, n_obs,

@@ -24,6 +24,7 @@ from doe_calib.estimation.fit_statistics import misfit_finding
 from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
 from doe_calib.estimation.selection import SELECTIONS, select as choose
 from doe_calib.estimation.sigma import resolve_sigma
+from doe_calib.estimation.sockets import is_socket_note
 from doe_calib.io.measurements import provisional
 from doe_calib.io.repeated_readings import copies_words
 from doe_calib.io.setting_ranges import positive, whole
@@ -172,7 +173,8 @@ def identify(model, measurements, params=None, *, estimator: str = "point",
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     of_that_fit = {str(w.message) for w in said[id(first)] if issubclass(w.category, OF_THAT_FIT)}
     notes = kept.warnings + tuple(n for n in first.warnings if n not in kept.warnings
-                                  and n not in of_that_fit and not n.startswith(SIGMA_ESTIMATED))
+                                  and n not in of_that_fit and not n.startswith(SIGMA_ESTIMATED)
+                                  and not is_socket_note(n))
     return with_plausibility(model, measurements,
                              replace(kept, warnings=notes, selection=selection,
                                      absorbed=first.absorbed))
@@ -192,6 +194,9 @@ def _told(first, kept):
 
 def _estimate(model, measurements, params, estimator, progress, options):
     """One fit by the estimator named."""
+    if measurements.contact.any() and estimator != "point":
+        raise OptionError(f"estimator={estimator!r} takes tracker readings only; the socket "
+                          f"contacts of these readings need the point estimator")
     if estimator == "point":
         return identify_point(model, measurements, params, progress=progress, **options)
     if estimator == "two-step":

@@ -1,12 +1,16 @@
 """What every estimator does first: start values, base registration, the rank analysis.
 
-The base pose starts from a point-set registration of all readings; the
-parameters the data cannot separate are fixed (at their current values) with
-the reason in words.
+The base pose starts from a point-set registration of the tracker's readings;
+the parameters the data cannot separate are fixed (at their current values) with
+the reason in words. Readings that are all socket contacts cannot see the base
+pose, a rigid motion of the whole arm or its scale: those are fixed first, said
+in words of their own (:func:`fix_unseen_by_contacts`).
 """
 from __future__ import annotations
 
 import warnings
+
+import numpy as np
 
 from doe_calib.errors import ConditioningWarning, DataError, IdentifiabilityWarning
 from doe_calib.estimation.identifiability import analyse, blind_motion_words
@@ -18,6 +22,16 @@ from doe_calib.model.rotations import matrix_to_rotation_vector
 COND_WARN = 1e6
 #: How the reason of every parameter the rank analysis fixed ends.
 NOT_SEPARABLE = "; fixed at its current value"
+#: Why the base pose is fixed when every reading is a socket contact.
+BASE_UNSEEN = "socket contacts cannot see the robot's base pose: fixed at the URDF's root"
+#: Why the first joint's placement and offset are then fixed too.
+ARM_UNSEEN = ("socket contacts cannot see a rigid motion of the whole arm (the first joint's "
+              "placement, and its offset, turn and shift every contact and socket alike): "
+              "fixed at its current value with the base pose")
+#: Why one link length is then held: the words end with the length.
+SCALE_UNSEEN = ("socket contacts cannot see the robot's scale without a known length (the "
+                "whole arm and the sockets grown alike fit the same): held at its current value "
+                "to fix the scale, the link length it sets")
 
 
 def not_separable(params) -> list[str]:
@@ -42,6 +56,49 @@ def register_base(model, measurements, params):
     v[base[:3]] = t
     v[base[3:]] = matrix_to_rotation_vector(rot)
     return params.with_values(v)
+
+
+def fix_unseen_by_contacts(robot, params):
+    """What readings that are all socket contacts cannot see, fixed and said in words.
+
+    Contacts compare the marker to points of unknown position: a rigid motion or a
+    growth of the whole arm moves the sockets with it, and fits the same. Fixed are the
+    base pose, at the identity (the URDF's root frame, :data:`BASE_UNSEEN`); the first
+    joint's placement and offset, at their values (:data:`ARM_UNSEEN`); and, when the
+    model has placement translations, the one along the longest nominal link, at its
+    value (:data:`SCALE_UNSEEN`): the scale. Exact null directions of these readings'
+    Jacobian only where every socket's contacts meet, so the rank analysis at the
+    nominal model does not find them; left free, a fit can shrink the arm.
+    """
+    base = params.index("base")
+    v = params.values.copy()
+    v[base] = 0.0
+    params = params.with_values(v).fixed([params.names[i] for i in base], BASE_UNSEEN)
+    first = robot.joints[0].name
+    arm = [n for n in (f"dq_{first}", *(f"g_{first}_{r}{a}" for r in "tr" for a in "xyz"))
+           if n in params.names]
+    params = params.fixed(arm, ARM_UNSEEN) if arm else params
+    if any(why.startswith(SCALE_UNSEEN) for why in params.fixed_reason):
+        return params  # a refit of the kept parameters: the scale is already held
+    name, length = _longest_link(robot, params)
+    return params.fixed([name], f"{SCALE_UNSEEN} ({length * 1000.0:.1f} mm)") if name \
+        else params
+
+
+def _longest_link(robot, params) -> tuple:
+    """The placement translation (name) along the longest nominal link after the first
+    joint, and that length (m); (None, 0) when the model has none free."""
+    frames = [(j.name, j.placement_matrix) for j in robot.joints[1:]] + \
+        [("flange", np.array(robot.flange_placement, float).reshape(4, 4))]
+    best = (None, 0.0)
+    for frame, m in frames:
+        local = m[:3, :3].T @ m[:3, 3]  # the link in the frame the error is expressed in
+        for a, x in zip("xyz", local):
+            name = f"g_{frame}_t{a}"
+            if abs(x) > abs(best[1]) and name in params.names and \
+                    params.free[params.names.index(name)]:
+                best = (name, float(abs(x)))
+    return best
 
 
 def _fixed_sentence(params, names) -> str:
@@ -111,8 +168,14 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
     where = measurements.source or "<measurements>"
     if len(measurements) == 0:
         raise DataError("no readings to identify from", where)
-    if register and params.free[params.index("base")].all():
-        params = register_base(model, measurements, params)
+    tracked = ~measurements.contact
+    if not tracked.any():
+        params = fix_unseen_by_contacts(model.robot, params)
+        warnings.warn(BASE_UNSEEN, IdentifiabilityWarning, stacklevel=3)  # the report
+        # groups the fixed parameters by these reasons: no note of its own
+    elif register and params.free[params.index("base")].all():
+        params = register_base(model, measurements if tracked.all() else
+                               measurements.subset(tracked), params)
     n_free = int(params.free.sum())
     if measurements.n_coordinates < n_free:
         raise DataError(f"{measurements.n_coordinates} observed coordinates for {n_free} unknown "

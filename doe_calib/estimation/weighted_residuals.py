@@ -7,6 +7,15 @@ model's observation matrix (CasADi, never finite differences).
 :func:`reduce_jacobian` and :func:`residual_norm2` go through the
 configurations a block at a time, so memory holds one block of B, whatever
 the number of readings.
+
+A socket contact (formats.md §3) is compared to its socket's point s, unknown: with
+the robot parameters p held, the best s is the σ⁻²-weighted mean of the model's
+points of that socket's contacts. The residuals here are those of s so eliminated
+(variable projection; s enters linearly): r = (s̄(p) − x(p)) / σ with Jacobian
+−(B − B̄) / σ, exactly the derivative of the eliminated residual, so the fit of p
+and its covariance (the Schur complement of the full problem) are those of
+estimating s alongside p. A socket's mean needs all its contacts at once: a file
+with contacts is taken in one block of configurations.
 """
 from __future__ import annotations
 
@@ -28,10 +37,42 @@ def marker_points(model, measurements, values, block: int = BLOCK_CONFIGURATIONS
     return out
 
 
+def socket_mean(measurements, rows, v) -> np.ndarray:
+    """For each of ``rows``: the σ⁻²-weighted mean of ``v`` (len(rows), …) over the rows of
+    its socket; 0 for a tracker reading.
+
+    Parameters
+    ----------
+    measurements : Measurements
+    rows : ndarray of int
+        Readings; every contact of a socket among them that is to count.
+    v : ndarray, shape (len(rows), …)
+        A quantity per reading (its model point, m; its rows of B).
+    """
+    k = measurements.socket[rows]
+    out = np.zeros_like(v, dtype=float)
+    w = measurements.sigma[rows] ** -2.0
+    for j in np.unique(k[k >= 0]).tolist():
+        at = k == j
+        out[at] = np.tensordot(w[at], v[at], axes=1) / w[at].sum()
+    return out
+
+
+def targets(measurements, rows, points) -> np.ndarray:
+    """What the model's ``points`` (len(rows), 3) of ``rows`` are compared to, m: the reading,
+    or for a contact its socket's point (the mean of its contacts' points)."""
+    if not measurements.contact[rows].any():
+        return measurements.xyz[rows]
+    seated = measurements.contact[rows, None]
+    return np.where(seated, socket_mean(measurements, rows, points), measurements.xyz[rows])
+
+
 def marker_residuals(model, measurements, values) -> np.ndarray:
     """Reading minus model of every reading, shape (K, 3), m (the one place it is computed
-    from marker positions; the weighted residual below divides it by σ)."""
-    return measurements.xyz - marker_points(model, measurements, values)
+    from marker positions; the weighted residual below divides it by σ). A contact's
+    reading is its socket's point (module notes)."""
+    points = marker_points(model, measurements, values)
+    return targets(measurements, np.arange(len(measurements)), points) - points
 
 
 def weighted_residual(model, measurements, values, jacobian: bool = True):
@@ -42,12 +83,15 @@ def weighted_residual(model, measurements, values, jacobian: bool = True):
     else:
         x, b = marker_positions(model, values, cfg), None
     c, j, s = measurements.config, measurements.marker, measurements.sigma[:, None]
-    r = ((measurements.xyz - x[c, j]) / s).ravel()
+    every = np.arange(len(measurements))
+    r = ((targets(measurements, every, x[c, j]) - x[c, j]) / s).ravel()
     if not jacobian:
         return r, None
     flat = b.reshape(-1, 3, b.shape[-1])
     picked = c * b.shape[1] + j
     rows = flat[:len(picked)] if _in_order(picked) else flat[picked]
+    if measurements.contact.any():
+        rows = rows - socket_mean(measurements, every, rows)
     return r, np.divide(rows, -s[:, :, None]).reshape(3 * len(measurements), -1)
 
 
@@ -78,7 +122,8 @@ def _blocks(measurements, size: int):
 
 def residual_norm2(model, measurements, values, block: int = BLOCK_CONFIGURATIONS) -> float:
     """‖r‖², the weighted residuals' sum of squares, one block of configurations at a time."""
-    r = (measurements.xyz - marker_points(model, measurements, values, block)) / \
+    points = marker_points(model, measurements, values, block)
+    r = (targets(measurements, np.arange(len(measurements)), points) - points) / \
         measurements.sigma[:, None]
     return float(np.sum(r * r))
 
@@ -107,6 +152,8 @@ def reduce_jacobian(model, measurements, values, columns=None, scale=None,
     if columns.dtype == bool:
         columns = np.flatnonzero(columns)
     scale = np.ones(len(columns)) if scale is None else np.asarray(scale, float)
+    if measurements.contact.any():  # a socket's mean needs all its contacts (module notes)
+        block = max(block, len(measurements.configurations))
 
     def blocks():
         for cfg, rows, c in _blocks(measurements, block):
@@ -137,6 +184,9 @@ def augmented_block(measurements, rows, config, x, b, columns, scale) -> np.ndar
             np.take(flat, columns, axis=2)
     else:
         jac = flat[picked[:, None, None], np.arange(3)[:, None], columns]
+    points = x.reshape(-1, 3)[picked]
+    if measurements.contact[rows].any():
+        jac = jac - socket_mean(measurements, rows, jac)
     np.multiply(jac, -(scale / s)[:, None, :], out=view[:, :, :-1])
-    np.divide(measurements.xyz[rows] - x.reshape(-1, 3)[picked], s, out=view[:, :, -1])
+    np.divide(targets(measurements, rows, points) - points, s, out=view[:, :, -1])
     return out

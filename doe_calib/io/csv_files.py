@@ -119,14 +119,16 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     'per reading'
     """
     table = read_table(path)
+    contacts = "socket" in table.columns  # x, y, z then empty on a contact's row
+    tracked_xyz, require_xyz = require_xyz, require_xyz and not contacts
     required = ["pose", *joint_columns(robot), "marker", *(XYZ if require_xyz else ())]
-    optional = [*WRENCH, "temperature", "sigma", "session", *approach_columns(robot),
+    optional = [*WRENCH, "temperature", "sigma", "session", "socket", *approach_columns(robot),
                 *(() if require_xyz else XYZ), *PREDICTED_STD]
     extra = check_columns(table, required, optional)
     explicit = approach_given(table, robot)
     if sigma is not None and not sigma > 0:
         raise DataError(f"σ must be positive, got {sigma * 1000.0} mm", table.path)
-    table.cells(["pose", "marker", "session"])  # each kind of column in one pass
+    table.cells(["pose", "marker", "session", "socket"])  # each kind of column in one pass
     table.floats([*joint_columns(robot), *WRENCH, "temperature", "sigma", *XYZ,
                   *approach_columns(robot)])
     problems, notes = RowProblems(table), []
@@ -147,6 +149,9 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
                                                                f"{sig[i]}", "sigma")
     sigma_m = np.where(np.isnan(sig), np.nan if sigma is None else sigma, sig / 1000.0)
     xyz = numbers(table, problems, 9, XYZ, None if require_xyz else np.nan) / 1000.0
+    socket_ids = texts(table, problems, 9, "socket") if contacts else None
+    if contacts:
+        _check_contacts(table, problems, socket_ids, xyz, tracked_xyz)
     appr = approach(table, problems, 10, robot) if explicit else None
     pose_code, session_code = codes(pose), codes(sessions)
     turns = _same_q(table, problems, 5, robot, q, combined([session_code, pose_code]), pose)
@@ -183,12 +188,36 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
                         ((ignored_note(table, extra),) if extra else ())
                         + tuple(text for i, text in notes if i in kept or i < 0),
                         session, not given,
-                        PER_READING if "sigma" in table.columns else GIVEN if given else ESTIMATED)
-    finding = metres_finding(meas.xyz, robot, meas.configurations.q, meas.config,
-                             tool.position_array[meas.marker], meas.sessions[meas.config])
+                        PER_READING if "sigma" in table.columns else GIVEN if given else ESTIMATED,
+                        **(_sockets([socket_ids[r] for r in rows.tolist()]) if contacts else {}))
+    tracked = meas.subset(~meas.contact) if contacts else meas  # the tracker's readings
+    finding = metres_finding(tracked.xyz, robot, tracked.configurations.q, tracked.config,
+                             tool.position_array[tracked.marker],
+                             tracked.sessions[tracked.config])
     if finding is not None:
         raise DataError(finding, meas.source)
     return meas
+
+
+def _check_contacts(table, problems, socket_ids, xyz, tracked_xyz: bool) -> None:
+    """Refuse a contact (a ``socket`` id) with x, y, z and, with ``tracked_xyz``, a tracker
+    reading (no id) without all three (formats.md §3, *Socket contacts*)."""
+    seated = np.array([bool(c) for c in socket_ids])
+    given = np.isfinite(xyz)
+    problems.check((9, 20), seated & given.any(axis=1), lambda i: (
+        f"socket {socket_ids[i]!r} with x, y, z: a contact's position is the socket's, "
+        f"unknown; leave x, y, z empty (or the socket cell, for a tracker reading)"), "socket")
+    problems.check((9, 21), tracked_xyz & ~seated & ~given.all(axis=1), lambda i: (
+        "x, y, z missing on a row without a socket: give the tracker reading, or the socket "
+        "id of a contact"), "x" if "x" in table.columns else "socket")
+
+
+def _sockets(ids) -> dict:
+    """``socket`` and ``socket_names`` of :class:`Measurements` from each reading's socket id
+    ("" for a tracker reading)."""
+    names = tuple(dict.fromkeys(i for i in ids if i))
+    at = {n: k for k, n in enumerate(names)}
+    return {"socket": np.array([at.get(i, -1) for i in ids], int), "socket_names": names}
 
 
 def _same_q(table, problems, rank, robot, q, group, pose) -> np.ndarray:

@@ -199,6 +199,13 @@ class Measurements:
         when they are derived from fewer numbers than 3 per reading (6 for the
         virtual points of a 6-DoF probe pose); 0: 3 per reading. Sets the
         degrees of freedom of σ̂ and χ².
+    socket : ndarray of int, shape (K,), optional
+        For a contact (formats.md §3, *Socket contacts*): the socket (index into
+        ``socket_names``) in which the marker was seated, its position unknown; −1 for a
+        tracker reading. None: every reading is a tracker reading. A contact's ``xyz`` is
+        NaN.
+    socket_names : tuple of str
+        The sockets' ids, in order of first appearance.
     """
 
     configurations: Configurations
@@ -214,6 +221,8 @@ class Measurements:
     sigma_estimated: bool = False
     sigma_source: str = GIVEN
     observed_per_configuration: int = 0
+    socket: np.ndarray | None = None
+    socket_names: tuple = ()
 
     def __post_init__(self):
         if self.sigma_source not in SIGMA_SOURCES:
@@ -230,7 +239,19 @@ class Measurements:
         """Number of independent scalar observations: 3K, or 6 per pose of a 6-DoF probe."""
         if self.observed_per_configuration:
             return self.observed_per_configuration * len(np.unique(self.config))
-        return 3 * len(self)
+        return 3 * len(self) - 3 * len(self.sockets_used)
+
+    @property
+    def contact(self) -> np.ndarray:
+        """Which readings are socket contacts, shape (K,) bool (none without sockets)."""
+        return np.zeros(len(self), bool) if self.socket is None else self.socket >= 0
+
+    @property
+    def sockets_used(self) -> np.ndarray:
+        """Indices (into ``socket_names``) of the sockets some reading is seated in: each
+        is one unknown point, 3 coordinates the readings must also pay for."""
+        return np.unique(self.socket[self.contact]) if self.socket is not None else \
+            np.zeros(0, int)
 
     def subset(self, rows) -> "Measurements":
         """The readings at ``rows``, keeping only the configurations they use."""
@@ -243,7 +264,9 @@ class Measurements:
                             session=tuple(self.sessions[used]),
                             sigma_estimated=self.sigma_estimated,
                             sigma_source=self.sigma_source,
-                            observed_per_configuration=self.observed_per_configuration)
+                            observed_per_configuration=self.observed_per_configuration,
+                            socket=None if self.socket is None else self.socket[rows],
+                            socket_names=self.socket_names)
 
     @property
     def sessions(self) -> np.ndarray:
@@ -291,7 +314,18 @@ def concatenate(parts) -> Measurements:
                         sum((p.warnings for p in parts), ()),
                         tuple(s for p in parts for s in p.sessions),
                         any(p.sigma_estimated for p in parts), joined_sigma_source(parts),
-                        _joined_observed(parts))
+                        _joined_observed(parts), *_joined_sockets(parts))
+
+
+def _joined_sockets(parts) -> tuple:
+    """``(socket, socket_names)`` of joined parts: a socket id names one point in all."""
+    if all(p.socket is None for p in parts):
+        return None, ()
+    names = tuple(dict.fromkeys(n for p in parts for n in p.socket_names))
+    at = {n: i for i, n in enumerate(names)}
+    return np.concatenate([np.full(len(p), -1) if p.socket is None else
+                           np.array([at[p.socket_names[i]] if i >= 0 else -1
+                                     for i in p.socket.tolist()], int) for p in parts]), names
 
 
 def _joined_observed(parts) -> int:

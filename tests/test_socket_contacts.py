@@ -1,0 +1,202 @@
+"""Ball-in-socket contacts (formats.md §3, *Socket contacts*) through ``identify`` and
+``predict``, judged on a campaign simulated independently of our model (issue #31).
+
+A UR10 with placement errors up to 0.5 mm / 0.05° on every joint, joint offsets up to
+0.1°, the ball centre 1 mm off nominal; three sockets on the table, 15 contacts each
+seated by IK on the true robot (seating scatter 0.01 mm per axis); only the controller's
+joint values are written. The base pose cannot be seen: the prediction is compared to
+the truth after a rigid registration.
+"""
+import csv
+
+import independent_sim as sim
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from doe_calib import Robot, Tool
+from doe_calib.cli import main
+from doe_calib.errors import DataError
+from doe_calib.io.csv_files import read_measurements
+
+BALL_M = np.array([0.0, 0.0, 0.10])  # nominal ball centre, flange frame
+SOCKETS_M = {"S1": [0.65, 0.25, 0.05], "S2": [0.45, -0.55, 0.05], "S3": [-0.25, 0.70, 0.05]}
+SEATING_MM = 0.01
+
+
+@pytest.fixture(scope="module")
+def ur10():
+    path = sim.ur10_urdf()
+    if path is None:
+        pytest.skip("example-robot-data's UR10 is not installed")
+    return sim.Chain.from_urdf(path, "tool0")
+
+
+@pytest.fixture(scope="module")
+def truth(ur10):
+    rng = np.random.default_rng(31)
+    n = len(ur10.joints)
+    twists = rng.uniform(-1, 1, (n, 6)) * np.r_[[0.5e-3] * 3, [np.radians(0.05)] * 3]
+    offsets = rng.uniform(-1, 1, n) * np.radians(0.1)
+    off = rng.normal(size=3)
+    ball = BALL_M + 1e-3 * off / np.linalg.norm(off)
+    return sim.Truth(np.zeros(3), np.zeros(3), ball[None], offsets, twists)
+
+
+def _ball(ur10, truth, q):
+    """True ball centre (3,), m, at commanded q (N,) (the robot's root frame)."""
+    return sim.marker_positions(ur10, truth, q[None], np.zeros((1, 6)))[0, 0]
+
+
+def _seat(ur10, truth, target, rng):
+    """Commanded q that puts the true ball centre on ``target``, by damped Gauss–Newton on
+    position from a random start (a varied tool orientation), or None."""
+    q = sim.random_configurations(ur10, 1, rng, within=np.c_[-np.pi * np.ones(6),
+                                                            np.pi * np.ones(6)])[0]
+    for _ in range(60):
+        e = target - _ball(ur10, truth, q)
+        if np.linalg.norm(e) < 1e-12:
+            return (q + np.pi) % (2 * np.pi) - np.pi  # inside every joint's limits
+        jac = np.array([(_ball(ur10, truth, q + h) - _ball(ur10, truth, q - h)) / 2e-7
+                        for h in np.eye(6) * 1e-7]).T
+        q = q + jac.T @ np.linalg.solve(jac @ jac.T + 1e-6 * np.eye(3), e)
+    return None
+
+
+def _q_columns(q):
+    return {f"q{k + 1}": repr(float(v)) for k, v in enumerate(np.degrees(q))}
+
+
+@pytest.fixture(scope="module")
+def campaign(ur10, truth, tmp_path_factory):
+    rng = np.random.default_rng(7)
+    d = tmp_path_factory.mktemp("sockets")
+    rows = []
+    for name, point in SOCKETS_M.items():
+        seated = 0
+        while seated < 15:
+            target = np.asarray(point) + rng.normal(scale=SEATING_MM * 1e-3, size=3)
+            q = _seat(ur10, truth, target, rng)
+            if q is None:
+                continue
+            seated += 1
+            rows.append({"pose": f"{name}-{seated}", **_q_columns(q), "marker": "ball",
+                         "socket": name, "x": "", "y": "", "z": ""})
+    with open(d / "contacts.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    (d / "tool.yaml").write_text("flange: tool0\nmarkers:\n  ball: [0.0, 0.0, 100.0]\n")
+    q_new = sim.random_configurations(ur10, 40, rng, within=np.c_[-np.pi * np.ones(6),
+                                                                  np.pi * np.ones(6)])
+    with open(d / "new.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=["pose", *_q_columns(q_new[0]), "marker"])
+        writer.writeheader()
+        writer.writerows({"pose": str(i), **_q_columns(q), "marker": "ball"}
+                         for i, q in enumerate(q_new))
+    return d, q_new
+
+
+def _registered_rms_mm(predicted, true, scale: bool = False):
+    """3-D RMS (mm) of ``predicted`` − ``true`` (K, 3), m, after the best rigid motion
+    (Kabsch) of the predicted points onto the true ones; with ``scale``, the best similarity
+    (Umeyama: a uniform scale too)."""
+    a, b = predicted - predicted.mean(0), true - true.mean(0)
+    u, s, vt = np.linalg.svd(a.T @ b)
+    d = np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))])
+    rot = (u @ d @ vt).T
+    grow = np.trace(np.diag(s) @ d) / np.sum(a * a) if scale else 1.0
+    return float(np.sqrt(np.mean(np.sum((grow * a @ rot.T - b) ** 2, axis=1))) * 1e3)
+
+
+def test_contacts_are_read_as_sockets(ur10, campaign):
+    d, _ = campaign
+    robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
+    meas = read_measurements(d / "contacts.csv", robot, Tool.from_yaml(d / "tool.yaml"),
+                             sigma=1e-5)
+    assert meas.socket_names == ("S1", "S2", "S3")
+    assert meas.contact.all() and np.bincount(meas.socket).tolist() == [15, 15, 15]
+    assert meas.n_coordinates == 3 * 45 - 9  # each socket's point is 3 unknowns
+
+
+def test_a_contact_with_xyz_is_refused(campaign, tmp_path):
+    d, _ = campaign
+    lines = (d / "contacts.csv").read_text().splitlines()
+    lines[1] = lines[1].rstrip(",") + ",1.0,2.0,3.0"
+    bad = tmp_path / "bad.csv"
+    bad.write_text("\n".join(lines) + "\n")
+    robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
+    with pytest.raises(DataError, match="leave x, y, z empty"):
+        read_measurements(bad, robot, Tool.from_yaml(d / "tool.yaml"), sigma=1e-5)
+
+
+def test_socket_campaign_predicts_new_configurations(ur10, truth, campaign, capsys):
+    d, q_new = campaign
+    urdf = str(sim.ur10_urdf())
+    assert main(["identify", "--robot", urdf, "--tool", str(d / "tool.yaml"),
+                 "--data", str(d / "contacts.csv"), "--sigma", str(SEATING_MM),
+                 "--model", "joint_offset+geometry", "--out", str(d / "r.json")]) == 0
+    said = capsys.readouterr()
+    assert "socket contacts cannot see the robot's base pose" in said.out + said.err
+    assert said.out.count("45 socket contacts in 3 sockets") == 1  # the kept fit's, once
+    assert main(["predict", "--result", str(d / "r.json"), "--data", str(d / "new.csv"),
+                 "--out", str(d / "pred.csv")]) == 0
+    with open(d / "pred.csv") as f:
+        pred = np.array([[float(r[c]) for c in "xyz"] for r in
+                         csv.DictReader(line for line in f if not line.startswith("#"))]) / 1e3
+    true = sim.marker_positions(ur10, truth, q_new, np.zeros((40, 6)))[:, 0]
+    nominal = sim.Truth.nominal(ur10, BALL_M[None])
+    before = _registered_rms_mm(sim.marker_positions(ur10, nominal, q_new,
+                                                     np.zeros((40, 6)))[:, 0], true)
+    after = _registered_rms_mm(pred, true)
+    similar = _registered_rms_mm(pred, true, scale=True)
+    print(f"nominal {before:.3f} mm; identified {after:.4f} mm (rigid), {similar:.4f} mm "
+          f"(similarity)")
+    assert before > 1.0
+    assert similar <= 0.03  # what contacts can see: all but a rigid motion and the scale
+    # the scale rides on the one link length held at the URDF's (0.08 mm off here, 1.3e-4)
+    assert after <= 0.15
+
+
+def test_contacts_mix_with_tracker_readings(ur10, truth, campaign, tmp_path):
+    """Tracker readings of the ball (base 2 m away, turned) and the contacts in one file: the
+    base is fitted from the tracker rows, the sockets land where they are in the tracker
+    frame, and new configurations are predicted there with no registration."""
+    from dataclasses import replace
+
+    from doe_calib.estimation.identify import FitSettings, identify
+    from doe_calib.estimation.sockets import located_sockets
+    from doe_calib.model.marker_model import build_model
+
+    d, q_new = campaign
+    rot = pin.exp3(np.array([0.3, -0.2, 1.9]))
+    placed = replace(truth, base_rotvec=pin.log3(rot), base_position=np.array([2.0, -0.5, 0.3]))
+    rng = np.random.default_rng(3)
+    q = sim.random_configurations(ur10, 20, rng, within=np.c_[-np.pi * np.ones(6),
+                                                              np.pi * np.ones(6)])
+    x = sim.marker_positions(ur10, placed, q, np.zeros((20, 6)))[:, 0]
+    x = (x + rng.normal(scale=SEATING_MM * 1e-3, size=x.shape)) * 1e3
+    lines = (d / "contacts.csv").read_text().splitlines()
+    lines += [",".join([f"t{i}", *_q_columns(qi).values(), "ball", "", *(repr(float(v)) for v in xi)])
+              for i, (qi, xi) in enumerate(zip(q, x))]
+    (tmp_path / "mixed.csv").write_text("\n".join(lines) + "\n")
+    robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
+    tool = Tool.from_yaml(d / "tool.yaml")
+    meas = read_measurements(tmp_path / "mixed.csv", robot, tool, sigma=SEATING_MM * 1e-3)
+    assert meas.contact.sum() == 45 and (~meas.contact).sum() == 20
+    model = build_model(robot, tool, "joint_offset+geometry")
+    result = identify(model, meas, settings=FitSettings(select="none"))
+    assert not any("socket contacts cannot see" in n for n in result.warnings)
+    found = located_sockets(model, meas, result.parameters, result.covariance)
+    for name, point in SOCKETS_M.items():  # the tracker frame: base ∘ root-frame point
+        where, std = found[name]
+        error = where - (rot @ point + placed.base_position)
+        assert np.linalg.norm(error) < 5e-5 and np.all(np.abs(error) < 4 * std)
+        assert np.all(std < 2e-5)
+    from doe_calib.io.measurements import Configurations
+
+    predicted = result.predict(Configurations.from_arrays(q_new), model).xyz
+    true = sim.marker_positions(ur10, placed, q_new, np.zeros((40, 6)))[:, 0]
+    rms = np.sqrt(np.mean(np.sum((predicted - true) ** 2, axis=1))) * 1e3
+    print(f"mixed file: {rms:.4f} mm at new configurations, tracker frame, no registration")
+    assert rms < 0.03
