@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import base64
 import html
+import re
 from pathlib import Path
 
 CSS = """
@@ -46,9 +47,17 @@ def _cell(value, tag: str, digits: int) -> str:
         return f"<{tag}>{value:.{digits}g}</{tag}>"
     if isinstance(value, int) and not isinstance(value, bool):
         return f"<{tag}>{value}</{tag}>"
-    # a line may break after a comma or semicolon: a long effect string keeps its table narrow
-    text = escape(value).replace(",", ",<wbr>").replace(";", ";<wbr>")
-    return f'<{tag} class="text">{text}</{tag}>'
+    return f'<{tag} class="text">{_breakable(value)}</{tag}>'
+
+
+def _breakable(value) -> str:
+    """Escaped text whose runs of 30 or more characters without a space may break after a
+    comma or semicolon (a long effect string keeps its table inside the page)."""
+    if isinstance(value, Html):
+        return value
+    runs = re.split(r"(\S{30,})", str(value))
+    return "".join("<wbr>".join(escape(p) for p in re.split(r"(?<=[,;])", run)) if k % 2
+                   else escape(run) for k, run in enumerate(runs))
 
 
 def table(header, rows, digits: int = 6) -> Html:
