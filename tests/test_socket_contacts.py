@@ -177,7 +177,8 @@ def test_contacts_mix_with_tracker_readings(ur10, truth, campaign, tmp_path):
     x = sim.marker_positions(ur10, placed, q, np.zeros((20, 6)))[:, 0]
     x = (x + rng.normal(scale=SEATING_MM * 1e-3, size=x.shape)) * 1e3
     lines = (d / "contacts.csv").read_text().splitlines()
-    lines += [",".join([f"t{i}", *_q_columns(qi).values(), "ball", "", *(repr(float(v)) for v in xi)])
+    lines += [",".join([f"t{i}", *_q_columns(qi).values(), "ball", "",
+                        *(repr(float(v)) for v in xi)])
               for i, (qi, xi) in enumerate(zip(q, x))]
     (tmp_path / "mixed.csv").write_text("\n".join(lines) + "\n")
     robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")

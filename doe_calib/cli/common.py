@@ -271,7 +271,8 @@ def fix_and_free(params, fix: str | None, free: str | None):
 
 
 def show_result(args, result, *written) -> None:
-    """Print ``result``'s summary (its JSON with ``--json``), then the files ``written`` on stderr."""
+    """Print ``result``'s summary (its JSON with ``--json``), then the files ``written``
+    on stderr."""
     from doe_calib.io.json_file import strict_json
 
     print(strict_json(result.to_dict()) if args.json else result.summary())

@@ -9,8 +9,8 @@ option and the keyword argument it becomes refuse the same values.
 Each command module may declare ``OUTPUTS``: option destination → ``"file"``
 (written as given: its folder must exist), ``"folder"`` (created if needed:
 its nearest existing ancestor must be a writable folder) or ``"file or folder"``
-(a file when the path has a suffix and is not an existing folder, else a folder). :func:`check_outputs`
-checks them all before the command runs, and refuses an output file that is
+(a file when the path has a suffix and is not an existing folder, else a folder).
+:func:`check_outputs` checks them all before the command runs, and refuses an output file that is
 one of the command's input files (any option naming an existing file: data,
 URDF, tool, design, result …), compared as resolved paths (symlinks,
 relative paths and hard links).

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 from studies.tiago_mocap.robot import session_study_parser, skipped, tiago_urdf
 
