@@ -59,7 +59,7 @@ def six_r(model, n_reps: int):
     sigma = 2e-5
     with quiet():
         meas = simulate(model, truth, cfg, sigma, rng)
-        start, _ = fix_unidentifiable(model, meas, register_base(model, meas, model.nominal()))
+        start, *_ = fix_unidentifiable(model, meas, register_base(model, meas, model.nominal()))
     return _replicate(model, start, truth, cfg, sigma, "point", n_reps)
 
 
