@@ -43,6 +43,17 @@ def model_odd():
     return build_model(robot, tool, "joint_offset+geometry+joint_compliance")
 
 
+@pytest.fixture(scope="session")
+def ur10():
+    """example-robot-data's UR10 as the independent simulator's chain (tests/independent_sim)."""
+    import independent_sim as sim
+
+    path = sim.ur10_urdf()
+    if path is None:
+        pytest.skip("example-robot-data's UR10 is not installed")
+    return sim.Chain.from_urdf(path, "tool0")
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)

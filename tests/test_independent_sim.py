@@ -29,14 +29,6 @@ TREE_URDF = """<?xml version="1.0"?>
 """
 
 
-@pytest.fixture(scope="module")
-def ur10():
-    path = sim.ur10_urdf()
-    if path is None:
-        pytest.skip("example-robot-data is not installed")
-    return sim.Chain.from_urdf(path, "tool0")
-
-
 @pytest.fixture
 def rng():
     return np.random.default_rng(2024)

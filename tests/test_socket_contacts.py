@@ -25,14 +25,6 @@ SEATING_MM = 0.01
 
 
 @pytest.fixture(scope="module")
-def ur10():
-    path = sim.ur10_urdf()
-    if path is None:
-        pytest.skip("example-robot-data's UR10 is not installed")
-    return sim.Chain.from_urdf(path, "tool0")
-
-
-@pytest.fixture(scope="module")
 def truth(ur10):
     rng = np.random.default_rng(31)
     n = len(ur10.joints)

@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from doe_calib.collision import blocked_beams, check_segment
-from doe_calib.compensation.compensate import tcp_point
+from doe_calib.compensation.compensate import rotation_angle, tcp_point
 from doe_calib.compensation.nlp import build_problem
 from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.result import DesignResult
@@ -77,12 +77,8 @@ class _Reach:
         q = np.clip(np.asarray(sol["x"]).ravel(), self.lower, self.upper)
         e_pos, e_rot = self.problem.error(q, *args, target, rotation)
         bad = float(np.linalg.norm(np.asarray(e_pos)))
-        if not self.problem.position_only:
-            # the error vector, sin θ · axis, vanishes at θ = π too: the flange turned half
-            # a turn has a negative trace of R_tᵀ R
-            r = self.flange(q)
-            turned = np.trace(np.asarray(rotation).T @ r) < 0
-            bad = math.inf if turned else max(bad, float(np.linalg.norm(np.asarray(e_rot))))
+        if not self.problem.position_only:  # the true angle: sin θ · axis is 0 at θ = π too
+            bad = max(bad, rotation_angle(e_rot, rotation, self.flange(q)))
         if bad >= REACHED or (self.is_free is not None and not self.is_free(q)):
             return None
         return q
