@@ -4,7 +4,8 @@ The base pose starts from a point-set registration of the tracker's readings;
 the parameters the data cannot separate are fixed (at their current values) with
 the reason in words. Readings that are all socket contacts cannot see the base
 pose, a rigid motion of the whole arm or its scale: those are fixed first, said
-in words of their own (:func:`fix_unseen_by_contacts`).
+in words of their own (:func:`fix_unseen_by_contacts`). Plane touches cannot see them
+either; ballbar readings see the scale (their lengths are known), not the rest.
 """
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import numpy as np
 
 from doe_calib.errors import ConditioningWarning, DataError, IdentifiabilityWarning
 from doe_calib.estimation.identifiability import analyse, blind_motion_words
+from doe_calib.estimation.planes import check_planes
 from doe_calib.estimation.registration import register
 from doe_calib.estimation.weighted_residuals import marker_points, reduce_jacobian
 from doe_calib.model.rotations import matrix_to_rotation_vector
@@ -32,6 +34,37 @@ ARM_UNSEEN = ("socket contacts cannot see a rigid motion of the whole arm (the f
 SCALE_UNSEEN = ("socket contacts cannot see the robot's scale without a known length (the "
                 "whole arm and the sockets grown alike fit the same): held at its current value "
                 "to fix the scale, the link length it sets")
+
+#: What each instrument without coordinates reads, and what it reads against.
+_INSTRUMENTS = {"socket": ("socket contacts", "contact and socket", "sockets"),
+                "plane": ("plane touches", "touch and plane", "planes"),
+                "ballbar": ("ballbar readings", "ballbar reading and pivot", "pivots")}
+
+
+def unseen_words(instruments) -> tuple:
+    """``(base, arm, scale)`` reasons, in words, for readings of ``instruments`` (some of
+    "socket", "plane", "ballbar"): those of sockets alone are :data:`BASE_UNSEEN`,
+    :data:`ARM_UNSEEN` and :data:`SCALE_UNSEEN`.
+
+    Examples
+    --------
+    >>> unseen_words(["plane"])[0]
+    "plane touches cannot see the robot's base pose: fixed at the URDF's root"
+    """
+    said = [_INSTRUMENTS[k] for k in _INSTRUMENTS if k in instruments]
+    read, alike, fixed = (" and ".join(w[i] for w in said) for i in range(3))
+    alike = ", ".join(w[1] for w in said)
+    return (BASE_UNSEEN.replace("socket contacts", read, 1),
+            ARM_UNSEEN.replace("socket contacts", read, 1).replace("contact and socket", alike),
+            SCALE_UNSEEN.replace("socket contacts", read, 1).replace("the sockets", f"the {fixed}"))
+
+
+def instruments(measurements) -> list:
+    """The instruments without coordinates among ``measurements``: "socket" (seated
+    contacts), "plane", "ballbar"."""
+    seated = measurements.contact & ~measurements.touch & ~measurements.ballbar
+    return [k for k, used in (("socket", seated), ("plane", measurements.touch),
+                              ("ballbar", measurements.ballbar)) if used.any()]
 
 
 def not_separable(params) -> list[str]:
@@ -58,7 +91,7 @@ def register_base(model, measurements, params):
     return params.with_values(v)
 
 
-def fix_unseen_by_contacts(robot, params):
+def fix_unseen_by_contacts(robot, params, read=("socket",)):
     """What readings that are all socket contacts cannot see, fixed and said in words.
 
     Contacts compare the marker to points of unknown position: a rigid motion or a
@@ -69,19 +102,26 @@ def fix_unseen_by_contacts(robot, params):
     value (:data:`SCALE_UNSEEN`): the scale. Exact null directions of these readings'
     Jacobian only where every socket's contacts meet, so the rank analysis at the
     nominal model does not find them; left free, a fit can shrink the arm.
+
+    ``read``: the instruments of the readings (:func:`instruments`), whose words
+    (:func:`unseen_words`) are said. Plane touches are as blind as contacts (a plane moves
+    and grows with the arm; what else they miss, a plane's own shift along its normal and
+    its tilt, is eliminated, and the rank analysis finds any more). A ballbar's known
+    length sees the scale: with one, no length is held.
     """
+    base_words, arm_words, scale_words = unseen_words(read)
     base = params.index("base")
     v = params.values.copy()
     v[base] = 0.0
-    params = params.with_values(v).fixed([params.names[i] for i in base], BASE_UNSEEN)
+    params = params.with_values(v).fixed([params.names[i] for i in base], base_words)
     first = robot.joints[0].name
     arm = [n for n in (f"dq_{first}", *(f"g_{first}_{r}{a}" for r in "tr" for a in "xyz"))
            if n in params.names]
-    params = params.fixed(arm, ARM_UNSEEN) if arm else params
-    if any(why.startswith(SCALE_UNSEEN) for why in params.fixed_reason):
-        return params  # a refit of the kept parameters: the scale is already held
+    params = params.fixed(arm, arm_words) if arm else params
+    if "ballbar" in read or any(why.startswith(scale_words) for why in params.fixed_reason):
+        return params  # the scale is seen, or (a refit of the kept parameters) already held
     name, length = _longest_link(robot, params)
-    return params.fixed([name], f"{SCALE_UNSEEN} ({length * 1000.0:.1f} mm)") if name \
+    return params.fixed([name], f"{scale_words} ({length * 1000.0:.1f} mm)") if name \
         else params
 
 
@@ -169,9 +209,12 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
     if len(measurements) == 0:
         raise DataError("no readings to identify from", where)
     tracked = ~measurements.contact
+    if measurements.touch.any():
+        check_planes(measurements, marker_points(model, measurements, params.values))
     if not tracked.any():
-        params = fix_unseen_by_contacts(model.robot, params)
-        warnings.warn(BASE_UNSEEN, IdentifiabilityWarning, stacklevel=3)  # the report
+        read = instruments(measurements)
+        params = fix_unseen_by_contacts(model.robot, params, read)
+        warnings.warn(unseen_words(read)[0], IdentifiabilityWarning, stacklevel=3)  # the report
         # groups the fixed parameters by these reasons: no note of its own
     elif register and params.free[params.index("base")].all():
         params = register_base(model, measurements if tracked.all() else

@@ -10,12 +10,13 @@ import re
 
 import numpy as np
 
+from doe_calib.estimation.ballbar import pivot_spread
 from doe_calib.estimation.weighted_residuals import socket_mean
 from doe_calib.model.evaluation import observation_matrix
 
 
 #: How the note of :func:`socket_note` begins.
-_NOTE = re.compile(r"\d+ socket contacts in \d+ sockets ")
+_NOTE = re.compile(r"\d+ socket contacts( and \d+ ballbar lengths)? in \d+ sockets ")
 
 
 def is_socket_note(text: str) -> bool:
@@ -29,7 +30,9 @@ def located_sockets(model, measurements, params, covariance, noise_scale: float 
     root frame when every reading is a contact: the base pose is then the identity).
 
     The point is the σ⁻²-weighted mean ŝ of the model's points of the socket's contacts at
-    ``params``; its covariance ``noise_scale / Σσ⁻² · I + B̄ Σ B̄ᵀ``, B̄ the same mean of the
+    ``params`` (with ballbar readings, the pivot, which
+    :func:`~doe_calib.estimation.ballbar.pivot_spread` gives with the terms below); its
+    covariance ``noise_scale / Σσ⁻² · I + B̄ Σ B̄ᵀ``, B̄ the same mean of the
     contacts' observation matrices (free columns) and Σ ``covariance`` (free parameters,
     SI): the contacts' own scatter and the fitted parameters', independent to first order
     (the parameters see only each contact's departure from its socket's mean).
@@ -43,9 +46,14 @@ def located_sockets(model, measurements, params, covariance, noise_scale: float 
     for k in measurements.sockets_used.tolist():
         at = measurements.socket == k
         i = int(np.argmax(at))
-        cov = mean_b[i] @ covariance @ mean_b[i].T + \
-            np.eye(3) * noise_scale / np.sum(measurements.sigma[at] ** -2.0)
-        out[measurements.socket_names[k]] = (points[i], np.sqrt(np.diag(cov)))
+        point, moved, own = points[i], mean_b[i], \
+            np.eye(3) / np.sum(measurements.sigma[at] ** -2.0)
+        if measurements.ballbar[at].any():  # a pivot: the centre of its lengths' spheres
+            point, moved, own = pivot_spread(
+                x[c, j][at], np.nan_to_num(measurements.distance[at], nan=0.0),
+                measurements.sigma[at] ** -2.0, b[c, j][at][:, :, params.free])
+        cov = moved @ covariance @ moved.T + own * noise_scale
+        out[measurements.socket_names[k]] = (point, np.sqrt(np.diag(cov)))
     return out
 
 
@@ -58,9 +66,10 @@ def socket_note(model, measurements, params, covariance, noise_scale: float = 1.
     >>> socket_note(model, measurements, result.parameters, result.covariance)  # doctest: +SKIP
     '45 socket contacts in 3 sockets (135 coordinates, less 9 for the sockets' unknown …'
     """
-    if not measurements.contact.any():
+    k = len(measurements.sockets_used)
+    if not k:
         return ""
-    n, k = int(measurements.contact.sum()), len(measurements.sockets_used)
+    n = int(np.sum((measurements.socket >= 0) & ~measurements.ballbar))
     where = "; ".join(
         f"{name} at ({', '.join(f'{c:.3f}' for c in point * 1000.0)}) ± "
         f"({', '.join(f'{c:.3f}' for c in std * 1000.0)}) mm, "
@@ -69,5 +78,8 @@ def socket_note(model, measurements, params, covariance, noise_scale: float = 1.
                                                   noise_scale).items())
     frame = ("the robot's root frame, placed by the fixed base and first joint; the ± leaves "
              "out what contacts cannot see" if measurements.contact.all() else "the tracker frame")
-    return (f"{n} socket contacts in {k} sockets ({3 * n} coordinates, less {3 * k} for the "
-            f"sockets' unknown points, in the observations counted): {where} ({frame})")
+    bars = int(measurements.ballbar.sum())
+    lengths = f" and {bars} ballbar lengths" if bars else ""
+    return (f"{n} socket contacts{lengths} in {k} sockets ({3 * n + bars} coordinates, less "
+            f"{3 * k} for the sockets' unknown points, in the observations counted): {where} "
+            f"({frame})")

@@ -14,14 +14,20 @@ points of that socket's contacts. The residuals here are those of s so eliminate
 (variable projection; s enters linearly): r = (s̄(p) − x(p)) / σ with Jacobian
 −(B − B̄) / σ, exactly the derivative of the eliminated residual, so the fit of p
 and its covariance (the Schur complement of the full problem) are those of
-estimating s alongside p. A socket's mean needs all its contacts at once: a file
-with contacts is taken in one block of configurations.
+estimating s alongside p. A socket with ballbar readings (its point then a pivot:
+:mod:`~doe_calib.estimation.ballbar`) and a plane's touches
+(:mod:`~doe_calib.estimation.planes`) are eliminated alike, their Jacobian by Kaufman's
+projection (:mod:`~doe_calib.estimation.variable_projection`). A socket's mean, a pivot
+or a plane needs all its readings at once: a file with contacts is taken in one block of
+configurations.
 """
 from __future__ import annotations
 
 import numpy as np
 
+from doe_calib.estimation.ballbar import pivot_rows, pivot_targets
 from doe_calib.estimation.least_squares import Reduction, reduce_augmented
+from doe_calib.estimation.planes import plane_rows, plane_targets
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 
 #: Configurations evaluated at once by the blockwise functions.
@@ -49,8 +55,10 @@ def socket_mean(measurements, rows, v) -> np.ndarray:
     v : ndarray, shape (len(rows), …)
         A quantity per reading (its model point, m; its rows of B).
     """
-    k = measurements.socket[rows]
     out = np.zeros_like(v, dtype=float)
+    if measurements.socket is None:
+        return out
+    k = measurements.socket[rows]
     w = measurements.sigma[rows] ** -2.0
     for j in np.unique(k[k >= 0]).tolist():
         at = k == j
@@ -58,13 +66,51 @@ def socket_mean(measurements, rows, v) -> np.ndarray:
     return out
 
 
+def _eliminated(measurements, rows):
+    """(kind, positions in ``rows``) of each unknown among ``rows`` that is not a socket's
+    mean: ``"pivot"`` for a socket with ballbar readings, ``"plane"`` for a plane."""
+    if measurements.distance is not None:
+        socket, bar = measurements.socket[rows], measurements.ballbar[rows]
+        for k in np.unique(socket[bar]).tolist():
+            yield "pivot", np.flatnonzero(socket == k)
+    if measurements.plane is not None:
+        plane = measurements.plane[rows]
+        for k in np.unique(plane[plane >= 0]).tolist():
+            yield "plane", np.flatnonzero(plane == k)
+
+
+def _lengths(measurements, rows) -> np.ndarray:
+    """Ballbar length of each of ``rows``, m; 0 for a seated contact."""
+    return np.nan_to_num(measurements.distance[rows], nan=0.0)
+
+
 def targets(measurements, rows, points) -> np.ndarray:
-    """What the model's ``points`` (len(rows), 3) of ``rows`` are compared to, m: the reading,
-    or for a contact its socket's point (the mean of its contacts' points)."""
+    """What the model's ``points`` (len(rows), 3) of ``rows`` are compared to, m: the reading;
+    for a contact its socket's point (the mean of its contacts' points); for a ballbar
+    reading the point at its length from the pivot, towards it; for a plane touch its foot
+    on the plane (module notes)."""
     if not measurements.contact[rows].any():
         return measurements.xyz[rows]
-    seated = measurements.contact[rows, None]
-    return np.where(seated, socket_mean(measurements, rows, points), measurements.xyz[rows])
+    seated = (measurements.socket[rows] >= 0)[:, None] if measurements.socket is not None \
+        else np.zeros((len(rows), 1), bool)
+    out = np.where(seated, socket_mean(measurements, rows, points), measurements.xyz[rows])
+    w = measurements.sigma[rows] ** -2.0
+    for kind, at in _eliminated(measurements, rows):
+        out[at] = plane_targets(points[at], w[at]) if kind == "plane" else \
+            pivot_targets(points[at], _lengths(measurements, rows[at]), w[at])
+    return out
+
+
+def eliminated_rows(measurements, rows, points, b) -> np.ndarray:
+    """Rows B′ (len(rows), 3, P) such that −B′/σ is the Jacobian of the weighted residuals of
+    ``rows`` with every socket's point, pivot and plane eliminated (module notes); ``b``
+    (len(rows), 3, P) their rows of the observation matrix, ``points`` their model points."""
+    out = b - socket_mean(measurements, rows, b)
+    sigma = measurements.sigma[rows]
+    for kind, at in _eliminated(measurements, rows):
+        out[at] = plane_rows(points[at], sigma[at], b[at]) if kind == "plane" else \
+            pivot_rows(points[at], _lengths(measurements, rows[at]), sigma[at], b[at])
+    return out
 
 
 def marker_residuals(model, measurements, values) -> np.ndarray:
@@ -91,7 +137,7 @@ def weighted_residual(model, measurements, values, jacobian: bool = True):
     picked = c * b.shape[1] + j
     rows = flat[:len(picked)] if _in_order(picked) else flat[picked]
     if measurements.contact.any():
-        rows = rows - socket_mean(measurements, every, rows)
+        rows = eliminated_rows(measurements, every, x[c, j], rows)
     return r, np.divide(rows, -s[:, :, None]).reshape(3 * len(measurements), -1)
 
 
@@ -186,7 +232,7 @@ def augmented_block(measurements, rows, config, x, b, columns, scale) -> np.ndar
         jac = flat[picked[:, None, None], np.arange(3)[:, None], columns]
     points = x.reshape(-1, 3)[picked]
     if measurements.contact[rows].any():
-        jac = jac - socket_mean(measurements, rows, jac)
+        jac = eliminated_rows(measurements, rows, points, jac)
     np.multiply(jac, -(scale / s)[:, None, :], out=view[:, :, :-1])
     np.divide(targets(measurements, rows, points) - points, s, out=view[:, :, -1])
     return out

@@ -63,7 +63,14 @@ from doe_calib.io.configuration_columns import (
 )
 from doe_calib.io.design_json import read_design_json
 from doe_calib.io.logged_turns import TURN_DEG, TURN_TOLERANCE, turns_note, whole_turns
-from doe_calib.io.measurements import ESTIMATED, GIVEN, PER_READING, Configurations, Measurements
+from doe_calib.io.measurements import (
+    ESTIMATED,
+    GIVEN,
+    MIN_TOUCHES,
+    PER_READING,
+    Configurations,
+    Measurements,
+)
 from doe_calib.io.reading_units import metres_finding
 from doe_calib.io.row_problems import RowProblems, earlier_in_group
 from doe_calib.io.table import read_table
@@ -119,17 +126,17 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     'per reading'
     """
     table = read_table(path)
-    contacts = "socket" in table.columns  # x, y, z then empty on a contact's row
+    contacts = bool({"socket", "plane"} & set(table.columns))  # x, y, z empty on their rows
     tracked_xyz, require_xyz = require_xyz, require_xyz and not contacts
     required = ["pose", *joint_columns(robot), "marker", *(XYZ if require_xyz else ())]
-    optional = [*WRENCH, "temperature", "sigma", "session", "socket", *approach_columns(robot),
-                *(() if require_xyz else XYZ), *PREDICTED_STD]
+    optional = [*WRENCH, "temperature", "sigma", "session", "socket", "plane", "distance",
+                *approach_columns(robot), *(() if require_xyz else XYZ), *PREDICTED_STD]
     extra = check_columns(table, required, optional)
     explicit = approach_given(table, robot)
     if sigma is not None and not sigma > 0:
         raise DataError(f"σ must be positive, got {sigma * 1000.0} mm", table.path)
-    table.cells(["pose", "marker", "session", "socket"])  # each kind of column in one pass
-    table.floats([*joint_columns(robot), *WRENCH, "temperature", "sigma", *XYZ,
+    table.cells(["pose", "marker", "session", "socket", "plane"])  # each kind in one pass
+    table.floats([*joint_columns(robot), *WRENCH, "temperature", "sigma", *XYZ, "distance",
                   *approach_columns(robot)])
     problems, notes = RowProblems(table), []
     check_width(table, problems, 0)
@@ -150,8 +157,11 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     sigma_m = np.where(np.isnan(sig), np.nan if sigma is None else sigma, sig / 1000.0)
     xyz = numbers(table, problems, 9, XYZ, None if require_xyz else np.nan) / 1000.0
     socket_ids = texts(table, problems, 9, "socket") if contacts else None
+    plane_ids = texts(table, problems, 9, "plane") if contacts else None
+    distance = numbers(table, problems, 8.9, ["distance"], np.nan)[:, 0] / 1000.0
     if contacts:
-        _check_contacts(table, problems, socket_ids, xyz, tracked_xyz)
+        _check_contacts(table, problems, socket_ids, plane_ids, xyz, tracked_xyz)
+    _check_distances(table, problems, socket_ids, distance)
     appr = approach(table, problems, 10, robot) if explicit else None
     pose_code, session_code = codes(pose), codes(sessions)
     turns = _same_q(table, problems, 5, robot, q, combined([session_code, pose_code]), pose)
@@ -164,6 +174,8 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     problems.check(11, read & (first >= 0), lambda i: (
         f"marker {names[i]!r} is read twice in pose {pose[i]!r} under the same load (first on "
         f"line {table.numbers[first[i]]})"), "marker")
+    if contacts:
+        _check_counts(table, problems, socket_ids, plane_ids, distance)
     if not skip_bad:
         problems.raise_first()
     dropped = problems.dropped()
@@ -189,7 +201,8 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
                         + tuple(text for i, text in notes if i in kept or i < 0),
                         session, not given,
                         PER_READING if "sigma" in table.columns else GIVEN if given else ESTIMATED,
-                        **(_sockets([socket_ids[r] for r in rows.tolist()]) if contacts else {}))
+                        **(_without_coordinates(socket_ids, plane_ids, distance, rows)
+                           if contacts else {}))
     tracked = meas.subset(~meas.contact) if contacts else meas  # the tracker's readings
     finding = metres_finding(tracked.xyz, robot, tracked.configurations.q, tracked.config,
                              tool.position_array[tracked.marker],
@@ -199,25 +212,82 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     return meas
 
 
-def _check_contacts(table, problems, socket_ids, xyz, tracked_xyz: bool) -> None:
-    """Refuse a contact (a ``socket`` id) with x, y, z and, with ``tracked_xyz``, a tracker
-    reading (no id) without all three (formats.md §3, *Socket contacts*)."""
+def _check_contacts(table, problems, socket_ids, plane_ids, xyz, tracked_xyz: bool) -> None:
+    """Refuse a contact (a ``socket`` id) or a touch (a ``plane`` id) with x, y, z, a row with
+    both ids and, with ``tracked_xyz``, a tracker reading (no id) without all three
+    (formats.md §3, *Socket contacts*, *Plane touches*)."""
     seated = np.array([bool(c) for c in socket_ids])
+    touch = np.array([bool(c) for c in plane_ids])
     given = np.isfinite(xyz)
     problems.check((9, 20), seated & given.any(axis=1), lambda i: (
         f"socket {socket_ids[i]!r} with x, y, z: a contact's position is the socket's, "
         f"unknown; leave x, y, z empty (or the socket cell, for a tracker reading)"), "socket")
-    problems.check((9, 21), tracked_xyz & ~seated & ~given.all(axis=1), lambda i: (
+    problems.check((9, 20), touch & given.any(axis=1), lambda i: (
+        f"plane {plane_ids[i]!r} with x, y, z: a touch's position is on the plane, unknown; "
+        f"leave x, y, z empty (or the plane cell, for a tracker reading)"), "plane")
+    problems.check((9, 20), seated & touch, lambda i: (
+        f"socket {socket_ids[i]!r} and plane {plane_ids[i]!r} on one row: a row is a socket "
+        f"contact or a plane touch"), "plane")
+    problems.check((9, 21), tracked_xyz & ~seated & ~touch & ~given.all(axis=1), lambda i: (
         "x, y, z missing on a row without a socket: give the tracker reading, or the socket "
-        "id of a contact"), "x" if "x" in table.columns else "socket")
+        "id of a contact" + (" (or the plane id of a touch)" if "plane" in table.columns
+                             else "")), "x" if "x" in table.columns else "socket")
 
 
-def _sockets(ids) -> dict:
-    """``socket`` and ``socket_names`` of :class:`Measurements` from each reading's socket id
-    ("" for a tracker reading)."""
-    names = tuple(dict.fromkeys(i for i in ids if i))
-    at = {n: k for k, n in enumerate(names)}
-    return {"socket": np.array([at.get(i, -1) for i in ids], int), "socket_names": names}
+def _check_distances(table, problems, socket_ids, distance) -> None:
+    """Refuse a negative ballbar length and one without its pivot's socket id
+    (formats.md §3, *Ballbar and gauge lengths*)."""
+    given = np.isfinite(distance)
+    problems.check((9, 18), given & (distance < 0), lambda i: (
+        f"distance {distance[i] * 1000.0:g} mm: a ballbar's length is positive (empty or 0 "
+        f"for a contact seated in its socket)"), "distance")
+    pivot = np.zeros(len(distance), bool) if socket_ids is None else \
+        np.array([bool(c) for c in socket_ids])
+    problems.check((9, 19), given & ~pivot, lambda i: (
+        "distance without a socket: a ballbar's length is measured from its pivot, whose id "
+        "goes in the socket column"), "distance")
+
+
+def _check_counts(table, problems, socket_ids, plane_ids, distance) -> None:
+    """Refuse, of the rows read, the touches of a plane with fewer than :data:`MIN_TOUCHES`
+    and the ballbar readings of a pivot with fewer than 4 and no seated contact: such a
+    plane or pivot takes all its readings to place."""
+    read = ~problems.failing()
+    bar = np.isfinite(distance) & (distance > 0)
+    for ids, what, kind, rows_of in ((plane_ids, "touches", "plane", lambda at: at),
+                                     (socket_ids, "ballbar readings", "socket",
+                                      lambda at: at if bar[at].all() else at[:0])):
+        groups = {}
+        for i in np.flatnonzero(read).tolist():
+            if ids[i]:
+                groups.setdefault(ids[i], []).append(i)
+        for name, at in groups.items():
+            at = rows_of(np.array(at))
+            if 0 < len(at) < MIN_TOUCHES:
+                bad = np.zeros(len(read), bool)
+                bad[at] = True
+                lines = ", ".join(str(table.numbers[i]) for i in at.tolist())
+                problems.check(12, bad, lambda i, said=f"{kind} {name!r} has {len(at)} {what} "
+                               f"(lines {lines})": (
+                                   f"{said}: its unknown point or plane takes 3 to place; "
+                                   f"give it {MIN_TOUCHES} or more"), kind)
+
+
+def _without_coordinates(socket_ids, plane_ids, distance, rows) -> dict:
+    """The fields of :class:`Measurements` for the readings ``rows`` without coordinates,
+    from each row's socket and plane id ("" for neither) and ballbar length (m, NaN)."""
+    out = {}
+    for kind, ids in (("socket", socket_ids), ("plane", plane_ids)):
+        kept = [ids[r] for r in rows.tolist()]
+        names = tuple(dict.fromkeys(i for i in kept if i))
+        at = {n: k for k, n in enumerate(names)}
+        if names or kind == "socket":
+            out.update({kind: np.array([at.get(i, -1) for i in kept], int),
+                        f"{kind}_names": names})
+    lengths = np.where(distance[rows] > 0, distance[rows], np.nan)
+    if np.isfinite(lengths).any():
+        out["distance"] = lengths
+    return out
 
 
 def _same_q(table, problems, rank, robot, q, group, pose) -> np.ndarray:

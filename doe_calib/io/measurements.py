@@ -20,6 +20,9 @@ ENV_FIELDS = ("temperature",)
 GIVEN, PER_READING, ESTIMATED = "given", "per reading", "estimated"
 REPEATED = "repeated readings"
 SIGMA_SOURCES = (GIVEN, PER_READING, ESTIMATED, REPEATED)
+#: Fewest readings of an unknown plane or ballbar pivot: 3 place it, the fourth is the first
+#: that informs.
+MIN_TOUCHES = 4
 
 
 def env_fields(n_joints: int) -> tuple:
@@ -203,9 +206,19 @@ class Measurements:
         For a contact (formats.md §3, *Socket contacts*): the socket (index into
         ``socket_names``) in which the marker was seated, its position unknown; −1 for a
         tracker reading. None: every reading is a tracker reading. A contact's ``xyz`` is
-        NaN.
+        NaN. With a ``distance``, the socket is the pivot of a ballbar.
     socket_names : tuple of str
         The sockets' ids, in order of first appearance.
+    plane : ndarray of int, shape (K,), optional
+        For a plane touch (formats.md §3, *Plane touches*): the plane (index into
+        ``plane_names``), its position unknown, on which the marker lay; −1 otherwise.
+        None: no reading touches a plane.
+    plane_names : tuple of str
+        The planes' ids, in order of first appearance.
+    distance : ndarray, shape (K,), optional
+        For a ballbar reading (formats.md §3, *Ballbar and gauge lengths*): the length
+        measured from its socket's point (the pivot) to the marker, m; NaN otherwise (a
+        contact seated in its socket). None: no such reading.
     """
 
     configurations: Configurations
@@ -223,6 +236,9 @@ class Measurements:
     observed_per_configuration: int = 0
     socket: np.ndarray | None = None
     socket_names: tuple = ()
+    plane: np.ndarray | None = None
+    plane_names: tuple = ()
+    distance: np.ndarray | None = None
 
     def __post_init__(self):
         if self.sigma_source not in SIGMA_SOURCES:
@@ -239,18 +255,42 @@ class Measurements:
         """Number of independent scalar observations: 3K, or 6 per pose of a 6-DoF probe."""
         if self.observed_per_configuration:
             return self.observed_per_configuration * len(np.unique(self.config))
-        return 3 * len(self) - 3 * len(self.sockets_used)
+        scalar = self.touch | self.ballbar  # one coordinate each: along the normal, the bar
+        return 3 * int(np.sum(~scalar)) + int(np.sum(scalar)) - \
+            3 * (len(self.sockets_used) + len(self.planes_used))
 
     @property
     def contact(self) -> np.ndarray:
-        """Which readings are socket contacts, shape (K,) bool (none without sockets)."""
-        return np.zeros(len(self), bool) if self.socket is None else self.socket >= 0
+        """Which readings have no coordinates, shape (K,) bool: socket contacts, ballbar
+        readings and plane touches (none without them)."""
+        return self._in(self.socket) | self._in(self.plane)
+
+    @property
+    def touch(self) -> np.ndarray:
+        """Which readings are plane touches, shape (K,) bool."""
+        return self._in(self.plane)
+
+    @property
+    def ballbar(self) -> np.ndarray:
+        """Which readings are ballbar lengths from their socket's point, shape (K,) bool."""
+        return np.zeros(len(self), bool) if self.distance is None else \
+            np.isfinite(self.distance)
+
+    def _in(self, index) -> np.ndarray:
+        return np.zeros(len(self), bool) if index is None else index >= 0
+
+    @property
+    def planes_used(self) -> np.ndarray:
+        """Indices (into ``plane_names``) of the planes some reading touches: each is an
+        unknown plane, 3 numbers the readings must also pay for."""
+        return np.unique(self.plane[self.touch]) if self.plane is not None else \
+            np.zeros(0, int)
 
     @property
     def sockets_used(self) -> np.ndarray:
         """Indices (into ``socket_names``) of the sockets some reading is seated in: each
         is one unknown point, 3 coordinates the readings must also pay for."""
-        return np.unique(self.socket[self.contact]) if self.socket is not None else \
+        return np.unique(self.socket[self.socket >= 0]) if self.socket is not None else \
             np.zeros(0, int)
 
     def subset(self, rows) -> "Measurements":
@@ -266,7 +306,10 @@ class Measurements:
                             sigma_source=self.sigma_source,
                             observed_per_configuration=self.observed_per_configuration,
                             socket=None if self.socket is None else self.socket[rows],
-                            socket_names=self.socket_names)
+                            socket_names=self.socket_names,
+                            plane=None if self.plane is None else self.plane[rows],
+                            plane_names=self.plane_names,
+                            distance=None if self.distance is None else self.distance[rows])
 
     @property
     def sessions(self) -> np.ndarray:
@@ -314,18 +357,24 @@ def concatenate(parts) -> Measurements:
                         sum((p.warnings for p in parts), ()),
                         tuple(s for p in parts for s in p.sessions),
                         any(p.sigma_estimated for p in parts), joined_sigma_source(parts),
-                        _joined_observed(parts), *_joined_sockets(parts))
+                        _joined_observed(parts), *_joined_ids(parts, "socket"),
+                        *_joined_ids(parts, "plane"),
+                        None if all(p.distance is None for p in parts) else
+                        np.concatenate([np.full(len(p), np.nan) if p.distance is None else
+                                        p.distance for p in parts]))
 
 
-def _joined_sockets(parts) -> tuple:
-    """``(socket, socket_names)`` of joined parts: a socket id names one point in all."""
-    if all(p.socket is None for p in parts):
+def _joined_ids(parts, kind: str) -> tuple:
+    """``(socket, socket_names)`` (``kind`` "socket") or ``(plane, plane_names)`` of joined
+    parts: an id names one socket's point, or one plane, in all."""
+    if all(getattr(p, kind) is None for p in parts):
         return None, ()
-    names = tuple(dict.fromkeys(n for p in parts for n in p.socket_names))
+    names = tuple(dict.fromkeys(n for p in parts for n in getattr(p, f"{kind}_names")))
     at = {n: i for i, n in enumerate(names)}
-    return np.concatenate([np.full(len(p), -1) if p.socket is None else
-                           np.array([at[p.socket_names[i]] if i >= 0 else -1
-                                     for i in p.socket.tolist()], int) for p in parts]), names
+    return np.concatenate([np.full(len(p), -1) if getattr(p, kind) is None else
+                           np.array([at[getattr(p, f"{kind}_names")[i]] if i >= 0 else -1
+                                     for i in getattr(p, kind).tolist()], int)
+                           for p in parts]), names
 
 
 def _joined_observed(parts) -> int:
