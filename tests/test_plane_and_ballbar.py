@@ -205,6 +205,32 @@ def test_ballbar_campaign_predicts_new_configurations(ur10, truth, campaigns, ca
     assert after <= 0.03  # the lengths see the scale: only a rigid motion is left
 
 
+def test_a_table_alone_cannot_see_the_shoulder_offset(campaigns):
+    """Touches of the table top alone (normal along the first joint's axis) cannot see the
+    shoulder's offset from that axis, nor a shift along the parallel joints' axes: each moves
+    every touch parallel to the table. Three planes see them."""
+    from doe_calib.estimation.preparation import (
+        WITHIN_PLANES,
+        fix_unseen_by_contacts,
+        fix_unseen_by_touches,
+    )
+    from doe_calib.model.marker_model import build_model
+
+    d, _ = campaigns
+    robot, tool = _robot_tool(d)
+    meas = read_measurements(d / "touches.csv", robot, tool, sigma=TOUCH_MM * 1e-3)
+    model = build_model(robot, tool, "joint_offset+geometry")
+    start = fix_unseen_by_contacts(robot, model.nominal(), ["plane"])
+
+    def unseen(readings):
+        params = fix_unseen_by_touches(model, readings, start)
+        return {n for n, why in zip(params.names, params.fixed_reason) if why == WITHIN_PLANES}
+    table = unseen(meas.subset(meas.plane == meas.plane_names.index("table")))
+    assert {"g_shoulder_lift_joint_ty", "g_shoulder_lift_joint_tz", "g_elbow_joint_ty",
+            "g_wrist_1_joint_ty", "g_wrist_2_joint_ty"} <= table
+    assert unseen(meas) == set()
+
+
 @pytest.mark.parametrize("data, sigma", [("touches", TOUCH_MM), ("ballbar", BAR_MM)])
 def test_jacobian_matches_finite_differences(campaigns, data, sigma):
     """The projected Jacobian against central differences of the eliminated residuals: the

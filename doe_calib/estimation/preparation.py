@@ -17,7 +17,12 @@ from doe_calib.errors import ConditioningWarning, DataError, IdentifiabilityWarn
 from doe_calib.estimation.identifiability import analyse, blind_motion_words
 from doe_calib.estimation.planes import check_planes
 from doe_calib.estimation.registration import register
-from doe_calib.estimation.weighted_residuals import marker_points, reduce_jacobian
+from doe_calib.estimation.weighted_residuals import (
+    eliminated_rows,
+    marker_points,
+    reduce_jacobian,
+)
+from doe_calib.model.evaluation import observation_matrix
 from doe_calib.model.rotations import matrix_to_rotation_vector
 
 #: Condition number of the observation matrix above which the fit warns.
@@ -125,6 +130,40 @@ def fix_unseen_by_contacts(robot, params, read=("socket",)):
         else params
 
 
+#: Fraction of a parameter's effect on the touched markers below which plane touches do not
+#: see it (:func:`fix_unseen_by_touches`); below the second, the rank analysis finds it.
+MIN_SEEN_BY_TOUCHES, EXACTLY_UNSEEN = 0.01, 1e-6
+#: Why a parameter is fixed by :func:`fix_unseen_by_touches`.
+WITHIN_PLANES = ("plane touches cannot see it: it moves every touch within its plane, or the "
+                 "plane with it (the data keep less than 1 % of its effect): fixed at its "
+                 "current value")
+
+
+def fix_unseen_by_touches(model, measurements, params):
+    """Fix, said in words, the free parameters whose effect on the markers of readings that
+    are all contacts, some of them plane touches, the eliminated residuals keep less than
+    :data:`MIN_SEEN_BY_TOUCHES` of (and more than :data:`EXACTLY_UNSEEN`: the rank
+    analysis says why those are not seen): a touch sees an error only along its plane's
+    normal, and less what moves the whole plane.
+
+    These are near, not exact, null directions: the planes' normals are seen only as well
+    as the start values place the touches (with a table top alone, under an arm standing
+    on it, the shoulder's offset from the first joint's axis moves every touch parallel to
+    the table: left free, a fit gives it a std of millimetres).
+    """
+    x, b = observation_matrix(model, params.values, measurements.configurations)
+    c, j, every = measurements.config, measurements.marker, np.arange(len(measurements))
+    free = np.flatnonzero(params.free)
+    whole = b[c, j][:, :, free]
+    seen = eliminated_rows(measurements, every, x[c, j], whole)
+    weight = measurements.sigma[:, None, None] ** -2.0
+    effect = np.sqrt(np.sum(whole ** 2 * weight, axis=(0, 1)))
+    kept = np.sqrt(np.sum(seen ** 2 * weight, axis=(0, 1)))
+    blind = (kept < MIN_SEEN_BY_TOUCHES * effect) & (kept > EXACTLY_UNSEEN * effect)
+    return params.fixed([params.names[i] for i in free[blind]], WITHIN_PLANES) \
+        if blind.any() else params
+
+
 def _longest_link(robot, params) -> tuple:
     """The placement translation (name) along the longest nominal link after the first
     joint, and that length (m); (None, 0) when the model has none free."""
@@ -214,6 +253,8 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
     if not tracked.any():
         read = instruments(measurements)
         params = fix_unseen_by_contacts(model.robot, params, read)
+        if "plane" in read:
+            params = fix_unseen_by_touches(model, measurements, params)
         warnings.warn(unseen_words(read)[0], IdentifiabilityWarning, stacklevel=3)  # the report
         # groups the fixed parameters by these reasons: no note of its own
     elif register and params.free[params.index("base")].all():
