@@ -309,3 +309,57 @@ def test_a_negative_distance_is_refused(campaigns, tmp_path):
     with pytest.raises(DataError, match=r"bad.csv, line 3, column 'distance' \(\d+\): distance "
                                         r"-\d+.*mm: a ballbar's length is positive"):
         read_measurements(_bad(d, tmp_path, "ballbar.csv", negative), robot, tool, sigma=1e-6)
+
+
+@pytest.mark.parametrize("data", ["touches", "ballbar"])
+def test_touches_and_lengths_write_back_as_read(campaigns, tmp_path, data):
+    from doe_calib.io.csv_files import write_measurements
+
+    d, _ = campaigns
+    robot, tool = _robot_tool(d)
+    meas = read_measurements(d / f"{data}.csv", robot, tool)
+    write_measurements(tmp_path / "back.csv", meas, robot, tool)
+    back = read_measurements(tmp_path / "back.csv", robot, tool)
+    for field in ("socket", "plane", "distance", "sigma", "xyz"):
+        a, b = getattr(meas, field), getattr(back, field)
+        assert (a is None and b is None) or np.array_equal(a, b, equal_nan=True), field
+    assert (back.socket_names, back.plane_names) == (meas.socket_names, meas.plane_names)
+
+
+def test_touches_mix_with_tracker_readings(ur10, truth, campaigns, tmp_path):
+    """Tracker readings of the ball (base 2 m away, turned) and the touches in one file: the
+    base is fitted from the tracker rows, the planes lie where they are in the tracker frame,
+    and new configurations are predicted there with no registration."""
+    from dataclasses import replace
+
+    import pinocchio as pin
+
+    from doe_calib.estimation.identify import FitSettings, identify
+    from doe_calib.io.measurements import Configurations
+    from doe_calib.model.marker_model import build_model
+
+    d, q_new = campaigns
+    rot = pin.exp3(np.array([0.3, -0.2, 1.9]))
+    placed = replace(truth, base_rotvec=pin.log3(rot), base_position=np.array([2.0, -0.5, 0.3]))
+    rng = np.random.default_rng(3)
+    q = rng.uniform(-np.pi, np.pi, (20, 6))
+    x = sim.marker_positions(ur10, placed, q, np.zeros((20, 6)))[:, 0]
+    x = (x + rng.normal(scale=TOUCH_MM * 1e-3, size=x.shape)) * 1e3
+    with open(d / "touches.csv") as f:
+        rows = list(csv.DictReader(f))
+    rows += [_row(f"t{i}", qi, **dict(zip("xyz", map(repr, map(float, xi)))))
+             for i, (qi, xi) in enumerate(zip(q, x))]
+    _write(tmp_path / "mixed.csv", rows)
+    robot, tool = _robot_tool(d)
+    meas = read_measurements(tmp_path / "mixed.csv", robot, tool, sigma=TOUCH_MM * 1e-3)
+    assert meas.touch.sum() == 60 and (~meas.contact).sum() == 20
+    assert meas.n_coordinates == 60 - 9 + 3 * 20
+    model = build_model(robot, tool, "joint_offset+geometry")
+    result = identify(model, meas, settings=FitSettings(select="none"))
+    assert not any("touches cannot see" in n for n in result.warnings)
+    predicted = result.predict(Configurations.from_arrays(q_new), model).xyz
+    true = sim.marker_positions(ur10, placed, q_new, np.zeros((40, 6)))[:, 0]
+    rms = np.sqrt(np.mean(np.sum((predicted - true) ** 2, axis=1))) * 1e3
+    print(f"touches and tracker: {rms:.4f} mm at new configurations, tracker frame, "
+          f"no registration")
+    assert rms < 0.03

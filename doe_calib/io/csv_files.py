@@ -411,7 +411,8 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     The approach columns are written only when reading back would not derive
     the same directions from the order of the rows (module notes); the
     ``session`` column only when the readings come from several sessions; the
-    ``sigma`` column only when some reading has a σ. ``std`` (K, 3), m: a prediction's
+    ``sigma`` column only when some reading has a σ; the ``socket``, ``plane`` and
+    ``distance`` columns only when some reading has one. ``std`` (K, 3), m: a prediction's
     standard deviation of each coordinate, written as the :data:`PREDICTED_STD` columns in
     mm (ignored on reading).
     """
@@ -419,7 +420,9 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     order = np.array(list(dict.fromkeys(c.tolist())), int)  # in order of first appearance
     columns = {**_configuration_columns(cfg, c, robot),
                "marker": [tool.names[j] for j in measurements.marker],
-               **_numbers(XYZ, measurements.xyz * 1000.0)}
+               **_numbers(XYZ, measurements.xyz * 1000.0,
+                          unknown_empty=bool(measurements.contact.any()))}
+    columns.update(_contact_cells(measurements))
     if np.isfinite(cfg.temperature).any():
         columns.update(_numbers(["temperature"], cfg.env[c, :1], unknown_empty=True))
     if not np.isnan(measurements.sigma).all():  # none given: none written
@@ -433,6 +436,20 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
         columns.update(_numbers(PREDICTED_STD, np.asarray(std, float) * 1000.0))
     _write(path, "doe_calib measurements: q in deg (mm for prismatic joints), x/y/z and sigma "
                  "in mm, forces in N, moments in N·m, temperature in °C", columns)
+
+
+def _contact_cells(measurements) -> dict:
+    """The columns ``socket``, ``plane`` and ``distance`` (mm) of the readings that have them
+    (formats.md §3), empty cells for the other rows; none without such readings."""
+    out = {}
+    for kind in ("socket", "plane"):
+        index, names = getattr(measurements, kind), getattr(measurements, f"{kind}_names")
+        if index is not None and (index >= 0).any():
+            out[kind] = [names[k] if k >= 0 else "" for k in index.tolist()]
+    if measurements.ballbar.any():
+        out.update(_numbers(["distance"], measurements.distance[:, None] * 1000.0,
+                            unknown_empty=True))
+    return out
 
 
 def write_design(path, configurations, robot) -> None:
