@@ -363,3 +363,46 @@ def test_touches_mix_with_tracker_readings(ur10, truth, campaigns, tmp_path):
     print(f"touches and tracker: {rms:.4f} mm at new configurations, tracker frame, "
           f"no registration")
     assert rms < 0.03
+
+
+def test_pivots_are_located(campaigns):
+    """Each pivot is the centre of its lengths' spheres (with P1's seated contacts): their
+    distance apart, blind to the rigid motion the readings cannot see, is the true one."""
+    from doe_calib.estimation.identify import identify
+    from doe_calib.estimation.sockets import located_sockets
+    from doe_calib.model.marker_model import build_model
+
+    d, _ = campaigns
+    robot, tool = _robot_tool(d)
+    meas = read_measurements(d / "ballbar.csv", robot, tool)
+    model = build_model(robot, tool, "joint_offset+geometry")
+    with pytest.warns(Warning):  # the selection leaves at nominal what the arcs barely see
+        result = identify(model, meas)
+    found = located_sockets(model, meas, result.parameters, result.covariance)
+    (p1, std1), (p2, std2) = found["P1"], found["P2"]
+    apart = np.linalg.norm(p1 - p2) - np.linalg.norm(np.subtract(*PIVOTS_M.values()))
+    print(f"pivots apart: {apart * 1e3:+.4f} mm off; std {std1 * 1e3}, {std2 * 1e3} mm")
+    assert abs(apart) < 5e-6 and np.all(std1 < 5e-6) and np.all(std2 < 5e-6)
+    assert any(n.startswith("48 socket contacts") or "ballbar lengths in 2 sockets" in n
+               for n in result.warnings)
+
+
+def test_touches_on_a_line_are_refused(ur10, truth, campaigns, tmp_path):
+    from doe_calib.estimation.identify import identify
+    from doe_calib.model.marker_model import build_model
+
+    d, _ = campaigns
+    rng = np.random.default_rng(4)
+    rows = []
+    for a in np.linspace(-0.3, 0.3, 6):
+        q = None
+        while q is None:
+            q = _reach(ur10, truth, np.array([0.3 + a, 0.2, 0.05]), rng)
+        rows.append(_row(f"l{len(rows)}", q, plane="edge"))
+    with open(d / "touches.csv") as f:
+        _write(tmp_path / "line.csv", list(csv.DictReader(f)) + rows)
+    robot, tool = _robot_tool(d)
+    meas = read_measurements(tmp_path / "line.csv", robot, tool, sigma=TOUCH_MM * 1e-3)
+    with pytest.raises(DataError, match=r"line.csv: plane 'edge': its 6 touches \(lines 62, 63, "
+                                        r"64, 65, 66, 67\) lie on a line"):
+        identify(build_model(robot, tool, "joint_offset+geometry"), meas)

@@ -57,7 +57,7 @@ def unseen_words(instruments) -> tuple:
     "plane touches cannot see the robot's base pose: fixed at the URDF's root"
     """
     said = [_INSTRUMENTS[k] for k in _INSTRUMENTS if k in instruments]
-    read, alike, fixed = (" and ".join(w[i] for w in said) for i in range(3))
+    read, fixed = (" and ".join(w[i] for w in said) for i in (0, 2))
     alike = ", ".join(w[1] for w in said)
     return (BASE_UNSEEN.replace("socket contacts", read, 1),
             ARM_UNSEEN.replace("socket contacts", read, 1).replace("contact and socket", alike),
