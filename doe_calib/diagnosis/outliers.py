@@ -18,6 +18,10 @@ when few (:data:`MAX_OUTLIERS`) and the other readings then fit within the
 noise (:func:`~doe_calib.diagnosis.diagnose.diagnose`'s adequacy rules; with σ
 estimated, the F test of the rest's rigid part against the within-pose part);
 otherwise the effect tests judge.
+
+A socket contact's deletion residual is its misfit against its socket's point as the
+other contacts place it (:mod:`~doe_calib.diagnosis.held_out_sockets`): an outlying
+contact left out no longer moves the point its socket's other contacts are compared to.
 """
 from __future__ import annotations
 
@@ -26,9 +30,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.special import fdtrc
 
+from doe_calib.diagnosis.held_out_sockets import held_out_errors
 from doe_calib.estimation.chi_square import chi2_survival, chi2_upper_quantile
 from doe_calib.estimation.identify import identify_quietly
-from doe_calib.estimation.weighted_residuals import marker_residuals
+from doe_calib.estimation.weighted_residuals import marker_points
 from doe_calib.io.measurements import ESTIMATED
 
 #: More suspects than this (readings) is not "a few outliers" but a model or σ problem.
@@ -135,11 +140,18 @@ def _fits(t, dof, sigma_m, level, tolerance, practical_um, survival) -> bool:
     return survival >= level or ratio <= 1 + tolerance or misfit_um < practical_um
 
 
+def _errors(model, measurements, values, out) -> tuple:
+    """Reading minus model (K, 3), m, at ``values``, each contact against its socket's point
+    as the readings not ``out`` place it (module notes), and the modelled points (K, 3)."""
+    points = marker_points(model, measurements, values)
+    return held_out_errors(measurements, ~out, points)[0], points
+
+
 def _rest_fits_the_noise(error, sigma, keep, rank, level, tolerance, practical_um,
                          within=None) -> bool:
     """Whether the readings ``keep`` fit within σ: their χ² against σ (given), or with
     ``within`` (the within-pose sum of squares and dof, σ estimated) the F test of the rest's
-    rigid part against it."""
+    rigid part against it. ``rank``: the parameters fitted, sockets' points included."""
     if within is None:
         t = float(((error[keep] / sigma[keep, None]) ** 2).sum())
         dof = max(3 * int(keep.sum()) - rank, 1)
@@ -187,13 +199,13 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
         return ()
     k = len(measurements)
     sigma, estimated = measurements.sigma, measurements.sigma_source == ESTIMATED
-    rank = int(fit.parameters.free.sum())
-    error = marker_residuals(model, measurements, fit.parameters.values)
+    rank = int(fit.parameters.free.sum()) + 3 * len(measurements.sockets_used)
     out, within = np.zeros(k, bool), None
+    error, predicted = _errors(model, measurements, fit.parameters.values, out)
     critical = chi2_upper_quantile(min(level / k, 0.5), 3)  # Bonferroni over the K readings
     for _ in range(MAX_ROUNDS):
         if estimated:  # the noise within poses, of the poses without suspects
-            within = within_pose(error, measurements.xyz - error, measurements.config, ~out)
+            within = within_pose(error, predicted, measurements.config, ~out)
             if within[1] < 3:
                 return ()
             scale = np.full(k, np.sqrt(within[0] / within[1]))
@@ -213,7 +225,7 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
             beyond = worst
         out = beyond
         refit = identify_quietly(model, measurements.subset(~out), fit.parameters)
-        error = marker_residuals(model, measurements, refit.parameters.values)
+        error, predicted = _errors(model, measurements, refit.parameters.values, out)
     else:
         return ()
     if not out.any() or not _rest_fits_the_noise(error, sigma, ~out, rank, level, tolerance,
