@@ -145,8 +145,10 @@ def _held_out_mm(d, result, ur10, truth, q_new):
 def test_diagnose_on_contacts_names_the_missing_effect(campaign, fitted):
     d, _, _ = campaign
     model, meas, fit = fitted
-    assert main(_args(d, "diagnose", d / "diag.json")) == 0
+    assert main(_args(d, "diagnose", d / "diag.json", "--report", str(d / "diag.html"))) == 0
     out = json.loads((d / "diag.json").read_text())
+    assert "mm, the robot&#x27;s root frame; a socket contact&#x27;s is its socket&#x27;s " \
+        "point" in (d / "diag.html").read_text()
     assert out["proposed"].startswith("cyclic(j2,")
     assert "joint 2" in out["verdict"] and "shoulder_lift_joint" in out["verdict"]
     # each socket's point is 3 unknowns the residual has paid for
