@@ -13,6 +13,7 @@ import json
 import independent_sim as sim
 import numpy as np
 import pytest
+from seated_contacts import SEATING_MM, q_columns, write_contacts
 
 from doe_calib import Robot, Tool
 from doe_calib.cli import main
@@ -27,7 +28,6 @@ BALL_M = np.array([0.0, 0.0, 0.10])
 SOCKETS_M = {"S1": [0.65, 0.25, 0.05], "S2": [0.45, -0.55, 0.05], "S3": [-0.25, 0.70, 0.05],
              "S4": [-0.60, -0.40, 0.30]}
 PER_SOCKET = 20
-SEATING_MM = 0.01
 SHOULDER = sim.Cyclic(1, np.radians(0.03), 2)  # joint 2, 2 per revolution
 MODEL = "joint_offset+geometry"
 
@@ -42,64 +42,19 @@ def _truth(ur10, effects=(SHOULDER,)):
     return sim.Truth(np.zeros(3), np.zeros(3), ball[None], offsets, twists, tuple(effects))
 
 
-def _ball(ur10, truth, q):
-    return sim.marker_positions(ur10, truth, q[None], np.zeros((1, 6)))[0, 0]
-
-
-def _seat(ur10, truth, target, rng):
-    """Commanded q (N,) that puts the true ball centre on ``target`` (damped Gauss–Newton on
-    position from a random start), or None."""
-    turn = np.c_[-np.pi * np.ones(6), np.pi * np.ones(6)]
-    q = sim.random_configurations(ur10, 1, rng, within=turn)[0]
-    for _ in range(60):
-        e = target - _ball(ur10, truth, q)
-        if np.linalg.norm(e) < 1e-12:
-            return (q + np.pi) % (2 * np.pi) - np.pi
-        jac = np.array([(_ball(ur10, truth, q + h) - _ball(ur10, truth, q - h)) / 2e-7
-                        for h in np.eye(6) * 1e-7]).T
-        q = q + jac.T @ np.linalg.solve(jac @ jac.T + 1e-6 * np.eye(3), e)
-    return None
-
-
-def _q_columns(q):
-    return {f"q{k + 1}": repr(float(v)) for k, v in enumerate(np.degrees(q))}
-
-
-def write_contacts(path, ur10, truth, rng, sockets=SOCKETS_M, per_socket=PER_SOCKET,
-                   displaced=None):
-    """Seat the true ball ``per_socket`` times in each socket, write formats.md §3 contacts;
-    ``displaced``: (row, offset m (3,)) of one contact seated off its socket."""
-    rows = []
-    for name, point in sockets.items():
-        seated = 0
-        while seated < per_socket:
-            target = np.asarray(point) + rng.normal(scale=SEATING_MM * 1e-3, size=3)
-            if displaced is not None and len(rows) == displaced[0]:
-                target = target + displaced[1]
-            q = _seat(ur10, truth, target, rng)
-            if q is None:
-                continue
-            seated += 1
-            rows.append({"pose": f"{name}-{seated}", **_q_columns(q), "marker": "ball",
-                         "socket": name})
-    with open(path, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-
-
 @pytest.fixture(scope="module")
 def campaign(ur10, tmp_path_factory):
     d = tmp_path_factory.mktemp("socket_diagnosis")
     truth = _truth(ur10)
-    write_contacts(d / "contacts.csv", ur10, truth, np.random.default_rng(7))
+    write_contacts(d / "contacts.csv", ur10, truth, np.random.default_rng(7), SOCKETS_M,
+                   PER_SOCKET)
     (d / "tool.yaml").write_text("flange: tool0\nmarkers:\n  ball: [0.0, 0.0, 100.0]\n")
     q_new = sim.random_configurations(ur10, 40, np.random.default_rng(99),
                                       within=np.c_[-np.pi * np.ones(6), np.pi * np.ones(6)])
     with open(d / "new.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=["pose", *_q_columns(q_new[0]), "marker"])
+        writer = csv.DictWriter(f, fieldnames=["pose", *q_columns(q_new[0]), "marker"])
         writer.writeheader()
-        writer.writerows({"pose": str(i), **_q_columns(q), "marker": "ball"}
+        writer.writerows({"pose": str(i), **q_columns(q), "marker": "ball"}
                          for i, q in enumerate(q_new))
     return d, truth, q_new
 

@@ -341,15 +341,19 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     The approach columns are written only when reading back would not derive
     the same directions from the order of the rows (module notes); the
     ``session`` column only when the readings come from several sessions; the
-    ``sigma`` column only when some reading has a σ. ``std`` (K, 3), m: a prediction's
+    ``sigma`` column only when some reading has a σ; the ``socket`` column only when some
+    reading is a socket contact (its x, y, z then empty). ``std`` (K, 3), m: a prediction's
     standard deviation of each coordinate, written as the :data:`PREDICTED_STD` columns in
     mm (ignored on reading).
     """
     cfg, c, sessions = measurements.configurations, measurements.config, measurements.sessions
     order = np.array(list(dict.fromkeys(c.tolist())), int)  # in order of first appearance
+    seated = measurements.contact.any()  # a contact's x, y, z are empty, its socket given
     columns = {**_configuration_columns(cfg, c, robot),
                "marker": [tool.names[j] for j in measurements.marker],
-               **_numbers(XYZ, measurements.xyz * 1000.0)}
+               **({"socket": [measurements.socket_names[k] if k >= 0 else ""
+                              for k in measurements.socket]} if seated else {}),
+               **_numbers(XYZ, measurements.xyz * 1000.0, unknown_empty=seated)}
     if np.isfinite(cfg.temperature).any():
         columns.update(_numbers(["temperature"], cfg.env[c, :1], unknown_empty=True))
     if not np.isnan(measurements.sigma).all():  # none given: none written
