@@ -164,3 +164,18 @@ def test_held_out_contacts_are_scored_against_the_kept_contacts(fitted):
     every = np.ones(len(meas), bool)
     own = held_out_errors(meas, every, marker_points(model, meas, fit.parameters.values))[0]
     assert linear > np.sqrt(np.mean(own ** 2)) * 1e3  # in a mean it is part of, it looks closer
+
+
+@pytest.mark.parametrize("estimator, needs", [
+    ("two-step", "the two-step estimator fits the base and markers to each reading's x, y, z"),
+    ("pose", "the pose estimator rebuilds each flange pose from its markers' x, y, z")])
+def test_the_estimators_without_contacts_say_what_to_use(campaign, estimator, needs, capsys):
+    d, _, _ = campaign
+    assert main(_args(d, "identify", d / "refused.json", "--estimator", estimator)) == 2
+    err = capsys.readouterr().err
+    assert needs in err and "contacts.csv" in err
+    assert (f"; {len(SOCKETS_M) * PER_SOCKET} of these {len(SOCKETS_M) * PER_SOCKET} readings "
+            f"are socket contacts, which have none (the ball sat in a socket whose position is "
+            f"unknown). Use the point estimator (the default: --estimator point, or leave "
+            f"--estimator out)") in err
+    assert not (d / "refused.json").exists()
