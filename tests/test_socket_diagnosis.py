@@ -179,3 +179,18 @@ def test_the_estimators_without_contacts_say_what_to_use(campaign, estimator, ne
             f"unknown). Use the point estimator (the default: --estimator point, or leave "
             f"--estimator out)") in err
     assert not (d / "refused.json").exists()
+
+
+def test_a_contact_seated_off_its_socket_is_named_as_a_gross_error(ur10, tmp_path):
+    """A ball 0.2 mm off its socket in one contact of an otherwise geometric campaign: judged
+    against the socket's point as the other contacts place it, it is the one gross error."""
+    write_contacts(tmp_path / "contacts.csv", ur10, _truth(ur10, effects=()),
+                   np.random.default_rng(7), SOCKETS_M, PER_SOCKET,
+                   displaced=(25, np.array([0.0, 0.0, 2e-4])))
+    (tmp_path / "tool.yaml").write_text("flange: tool0\nmarkers:\n  ball: [0.0, 0.0, 100.0]\n")
+    assert main(_args(tmp_path, "diagnose", tmp_path / "d.json")) == 0
+    out = json.loads((tmp_path / "d.json").read_text())
+    assert [(o["pose"], o["socket"]) for o in out["outliers"]] == [("S2-6", "S2")]
+    assert 0.15 < out["outliers"][0]["size_mm"] < 0.25
+    assert "pose S2-6, marker ball in socket S2 (line 27 of" in out["verdict"]
+    assert "A ball not seated home in its socket" in out["verdict"]

@@ -66,6 +66,8 @@ class Outlier:
         ``K · P(χ²₃ > ‖e_i/σ_i‖²)`` (Bonferroni over the K readings), at most 1.
     n_readings : int
         K, the readings it was judged among.
+    socket : str
+        For a socket contact, its socket's id ("" for a tracker reading).
     """
 
     pose: str
@@ -76,10 +78,13 @@ class Outlier:
     size_sigma: float
     p_value: float
     n_readings: int
+    socket: str = ""
 
     def words(self) -> str:
-        """``pose 17, marker B (line 102 of m.csv): 1.5 mm = 50 σ off (p = 1e-300 …)``."""
-        where = f" (line {self.line} of {self.source})" if self.line else ""
+        """``pose 17, marker B (line 102 of m.csv): 1.5 mm = 50 σ off (p = 1e-300 …)``; a
+        contact's says its socket (``marker ball in socket S2``)."""
+        where = (f" in socket {self.socket}" if self.socket else "") + \
+            (f" (line {self.line} of {self.source})" if self.line else "")
         p = f"p = {self.p_value:.2g}" if self.p_value >= 1e-300 else "p < 1e-300"
         return (f"pose {self.pose}, marker {self.marker}{where}: {self.size_mm:.3g} mm = "
                 f"{self.size_sigma:.3g} σ from where the other readings put it ({p}, "
@@ -236,7 +241,9 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
                      int(measurements.line[i]), str(measurements.source),
                      float(np.linalg.norm(error[i]) * 1e3),
                      float(np.linalg.norm(error[i]) / scale[i]),
-                     float(min(chi2_survival(t[i], 3) * k, 1.0)), k)
+                     float(min(chi2_survival(t[i], 3) * k, 1.0)), k,
+                     measurements.socket_names[measurements.socket[i]]
+                     if measurements.contact[i] else "")
              for i in np.flatnonzero(out)]
     return tuple(sorted(found, key=lambda o: -o.size_sigma))
 
@@ -256,8 +263,12 @@ def outlier_verdict(outliers, adequacy_words: str) -> str:
         f"{len(outliers)} readings are gross errors"
     listed = "; ".join(o.words() for o in outliers)
     python = "[" + ", ".join(repr(p) for p in poses) + "]"
+    causes = "A reading off its target, a marker moved or swapped, or a pose typed wrong"
+    if any(o.socket for o in outliers):
+        causes = ("A ball not seated home in its socket (dirt, a slipped seat), a contact "
+                  "written under another socket's id, or a pose typed wrong")
     return (f"The model is NOT adequate ({adequacy_words}), but {head}, not an effect: {listed}. "
-            f"A reading off its target, a marker moved or swapped, or a pose typed wrong. "
+            f"{causes}. "
             f"Re-measure {'that pose' if len(poses) == 1 else 'those poses'} or leave "
             f"{'it' if len(poses) == 1 else 'them'} out: rerun with --exclude-poses "
             f"{','.join(poses)} (each exclusion is reported; in Python "
