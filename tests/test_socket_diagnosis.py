@@ -194,3 +194,35 @@ def test_a_contact_seated_off_its_socket_is_named_as_a_gross_error(ur10, tmp_pat
     assert 0.15 < out["outliers"][0]["size_mm"] < 0.25
     assert "pose S2-6, marker ball in socket S2 (line 27 of" in out["verdict"]
     assert "A ball not seated home in its socket" in out["verdict"]
+
+
+def test_diagnose_on_loaded_contacts_names_the_shoulder_compliance(ur10, tmp_path):
+    """Every other contact seated with 10 kg hung on the flange (the wrench columns), the
+    shoulder compliant (2 µrad/(N·m)); sockets near and far so that its torque varies: the
+    diagnosis names a compliance of joint 2 and fits its size."""
+    spread = {"S1": [1.05, 0.20, 0.05], "S2": [0.35, -0.30, 0.05], "S3": [-0.30, 0.90, 0.40],
+              "S4": [-0.20, -0.35, -0.20]}
+    truth = _truth(ur10, effects=(sim.SmoothAngleCompliance(1, 2e-6, 0.0),))
+    write_contacts(tmp_path / "contacts.csv", ur10, truth, np.random.default_rng(7), spread,
+                   PER_SOCKET, payload=(10.0, np.array([0.0, 0.0, 0.05])))
+    (tmp_path / "tool.yaml").write_text("flange: tool0\nmarkers:\n  ball: [0.0, 0.0, 100.0]\n")
+    assert main(_args(tmp_path, "diagnose", tmp_path / "d.json")) == 0
+    out = json.loads((tmp_path / "d.json").read_text())
+    proposed = next(c for c in out["candidates"] if c["proposed"])
+    assert proposed["joint"] == 2 and "compliance" in proposed["effect"]
+    sizes = [s["value"] for s in proposed["fitted"]]
+    assert all(s == pytest.approx(2.0, rel=0.1) for s in sizes)  # µrad/(N·m)
+    assert proposed["cv_rms_mm"] < 0.3 * out["cv_rms_mm"]
+
+
+def test_the_added_variable_plot_of_contacts_shows_the_missing_effect(fitted):
+    """The joint direction is socket-projected as the residual is: the partial residual
+    follows the fitted cyclic error."""
+    from doe_calib.diagnosis import diagnose
+    from doe_calib.diagnosis.added_variable import strongest_added_variables
+
+    model, meas, fit = fitted
+    diagnosis = diagnose(model, meas, fit)
+    plot = strongest_added_variables(diagnosis, model, meas, fit, top=1).plots[0]
+    assert plot.effect.startswith("cyclic(j2,") and plot.unit == "mdeg"
+    assert plot.correlation > 0.95
