@@ -115,8 +115,9 @@ def test_diagnose_on_contacts_names_the_missing_effect(campaign, fitted):
 def test_refine_on_contacts_adds_it_and_the_held_out_error_falls(ur10, campaign, capsys):
     d, truth, q_new = campaign
     assert main(_args(d, "identify", d / "start.json")) == 0
-    assert main(_args(d, "refine", d / "refined.json", "--report",
-                      str(d / "refine.html"))) == 0
+    write_contacts(d / "validation.csv", ur10, truth, np.random.default_rng(8), SOCKETS_M, 5)
+    assert main(_args(d, "refine", d / "refined.json", "--report", str(d / "refine.html"),
+                      "--validation", str(d / "validation.csv"))) == 0
     history = json.loads((d / "refined_refine.json").read_text())
     added = [s["added"] for s in history["steps"] if s["added"]]
     assert added and added[0].startswith("cyclic(j2,")
@@ -126,6 +127,9 @@ def test_refine_on_contacts_adds_it_and_the_held_out_error_falls(ur10, campaign,
     assert before > 0.2 and after < 0.03
     cv = [s["cv_rms_mm"] for s in history["steps"]]
     assert cv[-1] < 0.2 * cv[0] and cv[-1] > 0.8 * SEATING_MM  # held out: not below the noise
+    # validation contacts against the sockets as the fitted contacts place them
+    valid = [s["validation_rms_mm"] for s in history["steps"]]
+    assert valid[-1] < 0.25 * valid[0] and 0.8 * SEATING_MM < valid[-1] < 1.5 * SEATING_MM
 
 
 def test_folds_deal_each_sockets_contacts_out(fitted):

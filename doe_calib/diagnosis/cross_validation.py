@@ -41,7 +41,8 @@ from doe_calib.diagnosis.held_out_sockets import (held_out_errors, kept_socket_m
                                                    unscored_words)
 from doe_calib.diagnosis.residuals import residuals
 from doe_calib.errors import DoeCalibError
-from doe_calib.estimation.weighted_residuals import weighted_residual
+from doe_calib.estimation.weighted_residuals import marker_points, weighted_residual
+from doe_calib.io.measurements import concatenate
 from doe_calib.model.evaluation import observation_matrix
 
 GROUPINGS = ("auto", "pose", "session", "region")
@@ -129,9 +130,22 @@ def make_folds(measurements, k: int = 5, grouping: str = "auto", seed: int = 0) 
     return Folds(held, grouping, text + unscored_words(measurements, held))
 
 
-def validation_rms(model, values, measurements) -> float:
-    """RMS (mm) of every coordinate's error when ``values`` predict ``measurements``."""
-    return residuals(model, measurements, values).rms_mm
+def validation_rms(model, values, measurements, fitted_on=None) -> float:
+    """RMS (mm) of every coordinate's error when ``values`` predict ``measurements``.
+
+    A socket contact is compared to its socket's point: with ``fitted_on`` (the readings
+    ``values`` were fitted to), as their contacts of that socket place it, when they hold
+    some; else as the held-out contacts of that socket place it
+    (:mod:`~doe_calib.diagnosis.held_out_sockets`).
+    """
+    if fitted_on is None or not measurements.contact.any() or not fitted_on.contact.any():
+        return residuals(model, measurements, values).rms_mm
+    both = concatenate([fitted_on, measurements])
+    fitted = np.arange(len(both)) < len(fitted_on)
+    placed = np.isin(both.socket, np.unique(both.socket[fitted & both.contact]))
+    kept = fitted | (both.contact & ~placed)
+    e, _ = held_out_errors(both, kept, marker_points(model, both, values))
+    return float(np.sqrt(np.mean(e[~fitted] ** 2)) * 1e3)
 
 
 def cross_validated_rms(model, measurements, params, folds: Folds) -> float:
