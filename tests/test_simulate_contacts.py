@@ -132,3 +132,11 @@ def test_template_refuses_design_options(planned, capsys):
     d, *_ = planned
     assert _simulate(d, "x.csv", "--load", "5@0,0,50") == 2
     assert "--load is not taken with --template" in capsys.readouterr().err
+
+
+def test_given_socket_points_must_name_every_socket(planned):
+    d, robot, tool, model = planned
+    template = read_measurements(d / "template.csv", robot, tool, require_xyz=False)
+    with pytest.raises(DataError, match="no point given for socket 'S2'"):
+        simulate_readings(model, model.nominal(), template, 1e-5,
+                          points={"S1": np.zeros(3), "S3": np.zeros(3)})

@@ -35,15 +35,22 @@ def kept_socket_means(measurements, kept, v) -> tuple:
         contact.
     """
     means = np.zeros_like(v, dtype=float)
-    scored = ~measurements.contact
     w = measurements.sigma ** -2.0
     for k in measurements.sockets_used.tolist():
         mine = measurements.socket == k
         used = mine & kept
         if used.any():
             means[mine] = np.tensordot(w[used], v[used], axes=1) / w[used].sum()
-            scored = scored | mine
-    return means, scored
+    return means, scored(measurements, kept)
+
+
+def scored(measurements, kept) -> np.ndarray:
+    """Which readings can be compared when only ``kept`` (K,) bool are used, shape (K,) bool:
+    tracker readings, and contacts whose socket keeps a contact."""
+    if not measurements.contact.any():
+        return np.ones(len(measurements), bool)
+    placed = np.unique(measurements.socket[kept & measurements.contact])
+    return ~measurements.contact | np.isin(measurements.socket, placed)
 
 
 def held_out_errors(measurements, kept, points) -> tuple:
@@ -63,7 +70,6 @@ def unscored_words(measurements, held) -> str:
     because no other fold holds a contact of their socket ("" when every one can)."""
     if not measurements.contact.any():
         return ""
-    n = sum(int((~kept_socket_means(measurements, ~h, np.zeros((len(h), 1)))[1] & h).sum())
-            for h in held)
+    n = sum(int((h & ~scored(measurements, ~h)).sum()) for h in held)
     return "" if n == 0 else (f"; {n} contacts not scored (every other contact of their socket "
                               f"is in the same fold)")

@@ -85,7 +85,7 @@ def seated_configurations(model, values, template, targets) -> Configurations:
                         f"its ball in socket {template.socket_names[template.socket[rows[worst]]]}"
                         f" from the planned joint values ({np.linalg.norm(error[worst]) * 1e3:.3g}"
                         f" mm off after {MAX_ITERATIONS} iterations): out of reach or at a "
-                        f"singular configuration", template.source,
+                        f"singular configuration", template.source or None,
                         int(template.line[rows[worst]]))
     out = cfg.q.copy()
     out[used] = q
@@ -113,6 +113,12 @@ def simulate_readings(model, values, template, sigma: float, rng=None, points=No
     points : dict, optional
         Socket id → point (3,), m, frame of the readings; default :func:`socket_points`.
 
+    Raises
+    ------
+    DataError
+        A socket of the template without a point in ``points``; a contact the true robot
+        cannot seat (:func:`seated_configurations`).
+
     Returns
     -------
     Measurements
@@ -124,8 +130,11 @@ def simulate_readings(model, values, template, sigma: float, rng=None, points=No
     contact = template.contact
     targets = np.full((len(template), 3), np.nan)
     for k in template.sockets_used.tolist():
-        at = template.socket == k
-        targets[at] = np.asarray(where[template.socket_names[k]], float)
+        name = template.socket_names[k]
+        if name not in where:
+            raise DataError(f"no point given for socket {name!r} (points for "
+                            f"{', '.join(map(repr, where)) or 'none'})", template.source or None)
+        targets[template.socket == k] = np.asarray(where[name], float)
     targets[contact] += sigma * rng.standard_normal((int(contact.sum()), 3))
     cfg = seated_configurations(model, values, template, targets)
     x = marker_positions(model, values, cfg)[template.config, template.marker]
@@ -133,5 +142,5 @@ def simulate_readings(model, values, template, sigma: float, rng=None, points=No
                    x + sigma * rng.standard_normal((len(template), 3)))
     return Measurements(cfg, template.config, template.marker, xyz,
                         np.full(len(template), sigma if sigma > 0 else 1e-6),
-                        template.line, source, socket=template.socket,
+                        np.zeros(len(template), int), source, socket=template.socket,
                         socket_names=template.socket_names)
