@@ -56,13 +56,14 @@ def scored(measurements, kept) -> np.ndarray:
 def held_out_errors(measurements, kept, points) -> tuple:
     """Reading minus model of every reading, (K, 3), m, each contact compared to its socket's
     point as the ``kept`` contacts place it (:func:`kept_socket_means`; 0 for one that cannot
-    be), and which readings could be compared (K,) bool. ``points``: the model's marker point
-    of every reading (K, 3), m. Without contacts, ``measurements.xyz − points`` and every reading."""
+    be), and which readings could be compared (K,) bool (:func:`scored`). ``points``: the
+    model's marker point of every reading (K, 3), m. Without contacts,
+    ``measurements.xyz − points`` and every reading."""
     if not measurements.contact.any():
         return measurements.xyz - points, np.ones(len(measurements), bool)
-    means, scored = kept_socket_means(measurements, kept, points)
+    means, compared = kept_socket_means(measurements, kept, points)
     target = np.where(measurements.contact[:, None], means, measurements.xyz)
-    return np.where(scored[:, None], target - points, 0.0), scored
+    return np.where(compared[:, None], target - points, 0.0), compared
 
 
 def unscored_words(measurements, held) -> str:
