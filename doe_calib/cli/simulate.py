@@ -27,6 +27,12 @@ def add_arguments(c):
     robot_arguments(c)
     c.add_argument("--design", help="design of poses and loads: the JSON doe-calib design "
                                     "writes, or its CSV (else random poses)")
+    c.add_argument("--template", metavar="CSV",
+                   help="measurement CSV whose readings are simulated as they stand: its "
+                        "poses, loads, markers and socket contacts (x, y, z unused, may be "
+                        "empty); a contact's q is written as the one that seats the true ball "
+                        "in its socket (IK on the truth from the row's q), the socket where "
+                        "the truth puts the ball on average over its rows")
     c.add_argument("--poses", type=count("--poses", 1, "pose"), default=30,
                    help="random poses when no design")
     c.add_argument("--constraints", metavar="CELL.yaml",
@@ -37,7 +43,8 @@ def add_arguments(c):
                    help="MASS_KG@X,Y,Z: measure each pose unloaded and with this mass (kg; "
                         "centre of mass in mm, flange frame); 0 kg measures unloaded only")
     c.add_argument("--sigma", type=positive("--sigma", "mm"), default=0.02,
-                   help="noise σ per coordinate, mm")
+                   help="noise σ per coordinate, mm (a socket contact's seating scatter per "
+                        "axis)")
     c.add_argument("--truth", help="JSON with the true parameters (else random errors)")
     c.add_argument("--tracker", help="tracker placement X,Y,Z,RX,RY,RZ (mm, rotation vector "
                                      "in deg) when errors are random")
@@ -56,11 +63,9 @@ def run(args):
     import numpy as np
 
     from doe_calib.estimation.result import load_parameters, save_parameters
-    from doe_calib.io.csv_files import read_design, write_measurements
-    from doe_calib.io.measurements import Configurations
-    from doe_calib.model.loads import unloaded_and_loaded
+    from doe_calib.io.csv_files import write_measurements
     from doe_calib.model.marker_model import build_model
-    from doe_calib.model.simulate import random_configurations, random_truth, simulate
+    from doe_calib.model.simulate import random_truth, simulate
 
     robot, tool = load_robot_tool(args)
     check_payloads(robot, [args.load] if args.load else [])
@@ -74,26 +79,19 @@ def run(args):
             t = parse_floats(args.tracker, 6, "--tracker (mm, deg)")
             base = np.r_[t[:3] / 1000.0, np.radians(t[3:])]
         truth = model.nominal().with_values(random_truth(model, rng, base=base))
-    if args.design:
-        if args.load:
-            raise OptionError("--load is for random poses: a --design carries its own loads")
-        if args.constraints:
-            raise OptionError("--constraints is for random poses: a --design's poses were "
-                              "chosen inside its own")
-        cfg = read_design(args.design, robot)
+    if args.template:
+        meas = _from_template(args, model, truth, rng)
     else:
-        q = random_configurations(robot, args.poses, rng) if not args.constraints else \
-            _poses_in_cell(args, model, truth, robot, tool, rng)
-        if args.load:
-            kg, com, _ = args.load
-            cfg = unloaded_and_loaded(model, truth.values, q, kg, com)
-        else:
-            cfg = Configurations.from_arrays(q)
-    meas = simulate(model, truth, cfg, args.sigma / 1000.0, rng, source=args.out)
+        meas = simulate(model, truth, _configurations(args, model, truth, rng),
+                        args.sigma / 1000.0, rng, source=args.out)
+    cfg = meas.configurations
     write_measurements(args.out, meas, robot, tool)
     messages = sys.stderr if args.json else sys.stdout
+    seated = int(meas.contact.sum())
     print(f"written: {args.out} ({len(meas)} readings, {len(cfg)} configurations, "
-          f"σ = {args.sigma} mm)", file=messages)
+          f"σ = {args.sigma} mm" + (f"; {seated} socket contacts in {len(meas.sockets_used)} "
+                                    f"sockets, each q the one seating the true ball" if seated
+                                    else "") + ")", file=messages)
     if args.truth_out:
         save_parameters(args.truth_out, truth, model.spec)
         print(f"written: {args.truth_out} (the true parameters)", file=messages)
@@ -102,6 +100,45 @@ def run(args):
                           "configurations": len(cfg), "poses": len(set(cfg.pose)),
                           "sigma_mm": args.sigma, "model": model.spec, "seed": args.seed,
                           "truth": args.truth_out}))
+
+
+def _configurations(args, model, truth, rng):
+    """The configurations to simulate: ``--design``'s, or ``--poses`` random ones (in the
+    ``--constraints`` cell), each measured unloaded and with ``--load`` when given."""
+    from doe_calib.io.csv_files import read_design
+    from doe_calib.io.measurements import Configurations
+    from doe_calib.model.loads import unloaded_and_loaded
+    from doe_calib.model.simulate import random_configurations
+
+    robot = model.robot
+    if args.design:
+        if args.load:
+            raise OptionError("--load is for random poses: a --design carries its own loads")
+        if args.constraints:
+            raise OptionError("--constraints is for random poses: a --design's poses were "
+                              "chosen inside its own")
+        return read_design(args.design, robot)
+    q = random_configurations(robot, args.poses, rng) if not args.constraints else \
+        _poses_in_cell(args, model, truth, robot, model.tool, rng)
+    if args.load:
+        kg, com, _ = args.load
+        return unloaded_and_loaded(model, truth.values, q, kg, com)
+    return Configurations.from_arrays(q)
+
+
+def _from_template(args, model, truth, rng):
+    """The readings of ``--template`` simulated on ``truth``
+    (:func:`~doe_calib.model.seating.simulate_readings`)."""
+    from doe_calib.io.csv_files import read_measurements
+    from doe_calib.model.seating import simulate_readings
+
+    for given, name in ((args.design, "--design"), (args.load, "--load"),
+                        (args.constraints, "--constraints")):
+        if given:
+            raise OptionError(f"{name} is not taken with --template: the template's rows are "
+                              f"the poses, loads and readings simulated")
+    template = read_measurements(args.template, model.robot, model.tool, require_xyz=False)
+    return simulate_readings(model, truth, template, args.sigma / 1000.0, rng, source=args.out)
 
 
 def _poses_in_cell(args, model, truth, robot, tool, rng):

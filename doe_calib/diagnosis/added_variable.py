@@ -8,7 +8,8 @@ the displacement it explains ``f = Z⊥ θ̂``. Each configuration c is reduced 
 one signed number:
 
 * an effect on joint k as an equivalent joint error along ``g_c = ∂x_c/∂q_k``
-  (central difference): fitted ``g_cᵀ f_c / g_cᵀ g_c`` and residual
+  (central difference; for a socket contact, less its socket's mean, the part the
+  socket's unknown point cannot take): fitted ``g_cᵀ f_c / g_cᵀ g_c`` and residual
   ``g_cᵀ r_c / g_cᵀ g_c`` (mdeg, or µm for a prismatic joint);
 * any other effect along the fitted displacement: ``‖f_c‖`` and
   ``f_cᵀ r_c / ‖f_c‖`` (mm), its size, not its sign.
@@ -28,6 +29,7 @@ from doe_calib.diagnosis.effect_tests import failure_note
 from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.errors import DoeCalibError, DoeCalibWarning
 from doe_calib.estimation.effect_signature import candidate_effects, fitted_basis, projected_columns
+from doe_calib.estimation.weighted_residuals import socket_mean
 from doe_calib.model.effects import joint_index
 from doe_calib.model.evaluation import marker_positions
 
@@ -179,7 +181,9 @@ def _per_config(values, config, m) -> np.ndarray:
 
 
 def _joint_direction(model, measurements, values, k) -> np.ndarray:
-    """∂x/∂q_k of every reading, weighted by 1/σ like the residual, shape (K, 3)."""
+    """∂x/∂q_k of every reading, weighted by 1/σ like the residual, shape (K, 3); a socket
+    contact's less its socket's mean, as its residual and columns are (the socket's point
+    takes the rest)."""
     cfg = measurements.configurations
     shifted = []
     for sign in (1.0, -1.0):
@@ -188,7 +192,10 @@ def _joint_direction(model, measurements, values, k) -> np.ndarray:
         shifted.append(marker_positions(model, values, cfg.__class__(cfg.pose, q, cfg.wrench,
                                                                      cfg.env)))
     d = (shifted[0] - shifted[1]) / (2 * _STEP)
-    return d[measurements.config, measurements.marker] / measurements.sigma[:, None]
+    d = d[measurements.config, measurements.marker]
+    if measurements.contact.any():
+        d = d - socket_mean(measurements, np.arange(len(measurements)), d)
+    return d / measurements.sigma[:, None]
 
 
 def _best_variable(fitted, variables):

@@ -23,6 +23,13 @@ What a group is (``grouping``):
     range): rewards what extrapolates to unlike configurations;
 ``auto`` (default)
     ``session`` when the data hold several sessions, else ``pose``.
+
+Socket contacts (formats.md §3) are compared to their socket's point, unknown: a fold's
+refit places each socket by the contacts it keeps, and a held-out contact is scored
+against that point (:mod:`~doe_calib.diagnosis.held_out_sockets`), never against a mean
+it is part of. Folds of poses therefore deal each socket's contacts out over the folds,
+so that every fold keeps most of every socket's contacts; a contact whose socket has no
+contact in the other folds cannot be scored, and the folds say how many.
 """
 from __future__ import annotations
 
@@ -30,9 +37,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from doe_calib.diagnosis.held_out_sockets import (held_out_errors, kept_socket_means,
+                                                   unscored_words)
 from doe_calib.diagnosis.residuals import residuals
 from doe_calib.errors import DoeCalibError
-from doe_calib.estimation.weighted_residuals import weighted_residual
+from doe_calib.estimation.weighted_residuals import marker_points, weighted_residual
+from doe_calib.io.measurements import concatenate
+from doe_calib.model.evaluation import observation_matrix
 
 GROUPINGS = ("auto", "pose", "session", "region")
 
@@ -60,8 +71,20 @@ def _pose_groups(measurements, k, seed):
     poses = np.array(list(dict.fromkeys(measurements.configurations.pose)))
     k = max(2, min(k, len(poses)))
     order = np.random.default_rng(seed).permutation(len(poses))
+    if measurements.contact.any():  # each socket's contacts dealt out over the folds
+        order = order[np.argsort(_pose_socket(measurements, poses)[order], kind="stable")]
     fold_of = {poses[i]: n % k for n, i in enumerate(order)}
     return np.array([fold_of[p] for p in measurements.configurations.pose]), k
+
+
+def _pose_socket(measurements, poses) -> np.ndarray:
+    """The socket of each pose's first contact (−1: a pose of tracker readings only)."""
+    pose_of = np.asarray(measurements.configurations.pose, dtype=object)[measurements.config]
+    first = {}
+    for p, k in zip(pose_of[::-1], measurements.socket[::-1]):
+        if k >= 0:
+            first[p] = int(k)
+    return np.array([first.get(p, -1) for p in poses])
 
 
 def _region_groups(measurements, k, seed):
@@ -103,12 +126,26 @@ def make_folds(measurements, k: int = 5, grouping: str = "auto", seed: int = 0) 
         of_config, k = _pose_groups(measurements, k, seed)
         text = f"{k} folds of whole poses"
     of_reading = of_config[measurements.config]
-    return Folds(tuple(of_reading == f for f in range(k)), grouping, text)
+    held = tuple(of_reading == f for f in range(k))
+    return Folds(held, grouping, text + unscored_words(measurements, held))
 
 
-def validation_rms(model, values, measurements) -> float:
-    """RMS (mm) of every coordinate's error when ``values`` predict ``measurements``."""
-    return residuals(model, measurements, values).rms_mm
+def validation_rms(model, values, measurements, fitted_on=None) -> float:
+    """RMS (mm) of every coordinate's error when ``values`` predict ``measurements``.
+
+    A socket contact is compared to its socket's point: with ``fitted_on`` (the readings
+    ``values`` were fitted to), as their contacts of that socket place it, when they hold
+    some; else as the held-out contacts of that socket place it
+    (:mod:`~doe_calib.diagnosis.held_out_sockets`).
+    """
+    if fitted_on is None or not measurements.contact.any() or not fitted_on.contact.any():
+        return residuals(model, measurements, values).rms_mm
+    both = concatenate([fitted_on, measurements])
+    fitted = np.arange(len(both)) < len(fitted_on)
+    placed = np.isin(both.socket, np.unique(both.socket[fitted & both.contact]))
+    kept = fitted | (both.contact & ~placed)
+    e, _ = held_out_errors(both, kept, marker_points(model, both, values))
+    return float(np.sqrt(np.mean(e[~fitted] ** 2)) * 1e3)
 
 
 def cross_validated_rms(model, measurements, params, folds: Folds) -> float:
@@ -116,6 +153,8 @@ def cross_validated_rms(model, measurements, params, folds: Folds) -> float:
 
     ``params`` is the fit on all data: its values and which parameters are free.
     """
+    if measurements.contact.any():
+        return _with_contacts(model, measurements, params, folds)
     r, jac = weighted_residual(model, measurements, params.values)
     jac = jac[:, params.free]
     norms = np.linalg.norm(jac, axis=0)
@@ -129,6 +168,35 @@ def cross_validated_rms(model, measurements, params, folds: Folds) -> float:
         step = -_solve(gram - j_h.T @ j_h, grad - j_h.T @ r_h)
         sq += float((((r_h + j_h @ step) * sigma[rows]) ** 2).sum())
     return float(np.sqrt(sq / r.size) * 1e3)
+
+
+def _with_contacts(model, measurements, params, folds: Folds) -> float:
+    """:func:`cross_validated_rms` of readings with socket contacts (module notes).
+
+    The error of a reading is ``e = t − x`` with ``t`` its reading or its socket's point,
+    the mean of the kept contacts' model points; one Gauss–Newton step moves it by
+    ``−D δ``, ``D = B − B̄`` (B̄ the same mean of B; 0 for a tracker reading). Each fold
+    solves ``δ`` on the kept readings and scores the held-out ones that can be scored;
+    the RMS is over the coordinates scored (NaN when none is).
+    """
+    x, b = observation_matrix(model, params.values, measurements.configurations)
+    c, j = measurements.config, measurements.marker
+    points, rows = x[c, j], b[c, j][:, :, params.free]
+    s = measurements.sigma[:, None, None]
+    norms = np.linalg.norm((rows / s).reshape(-1, rows.shape[-1]), axis=0)
+    rows = rows / np.where(norms > 0, norms, 1.0)
+    seated = measurements.contact[:, None, None]
+    sq, n = 0.0, 0
+    for held in folds.held:
+        kept = ~held
+        e, scored = held_out_errors(measurements, kept, points)
+        d = rows - np.where(seated, kept_socket_means(measurements, kept, rows)[0], 0.0)
+        jac, r = (d[kept] / s[kept]).reshape(-1, d.shape[-1]), (e[kept] / s[kept, 0]).ravel()
+        step = _solve(jac.T @ jac, jac.T @ r)
+        out = held & scored
+        sq += float(np.sum((e[out] - d[out] @ step) ** 2))
+        n += 3 * int(out.sum())
+    return float(np.sqrt(sq / n) * 1e3) if n else float("nan")
 
 
 def _solve(gram: np.ndarray, rhs: np.ndarray, rcond: float = 1e-12) -> np.ndarray:

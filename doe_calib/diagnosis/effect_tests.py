@@ -10,7 +10,8 @@ orthonormal basis of ``J``. The part of ``r`` in the span of ``Z⊥``,
 
 ``F = (ΔSS / q) / ((‖r‖² − ΔSS) / (3K − rank J − q))  ~  F(q, 3K − rank J − q)``
 
-under "the effect is absent", with ``q`` the rank of ``Z⊥``. The F form
+under "the effect is absent", with ``q`` the rank of ``Z⊥`` (3K less 3 per socket of
+socket contacts, whose points the residual and the columns have eliminated). The F form
 does not depend on σ being right. p-values are Bonferroni-adjusted over
 all candidates tried, so a correct model is rarely sent looking; candidates
 are ordered by ``log10 p`` (which does not underflow).
@@ -129,7 +130,7 @@ def candidate_tests(model, measurements, params, effects=None,
     if effects is None:
         effects = candidate_effects(model, measurements.configurations, registry)
     r, q_basis = fitted_basis(model, measurements, params)
-    rank_j = q_basis.shape[1]
+    rank_j = q_basis.shape[1] + 3 * len(measurements.sockets_used)  # the sockets' points
     ss = float(r @ r)
     jac = []  # the free weighted Jacobian, made once and only when words need it
 

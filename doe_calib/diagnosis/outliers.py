@@ -18,6 +18,10 @@ when few (:data:`MAX_OUTLIERS`) and the other readings then fit within the
 noise (:func:`~doe_calib.diagnosis.diagnose.diagnose`'s adequacy rules; with σ
 estimated, the F test of the rest's rigid part against the within-pose part);
 otherwise the effect tests judge.
+
+A socket contact's deletion residual is its misfit against its socket's point as the
+other contacts place it (:mod:`~doe_calib.diagnosis.held_out_sockets`): an outlying
+contact left out no longer moves the point its socket's other contacts are compared to.
 """
 from __future__ import annotations
 
@@ -26,9 +30,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.special import fdtrc
 
+from doe_calib.diagnosis.held_out_sockets import held_out_errors
 from doe_calib.estimation.chi_square import chi2_survival, chi2_upper_quantile
 from doe_calib.estimation.identify import identify_quietly
-from doe_calib.estimation.weighted_residuals import marker_residuals
+from doe_calib.estimation.weighted_residuals import marker_points
 from doe_calib.io.measurements import ESTIMATED
 
 #: More suspects than this (readings) is not "a few outliers" but a model or σ problem.
@@ -61,6 +66,8 @@ class Outlier:
         ``K · P(χ²₃ > ‖e_i/σ_i‖²)`` (Bonferroni over the K readings), at most 1.
     n_readings : int
         K, the readings it was judged among.
+    socket : str
+        For a socket contact, its socket's id ("" for a tracker reading).
     """
 
     pose: str
@@ -71,10 +78,13 @@ class Outlier:
     size_sigma: float
     p_value: float
     n_readings: int
+    socket: str = ""
 
     def words(self) -> str:
-        """``pose 17, marker B (line 102 of m.csv): 1.5 mm = 50 σ off (p = 1e-300 …)``."""
-        where = f" (line {self.line} of {self.source})" if self.line else ""
+        """``pose 17, marker B (line 102 of m.csv): 1.5 mm = 50 σ off (p = 1e-300 …)``; a
+        contact's says its socket (``marker ball in socket S2``)."""
+        where = (f" in socket {self.socket}" if self.socket else "") + \
+            (f" (line {self.line} of {self.source})" if self.line else "")
         p = f"p = {self.p_value:.2g}" if self.p_value >= 1e-300 else "p < 1e-300"
         return (f"pose {self.pose}, marker {self.marker}{where}: {self.size_mm:.3g} mm = "
                 f"{self.size_sigma:.3g} σ from where the other readings put it ({p}, "
@@ -135,11 +145,18 @@ def _fits(t, dof, sigma_m, level, tolerance, practical_um, survival) -> bool:
     return survival >= level or ratio <= 1 + tolerance or misfit_um < practical_um
 
 
+def _errors(model, measurements, values, out) -> tuple:
+    """Reading minus model (K, 3), m, at ``values``, each contact against its socket's point
+    as the readings not ``out`` place it (module notes), and the modelled points (K, 3)."""
+    points = marker_points(model, measurements, values)
+    return held_out_errors(measurements, ~out, points)[0], points
+
+
 def _rest_fits_the_noise(error, sigma, keep, rank, level, tolerance, practical_um,
                          within=None) -> bool:
     """Whether the readings ``keep`` fit within σ: their χ² against σ (given), or with
     ``within`` (the within-pose sum of squares and dof, σ estimated) the F test of the rest's
-    rigid part against it."""
+    rigid part against it. ``rank``: the parameters fitted, sockets' points included."""
     if within is None:
         t = float(((error[keep] / sigma[keep, None]) ** 2).sum())
         dof = max(3 * int(keep.sum()) - rank, 1)
@@ -187,13 +204,13 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
         return ()
     k = len(measurements)
     sigma, estimated = measurements.sigma, measurements.sigma_source == ESTIMATED
-    rank = int(fit.parameters.free.sum())
-    error = marker_residuals(model, measurements, fit.parameters.values)
+    rank = int(fit.parameters.free.sum()) + 3 * len(measurements.sockets_used)
     out, within = np.zeros(k, bool), None
+    error, predicted = _errors(model, measurements, fit.parameters.values, out)
     critical = chi2_upper_quantile(min(level / k, 0.5), 3)  # Bonferroni over the K readings
     for _ in range(MAX_ROUNDS):
         if estimated:  # the noise within poses, of the poses without suspects
-            within = within_pose(error, measurements.xyz - error, measurements.config, ~out)
+            within = within_pose(error, predicted, measurements.config, ~out)
             if within[1] < 3:
                 return ()
             scale = np.full(k, np.sqrt(within[0] / within[1]))
@@ -213,7 +230,7 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
             beyond = worst
         out = beyond
         refit = identify_quietly(model, measurements.subset(~out), fit.parameters)
-        error = marker_residuals(model, measurements, refit.parameters.values)
+        error, predicted = _errors(model, measurements, refit.parameters.values, out)
     else:
         return ()
     if not out.any() or not _rest_fits_the_noise(error, sigma, ~out, rank, level, tolerance,
@@ -224,7 +241,9 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
                      int(measurements.line[i]), str(measurements.source),
                      float(np.linalg.norm(error[i]) * 1e3),
                      float(np.linalg.norm(error[i]) / scale[i]),
-                     float(min(chi2_survival(t[i], 3) * k, 1.0)), k)
+                     float(min(chi2_survival(t[i], 3) * k, 1.0)), k,
+                     measurements.socket_names[measurements.socket[i]]
+                     if measurements.contact[i] else "")
              for i in np.flatnonzero(out)]
     return tuple(sorted(found, key=lambda o: -o.size_sigma))
 
@@ -244,8 +263,12 @@ def outlier_verdict(outliers, adequacy_words: str) -> str:
         f"{len(outliers)} readings are gross errors"
     listed = "; ".join(o.words() for o in outliers)
     python = "[" + ", ".join(repr(p) for p in poses) + "]"
+    causes = "A reading off its target, a marker moved or swapped, or a pose typed wrong"
+    if any(o.socket for o in outliers):
+        causes = ("A ball not seated home in its socket (dirt, a slipped seat), a contact "
+                  "written under another socket's id, or a pose typed wrong")
     return (f"The model is NOT adequate ({adequacy_words}), but {head}, not an effect: {listed}. "
-            f"A reading off its target, a marker moved or swapped, or a pose typed wrong. "
+            f"{causes}. "
             f"Re-measure {'that pose' if len(poses) == 1 else 'those poses'} or leave "
             f"{'it' if len(poses) == 1 else 'them'} out: rerun with --exclude-poses "
             f"{','.join(poses)} (each exclusion is reported; in Python "

@@ -62,7 +62,7 @@ def refine(model, measurements, validation=None, *, settings: RefineSettings | N
     steps, added, reason, effect = [], None, "starting model", None
     while True:
         diag = diagnose(model, measurements, fit, settings=s, registry=registry)
-        val = validation_rms(model, fit.parameters.values, validation) \
+        val = validation_rms(model, fit.parameters.values, validation, measurements) \
             if validation is not None else None
         steps.append(RefineStep(model.spec, added, diag.rms_mm, diag.cv_rms_mm, val,
                                 diag.adequate, reason, () if effect is None else effect.sizes,

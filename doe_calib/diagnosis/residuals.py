@@ -3,7 +3,9 @@
 All statistics use the weighted residuals ``r = (y − x(p̂)) / σ`` of every
 marker coordinate. Under an adequate model with the right σ,
 ``Σ r² ~ χ²(3K − rank)``: a tiny p-value says the residual is larger than the
-noise can explain (a missing effect, or σ too optimistic).
+noise can explain (a missing effect, or σ too optimistic). Socket contacts
+(formats.md §3) are compared to their socket's point, eliminated from the fit: each
+socket takes 3 of those degrees of freedom.
 """
 from __future__ import annotations
 
@@ -30,12 +32,16 @@ class Residuals:
         Configuration of each reading.
     pose : tuple of str, length K
         Pose id of each reading.
+    eliminated : int
+        Coordinates the residuals owe to the sockets' points fitted with them (3 per
+        socket; 0 without contacts): degrees of freedom they do not have.
     """
 
     error: np.ndarray
     weighted: np.ndarray
     config: np.ndarray
     pose: tuple
+    eliminated: int = 0
 
     @property
     def rms_mm(self) -> float:
@@ -47,7 +53,8 @@ def residuals(model, measurements, values) -> Residuals:
     """Residuals of ``measurements`` under ``model`` at parameter ``values`` (SI)."""
     e = marker_residuals(model, measurements, values)
     pose = tuple(measurements.configurations.pose[c] for c in measurements.config)
-    return Residuals(e, e / measurements.sigma[:, None], measurements.config, pose)
+    return Residuals(e, e / measurements.sigma[:, None], measurements.config, pose,
+                     3 * len(measurements.sockets_used))
 
 
 def residual_norms_mm(model, measurements, values) -> np.ndarray:
@@ -111,14 +118,15 @@ class Adequacy:
 
 def adequacy(res: Residuals, rank: int, sigma_mm: float, level: float = 0.01,
              sigma_source: str = "given") -> Adequacy:
-    """χ² test of the weighted residuals (at the readings' σ) with ``rank`` fitted parameters.
+    """χ² test of the weighted residuals (at the readings' σ) with ``rank`` fitted parameters
+    (and the sockets' points, ``res.eliminated``).
 
     ``sigma_mm`` (the readings' median σ, mm) and ``sigma_source``
     (:data:`~doe_calib.io.measurements.SIGMA_SOURCES`) say which σ was tested against.
     """
     w = res.weighted
     t = float((w ** 2).sum())
-    dof = int(w.size - rank)
+    dof = int(w.size - res.eliminated - rank)
     p = chi2_survival(t, dof) if dof > 0 else float("nan")
     return Adequacy(t, dof, p, float(sigma_mm), sigma_source, bool(p >= level), level)
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass, replace
 from doe_calib.errors import (
     ConditioningWarning,
     ConvergenceWarning,
+    DataError,
     DataWarning,
     DoeCalibWarning,
     MisfitWarning,
@@ -101,6 +102,25 @@ class FitSettings:
                                               if n and getattr(self, n) is not None}
 
 
+#: What the estimators other than ``point`` need of every reading, in words.
+NEEDS_XYZ = {"two-step": "the two-step estimator fits the base and markers to each reading's "
+                         "x, y, z",
+             "pose": "the pose estimator rebuilds each flange pose from its markers' x, y, z"}
+
+
+def refuse_contacts(estimator: str, measurements) -> None:
+    """Raise a DataError, in words a user acts on, when ``estimator`` is not ``point`` and
+    some of ``measurements`` are socket contacts."""
+    n = int(measurements.contact.sum())
+    if n and estimator != "point":
+        raise DataError(f"{NEEDS_XYZ[estimator]}; {n} of these {len(measurements)} readings "
+                        f"are socket contacts, which have none (the ball sat in a socket whose "
+                        f"position is unknown). Use the point estimator (the default: "
+                        f"--estimator point, or leave --estimator out), which compares each "
+                        f"contact to its socket's point, fitted with the robot",
+                        measurements.source or None)
+
+
 #: The settings of fits run many times to compare models: every parameter kept.
 WHOLE = FitSettings(select="none")
 
@@ -144,9 +164,15 @@ def identify(model, measurements, params=None, *, estimator: str = "point",
         ``sigma_mm`` is σ̂, the covariance is scaled to it, and the result says so.
         The σ of repeated readings, when poses were read more than once, is reported
         beside (``sigma_repeated``), never used in place of σ.
+
+    Raises
+    ------
+    DataError
+        ``two-step`` or ``pose`` on readings with socket contacts (what to use instead).
     """
     settings = FitSettings() if settings is None else settings
     options = settings.options(estimator)
+    refuse_contacts(estimator, measurements)
     settled = resolve_sigma(model, measurements, sigma, in_fit=True)
     measurements = provisional(settled.measurements)
     model = for_workload(model, FIT_PASSES * len(measurements.configurations), progress)
@@ -194,9 +220,6 @@ def _told(first, kept):
 
 def _estimate(model, measurements, params, estimator, progress, options):
     """One fit by the estimator named."""
-    if measurements.contact.any() and estimator != "point":
-        raise OptionError(f"estimator={estimator!r} takes tracker readings only; the socket "
-                          f"contacts of these readings need the point estimator")
     if estimator == "point":
         return identify_point(model, measurements, params, progress=progress, **options)
     if estimator == "two-step":

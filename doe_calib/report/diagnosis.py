@@ -35,6 +35,15 @@ def _by_direction(diagnosis, columns, top: int = 3):
     return [(n, columns[n]) for n in names if n in columns][:top]
 
 
+def _frame_words(measurements) -> str:
+    """The frame of the residuals' x, y, z and, with socket contacts, what a contact's is."""
+    if not measurements.contact.any():
+        return "tracker frame"
+    frame = "the robot's root frame" if measurements.contact.all() else "tracker frame"
+    return (f"{frame}; a socket contact's is its socket's point, the mean of the model's "
+            f"points of its contacts, less its own")
+
+
 def failure_sections(diagnosis, model, measurements, fit, dpi: int = 90,
                      title: str = "") -> list:
     """Where the model fails: its fit, what the residual follows, signed and sized residuals,
@@ -45,9 +54,9 @@ def failure_sections(diagnosis, model, measurements, fit, dpi: int = 90,
     strongest = _by_direction(diagnosis, columns)
     by_direction = [figure(to_png(residuals_by_direction(error, strongest), dpi),
                            "signed residual components against the strongest variables",
-                           "Residual x, y, z (mm, tracker frame) of each reading against the "
-                           "variables its size follows most: signed, so a step or a sine keeps "
-                           "its shape.")] if strongest else []
+                           f"Residual x, y, z (mm, {_frame_words(measurements)}) of each reading "
+                           f"against the variables its size follows most: signed, so a step or "
+                           f"a sine keeps its shape.")] if strongest else []
     norms = np.linalg.norm(error, axis=1)
     out = [section(f"{title}Where the model fails", table(
         ["model", "fit RMS (mm)", "CV RMS (mm)", "noise floor (mm)", "σ̂/σ"],
