@@ -19,6 +19,7 @@ import numpy as np
 from doe_calib.design.result import DesignResult
 from doe_calib.io.design_json import FORMAT
 from doe_calib.io.json_file import read_json
+from doe_calib.io.measurements import Measurements
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,6 +84,18 @@ class ContactDesign(DesignResult):
                    sockets=dict(c["sockets"]), lift_mm=float(c["lift_mm"]),
                    cone_deg=float(c["cone_deg"]),
                    above=np.array([p["above_q_deg"] for p in d["poses"]], float) / factors)
+
+    def readings(self, model, sigma: float | None = None):
+        """The contacts as the readings they plan (formats.md §3, *Socket contacts*): the
+        ball at each pose, seated in its socket (position unknown), σ (m) the design's."""
+        m = len(self.configurations)
+        names = tuple(self.sockets)
+        sigma = (self.sigma_mm or 0.02) / 1000.0 if sigma is None else sigma
+        return Measurements(self.configurations, np.arange(m),
+                            np.full(m, model.tool.index(self.ball)), np.full((m, 3), np.nan),
+                            np.full(m, float(sigma)), np.zeros(m, int), "contact design",
+                            socket=np.array([names.index(s) for s in self.socket]),
+                            socket_names=names)
 
     @classmethod
     def from_json(cls, path) -> "ContactDesign":

@@ -274,3 +274,31 @@ def contact_design(model, n_contacts: int, contacts: SocketContacts, sigma: floa
     setting = ContactSetting(**{f: getattr(base, f) for f in base.__dataclass_fields__},
                              contacts=contacts)
     return run(ContactGoal(criterion), setting, contacts, progress)
+
+
+def with_contact_detectability(design: ContactDesign, model, spec: str, alpha: float = 0.05,
+                               power: float = 0.8, registry=None) -> ContactDesign:
+    """``design`` with the detectability of the effects ``spec`` names in its contacts
+    (:func:`.discovery.detection.detectability`: the sockets' points eliminated as the fit
+    does, the parameters it was designed for estimated too, the others held).
+
+    Parameters
+    ----------
+    design : ContactDesign
+    model : Model
+        The model the design is for.
+    spec : str
+        ``+``-joined effect strings, or ``catalogue``.
+    alpha, power : float
+    registry : EffectRegistry, optional
+    """
+    # imported here: the detection statistics load slowly
+    from doe_calib.design.discovery.detection import detect_effects, detectability
+
+    params = model.nominal()
+    held = [n for n in params.names if n not in design.predicted_std]
+    params = params.fixed(held, "not identifiable from the design's contacts")
+    readings = design.readings(model)
+    effects = detect_effects(model, spec, design.configurations, registry)
+    return replace(design, detectability=detectability(model, params, readings, effects,
+                                                       alpha, power))
