@@ -12,9 +12,9 @@ n_s·I/σ² (n_s contacts of s), and the Schur complement that eliminates the po
 any centres c_s, Σ (B_i − c_s)ᵀ(B_i − c_s) ≥ M (Loewner order; equality at c_s = B̄_s):
 the relaxation over blocks centred at any c_s bounds the criterion of every design from
 above, so its bound is certified. The centres are the candidates' means, then the
-relaxation's weighted means (the lower bound is kept); the exchange runs on blocks centred
-at the chosen contacts' own means, again until the choice stays, and is judged by the
-exact M. The parameters are those identification fits from contacts alone
+relaxation's weighted means (the lower bound is kept); the exchange starts on blocks
+centred at the relaxation's means and swaps contacts on the exact M
+(:mod:`.solvers.contact_exchange`). The parameters are those identification fits from contacts alone
 (:func:`~doe_calib.estimation.preparation.fix_unseen_by_contacts`: base, first joint and
 scale fixed), then those no candidates separate fixed as the rank analysis does.
 Contacts are unloaded and not refined (a seated pose is tied to its socket).
@@ -34,13 +34,14 @@ from doe_calib.design.pipeline import Setting, constraints_used, run
 from doe_calib.design.predicted_std import design_std
 from doe_calib.design.problem import blocks_for, fixed_unidentifiable, load_configurations
 from doe_calib.design.result import BoundRelaxation, Equivalence, RandomDesigns
+from doe_calib.design.solvers.contact_exchange import contact_exchange
 from doe_calib.design.solvers.exchange import exact_design
 from doe_calib.design.solvers.relaxation import equivalence_ratio, relax
 from doe_calib.errors import OptionError, SolverError
 from doe_calib.estimation.preparation import fix_unseen_by_contacts
 from doe_calib.model.evaluation import observation_matrix
 
-#: Rounds of re-centring the relaxation and the exchange at most.
+#: Rounds of re-centring the relaxation at most.
 ROUNDS = 6
 
 
@@ -150,16 +151,13 @@ class ContactGoal(CriterionGoal):
             raise SolverError(f"only {len(pool)} contact candidates a program can reach for "
                               f"{n} contacts")
         blocks, socket = info.blocks[pool], info.socket[pool]
-        weights, best, value = relaxed.weights[pool], None, -np.inf
-        for _ in range(ROUNDS):
-            made = exact_design(centred(blocks, socket, weights), n, info.criterion, weights)
-            got = info.criterion.value(contact_information(blocks, socket, made.indices))
-            if best is not None and got <= value:
-                break
-            best, value = made, got
-            weights = np.full(len(pool), 1e-9)
-            weights[made.indices] = 1.0
-        return replace(best, indices=pool[best.indices], value=value)
+        weights = relaxed.weights[pool]
+        made = exact_design(centred(blocks, socket, weights), n, info.criterion, weights)
+        chosen, value, sweeps = contact_exchange(blocks, socket, made.indices, info.criterion)
+        return replace(made, indices=pool[chosen], value=value,
+                       iterations=made.iterations + sweeps,
+                       status=f"{made.status}; then {sweeps} sweeps of swaps on the exact "
+                              f"information")
 
     def refinement(self, setting, candidates, info, choice, stage):
         return None
