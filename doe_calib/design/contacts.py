@@ -29,8 +29,8 @@ from doe_calib.design.candidates.clearances import pose_clearances
 from doe_calib.design.candidates.sockets import SocketContacts
 from doe_calib.design.contact_result import ContactDesign
 from doe_calib.design.criteria import AOptimal, Criterion, DOptimal, EOptimal, log_det
-from doe_calib.design.optimal import RANDOM_DESIGNS, CriterionGoal
-from doe_calib.design.pipeline import Setting, constraints_used, run
+from doe_calib.design.optimal import RANDOM_DESIGNS
+from doe_calib.design.pipeline import Goal, Setting, constraints_used, run
 from doe_calib.design.predicted_std import design_std
 from doe_calib.design.problem import blocks_for, fixed_unidentifiable, load_configurations
 from doe_calib.design.result import BoundRelaxation, Equivalence, RandomDesigns
@@ -78,7 +78,6 @@ class ContactInformation:
     socket: np.ndarray
     q: np.ndarray
     pose_of: np.ndarray
-    task: None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,9 +95,11 @@ class CentredRelaxation:
 
 
 @dataclass(frozen=True)
-class ContactGoal(CriterionGoal):
+class ContactGoal(Goal):
     """Maximise the D, A or E criterion of the contacts' information, the sockets' points
     eliminated (module notes)."""
+
+    criterion: object = "D"
 
     def information(self, setting, candidates, stage) -> ContactInformation:
         model, n = setting.model, setting.n_poses
