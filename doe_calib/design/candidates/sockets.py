@@ -9,7 +9,8 @@ nominal model (:mod:`.seating`) from a random seed (so on varied branches of the
 A candidate is kept when it is seated inside the joint bounds, meets every constraint
 (:mod:`.feasibility`) and, with a collision model, its clearances; and when its approach
 point, the ball ``lift`` back along the approach direction with the same orientation, is
-seated, feasible and clear too (the program comes down from there).
+seated on the same branch of the arm (no joint moving more than :data:`NEAR`), feasible
+and clear too (the program comes down from there).
 """
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ import numpy as np
 
 from doe_calib.collision import Workspace
 from doe_calib.design.candidates.draw import CandidateSet, screen_collisions
+from doe_calib.design.candidates.reachability import nearest_equivalent
 from doe_calib.design.candidates.seating import seat, seating_residual
 from doe_calib.errors import DataError, OptionError, SolverError
 
@@ -28,6 +30,9 @@ from doe_calib.errors import DataError, OptionError, SolverError
 PER_SOCKET = 400
 CONE = np.radians(40.0)
 LIFT = 0.05
+#: Largest joint move (rad, m) from a contact to its approach point: beyond it the solve
+#: found another branch of the arm, which the straight move up would not keep.
+NEAR = 0.5
 
 
 @dataclass(frozen=True)
@@ -147,11 +152,15 @@ class SocketContacts:
         q, ok = seat(residual, target, rotation, rng.uniform(lo, hi, (k, len(lo))), lo, hi,
                      revolute)
         up, ok_up = seat(residual, target - self.lift * down, rotation, q, lo, hi, revolute)
+        up = nearest_equivalent(up, q, robot, lo, hi)
         removed = {"not seated inside the joint limits": int((~ok).sum())}
         ok &= self._screen(feasibility, collision, q, ok, removed, "")
         lifted = ok & ~ok_up
         removed["approach point not seated inside the joint limits"] = int(lifted.sum())
-        ok &= ok_up & self._screen(feasibility, collision, up, ok & ok_up, removed,
+        ok &= ok_up
+        away = ok & (np.abs(up - q).max(axis=1) > NEAR)
+        removed["approach point on another branch of the arm"] = int(away.sum())
+        ok &= ~away & self._screen(feasibility, collision, up, ok & ~away, removed,
                                    "approach point: ")
         for j, name in enumerate(self.sockets.names):
             if not ok[socket == j].any():
