@@ -325,3 +325,10 @@ def test_contact_program_moves_are_checked(designed, capsys):
     assert main(["export", str(d / "design.json"), "--format", "csv", "--out",
                  str(d / "checked.csv")]) != 0
     assert "would collide" in capsys.readouterr().err
+
+
+def test_contact_options_need_sockets(designed, capsys):
+    d, _ = designed
+    assert main(["design", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                 "--lift", "30", "--out", str(d / "x.json")]) != 0
+    assert "--lift is for a design of socket contacts" in capsys.readouterr().err

@@ -52,12 +52,12 @@ def add_arguments(c):
                         "--out is a measurement CSV of contacts to fill in")
     c.add_argument("--ball", metavar="MARKER",
                    help="with --sockets: the tool's marker seated (default its only marker)")
-    c.add_argument("--orientations", type=count("--orientations", 1), default=400,
+    c.add_argument("--orientations", type=count("--orientations", 1),
                    help="with --sockets: tool orientations drawn per socket (default 400)")
-    c.add_argument("--cone", type=positive("--cone", "deg"), default=40.0, metavar="DEG",
+    c.add_argument("--cone", type=positive("--cone", "deg"), metavar="DEG",
                    help="with --sockets: the tool's stem comes down within this angle of the "
                         "vertical (default 40)")
-    c.add_argument("--lift", type=positive("--lift", "mm"), default=50.0, metavar="MM",
+    c.add_argument("--lift", type=positive("--lift", "mm"), metavar="MM",
                    help="with --sockets: the approach point, this far back along the approach "
                         "from the socket, must be reachable too (default 50)")
     c.add_argument("--augment", metavar="M.csv",
@@ -158,6 +158,9 @@ def run(args):
     from doe_calib.model.marker_model import build_model
 
     csv_path = _csv_beside(args.out)
+    given = [o for o in ("ball", "orientations", "cone", "lift") if getattr(args, o) is not None]
+    if given and not args.sockets:
+        raise OptionError(f"--{given[0]} is for a design of socket contacts: give --sockets FILE")
     if args.detect:  # before any work: a detection test's power must be above its level
         power = ("--power", args.power) if args.min_power is None else \
             ("--min-power", args.min_power)

@@ -7,7 +7,8 @@ import sys
 import numpy as np
 
 from doe_calib.cli.common import show_result, stage_progress
-from doe_calib.design.candidates.sockets import SocketContacts, read_sockets
+from doe_calib.design.candidates.sockets import (CONE, LIFT, PER_SOCKET, SocketContacts,
+                                                 read_sockets)
 from doe_calib.design.contact_result import write_contact_csv
 from doe_calib.design.contacts import contact_design, with_contact_detectability
 from doe_calib.errors import OptionError
@@ -29,9 +30,11 @@ def run_contacts(args, model, constraints, collision, registry, csv_path, home=N
     if args.criterion not in ("D", "A", "E"):
         raise OptionError(f"--sockets designs for the D, A or E criterion; got --criterion "
                           f"{args.criterion}")
-    contacts = SocketContacts.of_tool(read_sockets(args.sockets), model.tool, args.ball,
-                                      per_socket=args.orientations,
-                                      cone=float(np.radians(args.cone)), lift=args.lift / 1000.0)
+    contacts = SocketContacts.of_tool(
+        read_sockets(args.sockets), model.tool, args.ball,
+        per_socket=PER_SOCKET if args.orientations is None else args.orientations,
+        cone=CONE if args.cone is None else float(np.radians(args.cone)),
+        lift=LIFT if args.lift is None else args.lift / 1000.0)
     progress = stage_progress()
     result = contact_design(model, args.poses, contacts, sigma=args.sigma / 1000.0,
                             criterion=args.criterion, constraints=constraints,

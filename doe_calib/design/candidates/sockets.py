@@ -134,9 +134,6 @@ class SocketContacts:
                               f"{', '.join(tool.names)}")
         return cls(sockets, tool.index(ball), **settings)
 
-    def __len__(self) -> int:
-        return len(self.sockets.names) * self.per_socket
-
     def draw(self, feasibility, model, values, rng, collision=None) -> ContactSet:
         """The contact candidates (module notes); ``values`` the parameters placing the
         robot (SI). Raises SolverError when a socket keeps none."""
