@@ -1,7 +1,7 @@
-"""The design of socket contacts (issue #31, item 3): candidates seated by IK, the sockets'
-points eliminated from the information, and a designed contact set against random ones on
-the campaign of tests/test_socket_contacts.py (its truth, sockets and seating scatter),
-simulated independently of our model."""
+"""The design of socket contacts (issue #31, item 3): the sockets' points eliminated from
+the information, the exchange on it, the CLI's design, and a designed contact set against
+random ones on the campaign of tests/test_socket_contacts.py (its truth, sockets and
+seating scatter), simulated independently of our model."""
 import csv
 import json
 
@@ -15,38 +15,16 @@ from doe_calib import Robot, Tool, build_model
 from doe_calib.cli import main
 from doe_calib.design.candidates.constraints import DesignConstraints
 from doe_calib.design.candidates.feasibility import build_feasibility
-from doe_calib.design.candidates.seating import seat, seating_residual
-from doe_calib.design.candidates.sockets import (SocketContacts, Sockets, _aligning,
-                                                 read_sockets)
+from doe_calib.design.candidates.sockets import SocketContacts, Sockets
 from doe_calib.design.contact_result import ContactDesign
 from doe_calib.design.contacts import centred, contact_design, contact_information
 from doe_calib.design.criteria import Criterion, log_det
 from doe_calib.design.problem import blocks_for
 from doe_calib.design.solvers.contact_exchange import contact_exchange
-from doe_calib.errors import DataError, OptionError
+from doe_calib.errors import OptionError
 
 N_CONTACTS = 30
 truth = socket_campaign.truth  # the fixture: the same true robot as the hand-seated campaign
-
-
-def test_sockets_file_is_read_in_mm(tmp_path):
-    path = tmp_path / "s.csv"
-    path.write_text("# table\nsocket,x,y,z\nS1,650,250,50\nS2,450,-550.5,50\n")
-    s = read_sockets(path)
-    assert s.names == ("S1", "S2")
-    assert np.allclose(s.points, [[0.65, 0.25, 0.05], [0.45, -0.5505, 0.05]])
-    path.write_text("socket,x,y,z\nS1,650,250,50\nS1,1,2,3\n")
-    with pytest.raises(DataError, match="given twice") as err:
-        read_sockets(path)
-    assert err.value.line == 3
-    path.write_text("socket,x,y,z\nS1,650,abc,50\n")
-    with pytest.raises(DataError, match="not a number") as err:
-        read_sockets(path)
-    assert (err.value.line, err.value.column) == (2, "y")
-    path.write_text("socket,x,y\nS1,650,250\n")
-    with pytest.raises(DataError, match="no column 'z'"):
-        read_sockets(path)
-
 
 def test_contact_information_is_the_schur_complement():
     """M = A − C D⁻¹ Cᵀ of the information of (p, u_s), the sockets' block n_s·I."""
@@ -83,39 +61,11 @@ def test_contact_exchange_swaps_on_the_exact_information():
             other[slot] = j
             assert log_det(contact_information(blocks, socket, other)) <= value + 1e-9
 
-
-def test_aligning_rotations():
-    rng = np.random.default_rng(4)
-    a = np.array([0.0, 0.0, 1.0])
-    b = rng.normal(size=(20, 3))
-    b = np.r_[b / np.linalg.norm(b, axis=1, keepdims=True), [-a]]
-    r = _aligning(a, b)
-    assert np.allclose(r @ a, b) and np.allclose(np.linalg.det(r), 1.0)
-    assert np.allclose(r @ r.transpose(0, 2, 1), np.eye(3))
-
-
 @pytest.fixture(scope="module")
 def ur10_model(ur10):
     robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
     tool = Tool.from_markers({"ball": [0.0, 0.0, 100.0]}, flange="tool0")
     return build_model(robot, tool, "joint_offset+geometry")
-
-
-def test_seating_puts_the_ball_in_the_socket(ur10_model):
-    robot, values = ur10_model.robot, ur10_model.nominal().values
-    rng = np.random.default_rng(6)
-    down = np.array([[0.0, 0.3, -1.0]]) / np.hypot(0.3, 1.0)
-    rotation = _aligning(np.array([0.0, 0.0, 1.0]), np.repeat(down, 50, axis=0))
-    target = np.tile([0.65, 0.25, 0.05], (50, 1))
-    lo, hi = np.full(6, -np.pi), np.full(6, np.pi)
-    q, ok = seat(seating_residual(ur10_model, values, [0, 0, 0.1]), target, rotation,
-                 rng.uniform(lo, hi, (50, 6)), lo, hi)
-    assert ok.sum() > 25
-    flange_r, flange_t = robot.flange_poses(q[ok])
-    assert np.allclose(flange_t + flange_r @ [0, 0, 0.1], target[ok], atol=1e-9)
-    assert np.allclose(flange_r, rotation[ok], atol=1e-8)
-    assert len(np.unique(np.round(q[ok], 3), axis=0)) > 2  # several branches of the arm
-
 
 @pytest.fixture(scope="module")
 def designed(ur10_model, tmp_path_factory):
@@ -267,65 +217,6 @@ def test_designed_contacts_beat_random_ones(ur10, truth, ur10_model, designed, c
     assert design.value > max(chance)
     assert max(chance) <= design.bound
     assert np.mean(ours) < 0.8 * np.mean(theirs)
-
-
-def _export(d, fmt, *extra):
-    return main(["export", str(d / "design.json"), "--format", fmt, "--out", str(d / "prog"),
-                 "--name", "contacts", "--no-collision", *extra])
-
-
-def test_contact_program_csv(designed):
-    d, design = designed
-    assert _export(d, "csv") == 0
-    with open(d / "prog" / "contacts.csv") as f:
-        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
-    assert [r["kind"] for r in rows] == ["approach", "contact", "wait", "retract"] * N_CONTACTS
-    sockets = [r["socket"] for r in rows[::4]]
-    assert sorted(sockets, key=list(SOCKETS_M).index) == sockets  # grouped by socket
-    factors = design.robot.display_factors
-    q = np.array([[float(r[f"q{k}"]) for k in range(1, 7)] for r in rows]) / factors
-    at = {p: i for i, p in enumerate(design.configurations.pose)}
-    order = [at[r["pose"]] for r in rows[::4]]
-    assert np.allclose(q[1::4], design.configurations.q[order], atol=1e-7)
-    assert np.allclose(q[0::4], design.above[order], atol=1e-7)
-    assert np.allclose(q[3::4], q[0::4]) and np.allclose(q[2::4], q[1::4])
-    assert {r["motion"] for r in rows[1::4]} == {"linear slow"}
-
-
-def test_contact_program_urscript(designed, capsys):
-    d, _ = designed
-    assert _export(d, "urscript") == 0
-    text = (d / "prog" / "contacts.script").read_text()
-    assert text.count("popup(") == N_CONTACTS and text.count("movel(") == 2 * N_CONTACTS
-    assert text.count("get_actual_joint_positions()") == N_CONTACTS
-    assert text.count("movej(") == N_CONTACTS and text.rstrip().endswith("contacts()")
-    assert _export(d, "urscript", "--handshake", "3") == 0  # a probe's trigger input
-    text = (d / "prog" / "contacts.script").read_text()
-    assert "popup(" not in text and text.count("get_standard_digital_in(3)") == N_CONTACTS
-    capsys.readouterr()
-    assert _export(d, "krl") != 0
-    assert "--format csv or urscript" in capsys.readouterr().err
-
-
-def test_contact_program_moves_are_checked(designed, capsys):
-    """With the URDF's collision model the moves between approach points are checked and
-    routed: a design made with it exports; one made without it (contacts low over the
-    floor) is refused."""
-    d, _ = designed
-    assert main(["design", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
-                 "--sockets", str(d / "sockets.csv"), "--poses", "12", "--orientations", "150",
-                 "--sigma", str(SEATING_MM), "--model", "joint_offset+geometry", "--seed", "2",
-                 "--out", str(d / "clear.json")]) == 0
-    capsys.readouterr()
-    assert main(["export", str(d / "clear.json"), "--format", "csv", "--out",
-                 str(d / "clear-program.csv")]) == 0
-    said = capsys.readouterr().err
-    assert "collision check of the program: 12 moves" in said and "0 colliding" in said
-    assert "moves checked for collisions" in said
-    assert main(["export", str(d / "design.json"), "--format", "csv", "--out",
-                 str(d / "checked.csv")]) != 0
-    assert "would collide" in capsys.readouterr().err
-
 
 def test_contact_options_need_sockets(designed, capsys):
     d, _ = designed
