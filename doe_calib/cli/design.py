@@ -45,6 +45,21 @@ def add_arguments(c):
                         "(taught, known-safe or measured ones) instead of random candidates; "
                         "they are screened by the same constraints, not refined, and the "
                         "chosen poses keep their ids")
+    c.add_argument("--sockets", metavar="FILE",
+                   help="design socket contacts instead of tracker poses: the sockets' nominal "
+                        "points (CSV socket,x,y,z, mm, robot base frame); --poses contacts of "
+                        "the tool's ball, seated by IK on the nominal model; the CSV beside "
+                        "--out is a measurement CSV of contacts to fill in")
+    c.add_argument("--ball", metavar="MARKER",
+                   help="with --sockets: the tool's marker seated (default its only marker)")
+    c.add_argument("--orientations", type=count("--orientations", 1),
+                   help="with --sockets: tool orientations drawn per socket (default 400)")
+    c.add_argument("--cone", type=positive("--cone", "deg"), metavar="DEG",
+                   help="with --sockets: the tool's stem comes down within this angle of the "
+                        "vertical (default 40)")
+    c.add_argument("--lift", type=positive("--lift", "mm"), metavar="MM",
+                   help="with --sockets: the approach point, this far back along the approach "
+                        "from the socket, must be reachable too (default 50)")
     c.add_argument("--augment", metavar="M.csv",
                    help="sequential design: propose --poses new poses that add most to this "
                         "measured campaign (a measurement CSV), for the model's parameters")
@@ -143,6 +158,9 @@ def run(args):
     from doe_calib.model.marker_model import build_model
 
     csv_path = _csv_beside(args.out)
+    given = [o for o in ("ball", "orientations", "cone", "lift") if getattr(args, o) is not None]
+    if given and not args.sockets:
+        raise OptionError(f"--{given[0]} is for a design of socket contacts: give --sockets FILE")
     if args.detect:  # before any work: a detection test's power must be above its level
         power = ("--power", args.power) if args.min_power is None else \
             ("--min-power", args.min_power)
@@ -164,6 +182,11 @@ def run(args):
         parse_floats(args.home, robot.n_joints, "--home") / robot.display_factors
     if args.diagnosis and not args.augment:
         raise OptionError("--diagnosis is read with --augment M.csv (the campaign it diagnosed)")
+    if args.sockets:
+        from doe_calib.cli.design_contacts import run_contacts
+
+        return run_contacts(args, model, constraints, collision, effect_registry(args),
+                            csv_path, home)
     from doe_calib.design.candidates.from_file import read_candidates
 
     candidates = args.candidates if not args.candidates_from else \

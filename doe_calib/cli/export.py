@@ -161,6 +161,11 @@ def run(args):
         axis_map = None if args.axis_map is None else AxisMap.parse(args.axis_map, design.robot)
         constraints = _constraints(args, design)
         models = program_collision_models(args, design, constraints)
+        from doe_calib.cli.export_contacts import contact_design, run_contacts
+
+        contacts = contact_design(args.design)
+        if contacts is not None:
+            return run_contacts(args, contacts, models, checked_visits)
         limits = None if constraints is None else (constraints.lower, constraints.upper)
         where, home = stations(args, design, _is_free(models), limits)
         if home is not None:

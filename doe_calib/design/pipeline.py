@@ -23,6 +23,7 @@ from doe_calib.design.candidates.draw import CandidateSet, feasible_candidates
 from doe_calib.design.candidates.feasibility import build_feasibility
 from doe_calib.design.candidates.from_file import CandidatePoses, screened_candidates
 from doe_calib.design.candidates.reachability import free_home, home_pose, reachable_choice
+from doe_calib.design.candidates.sockets import SocketContacts
 from doe_calib.io.setting_ranges import positive, whole
 
 log = logging.getLogger(__name__)
@@ -58,7 +59,7 @@ class Setting:
         nominal values, the URDF joint limits with their margin, a fresh generator."""
         whole("n_poses", n_poses, 1, pose)
         positive("sigma", sigma, "m")
-        if not isinstance(candidates, CandidatePoses):
+        if not isinstance(candidates, (CandidatePoses, SocketContacts)):
             whole("candidates", candidates, 1)
         return cls(model, model.nominal() if params is None else params, n_poses, tuple(loads),
                    sigma, DesignConstraints.from_robot(model.robot) if constraints is None
@@ -164,8 +165,8 @@ class Stages:
 
 def draw_candidates(setting: Setting, candidates, own_load_case: bool,
                     stage: Stages) -> Candidates:
-    """The candidates stage: ``candidates`` random feasible poses, or the poses of a file
-    screened by the same constraints.
+    """The candidates stage: ``candidates`` random feasible poses, the poses of a file
+    screened by the same constraints, or socket contacts (:mod:`.candidates.sockets`).
 
     ``own_load_case``: each candidate is later judged with its own load case (a goal that
     chooses one per pose), so the constraints here leave the load torques out.
@@ -177,6 +178,12 @@ def draw_candidates(setting: Setting, candidates, own_load_case: bool,
     if isinstance(candidates, CandidatePoses):
         stage("candidates", f"screening the {len(candidates)} poses of {candidates.source}")
         poses = screened_candidates(feasibility, model.robot, candidates, setting.collision)
+        return Candidates(feasibility, poses, False)
+    if isinstance(candidates, SocketContacts):
+        stage("candidates", f"seating the ball in {len(candidates.sockets.names)} sockets at "
+                            f"{candidates.per_socket} tool orientations each")
+        poses = candidates.draw(feasibility, model, setting.params.values, setting.rng,
+                                setting.collision)
         return Candidates(feasibility, poses, False)
     stage("candidates", f"drawing {candidates} feasible poses")
     poses = feasible_candidates(feasibility, model.robot, candidates, setting.rng,
@@ -226,9 +233,11 @@ def constraints_used(setting: Setting, loads, reach: Reachability | None) -> dic
 def run(goal: Goal, setting: Setting, candidates, progress=None):
     """The design of ``goal``: every stage in order, each given the results before it.
 
-    ``candidates``: random feasible candidates to draw, or the poses of a file
-    (:class:`.from_file.CandidatePoses`); ``progress(done, total, note)``, optional. Returns
-    the goal's result (:class:`.result.DesignResult`, :class:`.augment_result.AugmentResult`).
+    ``candidates``: random feasible candidates to draw, the poses of a file
+    (:class:`.from_file.CandidatePoses`) or socket contacts
+    (:class:`.candidates.sockets.SocketContacts`); ``progress(done, total, note)``, optional.
+    Returns the goal's result (:class:`.result.DesignResult`,
+    :class:`.augment_result.AugmentResult`, :class:`.contact_result.ContactDesign`).
     """
     stage = Stages(progress)
     drawn = draw_candidates(setting, candidates, goal.own_load_case, stage)

@@ -1,0 +1,219 @@
+"""Contact candidates: the tool's ball seated in sockets at their nominal positions.
+
+``doe-calib design --sockets FILE`` designs socket contacts (formats.md §3, *Socket
+contacts*; the sockets file, formats.md §4, *Contact designs*). For each socket, tool
+orientations are drawn: the stem (flange origin → ball centre) along an approach direction
+within a cone of half-angle ``cone`` around the downward vertical (uniform over that cap),
+turned about it by a uniform wrist angle; each is seated by inverse kinematics on the
+nominal model (:mod:`.seating`) from a random seed (so on varied branches of the arm).
+A candidate is kept when it is seated inside the joint bounds, meets every constraint
+(:mod:`.feasibility`) and, with a collision model, its clearances; and when its approach
+point, the ball ``lift`` back along the approach direction with the same orientation, is
+seated on the same branch of the arm (no joint moving more than :data:`NEAR`), feasible
+and clear too (the program comes down from there).
+"""
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from doe_calib.collision import Workspace
+from doe_calib.design.candidates.draw import CandidateSet, screen_collisions
+from doe_calib.design.candidates.reachability import nearest_equivalent
+from doe_calib.design.candidates.seating import seat, seating_residual
+from doe_calib.errors import DataError, OptionError, SolverError
+
+#: Orientations drawn per socket, the approach cone's half-angle (rad) and the lift (m).
+PER_SOCKET = 400
+CONE = np.radians(40.0)
+LIFT = 0.05
+#: Largest joint move (rad, m) from a contact to its approach point: beyond it the solve
+#: found another branch of the arm, which the straight move up would not keep.
+NEAR = 0.5
+
+
+@dataclass(frozen=True)
+class Sockets:
+    """Named socket points, nominal, robot base frame: ``names`` (S,), ``points`` (S, 3) m."""
+
+    names: tuple
+    points: np.ndarray
+    source: str = ""
+
+    def to_dict(self) -> dict:
+        """Socket name → point, mm."""
+        return {n: [float(v) for v in 1000.0 * p] for n, p in zip(self.names, self.points)}
+
+
+def read_sockets(path) -> Sockets:
+    """The sockets of a CSV ``socket,x,y,z`` (mm, robot base frame), one row each.
+
+    Raises
+    ------
+    DataError
+        A missing column, a value that is not a finite number, a socket named twice, or
+        no socket; with the file, line and column.
+    """
+    path = Path(path)
+    with open(path, newline="", encoding="utf-8") as f:
+        lines = [(i, r) for i, r in enumerate(csv.reader(f), start=1)
+                 if r and not r[0].lstrip().startswith("#")]
+    if not lines:
+        raise DataError("no header: the sockets file is a CSV socket,x,y,z (mm)", path)
+    line, header = lines[0]
+    columns = [c.strip().lower() for c in header]
+    for c in ("socket", "x", "y", "z"):
+        if c not in columns:
+            raise DataError(f"no column {c!r}: the sockets file is a CSV socket,x,y,z (mm, "
+                            f"robot base frame)", path, line)
+    names, points = [], []
+    for line, row in lines[1:]:
+        cells = dict(zip(columns, (c.strip() for c in row)))
+        name = cells.get("socket", "")
+        if not name:
+            raise DataError("a socket without a name", path, line, "socket")
+        if name in names:
+            raise DataError(f"socket {name!r} given twice", path, line, "socket")
+        xyz = []
+        for c in "xyz":
+            try:
+                xyz.append(float(cells.get(c, "")))
+            except ValueError:
+                xyz.append(np.nan)
+            if not np.isfinite(xyz[-1]):
+                raise DataError(f"{cells.get(c, '')!r} is not a number (mm)", path, line, c)
+        names.append(name)
+        points.append(xyz)
+    if not names:
+        raise DataError("no socket in the file", path)
+    return Sockets(tuple(names), np.array(points) / 1000.0, path.name)
+
+
+@dataclass(frozen=True, eq=False)
+class ContactSet(CandidateSet):
+    """Contact candidates (a :class:`.draw.CandidateSet` whose ``q`` are seated contacts)
+    with each one's ``socket`` (K,) (index into ``sockets.names``), its ``approach`` (K, N)
+    joint values (rad, m) at the approach point and the ``sockets``."""
+
+    socket: np.ndarray = None
+    approach: np.ndarray = None
+    sockets: Sockets = None
+
+
+@dataclass(frozen=True)
+class SocketContacts:
+    """What contact candidates to draw: ``sockets``, the tool's ``ball`` marker (its index),
+    orientations ``per_socket``, the approach ``cone`` (rad) and the ``lift`` (m)."""
+
+    sockets: Sockets
+    ball: int = 0
+    per_socket: int = PER_SOCKET
+    cone: float = CONE
+    lift: float = LIFT
+
+    @classmethod
+    def of_tool(cls, sockets: Sockets, tool, ball: str | None = None, **settings):
+        """For ``tool``: its marker ``ball``, or its only marker.
+
+        Raises
+        ------
+        OptionError
+            No such marker, or several markers and none named.
+        """
+        if ball is None:
+            if tool.n_markers != 1:
+                raise OptionError(f"socket contacts seat one ball: the tool has "
+                                  f"{tool.n_markers} markers ({', '.join(tool.names)}); name "
+                                  f"the ball (--ball)")
+            return cls(sockets, 0, **settings)
+        if ball not in tool.names:
+            raise OptionError(f"--ball {ball!r}: no such marker in the tool; markers: "
+                              f"{', '.join(tool.names)}")
+        return cls(sockets, tool.index(ball), **settings)
+
+    def draw(self, feasibility, model, values, rng, collision=None) -> ContactSet:
+        """The contact candidates (module notes); ``values`` the parameters placing the
+        robot (SI). Raises SolverError when a socket keeps none."""
+        robot, s = model.robot, len(self.sockets.names)
+        lo, hi = feasibility.constraints.bounds(robot)
+        revolute = np.array([j.kind == "revolute" for j in robot.joints])
+        ball = model.tool.position_array[self.ball]
+        residual = seating_residual(model, values, ball)
+        k = s * self.per_socket
+        socket = np.repeat(np.arange(s), self.per_socket)
+        down, rotation = self._orientations(ball, k, rng)
+        target = self.sockets.points[socket]
+        q, ok = seat(residual, target, rotation, rng.uniform(lo, hi, (k, len(lo))), lo, hi,
+                     revolute)
+        up, ok_up = seat(residual, target - self.lift * down, rotation, q, lo, hi, revolute)
+        up = nearest_equivalent(up, q, robot, lo, hi)
+        removed = {"not seated inside the joint limits": int((~ok).sum())}
+        ok &= self._screen(feasibility, collision, q, ok, removed, "")
+        lifted = ok & ~ok_up
+        removed["approach point not seated inside the joint limits"] = int(lifted.sum())
+        ok &= ok_up
+        away = ok & (np.abs(up - q).max(axis=1) > NEAR)
+        removed["approach point on another branch of the arm"] = int(away.sum())
+        ok &= ~away & self._screen(feasibility, collision, up, ok & ~away, removed,
+                                   "approach point: ")
+        for j, name in enumerate(self.sockets.names):
+            if not ok[socket == j].any():
+                raise SolverError(f"socket {name}: none of {self.per_socket} tool orientations "
+                                  f"is seated within the joint limits and the constraints; "
+                                  f"is it within reach?")
+        removed = {name: n for name, n in removed.items() if n}
+        kept = socket[ok]
+        names = tuple(f"{self.sockets.names[j]}-{int(np.sum(kept[:i] == j)) + 1}"
+                      for i, j in enumerate(kept))
+        return ContactSet(q[ok], k, removed, names, self.sockets.source, socket[ok], up[ok],
+                          self.sockets)
+
+    def _orientations(self, ball, k: int, rng) -> tuple:
+        """Approach directions (K, 3), base frame, and flange rotations (K, 3, 3) that point
+        the stem along them, turned about them by a random wrist angle."""
+        stem = ball / np.linalg.norm(ball) if np.linalg.norm(ball) > 1e-6 else np.r_[0, 0, 1.0]
+        tilt = np.arccos(1.0 - rng.uniform(0.0, 1.0, k) * (1.0 - np.cos(self.cone)))
+        azimuth, wrist = rng.uniform(0.0, 2 * np.pi, (2, k))
+        down = np.c_[np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth),
+                     -np.cos(tilt)]
+        onto = _aligning(stem, down)
+        return down, np.einsum("kij,kjl->kil", _about(down, wrist), onto)
+
+    @staticmethod
+    def _screen(feasibility, collision, q, ok, removed: dict, prefix: str) -> np.ndarray:
+        """Those of ``q`` (where ``ok``) that meet the constraints and clearances; the
+        violations counted into ``removed`` under ``prefix``."""
+        good, violated = feasibility.feasible(q)
+        good &= ok
+        if collision is not None and good.any():
+            good, hits = screen_collisions(collision, q, good, Workspace(collision))
+            violated.update(hits)
+        for name, v in violated.items():
+            removed[prefix + name] = removed.get(prefix + name, 0) + int((v & ok).sum())
+        return good
+
+
+def _aligning(a, b) -> np.ndarray:
+    """Rotations (K, 3, 3) taking the unit vector ``a`` (3,) onto each unit row of ``b``
+    (K, 3), the shortest turn (half a turn about an axis normal to ``a`` when opposite)."""
+    v, c = np.cross(a, b), b @ a
+    vx = np.zeros((len(b), 3, 3))
+    vx[:, 0, 1], vx[:, 0, 2], vx[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    vx -= vx.transpose(0, 2, 1)
+    out = np.eye(3) + vx + vx @ vx / np.maximum(1.0 + c, 1e-12)[:, None, None]
+    normal = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
+    normal /= np.linalg.norm(normal)
+    flip = 2 * np.outer(normal, normal) - np.eye(3)
+    return np.where((c < -1 + 1e-9)[:, None, None], flip, out)
+
+
+def _about(axes, angles) -> np.ndarray:
+    """Rotations (K, 3, 3) by ``angles`` (K,) about the unit ``axes`` (K, 3) (Rodrigues)."""
+    kx = np.zeros((len(axes), 3, 3))
+    kx[:, 0, 1], kx[:, 0, 2], kx[:, 1, 2] = -axes[:, 2], axes[:, 1], -axes[:, 0]
+    kx -= kx.transpose(0, 2, 1)
+    s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
+    return np.eye(3) + s * kx + (1 - c) * kx @ kx
