@@ -168,3 +168,42 @@ def test_the_added_variable_plot_of_touches_shows_the_missing_effect(campaigns):
     plot = strongest_added_variables(diagnosis, model, meas, fit, top=1).plots[0]
     print(f"added-variable plot of touches: {plot.effect}, r = {plot.correlation:.3f}")
     assert plot.effect.startswith("cyclic(j2,") and plot.correlation > 0.95
+
+
+@pytest.mark.parametrize("data", ["touches", "ballbar"])
+def test_held_out_touches_and_lengths_are_scored_against_the_kept_ones(campaigns, data):
+    """The linearised cross-validation is the refit on each fold's kept readings, a held-out
+    touch compared to its plane, a held-out length to its pivot, as the kept ones place
+    them; each a single coordinate."""
+    from doe_calib import Robot, Tool
+    from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
+    from doe_calib.diagnosis.held_out_contacts import held_out_errors
+    from doe_calib.estimation.identify import WHOLE, identify, identify_quietly
+    from doe_calib.estimation.weighted_residuals import marker_points
+    from doe_calib.io.csv_files import read_measurements
+    from doe_calib.model.marker_model import build_model
+
+    d, _, _, missing = campaigns
+    if missing:
+        pytest.skip("one truth is enough")
+    robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
+    sigma = (TOUCH_MM if data == "touches" else BAR_MM) * 1e-3
+    tool = Tool.from_yaml(d / "tool.yaml")
+    meas = read_measurements(d / f"{data}.csv", robot, tool, sigma=sigma)
+    model = build_model(robot, tool, MODEL)
+    with pytest.warns(Warning):
+        fit = identify(model, meas, settings=WHOLE)
+    folds = make_folds(meas, 5)
+    assert "not scored" not in folds.description
+    sq = 0.0
+    for held in folds.held:
+        refit = identify_quietly(model, meas.subset(~held), fit.parameters)
+        e, scored = held_out_errors(meas, ~held, marker_points(model, meas,
+                                                               refit.parameters.values))
+        assert scored.all()
+        sq += float(np.sum(e[held] ** 2))
+    refitted = np.sqrt(sq / len(meas)) * 1e3  # one coordinate per reading
+    linear = cross_validated_rms(model, meas, fit.parameters, folds)
+    print(f"{data}: cross-validated {linear:.5f} mm linearised, {refitted:.5f} mm refitted")
+    assert linear == pytest.approx(refitted, rel=0.05)
+    assert 0.8 * sigma * 1e3 < linear < 2 * sigma * 1e3
