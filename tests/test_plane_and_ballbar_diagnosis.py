@@ -42,10 +42,10 @@ def _truth(ur10, effects):
     return sim.Truth(np.zeros(3), np.zeros(3), ball[None], offsets, twists, tuple(effects))
 
 
-@pytest.fixture(scope="module", params=[(), (SHOULDER,)], ids=["geometric", "shoulder"])
-def campaigns(request, ur10, tmp_path_factory):
-    d = tmp_path_factory.mktemp("plane_diagnosis")
-    truth = _truth(ur10, request.param)
+def _campaigns(ur10, d, effects):
+    """Touches, lengths and new configurations of the truth with ``effects``, written in
+    ``d``: (d, truth, new configurations (40, 6) rad)."""
+    truth = _truth(ur10, effects)
     write_touches(d / "touches.csv", ur10, truth, np.random.default_rng(17), PLANES, PER_PLANE,
                   TOUCH_MM)
     write_lengths(d / "ballbar.csv", ur10, truth, np.random.default_rng(18), PIVOTS_M,
@@ -58,7 +58,17 @@ def campaigns(request, ur10, tmp_path_factory):
         writer.writeheader()
         writer.writerows({"pose": str(i), **q_columns(q), "marker": "ball"}
                          for i, q in enumerate(q_new))
-    return d, truth, q_new, bool(request.param)
+    return d, truth, q_new
+
+
+@pytest.fixture(scope="module")
+def geometric(ur10, tmp_path_factory):
+    return _campaigns(ur10, tmp_path_factory.mktemp("geometric"), ())
+
+
+@pytest.fixture(scope="module")
+def shoulder(ur10, tmp_path_factory):
+    return _campaigns(ur10, tmp_path_factory.mktemp("shoulder"), (SHOULDER,))
 
 
 def _args(d, command, data, out, *more):
@@ -90,12 +100,14 @@ def _held_out_mm(d, result, ur10, truth, q_new, scale):
     return _registered_rms_mm(pred, true, scale)
 
 
+@pytest.mark.parametrize("truth", ["geometric", "shoulder"])
 @pytest.mark.parametrize("data", ["touches", "ballbar"])
-def test_diagnose_proposes_only_what_the_truth_has(campaigns, data):
+def test_diagnose_proposes_only_what_the_truth_has(request, truth, data):
     """A touch or a length is one coordinate and each plane or pivot costs 3: the χ² and F
     tests count them so, and a geometric truth gets no proposal; the shoulder's cyclic error
     is named."""
-    d, _, _, missing = campaigns
+    d, _, _ = request.getfixturevalue(truth)
+    missing = truth == "shoulder"
     out_file = d / f"{data}-diag.json"
     assert main(_args(d, "diagnose", data, out_file)) == 0
     out = json.loads(out_file.read_text())
@@ -109,13 +121,17 @@ def test_diagnose_proposes_only_what_the_truth_has(campaigns, data):
 
 
 @pytest.mark.parametrize("data", ["touches", "ballbar"])
-def test_refine_adds_the_shoulder_and_the_held_out_error_falls(ur10, campaigns, data):
-    d, truth, q_new, missing = campaigns
-    if not missing:
-        pytest.skip("a geometric truth: nothing to add")
+def test_refine_adds_the_shoulder_and_the_held_out_error_falls(ur10, shoulder, data):
+    d, truth, q_new = shoulder
     start, refined = d / f"{data}-start.json", d / f"{data}-refined.json"
+    validation = d / f"{data}-validation.csv"
+    if data == "touches":
+        write_touches(validation, ur10, truth, np.random.default_rng(8), PLANES, 5, TOUCH_MM)
+    else:
+        write_lengths(validation, ur10, truth, np.random.default_rng(8), PIVOTS_M, LENGTHS_MM,
+                      arcs=3, per_arc=4, noise_mm=BAR_MM)
     assert main(_args(d, "identify", data, start)) == 0
-    assert main(_args(d, "refine", data, refined)) == 0
+    assert main(_args(d, "refine", data, refined, "--validation", str(validation))) == 0
     history = json.loads((d / f"{data}-refined_refine.json").read_text())
     added = [s["added"] for s in history["steps"] if s["added"]]
     assert added and added[0].startswith("cyclic(j2,")
@@ -123,12 +139,16 @@ def test_refine_adds_the_shoulder_and_the_held_out_error_falls(ur10, campaigns, 
     before = _held_out_mm(d, start, ur10, truth, q_new, scale)
     after = _held_out_mm(d, refined, ur10, truth, q_new, scale)
     cv = [s["cv_rms_mm"] for s in history["steps"]]
+    valid = [s["validation_rms_mm"] for s in history["steps"]]
     print(f"{data}: held out at new configurations, after a "
           f"{'similarity' if scale else 'rigid'} registration: {before:.4f} → {after:.4f} mm; "
-          f"cross-validated {cv[0]:.4f} → {cv[-1]:.4f} mm")
+          f"cross-validated {cv[0]:.4f} → {cv[-1]:.4f} mm; validation {valid[0]:.4f} → "
+          f"{valid[-1]:.4f} mm")
     assert after < 0.3 * before
     sigma = TOUCH_MM if data == "touches" else BAR_MM
     assert cv[-1] < 0.3 * cv[0] and cv[-1] > 0.8 * sigma  # held out: not below the noise
+    # validation readings against the planes, the pivots, as the fitted readings place them
+    assert valid[-1] < 0.3 * valid[0] and 0.5 * sigma < valid[-1] < 2 * sigma
 
 
 def test_a_touch_off_its_plane_is_named_as_a_gross_error(ur10, tmp_path):
@@ -145,7 +165,7 @@ def test_a_touch_off_its_plane_is_named_as_a_gross_error(ur10, tmp_path):
     assert "A touch off its plane" in out["verdict"]
 
 
-def test_the_added_variable_plot_of_touches_shows_the_missing_effect(campaigns):
+def test_the_added_variable_plot_of_touches_shows_the_missing_effect(shoulder):
     """The joint direction is projected as a touch's residual is (along its plane's normal,
     less what the plane takes): the partial residual follows the fitted cyclic error."""
     from doe_calib import Robot, Tool
@@ -155,9 +175,7 @@ def test_the_added_variable_plot_of_touches_shows_the_missing_effect(campaigns):
     from doe_calib.io.csv_files import read_measurements
     from doe_calib.model.marker_model import build_model
 
-    d, _, _, missing = campaigns
-    if not missing:
-        pytest.skip("a geometric truth: no effect to show")
+    d, _, _ = shoulder
     robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
     tool = Tool.from_yaml(d / "tool.yaml")
     meas = read_measurements(d / "touches.csv", robot, tool, sigma=TOUCH_MM * 1e-3)
@@ -171,7 +189,7 @@ def test_the_added_variable_plot_of_touches_shows_the_missing_effect(campaigns):
 
 
 @pytest.mark.parametrize("data", ["touches", "ballbar"])
-def test_held_out_touches_and_lengths_are_scored_against_the_kept_ones(campaigns, data):
+def test_held_out_touches_and_lengths_are_scored_against_the_kept_ones(geometric, data):
     """The linearised cross-validation is the refit on each fold's kept readings, a held-out
     touch compared to its plane, a held-out length to its pivot, as the kept ones place
     them; each a single coordinate."""
@@ -183,9 +201,7 @@ def test_held_out_touches_and_lengths_are_scored_against_the_kept_ones(campaigns
     from doe_calib.io.csv_files import read_measurements
     from doe_calib.model.marker_model import build_model
 
-    d, _, _, missing = campaigns
-    if missing:
-        pytest.skip("one truth is enough")
+    d, _, _ = geometric
     robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
     sigma = (TOUCH_MM if data == "touches" else BAR_MM) * 1e-3
     tool = Tool.from_yaml(d / "tool.yaml")

@@ -50,9 +50,14 @@ class Residuals:
     coordinates: np.ndarray | None = None
 
     @property
+    def per_reading(self) -> np.ndarray:
+        """Coordinates of each reading, shape (K,) int."""
+        return np.full(len(self.error), 3) if self.coordinates is None else self.coordinates
+
+    @property
     def rms_mm(self) -> float:
         """RMS of every coordinate's residual, mm (a touch's or a length's one)."""
-        n = self.error.size if self.coordinates is None else int(self.coordinates.sum())
+        n = int(self.per_reading.sum())
         return float(np.sqrt(np.sum(self.error ** 2) / max(n, 1)) * 1e3)
 
 
@@ -143,7 +148,7 @@ def flagged_poses(res: Residuals, dof_fraction: float, level: float = 1e-3,
     """Poses whose residual is far outside the noise and the other poses (named, never dropped).
 
     A pose's ``Σ r²`` over its readings is compared with χ² on its share of
-    the residual degrees of freedom (Bonferroni over the poses at ``level``),
+    the residual degrees of freedom (``dof_fraction`` of its coordinates) (Bonferroni over the poses at ``level``),
     and must also exceed 4× the median pose's χ²/dof: when the whole model
     is off, only the poses that stand out are named. With ``lines`` (the
     source line of each reading), each pose also names its worst reading's
@@ -153,7 +158,7 @@ def flagged_poses(res: Residuals, dof_fraction: float, level: float = 1e-3,
     order = np.argsort(first)  # poses in order of appearance
     r2 = (res.weighted ** 2).sum(axis=1)
     t_all = np.bincount(of, r2, len(ids))
-    dof_all = np.maximum(np.bincount(of, minlength=len(ids)) * 3 * dof_fraction, 1.0)
+    dof_all = np.maximum(np.bincount(of, res.per_reading, len(ids)) * dof_fraction, 1.0)
     typical = float(np.median(t_all / dof_all))
     stand_out = t_all / dof_all > 4 * max(typical, 1.0)  # the cheap test first: p only for these
     out = []
