@@ -148,11 +148,11 @@ def flagged_poses(res: Residuals, dof_fraction: float, level: float = 1e-3,
     """Poses whose residual is far outside the noise and the other poses (named, never dropped).
 
     A pose's ``Σ r²`` over its readings is compared with χ² on its share of
-    the residual degrees of freedom (``dof_fraction`` of its coordinates) (Bonferroni over the poses at ``level``),
-    and must also exceed 4× the median pose's χ²/dof: when the whole model
-    is off, only the poses that stand out are named. With ``lines`` (the
-    source line of each reading), each pose also names its worst reading's
-    line.
+    the residual degrees of freedom (``dof_fraction`` of its coordinates; Bonferroni
+    over the poses at ``level``), and must also exceed 4× the median pose's
+    χ²/dof: when the whole model is off, only the poses that stand out are
+    named. With ``lines`` (the source line of each reading), each pose also
+    names its worst reading's line.
     """
     ids, first, of = np.unique(np.array(res.pose), return_index=True, return_inverse=True)
     order = np.argsort(first)  # poses in order of appearance
