@@ -1,5 +1,6 @@
-"""Ball-in-socket contacts seated by the independent simulator (numpy and Pinocchio only):
-the commanded q that puts a truth's ball centre on a socket's point."""
+"""Ball-in-socket contacts, plane touches and ballbar lengths made by the independent
+simulator (numpy and Pinocchio only): the commanded q that puts a truth's ball centre on a
+socket's point, on a plane, at a length from a pivot."""
 import csv
 
 import independent_sim as sim
@@ -65,3 +66,60 @@ def write_contacts(path, chain, truth, rng, sockets, per_socket, scatter_mm=SEAT
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
+
+
+def _write(path, rows):
+    names = list(dict.fromkeys(k for r in rows for k in r))
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=names, restval="")
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def write_touches(path, chain, truth, rng, planes, per_plane, scatter_mm=SEATING_MM,
+                  displaced=None):
+    """Touch each of ``planes`` (id → (a point on it (3,), two in-plane unit axes (3,),
+    half-extent along them), m) ``per_plane`` times at random points of it, with a scatter
+    of ``scatter_mm`` along its normal; write the touches (formats.md §3, column ``plane``).
+    ``displaced``: (row, offset m) of one touch that far off its plane, along the normal."""
+    rows = []
+    for name, (point, e1, e2, half) in planes.items():
+        e1, e2 = np.asarray(e1, float), np.asarray(e2, float)
+        normal = np.cross(e1, e2)
+        touched = 0
+        while touched < per_plane:
+            a, b = rng.uniform(-half, half, 2)
+            target = np.asarray(point) + a * e1 + b * e2 + \
+                normal * rng.normal(scale=scatter_mm * 1e-3)
+            if displaced is not None and len(rows) == displaced[0]:
+                target = target + displaced[1] * normal
+            q = seat(chain, truth, target, rng)
+            if q is not None:
+                touched += 1
+                rows.append({"pose": f"{name}-{touched}", **q_columns(q), "marker": "ball",
+                             "plane": name})
+    _write(path, rows)
+
+
+def write_lengths(path, chain, truth, rng, pivots, lengths_mm, arcs=6, per_arc=8,
+                  noise_mm=0.001):
+    """Ballbar arcs about each of ``pivots`` (id → point (3,), m): ``arcs`` azimuths, each at
+    one of ``lengths_mm`` in turn, ``per_arc`` elevations from 15° to 75°; the logged length
+    is the true ball centre's distance from the pivot plus ``noise_mm`` of noise; write the
+    readings (formats.md §3, columns ``socket`` and ``distance``)."""
+    rows = []
+    for name, pivot in pivots.items():
+        for arc, azimuth in enumerate(np.radians(np.arange(arcs) * 360.0 / arcs) +
+                                      rng.uniform(0, 1)):
+            length = lengths_mm[arc % len(lengths_mm)]
+            for elevation in np.radians(np.linspace(15, 75, per_arc)):
+                d = np.array([np.cos(azimuth) * np.cos(elevation),
+                              np.sin(azimuth) * np.cos(elevation), np.sin(elevation)])
+                q = seat(chain, truth, np.asarray(pivot) + length * 1e-3 * d, rng)
+                if q is None:
+                    continue
+                true = np.linalg.norm(_ball(chain, truth, q) - pivot) * 1e3
+                rows.append({"pose": f"{name}-{len(rows)}", **q_columns(q), "marker": "ball",
+                             "socket": name,
+                             "distance": repr(float(true + rng.normal(scale=noise_mm)))})
+    _write(path, rows)

@@ -18,7 +18,7 @@ from seated_contacts import SEATING_MM, q_columns, write_contacts
 from doe_calib import Robot, Tool
 from doe_calib.cli import main
 from doe_calib.diagnosis.cross_validation import cross_validated_rms, make_folds
-from doe_calib.diagnosis.held_out_sockets import held_out_errors
+from doe_calib.diagnosis.held_out_contacts import held_out_errors
 from doe_calib.estimation.identify import WHOLE, identify, identify_quietly
 from doe_calib.estimation.weighted_residuals import marker_points
 from doe_calib.io.csv_files import read_measurements

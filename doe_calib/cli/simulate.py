@@ -29,10 +29,14 @@ def add_arguments(c):
                                     "writes, or its CSV (else random poses)")
     c.add_argument("--template", metavar="CSV",
                    help="measurement CSV whose readings are simulated as they stand: its "
-                        "poses, loads, markers and socket contacts (x, y, z unused, may be "
-                        "empty); a contact's q is written as the one that seats the true ball "
-                        "in its socket (IK on the truth from the row's q), the socket where "
-                        "the truth puts the ball on average over its rows")
+                        "poses, loads, markers, socket contacts, plane touches and ballbar "
+                        "lengths (x, y, z unused, may be empty); a contact's or a touch's q "
+                        "is written as the one that seats the true ball in its socket or on "
+                        "its plane (IK on the truth from the row's q), the socket where the "
+                        "truth puts the ball on average over its rows, the plane the best "
+                        "through the truth's ball at its rows; a ballbar row keeps its q and "
+                        "logs the true ball's distance from the pivot (the centre that best "
+                        "fits the row's lengths on the truth, or its seated contacts' mean)")
     c.add_argument("--poses", type=count("--poses", 1, "pose"), default=30,
                    help="random poses when no design")
     c.add_argument("--constraints", metavar="CELL.yaml",
@@ -44,7 +48,7 @@ def add_arguments(c):
                         "centre of mass in mm, flange frame); 0 kg measures unloaded only")
     c.add_argument("--sigma", type=positive("--sigma", "mm"), default=0.02,
                    help="noise σ per coordinate, mm (a socket contact's seating scatter per "
-                        "axis)")
+                        "axis, a touch's along its plane's normal, a ballbar length's)")
     c.add_argument("--truth", help="JSON with the true parameters (else random errors)")
     c.add_argument("--tracker", help="tracker placement X,Y,Z,RX,RY,RZ (mm, rotation vector "
                                      "in deg) when errors are random")
@@ -87,11 +91,8 @@ def run(args):
     cfg = meas.configurations
     write_measurements(args.out, meas, robot, tool)
     messages = sys.stderr if args.json else sys.stdout
-    seated = int(meas.contact.sum())
     print(f"written: {args.out} ({len(meas)} readings, {len(cfg)} configurations, "
-          f"σ = {args.sigma} mm" + (f"; {seated} socket contacts in {len(meas.sockets_used)} "
-                                    f"sockets, each q the one seating the true ball" if seated
-                                    else "") + ")", file=messages)
+          f"σ = {args.sigma} mm{_without_coordinates(meas)})", file=messages)
     if args.truth_out:
         save_parameters(args.truth_out, truth, model.spec)
         print(f"written: {args.truth_out} (the true parameters)", file=messages)
@@ -100,6 +101,22 @@ def run(args):
                           "configurations": len(cfg), "poses": len(set(cfg.pose)),
                           "sigma_mm": args.sigma, "model": model.spec, "seed": args.seed,
                           "truth": args.truth_out}))
+
+
+def _without_coordinates(meas) -> str:
+    """The readings without coordinates of ``meas`` in words ("" with none)."""
+    seated = int((meas.contact & ~meas.touch & ~meas.ballbar).sum())
+    touches, lengths = int(meas.touch.sum()), int(meas.ballbar.sum())
+    said = []
+    if seated or lengths:
+        said.append(f"{seated} socket contacts" + (f" and {lengths} ballbar lengths" if lengths
+                                                   else "") +
+                    f" in {len(meas.sockets_used)} sockets")
+    if touches:
+        said.append(f"{touches} touches of {len(meas.planes_used)} planes")
+    if seated or touches:
+        said.append("each q of a contact or touch the one seating the true ball")
+    return "".join(f"; {s}" for s in said)
 
 
 def _configurations(args, model, truth, rng):

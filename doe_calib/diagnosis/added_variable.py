@@ -8,8 +8,9 @@ the displacement it explains ``f = Z⊥ θ̂``. Each configuration c is reduced 
 one signed number:
 
 * an effect on joint k as an equivalent joint error along ``g_c = ∂x_c/∂q_k``
-  (central difference; for a socket contact, less its socket's mean, the part the
-  socket's unknown point cannot take): fitted ``g_cᵀ f_c / g_cᵀ g_c`` and residual
+  (central difference; for a reading without coordinates, projected as its residual is:
+  a socket contact's less its socket's mean, a touch's or a length's component along the
+  normal or the bar less what its plane or pivot takes): fitted ``g_cᵀ f_c / g_cᵀ g_c`` and residual
   ``g_cᵀ r_c / g_cᵀ g_c`` (mdeg, or µm for a prismatic joint);
 * any other effect along the fitted displacement: ``‖f_c‖`` and
   ``f_cᵀ r_c / ‖f_c‖`` (mm), its size, not its sign.
@@ -29,7 +30,7 @@ from doe_calib.diagnosis.effect_tests import failure_note
 from doe_calib.diagnosis.variables import configuration_variables, follows
 from doe_calib.errors import DoeCalibError, DoeCalibWarning
 from doe_calib.estimation.effect_signature import candidate_effects, fitted_basis, projected_columns
-from doe_calib.estimation.weighted_residuals import socket_mean
+from doe_calib.estimation.weighted_residuals import eliminated_rows
 from doe_calib.model.effects import joint_index
 from doe_calib.model.evaluation import marker_positions
 
@@ -181,10 +182,11 @@ def _per_config(values, config, m) -> np.ndarray:
 
 
 def _joint_direction(model, measurements, values, k) -> np.ndarray:
-    """∂x/∂q_k of every reading, weighted by 1/σ like the residual, shape (K, 3); a socket
-    contact's less its socket's mean, as its residual and columns are (the socket's point
-    takes the rest)."""
+    """∂x/∂q_k of every reading, weighted by 1/σ like the residual, shape (K, 3); a reading
+    without coordinates projected as its residual and columns are (its socket's point, its
+    pivot or its plane takes the rest)."""
     cfg = measurements.configurations
+    points = marker_positions(model, values, cfg)[measurements.config, measurements.marker]
     shifted = []
     for sign in (1.0, -1.0):
         q = cfg.q.copy()
@@ -194,7 +196,8 @@ def _joint_direction(model, measurements, values, k) -> np.ndarray:
     d = (shifted[0] - shifted[1]) / (2 * _STEP)
     d = d[measurements.config, measurements.marker]
     if measurements.contact.any():
-        d = d - socket_mean(measurements, np.arange(len(measurements)), d)
+        d = eliminated_rows(measurements, np.arange(len(measurements)), points,
+                            d[:, :, None])[:, :, 0]
     return d / measurements.sigma[:, None]
 
 

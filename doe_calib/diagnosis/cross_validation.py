@@ -24,12 +24,13 @@ What a group is (``grouping``):
 ``auto`` (default)
     ``session`` when the data hold several sessions, else ``pose``.
 
-Socket contacts (formats.md §3) are compared to their socket's point, unknown: a fold's
-refit places each socket by the contacts it keeps, and a held-out contact is scored
-against that point (:mod:`~doe_calib.diagnosis.held_out_sockets`), never against a mean
-it is part of. Folds of poses therefore deal each socket's contacts out over the folds,
-so that every fold keeps most of every socket's contacts; a contact whose socket has no
-contact in the other folds cannot be scored, and the folds say how many.
+Readings without coordinates (formats.md §3) are compared to an unknown: a socket's point,
+a ballbar's pivot, a plane. A fold's refit places each by the readings it keeps, and a
+held-out reading is scored against it (:mod:`~doe_calib.diagnosis.held_out_contacts`),
+never against an unknown it helped place. Folds of poses therefore deal each socket's and
+each plane's readings out over the folds, so that every fold keeps most of them; a reading
+whose group the other folds cannot place is not scored, and the folds say how many. A touch
+or a length is one coordinate of the RMS.
 """
 from __future__ import annotations
 
@@ -37,8 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from doe_calib.diagnosis.held_out_sockets import (held_out_errors, kept_socket_means,
-                                                   unscored_words)
+from doe_calib.diagnosis.held_out_contacts import (coordinates, held_out_errors,
+                                                   held_out_rows, scored, unscored_words)
 from doe_calib.diagnosis.residuals import residuals
 from doe_calib.errors import DoeCalibError
 from doe_calib.estimation.weighted_residuals import marker_points, weighted_residual
@@ -71,17 +72,24 @@ def _pose_groups(measurements, k, seed):
     poses = np.array(list(dict.fromkeys(measurements.configurations.pose)))
     k = max(2, min(k, len(poses)))
     order = np.random.default_rng(seed).permutation(len(poses))
-    if measurements.contact.any():  # each socket's contacts dealt out over the folds
-        order = order[np.argsort(_pose_socket(measurements, poses)[order], kind="stable")]
+    if measurements.contact.any():  # each socket's, each plane's readings dealt out
+        order = order[np.argsort(_pose_group(measurements, poses)[order], kind="stable")]
     fold_of = {poses[i]: n % k for n, i in enumerate(order)}
     return np.array([fold_of[p] for p in measurements.configurations.pose]), k
 
 
-def _pose_socket(measurements, poses) -> np.ndarray:
-    """The socket of each pose's first contact (−1: a pose of tracker readings only)."""
+def _pose_group(measurements, poses) -> np.ndarray:
+    """The socket or plane of each pose's first contact (planes numbered after the sockets;
+    −1: a pose of tracker readings only)."""
     pose_of = np.asarray(measurements.configurations.pose, dtype=object)[measurements.config]
+    group = np.full(len(measurements), -1)
+    if measurements.socket is not None:
+        group = np.where(measurements.socket >= 0, measurements.socket, group)
+    if measurements.plane is not None:
+        group = np.where(measurements.plane >= 0,
+                         measurements.plane + len(measurements.socket_names), group)
     first = {}
-    for p, k in zip(pose_of[::-1], measurements.socket[::-1]):
+    for p, k in zip(pose_of[::-1], group[::-1]):
         if k >= 0:
             first[p] = int(k)
     return np.array([first.get(p, -1) for p in poses])
@@ -133,19 +141,19 @@ def make_folds(measurements, k: int = 5, grouping: str = "auto", seed: int = 0) 
 def validation_rms(model, values, measurements, fitted_on=None) -> float:
     """RMS (mm) of every coordinate's error when ``values`` predict ``measurements``.
 
-    A socket contact is compared to its socket's point: with ``fitted_on`` (the readings
-    ``values`` were fitted to), as their contacts of that socket place it, when they hold
-    some; else as the held-out contacts of that socket place it
-    (:mod:`~doe_calib.diagnosis.held_out_sockets`).
+    A reading without coordinates is compared to its socket's point, pivot or plane: with
+    ``fitted_on`` (the readings ``values`` were fitted to), as their readings of that group
+    place it, when they can; else as the validation readings of that group place it
+    (:mod:`~doe_calib.diagnosis.held_out_contacts`). A touch or a length is one coordinate.
     """
     if fitted_on is None or not measurements.contact.any() or not fitted_on.contact.any():
         return residuals(model, measurements, values).rms_mm
     both = concatenate([fitted_on, measurements])
     fitted = np.arange(len(both)) < len(fitted_on)
-    placed = np.isin(both.socket, np.unique(both.socket[fitted & both.contact]))
-    kept = fitted | (both.contact & ~placed)
-    e, _ = held_out_errors(both, kept, marker_points(model, both, values))
-    return float(np.sqrt(np.mean(e[~fitted] ** 2)) * 1e3)
+    kept = fitted | (both.contact & ~scored(both, fitted))
+    e, compared = held_out_errors(both, kept, marker_points(model, both, values))
+    out = ~fitted & compared
+    return float(np.sqrt(np.sum(e[out] ** 2) / max(coordinates(both)[out].sum(), 1)) * 1e3)
 
 
 def cross_validated_rms(model, measurements, params, folds: Folds) -> float:
@@ -171,13 +179,13 @@ def cross_validated_rms(model, measurements, params, folds: Folds) -> float:
 
 
 def _with_contacts(model, measurements, params, folds: Folds) -> float:
-    """:func:`cross_validated_rms` of readings with socket contacts (module notes).
+    """:func:`cross_validated_rms` of readings without coordinates (module notes).
 
-    The error of a reading is ``e = t − x`` with ``t`` its reading or its socket's point,
-    the mean of the kept contacts' model points; one Gauss–Newton step moves it by
-    ``−D δ``, ``D = B − B̄`` (B̄ the same mean of B; 0 for a tracker reading). Each fold
-    solves ``δ`` on the kept readings and scores the held-out ones that can be scored;
-    the RMS is over the coordinates scored (NaN when none is).
+    The error of a reading is ``e = t − x`` with ``t`` its reading or what its unknown, placed
+    by the kept readings, compares it to; one Gauss–Newton step moves it by ``−D δ``
+    (:func:`~doe_calib.diagnosis.held_out_contacts.held_out_rows`). Each fold solves ``δ``
+    on the kept readings and scores the held-out ones that can be scored; the RMS is over
+    the coordinates scored (NaN when none is).
     """
     x, b = observation_matrix(model, params.values, measurements.configurations)
     c, j = measurements.config, measurements.marker
@@ -185,17 +193,17 @@ def _with_contacts(model, measurements, params, folds: Folds) -> float:
     s = measurements.sigma[:, None, None]
     norms = np.linalg.norm((rows / s).reshape(-1, rows.shape[-1]), axis=0)
     rows = rows / np.where(norms > 0, norms, 1.0)
-    seated = measurements.contact[:, None, None]
+    counted = coordinates(measurements)
     sq, n = 0.0, 0
     for held in folds.held:
         kept = ~held
-        e, scored = held_out_errors(measurements, kept, points)
-        d = rows - np.where(seated, kept_socket_means(measurements, kept, rows)[0], 0.0)
+        e, compared = held_out_errors(measurements, kept, points)
+        d = held_out_rows(measurements, kept, points, rows)
         jac, r = (d[kept] / s[kept]).reshape(-1, d.shape[-1]), (e[kept] / s[kept, 0]).ravel()
         step = _solve(jac.T @ jac, jac.T @ r)
-        out = held & scored
+        out = held & compared
         sq += float(np.sum((e[out] - d[out] @ step) ** 2))
-        n += 3 * int(out.sum())
+        n += int(counted[out].sum())
     return float(np.sqrt(sq / n) * 1e3) if n else float("nan")
 
 

@@ -288,7 +288,7 @@ def diagnose(model, measurements, fit=None, *, settings: DiagnosisSettings | Non
     screen, screened = screening_set(measurements)
     split = make_folds(screen, s.folds, s.grouping)
     cv = cross_validated_rms(model, screen, params, split)
-    flagged = flagged_poses(res, test.dof / res.weighted.size, lines=measurements.line)
+    flagged = flagged_poses(res, test.dof / int(res.per_reading.sum()), lines=measurements.line)
     chi2 = _chi2_record(test, s, settled.repeated)
     if outliers:  # no effect is tested on data an outlier pulls
         verdict = outlier_verdict(outliers, _adequacy_words(test))

@@ -10,8 +10,9 @@ orthonormal basis of ``J``. The part of ``r`` in the span of ``Z⊥``,
 
 ``F = (ΔSS / q) / ((‖r‖² − ΔSS) / (3K − rank J − q))  ~  F(q, 3K − rank J − q)``
 
-under "the effect is absent", with ``q`` the rank of ``Z⊥`` (3K less 3 per socket of
-socket contacts, whose points the residual and the columns have eliminated). The F form
+under "the effect is absent", with ``q`` the rank of ``Z⊥`` and 3K the coordinates: less 3
+per socket's point, ballbar pivot and plane, which the residual and the columns have
+eliminated, and 2 per plane touch or ballbar length, one coordinate each. The F form
 does not depend on σ being right. p-values are Bonferroni-adjusted over
 all candidates tried, so a correct model is rarely sent looking; candidates
 are ordered by ``log10 p`` (which does not underflow).
@@ -25,6 +26,7 @@ from scipy.special import fdtrc
 
 from doe_calib.diagnosis.candidate import Candidate
 from doe_calib.diagnosis.candidate_batch import batched_columns
+from doe_calib.diagnosis.held_out_contacts import eliminated_coordinates
 from doe_calib.design.detectability import MOSTLY_ABSORBED, absorbing_parameters, assess
 from doe_calib.errors import DoeCalibError
 from doe_calib.estimation.effect_signature import (candidate_effects, fitted_basis,
@@ -130,7 +132,7 @@ def candidate_tests(model, measurements, params, effects=None,
     if effects is None:
         effects = candidate_effects(model, measurements.configurations, registry)
     r, q_basis = fitted_basis(model, measurements, params)
-    rank_j = q_basis.shape[1] + 3 * len(measurements.sockets_used)  # the sockets' points
+    rank_j = q_basis.shape[1] + eliminated_coordinates(measurements)  # sockets, planes, …
     ss = float(r @ r)
     jac = []  # the free weighted Jacobian, made once and only when words need it
 

@@ -19,9 +19,10 @@ noise (:func:`~doe_calib.diagnosis.diagnose.diagnose`'s adequacy rules; with σ
 estimated, the F test of the rest's rigid part against the within-pose part);
 otherwise the effect tests judge.
 
-A socket contact's deletion residual is its misfit against its socket's point as the
-other contacts place it (:mod:`~doe_calib.diagnosis.held_out_sockets`): an outlying
-contact left out no longer moves the point its socket's other contacts are compared to.
+A reading without coordinates has as deletion residual its misfit against its socket's
+point, its ballbar's pivot or its plane as the other readings place it
+(:mod:`~doe_calib.diagnosis.held_out_contacts`): an outlier left out no longer moves what
+the rest are compared to. A plane touch or a ballbar length is one coordinate: χ²(1).
 """
 from __future__ import annotations
 
@@ -30,7 +31,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.special import fdtrc
 
-from doe_calib.diagnosis.held_out_sockets import held_out_errors
+from doe_calib.diagnosis.held_out_contacts import coordinates, held_out_errors
 from doe_calib.estimation.chi_square import chi2_survival, chi2_upper_quantile
 from doe_calib.estimation.identify import identify_quietly
 from doe_calib.estimation.weighted_residuals import marker_points
@@ -63,11 +64,14 @@ class Outlier:
         The same in σ: ``‖e_i‖ / σ_i`` with σ_i the reading's σ (the within-pose
         σ̂ when σ was estimated), dimensionless.
     p_value : float
-        ``K · P(χ²₃ > ‖e_i/σ_i‖²)`` (Bonferroni over the K readings), at most 1.
+        ``K · P(χ²_d > ‖e_i/σ_i‖²)`` (Bonferroni over the K readings; d its coordinates: 3,
+        1 for a touch or a length), at most 1.
     n_readings : int
         K, the readings it was judged among.
     socket : str
-        For a socket contact, its socket's id ("" for a tracker reading).
+        For a socket contact or a ballbar length, its socket's id ("" otherwise).
+    plane : str
+        For a plane touch, its plane's id ("" otherwise).
     """
 
     pose: str
@@ -79,11 +83,13 @@ class Outlier:
     p_value: float
     n_readings: int
     socket: str = ""
+    plane: str = ""
 
     def words(self) -> str:
         """``pose 17, marker B (line 102 of m.csv): 1.5 mm = 50 σ off (p = 1e-300 …)``; a
-        contact's says its socket (``marker ball in socket S2``)."""
+        contact's says its socket (``marker ball in socket S2``), a touch its plane."""
         where = (f" in socket {self.socket}" if self.socket else "") + \
+            (f" on plane {self.plane}" if self.plane else "") + \
             (f" (line {self.line} of {self.source})" if self.line else "")
         p = f"p = {self.p_value:.2g}" if self.p_value >= 1e-300 else "p < 1e-300"
         return (f"pose {self.pose}, marker {self.marker}{where}: {self.size_mm:.3g} mm = "
@@ -146,24 +152,27 @@ def _fits(t, dof, sigma_m, level, tolerance, practical_um, survival) -> bool:
 
 
 def _errors(model, measurements, values, out) -> tuple:
-    """Reading minus model (K, 3), m, at ``values``, each contact against its socket's point
-    as the readings not ``out`` place it (module notes), and the modelled points (K, 3)."""
+    """Reading minus model (K, 3), m, at ``values``, each reading without coordinates against
+    its unknown as the readings not ``out`` place it (module notes), and the modelled points
+    (K, 3)."""
     points = marker_points(model, measurements, values)
     return held_out_errors(measurements, ~out, points)[0], points
 
 
 def _rest_fits_the_noise(error, sigma, keep, rank, level, tolerance, practical_um,
-                         within=None) -> bool:
+                         within=None, counted=None) -> bool:
     """Whether the readings ``keep`` fit within σ: their χ² against σ (given), or with
     ``within`` (the within-pose sum of squares and dof, σ estimated) the F test of the rest's
-    rigid part against it. ``rank``: the parameters fitted, sockets' points included."""
+    rigid part against it. ``rank``: the parameters fitted, the sockets', pivots' and planes'
+    unknowns included; ``counted``: each reading's coordinates (default 3)."""
+    counted = np.full(len(keep), 3) if counted is None else counted
     if within is None:
         t = float(((error[keep] / sigma[keep, None]) ** 2).sum())
-        dof = max(3 * int(keep.sum()) - rank, 1)
+        dof = max(int(counted[keep].sum()) - rank, 1)
         return _fits(t, dof, float(np.median(sigma[keep])), level, tolerance, practical_um,
                      chi2_survival(t, dof))
     ss_in, dof_in = within
-    dof = 3 * int(keep.sum()) - rank - dof_in
+    dof = int(counted[keep].sum()) - rank - dof_in
     if dof <= 0:
         return True
     s2 = ss_in / dof_in
@@ -204,10 +213,13 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
         return ()
     k = len(measurements)
     sigma, estimated = measurements.sigma, measurements.sigma_source == ESTIMATED
-    rank = int(fit.parameters.free.sum()) + 3 * len(measurements.sockets_used)
+    counted = coordinates(measurements)
+    # with the parameters, 3 per socket's point, pivot and plane
+    rank = int(fit.parameters.free.sum()) + int(counted.sum()) - measurements.n_coordinates
     out, within = np.zeros(k, bool), None
     error, predicted = _errors(model, measurements, fit.parameters.values, out)
-    critical = chi2_upper_quantile(min(level / k, 0.5), 3)  # Bonferroni over the K readings
+    critical = np.array([chi2_upper_quantile(min(level / k, 0.5), int(c))  # Bonferroni over K
+                         for c in (1, 3)])[(counted == 3).astype(int)]
     for _ in range(MAX_ROUNDS):
         if estimated:  # the noise within poses, of the poses without suspects
             within = within_pose(error, predicted, measurements.config, ~out)
@@ -234,18 +246,25 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
     else:
         return ()
     if not out.any() or not _rest_fits_the_noise(error, sigma, ~out, rank, level, tolerance,
-                                                 practical_um, within):
+                                                 practical_um, within, counted):
         return ()
     cfg, names = measurements.configurations, model.tool.names
     found = [Outlier(cfg.pose[measurements.config[i]], names[measurements.marker[i]],
                      int(measurements.line[i]), str(measurements.source),
                      float(np.linalg.norm(error[i]) * 1e3),
                      float(np.linalg.norm(error[i]) / scale[i]),
-                     float(min(chi2_survival(t[i], 3) * k, 1.0)), k,
-                     measurements.socket_names[measurements.socket[i]]
-                     if measurements.contact[i] else "")
+                     float(min(chi2_survival(t[i], int(counted[i])) * k, 1.0)), k,
+                     *_group_names(measurements, i))
              for i in np.flatnonzero(out)]
     return tuple(sorted(found, key=lambda o: -o.size_sigma))
+
+
+def _group_names(measurements, i) -> tuple:
+    """(socket id, plane id) of reading ``i`` ("" where it has none)."""
+    socket = measurements.socket_names[measurements.socket[i]] \
+        if measurements.socket is not None and measurements.socket[i] >= 0 else ""
+    plane = measurements.plane_names[measurements.plane[i]] if measurements.touch[i] else ""
+    return socket, plane
 
 
 def outlier_verdict(outliers, adequacy_words: str) -> str:
@@ -266,7 +285,10 @@ def outlier_verdict(outliers, adequacy_words: str) -> str:
     causes = "A reading off its target, a marker moved or swapped, or a pose typed wrong"
     if any(o.socket for o in outliers):
         causes = ("A ball not seated home in its socket (dirt, a slipped seat), a contact "
-                  "written under another socket's id, or a pose typed wrong")
+                  "written under another socket's id, a length misread, or a pose typed wrong")
+    if any(o.plane for o in outliers):
+        causes = ("A touch off its plane (dirt, a burr, the probe triggered early), a touch "
+                  "written under another plane's id, or a pose typed wrong")
     return (f"The model is NOT adequate ({adequacy_words}), but {head}, not an effect: {listed}. "
             f"{causes}. "
             f"Re-measure {'that pose' if len(poses) == 1 else 'those poses'} or leave "

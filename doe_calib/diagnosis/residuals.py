@@ -3,9 +3,11 @@
 All statistics use the weighted residuals ``r = (y − x(p̂)) / σ`` of every
 marker coordinate. Under an adequate model with the right σ,
 ``Σ r² ~ χ²(3K − rank)``: a tiny p-value says the residual is larger than the
-noise can explain (a missing effect, or σ too optimistic). Socket contacts
-(formats.md §3) are compared to their socket's point, eliminated from the fit: each
-socket takes 3 of those degrees of freedom.
+noise can explain (a missing effect, or σ too optimistic). Readings without coordinates
+(formats.md §3) are compared to an unknown eliminated from the fit: each socket's point,
+ballbar pivot and plane takes 3 of those degrees of freedom, and a plane touch or a ballbar
+length is one coordinate (its residual, carried as a 3-vector, lies along the normal, the
+bar): 3K counts the coordinates.
 """
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from doe_calib.diagnosis.held_out_contacts import coordinates, eliminated_coordinates
 from doe_calib.estimation.chi_square import chi2_survival
 from doe_calib.estimation.fit_statistics import ratio_interval
 from doe_calib.estimation.weighted_residuals import marker_residuals
@@ -33,8 +36,10 @@ class Residuals:
     pose : tuple of str, length K
         Pose id of each reading.
     eliminated : int
-        Coordinates the residuals owe to the sockets' points fitted with them (3 per
-        socket; 0 without contacts): degrees of freedom they do not have.
+        Rows of ``weighted`` that are not degrees of freedom: 3 per socket's point, pivot
+        and plane fitted with the parameters, 2 per touch or length (0 without contacts).
+    coordinates : ndarray of int, shape (K,), optional
+        Coordinates of each reading: 1 for a touch or a length, else 3 (None: 3 each).
     """
 
     error: np.ndarray
@@ -42,11 +47,18 @@ class Residuals:
     config: np.ndarray
     pose: tuple
     eliminated: int = 0
+    coordinates: np.ndarray | None = None
+
+    @property
+    def per_reading(self) -> np.ndarray:
+        """Coordinates of each reading, shape (K,) int."""
+        return np.full(len(self.error), 3) if self.coordinates is None else self.coordinates
 
     @property
     def rms_mm(self) -> float:
-        """RMS of every coordinate's residual, mm."""
-        return float(np.sqrt(np.mean(self.error ** 2)) * 1e3)
+        """RMS of every coordinate's residual, mm (a touch's or a length's one)."""
+        n = int(self.per_reading.sum())
+        return float(np.sqrt(np.sum(self.error ** 2) / max(n, 1)) * 1e3)
 
 
 def residuals(model, measurements, values) -> Residuals:
@@ -54,7 +66,7 @@ def residuals(model, measurements, values) -> Residuals:
     e = marker_residuals(model, measurements, values)
     pose = tuple(measurements.configurations.pose[c] for c in measurements.config)
     return Residuals(e, e / measurements.sigma[:, None], measurements.config, pose,
-                     3 * len(measurements.sockets_used))
+                     eliminated_coordinates(measurements), coordinates(measurements))
 
 
 def residual_norms_mm(model, measurements, values) -> np.ndarray:
@@ -119,7 +131,7 @@ class Adequacy:
 def adequacy(res: Residuals, rank: int, sigma_mm: float, level: float = 0.01,
              sigma_source: str = "given") -> Adequacy:
     """χ² test of the weighted residuals (at the readings' σ) with ``rank`` fitted parameters
-    (and the sockets' points, ``res.eliminated``).
+    (and the rows that are not degrees of freedom, ``res.eliminated``).
 
     ``sigma_mm`` (the readings' median σ, mm) and ``sigma_source``
     (:data:`~doe_calib.io.measurements.SIGMA_SOURCES`) say which σ was tested against.
@@ -136,17 +148,17 @@ def flagged_poses(res: Residuals, dof_fraction: float, level: float = 1e-3,
     """Poses whose residual is far outside the noise and the other poses (named, never dropped).
 
     A pose's ``Σ r²`` over its readings is compared with χ² on its share of
-    the residual degrees of freedom (Bonferroni over the poses at ``level``),
-    and must also exceed 4× the median pose's χ²/dof: when the whole model
-    is off, only the poses that stand out are named. With ``lines`` (the
-    source line of each reading), each pose also names its worst reading's
-    line.
+    the residual degrees of freedom (``dof_fraction`` of its coordinates; Bonferroni
+    over the poses at ``level``), and must also exceed 4× the median pose's
+    χ²/dof: when the whole model is off, only the poses that stand out are
+    named. With ``lines`` (the source line of each reading), each pose also
+    names its worst reading's line.
     """
     ids, first, of = np.unique(np.array(res.pose), return_index=True, return_inverse=True)
     order = np.argsort(first)  # poses in order of appearance
     r2 = (res.weighted ** 2).sum(axis=1)
     t_all = np.bincount(of, r2, len(ids))
-    dof_all = np.maximum(np.bincount(of, minlength=len(ids)) * 3 * dof_fraction, 1.0)
+    dof_all = np.maximum(np.bincount(of, res.per_reading, len(ids)) * dof_fraction, 1.0)
     typical = float(np.median(t_all / dof_all))
     stand_out = t_all / dof_all > 4 * max(typical, 1.0)  # the cheap test first: p only for these
     out = []

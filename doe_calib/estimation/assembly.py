@@ -11,6 +11,7 @@ from doe_calib.errors import ConvergenceWarning
 from doe_calib.estimation.covariance import covariance_from_r_factor
 from doe_calib.estimation.measured_region import joint_range
 from doe_calib.estimation.result import IdentificationResult
+from doe_calib.estimation.planes import plane_note
 from doe_calib.estimation.sockets import socket_note
 from doe_calib.estimation.weighted_residuals import marker_residuals, reduce_jacobian
 
@@ -73,8 +74,9 @@ def finish(model, measurements, params, estimator, convergence, notes, covarianc
     if estimated:  # σ unknown: σ̂ becomes σ and scales the covariance (statsmodels' scale)
         covariance, sigma_mm, ratio = covariance * ratio ** 2, sigma_mm * ratio, 1.0
         notes = [f"{SIGMA_ESTIMATED}: {sigma_mm:.3g} mm"] + list(notes)
-    located = socket_note(model, measurements, params, covariance, scale)
-    notes = list(notes) + [located] if located else notes
+    located = [note(model, measurements, params, covariance, scale)
+               for note in (socket_note, plane_note)]
+    notes = list(notes) + [n for n in located if n]
     return IdentificationResult(
         model.robot, model.tool, model.spec, estimator, params, covariance, ratio,
         residual_statistics(model, measurements, params.values), convergence, n_obs,

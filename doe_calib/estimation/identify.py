@@ -25,6 +25,7 @@ from doe_calib.estimation.fit_statistics import misfit_finding
 from doe_calib.estimation.point_estimator import FIT_PASSES, identify_point
 from doe_calib.estimation.selection import SELECTIONS, select as choose
 from doe_calib.estimation.sigma import resolve_sigma
+from doe_calib.estimation.planes import is_plane_note
 from doe_calib.estimation.sockets import is_socket_note
 from doe_calib.io.measurements import provisional
 from doe_calib.io.repeated_readings import copies_words
@@ -200,7 +201,7 @@ def identify(model, measurements, params=None, *, estimator: str = "point",
     of_that_fit = {str(w.message) for w in said[id(first)] if issubclass(w.category, OF_THAT_FIT)}
     notes = kept.warnings + tuple(n for n in first.warnings if n not in kept.warnings
                                   and n not in of_that_fit and not n.startswith(SIGMA_ESTIMATED)
-                                  and not is_socket_note(n))
+                                  and not is_socket_note(n) and not is_plane_note(n))
     return with_plausibility(model, measurements,
                              replace(kept, warnings=notes, selection=selection,
                                      absorbed=first.absorbed))

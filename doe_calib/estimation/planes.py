@@ -12,14 +12,23 @@ e₂ the in-plane principal directions).
 The residual is carried as the 3-vector ``ρ·n`` (from the model's point to its foot on the
 plane), the Jacobian as ``n ⊗ ∂ρ``: n being a unit vector, the normal equations are those
 of the scalars, and a touch keeps the point layout (3 rows) of every other reading.
+
+After a fit, each plane is said as its unit normal n and its distance d from the frame's
+origin (the plane ``nᵀx = d``, n turned so that d ≥ 0), ± 1σ (:func:`located_planes`).
 """
 from __future__ import annotations
+
+import re
 
 import numpy as np
 
 from doe_calib.errors import DataError
 from doe_calib.estimation.variable_projection import project_out
 from doe_calib.io.measurements import MIN_TOUCHES
+from doe_calib.model.evaluation import observation_matrix
+
+#: How the note of :func:`plane_note` begins.
+_NOTE = re.compile(r"\d+ plane touches on \d+ planes ")
 #: A plane's touches whose scatter across their main direction is below this fraction of the
 #: scatter along it lie on a line: the plane's tilt about that line is not seen.
 MIN_SPREAD_RATIO = 0.01
@@ -93,3 +102,69 @@ def check_planes(measurements, points: np.ndarray) -> None:
 def _lines(lines) -> str:
     shown = ", ".join(str(n) for n in lines[:6].tolist())
     return f"lines {shown}{', …' if len(lines) > 6 else ''}"
+
+
+def located_planes(model, measurements, params, covariance, noise_scale: float = 1.0) -> dict:
+    """Plane id → (normal (3,), its std (3,), distance d from the origin, m, its std, m), in
+    the frame of the readings (the robot's root frame when every reading is a contact).
+
+    The plane is the best through the model's points of its touches at ``params``
+    (:func:`fitted_plane`). Its shift and two tilts ``a`` (the columns ``A`` of the module
+    notes, σ⁻²-weighted) have the covariance ``noise_scale (AᵀWA)⁻¹ + M Σ Mᵀ``, the
+    touches' own scatter and the fitted parameters', ``M = (AᵀWA)⁻¹AᵀW nᵀB`` how the plane
+    follows the parameters (free columns) and Σ ``covariance`` (free parameters, SI);
+    mapped to n and d by ``δn = −a₁e₁ − a₂e₂``, ``δd = a₀ − a₁e₁ᵀc − a₂e₂ᵀc``.
+    ``noise_scale``: (σ̂/σ)² when σ is estimated from the residuals, else 1.
+    """
+    x, b = observation_matrix(model, params.values, measurements.configurations)
+    c, j = measurements.config, measurements.marker
+    out = {}
+    for k in measurements.planes_used.tolist():
+        at = measurements.plane == k
+        points, w = x[c[at], j[at]], measurements.sigma[at] ** -2.0
+        centre, axes, _ = fitted_plane(points, w)
+        normal, d = axes[2], float(axes[2] @ centre)
+        own = np.c_[np.ones(len(points)), (points - centre) @ axes[:2].T]
+        inverse = np.linalg.inv(own.T @ (own * w[:, None]))
+        along = np.einsum("i,kip->kp", normal, b[c[at], j[at]][:, :, params.free])
+        moved = inverse @ own.T @ (along * w[:, None])
+        cov = moved @ covariance @ moved.T + inverse * noise_scale
+        to_nd = np.zeros((4, 3))
+        to_nd[:3, 1:] = -axes[:2].T
+        to_nd[3] = [1.0, -axes[0] @ centre, -axes[1] @ centre]
+        std = np.sqrt(np.diag(to_nd @ cov @ to_nd.T))
+        sign = -1.0 if d < 0 else 1.0
+        out[measurements.plane_names[k]] = (sign * normal, std[:3], sign * d, float(std[3]))
+    return out
+
+
+def is_plane_note(text: str) -> bool:
+    """Whether ``text`` is a fit's :func:`plane_note` (each fit has its own)."""
+    return bool(_NOTE.match(text))
+
+
+def plane_note(model, measurements, params, covariance, noise_scale: float = 1.0) -> str:
+    """How many touches on how many planes, and where the fit puts each plane: its normal
+    and its distance from the frame's origin, mm, ± 1σ (:func:`located_planes`); "" without
+    touches.
+
+    Examples
+    --------
+    >>> plane_note(model, measurements, result.parameters, result.covariance)  # doctest: +SKIP
+    '60 plane touches on 3 planes (60 coordinates, less 9 for the planes' unknown …'
+    """
+    k = len(measurements.planes_used)
+    if not k:
+        return ""
+    n = int(measurements.touch.sum())
+    where = "; ".join(
+        f"{name}: normal ({', '.join(f'{v:.6f}' for v in normal)}) ± "
+        f"({', '.join(f'{v:.6f}' for v in normal_std)}), {d * 1000.0:.3f} ± "
+        f"{d_std * 1000.0:.3f} mm from the origin, "
+        f"{int(np.sum(measurements.plane == measurements.plane_names.index(name)))} touches"
+        for name, (normal, normal_std, d, d_std) in located_planes(
+            model, measurements, params, covariance, noise_scale).items())
+    frame = ("the robot's root frame, placed by the fixed base and first joint; the ± leaves "
+             "out what contacts cannot see" if measurements.contact.all() else "the tracker frame")
+    return (f"{n} plane touches on {k} planes ({n} coordinates, less {3 * k} for the planes' "
+            f"unknown positions and tilts, in the observations counted): {where} ({frame})")
