@@ -18,11 +18,11 @@ from doe_calib.collision.clearance import (SEGMENT_STEP, Clearance, SegmentCheck
 from doe_calib.collision.model import (DEFAULT_CLEARANCE, DEFAULT_PLANNER, DEFAULT_SELF_CLEARANCE,
                                        MOVE_SHARE, CollisionModel, build_collision_model)
 from doe_calib.collision.passage import Blockage, blocked_passage, blocked_values
-from doe_calib.collision.planner import PlannedMove, PlannerSettings, plan_move
+from doe_calib.collision.planner import PlannedMove, PlannerSettings, plan_move, unplannable
 
 __all__ = ["BEAM_RADIUS", "BlockedBeam", "blocked_beams", "screen_beams", "MOVE_SHARE",
            "DEFAULT_PLANNER", "Blockage", "blocked_passage", "blocked_values",
-           "PlannedMove", "PlannerSettings", "plan_move", "SEGMENT_STEP", "Clearance",
-           "SegmentCheck", "Workspace", "check_path", "check_segment", "clearance", "contacts",
-           "too_close", "DEFAULT_CLEARANCE", "DEFAULT_SELF_CLEARANCE", "CollisionModel",
+           "PlannedMove", "PlannerSettings", "plan_move", "unplannable", "SEGMENT_STEP",
+           "Clearance", "SegmentCheck", "Workspace", "check_path", "check_segment", "clearance",
+           "contacts", "too_close", "DEFAULT_CLEARANCE", "DEFAULT_SELF_CLEARANCE", "CollisionModel",
            "build_collision_model"]

@@ -100,8 +100,9 @@ class PlannedMove:
     samples: int
 
 
-def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, ws, memo):
-    """One seeded RRT-Connect search, simplified; the path's positions (K, N) or None.
+def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, shorten, ws, memo):
+    """One seeded RRT-Connect search, simplified unless not ``shorten``; the path's positions
+    (K, N) or None.
 
     ``memo``: state (tuple of joint values) → whether it is free at ``margins``, kept
     between the searches of one move (a third of the states OMPL checks it has checked
@@ -161,7 +162,8 @@ def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, ws, memo):
         if not solved or not setup.haveExactSolutionPath():
             return None
         path = setup.getSolutionPath()
-        _shorten(og.PathSimplifier(info), path)
+        if shorten:
+            _shorten(og.PathSimplifier(info), path)
         out = np.array([[path.getState(i)[k] for k in range(n)]
                         for i in range(path.getStateCount())])
         setup.clear()
@@ -182,8 +184,23 @@ def _shorten(simplifier, path) -> None:
             break
 
 
+def unplannable(cm, qa, qb, lower=None, upper=None, workspace: Workspace | None = None,
+                prove: bool = True) -> bool:
+    """Whether :func:`plan_move` gives up qa → qb (N,) before searching: an end closer than
+    its move clearance, or (``prove``) a passage every path crosses proven blocked
+    (:func:`.passage.blocked_passage`). Parameters as for :func:`plan_move`."""
+    ws = Workspace(cm) if workspace is None else workspace
+    qa, qb = np.asarray(qa, float), np.asarray(qb, float)
+    margins = cm.move_margins or cm.margins
+    if (too_close(cm, np.array([qa, qb]), margins, ws) >= 0).any():
+        return True
+    return prove and blocked_passage(cm, qa, qb, margins, *joint_box(cm, lower, upper),
+                                     ws) is not None
+
+
 def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | None = None,
-              workspace: Workspace | None = None, prove: bool = True) -> PlannedMove | None:
+              workspace: Workspace | None = None, prove: bool = True,
+              shorten: bool = True) -> PlannedMove | None:
     """A collision-free joint-space path qa → qb (N,) at the move clearance, or None.
 
     Parameters
@@ -199,6 +216,12 @@ def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | No
         First look for a proof that no path exists (:func:`.passage.blocked_passage`,
         milliseconds where a search that finds nothing spends its whole budget); False
         when the caller has looked already.
+    shorten : bool
+        Shorten the path found (:func:`_shorten`); False when only its existence matters
+        (a reachability verdict): the search's raw path, still checked at ≤ 1° before it is
+        returned. Planning the moves from home to the 28 poses of the benchmark's UR5 cell
+        design that need a path, the shortening made 62 % of the state checks (38 800 of
+        62 400) and half the time (11.2 s against 5.1 s CPU).
 
     Returns
     -------
@@ -216,16 +239,14 @@ def plan_move(cm, qa, qb, lower=None, upper=None, settings: PlannerSettings | No
     qa, qb = np.asarray(qa, float), np.asarray(qb, float)
     margins = cm.move_margins or cm.margins
     lo, hi = joint_box(cm, lower, upper)
-    if (too_close(cm, np.array([qa, qb]), margins, ws) >= 0).any():
-        return None
-    if prove and blocked_passage(cm, qa, qb, margins, lo, hi, ws) is not None:
+    if unplannable(cm, qa, qb, lower, upper, ws, prove):
         return None
     near = (np.maximum(lo, np.minimum(qa, qb) - WIDEN), np.minimum(hi, np.maximum(qa, qb) + WIDEN))
     searches = [(near, SEARCH_STEP, settings.seed + a) for a in range(settings.attempts)]
     searches += [((lo, hi), SEGMENT_STEP, settings.seed + a) for a in range(settings.attempts)]
     memo = {}
     for (low, high), step, seed in searches:
-        path = _search(cm, qa, qb, low, high, margins, settings, seed, step, ws, memo)
+        path = _search(cm, qa, qb, low, high, margins, settings, seed, step, shorten, ws, memo)
         if path is None:
             continue
         path[0], path[-1] = qa, qb

@@ -13,17 +13,34 @@ q ± 360°; a pose whose angles no free path joins to home (a UR shoulder at
 280° lies beyond the table from 0°, at −80° it does not) is tried again at
 its equivalent nearest home (:func:`nearest_equivalent`), which measures
 exactly the same.
+
+Only a path's existence matters here (the program plans its own moves), so
+the poses already joined to home, and the via points of their paths, serve
+as stepping stones: a straight move from one of the nearest, or a path planned
+from the nearest and not shortened, joins a pose as surely as a path from home
+and costs less. A pose is refused only where the planner's search from home
+finds no path either, so every pose that search joins is joined; a pose it
+misses (its budget spent, no proof that no path exists) may now be joined
+too. On the benchmark's UR5 cell design from 20 000 candidates (47 chosen
+poses checked, 2 with no path) this took the check from 15.3 s to 4.4 s CPU
+with the same design; from 500 candidates one pose is now kept at its angles
+as drawn, which the search from home had missed, instead of its equivalent
+one turn away on four joints (the same physical pose: the criteria agree to
+10 digits).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from doe_calib.collision import Workspace, blocked_beams, check_segment, plan_move, too_close
+from doe_calib.collision import (Workspace, blocked_beams, check_segment, plan_move, too_close,
+                                 unplannable)
 from doe_calib.errors import OptionError, SolverError
 from doe_calib.runtime.forked import forked_map
 
 #: Reason of a pose no free path joins to the home pose.
 NO_PATH = "no free path from the home pose"
+#: Positions already joined to home tried as the start of a straight move to a pose.
+NEAREST = 3
 
 
 def home_pose(robot, constraints, home=None) -> np.ndarray:
@@ -89,24 +106,26 @@ def nearest_equivalent(q, home, robot, lower, upper) -> np.ndarray:
     return np.where(ok, turned, q)
 
 
-def _joined(collision, home, pose, ws) -> bool:
-    if check_segment(collision, home, pose, collision.move_margins or None, workspace=ws).free:
-        return True
-    return collision.planner is not None and plan_move(
-        collision, home, pose, settings=collision.planner, workspace=ws) is not None
-
-
 def unreachable(collision, q, home, robot, lower, upper, workers: int | None = None) -> list:
     """For each pose of q (M, N), why a program cannot use it, or the angles it is reached at.
+
+    Each pose is looked at first on its own (its beams, the straight move from
+    ``home``, a proof that no path exists: :func:`_looked_at`), in ``workers``
+    processes; then the poses left are joined in order by :func:`_planned`, each
+    from the nearest position already joined to ``home`` — a pose joined before it
+    or a via point of its path — before a path from ``home`` itself is planned.
+    Every path so found is free (each move checked at ≤ 1°); a pose is refused only
+    where the planner's own search from ``home`` finds no path either.
 
     Parameters
     ----------
     lower, upper : array_like, shape (N,)
         Joint bounds an equivalent angle must stay in, rad (m).
     workers : int, optional
-        Processes joining the poses at once when the collision model plans
+        Processes looking at the poses at once when the collision model plans
         (:func:`~doe_calib.runtime.forked.forked_map`; default the CPUs; 1: in
-        this process). Each pose's answer is its own: the result does not depend on it.
+        this process). Each pose's look is its own and the paths are planned in
+        this process, in order: the result does not depend on it.
 
     Returns
     -------
@@ -122,7 +141,13 @@ def unreachable(collision, q, home, robot, lower, upper, workers: int | None = N
     q = np.atleast_2d(q)
     shared = (collision, q, home, robot, lower, upper, Workspace(collision))  # a copy per worker
     # without a planner every pose is a straight check: not worth the processes
-    return forked_map(_reached, shared, len(q), 1 if collision.planner is None else workers)
+    looked = forked_map(_looked_at, shared, len(q), 1 if collision.planner is None else workers)
+    joined = [used for why, used, _ in looked if why is None]  # straight from home
+    ws, out = Workspace(collision), []
+    for why, used, left in looked:
+        planned = next((t for t in left if _planned(collision, home, t, joined, ws)), None)
+        out.append((why, used) if planned is None else (None, planned))
+    return out
 
 
 def revert_unreachable(collision, q, start, home, robot, constraints) -> tuple:
@@ -134,17 +159,49 @@ def revert_unreachable(collision, q, start, home, robot, constraints) -> tuple:
     return np.where(back[:, None], start, [used for _, used in checked]), int(back.sum())
 
 
-def _reached(shared, i: int):
-    """(reason or None, the angles used) for pose i of :func:`unreachable`."""
+def _looked_at(shared, i: int):
+    """Pose i of :func:`unreachable` on its own: (reason or None, the angles used, the angles
+    to plan a path to first, in order)."""
     collision, q, home, robot, lower, upper, ws = shared
     pose = q[i]
     blocked = blocked_beams(collision, pose, ws)
     if blocked:
-        return f"line of sight: blocked by {blocked[0].body}", pose
+        return f"line of sight: blocked by {blocked[0].body}", pose, []
     near = nearest_equivalent(pose, home, robot, lower, upper)
-    tries = [pose] + ([near] if not np.allclose(near, pose) else [])
-    used = next((t for t in tries if _joined(collision, home, t, ws)), None)
-    return (NO_PATH, pose) if used is None else (None, used)
+    left = []
+    for t in [pose] + ([near] if not np.allclose(near, pose) else []):
+        if check_segment(collision, home, t, collision.move_margins or None, workspace=ws).free:
+            return None, t, left
+        if collision.planner is not None and not unplannable(collision, home, t, workspace=ws):
+            left.append(t)
+    return NO_PATH, pose, left
+
+
+def _planned(collision, home, pose, joined, ws) -> bool:
+    """Whether a planned free path joins ``home`` to ``pose`` (N,).
+
+    Tried in turn: a straight move from each of the :data:`NEAREST` positions of
+    ``joined`` (each joined to ``home`` already) nearest the pose; a path planned
+    from the nearest, not shortened (only its existence matters); a path planned
+    from ``home``, as without stepping stones. ``joined`` gains the pose and the via
+    points of its path.
+    """
+    settings, margins = collision.planner, collision.move_margins or None
+    path = None
+    if joined:
+        known = np.asarray(joined)
+        nearest = known[np.argsort(np.max(np.abs(known - pose), axis=1), kind="stable")]
+        if any(check_segment(collision, h, pose, margins, workspace=ws).free
+               for h in nearest[:NEAREST]):
+            joined.append(pose)
+            return True
+        path = plan_move(collision, nearest[0], pose, settings=settings, workspace=ws,
+                         shorten=False)
+    if path is None:
+        path = plan_move(collision, home, pose, settings=settings, workspace=ws, prove=False)
+    if path is not None:
+        joined.extend([*path.via, pose])
+    return path is not None
 
 
 def reachable_choice(choose, q, pose_of, collision, home, robot, lower, upper,
