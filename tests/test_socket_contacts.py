@@ -61,9 +61,11 @@ def _q_columns(q):
 
 @pytest.fixture(scope="module")
 def campaign(ur10, truth, tmp_path_factory):
+    """The contacts file (every socket unknown), the tool, 40 new configurations (a file
+    and their q) and each contact's (socket, q)."""
     rng = np.random.default_rng(7)
     d = tmp_path_factory.mktemp("sockets")
-    rows = []
+    seats = []
     for name, point in SOCKETS_M.items():
         seated = 0
         while seated < 15:
@@ -72,12 +74,8 @@ def campaign(ur10, truth, tmp_path_factory):
             if q is None:
                 continue
             seated += 1
-            rows.append({"pose": f"{name}-{seated}", **_q_columns(q), "marker": "ball",
-                         "socket": name, "x": "", "y": "", "z": ""})
-    with open(d / "contacts.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+            seats.append((name, q))
+    _write_contacts(d / "contacts.csv", seats)
     (d / "tool.yaml").write_text("flange: tool0\nmarkers:\n  ball: [0.0, 0.0, 100.0]\n")
     q_new = sim.random_configurations(ur10, 40, rng, within=np.c_[-np.pi * np.ones(6),
                                                                   np.pi * np.ones(6)])
@@ -86,7 +84,24 @@ def campaign(ur10, truth, tmp_path_factory):
         writer.writeheader()
         writer.writerows({"pose": str(i), **_q_columns(q), "marker": "ball"}
                          for i, q in enumerate(q_new))
-    return d, q_new
+    return d, q_new, seats
+
+
+def _write_contacts(path, seats, given=None, sigma_mm=None):
+    """A contacts file of ``seats`` ((socket, q) each); ``given``: socket → its position,
+    mm, written on its rows (else x, y, z empty); ``sigma_mm``: socket → σ of its rows."""
+    given, count = given or {}, {}
+    rows = []
+    for name, q in seats:
+        count[name] = count.get(name, 0) + 1
+        xyz = given.get(name, ("", "", ""))
+        rows.append({"pose": f"{name}-{count[name]}", **_q_columns(q), "marker": "ball",
+                     "socket": name, **{c: str(v) for c, v in zip("xyz", xyz)},
+                     **({"sigma": str(sigma_mm[name])} if sigma_mm else {})})
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
 
 
 def _registered_rms_mm(predicted, true, scale: bool = False):
@@ -102,7 +117,7 @@ def _registered_rms_mm(predicted, true, scale: bool = False):
 
 
 def test_contacts_are_read_as_sockets(ur10, campaign):
-    d, _ = campaign
+    d, _, _ = campaign
     robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
     meas = read_measurements(d / "contacts.csv", robot, Tool.from_yaml(d / "tool.yaml"),
                              sigma=1e-5)
@@ -111,19 +126,24 @@ def test_contacts_are_read_as_sockets(ur10, campaign):
     assert meas.n_coordinates == 3 * 45 - 9  # each socket's point is 3 unknowns
 
 
-def test_a_contact_with_xyz_is_refused(campaign, tmp_path):
-    d, _ = campaign
+@pytest.mark.parametrize("change, said", [
+    ((1, "1.0", "2.0", "3.0"), r"socket 'S1' at \(1, 2, 3\) mm here but no x, y, z on line 2"),
+    ((0, "1.0", "", ""), "socket 'S1' with some of x, y, z: give all three"),
+])
+def test_a_socket_gives_one_position_or_none(campaign, tmp_path, change, said):
+    d, _, _ = campaign
     lines = (d / "contacts.csv").read_text().splitlines()
-    lines[1] = lines[1].rstrip(",") + ",1.0,2.0,3.0"
+    row, *xyz = change
+    lines[row + 2] = lines[row + 2].rstrip(",") + "," + ",".join(xyz)
     bad = tmp_path / "bad.csv"
     bad.write_text("\n".join(lines) + "\n")
     robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
-    with pytest.raises(DataError, match="leave x, y, z empty"):
+    with pytest.raises(DataError, match=f"line {row + 3}, column 'x'.*{said}"):
         read_measurements(bad, robot, Tool.from_yaml(d / "tool.yaml"), sigma=1e-5)
 
 
 def test_socket_campaign_predicts_new_configurations(ur10, truth, campaign, capsys):
-    d, q_new = campaign
+    d, q_new, _ = campaign
     urdf = str(sim.ur10_urdf())
     assert main(["identify", "--robot", urdf, "--tool", str(d / "tool.yaml"),
                  "--data", str(d / "contacts.csv"), "--sigma", str(SEATING_MM),
@@ -160,7 +180,7 @@ def test_contacts_mix_with_tracker_readings(ur10, truth, campaign, tmp_path):
     from doe_calib.estimation.sockets import located_sockets
     from doe_calib.model.marker_model import build_model
 
-    d, q_new = campaign
+    d, q_new, _ = campaign
     rot = pin.exp3(np.array([0.3, -0.2, 1.9]))
     placed = replace(truth, base_rotvec=pin.log3(rot), base_position=np.array([2.0, -0.5, 0.3]))
     rng = np.random.default_rng(3)
@@ -193,3 +213,4 @@ def test_contacts_mix_with_tracker_readings(ur10, truth, campaign, tmp_path):
     rms = np.sqrt(np.mean(np.sum((predicted - true) ** 2, axis=1))) * 1e3
     print(f"mixed file: {rms:.4f} mm at new configurations, tracker frame, no registration")
     assert rms < 0.03
+

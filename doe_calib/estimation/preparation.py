@@ -2,9 +2,10 @@
 
 The base pose starts from a point-set registration of the tracker's readings;
 the parameters the data cannot separate are fixed (at their current values) with
-the reason in words. Readings that are all socket contacts cannot see the base
-pose, a rigid motion of the whole arm or its scale: those are fixed first, said
-in words of their own (:func:`fix_unseen_by_contacts`).
+the reason in words. Readings that are all socket contacts cannot see, unless
+enough sockets' positions are given, the base pose, a rigid motion of the whole
+arm or its scale: those are fixed first, said in words of their own
+(:func:`fix_unseen_by_contacts`).
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from doe_calib.errors import ConditioningWarning, DataError, IdentifiabilityWarn
 from doe_calib.estimation.identifiability import analyse, blind_motion_words
 from doe_calib.estimation.registration import register
 from doe_calib.estimation.weighted_residuals import marker_points, reduce_jacobian
-from doe_calib.model.rotations import matrix_to_rotation_vector
+from doe_calib.model.rotations import matrix_to_rotation_vector, rotation_vector_to_matrix
 
 #: Condition number of the observation matrix above which the fit warns.
 COND_WARN = 1e6
@@ -32,6 +33,19 @@ ARM_UNSEEN = ("socket contacts cannot see a rigid motion of the whole arm (the f
 SCALE_UNSEEN = ("socket contacts cannot see the robot's scale without a known length (the "
                 "whole arm and the sockets grown alike fit the same): held at its current value "
                 "to fix the scale, the link length it sets")
+#: Why the base rotation is fixed when one socket's position is given: a turn about it.
+POINT_UNSEEN = ("socket contacts with one socket of given position cannot see the base's turn "
+                "about that point: the base rotation held at the URDF's root axes")
+#: Why a base rotation is fixed when the given sockets lie on one line (their ids follow).
+LINE_UNSEEN = ("socket contacts whose given positions lie on one line cannot see the base's "
+               "turn about that line: the base rotation's component about it held at the "
+               "turn least from the URDF's root axes (sockets {})")
+#: Why the first joint's placement and offset are fixed with part of the base rotation.
+ARM_AS_BASE = ("the first joint's placement and offset move the whole arm as the base pose "
+               "does, the turn the given sockets cannot see included: fixed at their current "
+               "values, the base pose free where the sockets see it")
+#: Given socket positions closer than this (m) are one point; off a line by less: on it.
+APART = 1e-3
 
 
 def not_separable(params) -> list[str]:
@@ -58,31 +72,117 @@ def register_base(model, measurements, params):
     return params.with_values(v)
 
 
-def fix_unseen_by_contacts(robot, params):
-    """What readings that are all socket contacts cannot see, fixed and said in words.
+def fix_unseen_by_contacts(model, measurements, params, start: bool = True):
+    """What readings without a tracker's cannot see, fixed and said in words.
 
-    Contacts compare the marker to points of unknown position: a rigid motion or a
-    growth of the whole arm moves the sockets with it, and fits the same. Fixed are the
-    base pose, at the identity (the URDF's root frame, :data:`BASE_UNSEEN`); the first
-    joint's placement and offset, at their values (:data:`ARM_UNSEEN`); and, when the
-    model has placement translations, the one along the longest nominal link, at its
-    value (:data:`SCALE_UNSEEN`): the scale. Exact null directions of these readings'
-    Jacobian only where every socket's contacts meet, so the rank analysis at the
-    nominal model does not find them; left free, a fit can shrink the arm.
+    Every reading is a socket contact (formats.md §3). Contacts in sockets of unknown
+    position see neither a rigid motion nor a growth of the whole arm (the sockets move
+    with it); a socket of given position (in the frame of the file) is a point read, and
+    sees what a point sees. By the spread of the given positions (:func:`given_sockets`):
+
+    - none: the base pose is fixed at the identity (:data:`BASE_UNSEEN`: the URDF's root
+      frame), the first joint's placement and offset at their values
+      (:data:`ARM_UNSEEN`);
+    - one point: the base starts where it puts that socket's contacts on it, its
+      rotation fixed (:data:`POINT_UNSEEN`: a turn about the point);
+    - on one line: the base starts registered on them, its rotation's component about
+      the line fixed (:data:`LINE_UNSEEN`);
+    - three or more not on one line: nothing (the base is registered and fitted).
+
+    With some base rotation fixed, the first joint's placement and offset (which move
+    the arm as the base does) are fixed too (:data:`ARM_AS_BASE`). Without two given
+    positions apart, the placement translation along the longest nominal link is held
+    at its value (:data:`SCALE_UNSEEN`): the scale. These are exact null directions of
+    the Jacobian only where every socket's contacts meet, so the rank analysis at the
+    nominal model does not find them; left free, a fit can turn or shrink the arm.
+    ``start``: set the base's start values (not on a refit, whose base is the fit's).
     """
+    points = given_sockets(measurements)
+    spread = _spread(points)
+    if spread >= 2:
+        return register_base(model, measurements.subset(~measurements.contact), params) \
+            if start else params
     base = params.index("base")
-    v = params.values.copy()
-    v[base] = 0.0
-    params = params.with_values(v).fixed([params.names[i] for i in base], BASE_UNSEEN)
+    if not len(points):
+        v = params.values.copy()
+        v[base] = 0.0
+        params = params.with_values(v).fixed([params.names[i] for i in base], BASE_UNSEEN)
+        arm_words = ARM_UNSEEN
+    else:
+        params = _start_base(model, measurements, params, spread) if start else params
+        turn = base[3:] if spread == 0 else [_base_turn_about(params, points)]
+        params = params.fixed([params.names[i] for i in turn],
+                              POINT_UNSEEN if spread == 0 else LINE_UNSEEN.format(
+                                  ", ".join(points)))
+        arm_words = ARM_AS_BASE
+    robot = model.robot
     first = robot.joints[0].name
     arm = [n for n in (f"dq_{first}", *(f"g_{first}_{r}{a}" for r in "tr" for a in "xyz"))
            if n in params.names]
-    params = params.fixed(arm, ARM_UNSEEN) if arm else params
-    if any(why.startswith(SCALE_UNSEEN) for why in params.fixed_reason):
-        return params  # a refit of the kept parameters: the scale is already held
+    params = params.fixed(arm, arm_words) if arm else params
+    if spread == 1 or any(why.startswith(SCALE_UNSEEN) for why in params.fixed_reason):
+        return params  # a known length; or a refit of the kept parameters: already held
     name, length = _longest_link(robot, params)
     return params.fixed([name], f"{SCALE_UNSEEN} ({length * 1000.0:.1f} mm)") if name \
         else params
+
+
+def given_sockets(measurements) -> dict:
+    """Socket id → its given position (3,), m, for each socket whose contacts give it
+    (formats.md §3); empty without."""
+    if measurements.socket is None:
+        return {}
+    at = np.flatnonzero((measurements.socket >= 0) & ~measurements.contact)
+    return {measurements.socket_names[measurements.socket[i]]: measurements.xyz[i]
+            for i in at[::-1]}  # one row per socket: they agree (the reader's check)
+
+
+def _spread(points: dict) -> int:
+    """0 for no point or one, 1 for points on one line, 2 for points spanning a plane
+    (apart by more than :data:`APART`, m)."""
+    if len(points) < 2:
+        return 0
+    p = np.array(list(points.values()))
+    return int(np.sum(np.linalg.svd(p - p.mean(0), compute_uv=False) > APART))
+
+
+def _start_base(model, measurements, params, spread: int):
+    """Start values of the base pose from given sockets on a line (``spread`` 1) or at one
+    point (0): the turn least from the URDF's root that puts the model's contacts on them."""
+    seen = measurements.subset(~measurements.contact)
+    base = params.index("base")
+    v = params.values.copy()
+    v[base] = 0.0
+    robot_pts, w = marker_points(model, seen, v), seen.sigma ** -2.0
+    rot = np.eye(3)
+    if spread == 1:
+        a, b = (_axis(x, w) for x in (robot_pts, seen.xyz))
+        b = b * np.sign(np.sum(w * ((robot_pts - robot_pts.mean(0)) @ a) *
+                               ((seen.xyz - seen.xyz.mean(0)) @ b)) or 1.0)
+        turn = np.cross(a, b)
+        rot = rotation_vector_to_matrix(turn / max(np.linalg.norm(turn), 1e-300) *
+                                        np.arctan2(np.linalg.norm(turn), a @ b))
+    v[base[:3]] = np.average(seen.xyz, 0, w) - rot @ np.average(robot_pts, 0, w)
+    v[base[3:]] = matrix_to_rotation_vector(rot)
+    return params.with_values(v)
+
+
+def _axis(points, w) -> np.ndarray:
+    """The weighted points' principal direction (3,), unit."""
+    c = points - np.average(points, 0, w)
+    return np.linalg.svd(c * np.sqrt(w)[:, None], full_matrices=False)[2][0]
+
+
+def _base_turn_about(params, points: dict) -> int:
+    """Index of the base's rotation parameter that a turn about the line through
+    ``points`` changes most (fixing it removes that turn)."""
+    p = np.array(list(points.values()))
+    u = np.linalg.svd(p - p.mean(0))[2][0]
+    rot = params.index("base")[3:]
+    r0 = params.values[rot]
+    moved = matrix_to_rotation_vector(rotation_vector_to_matrix(1e-6 * u) @
+                                      rotation_vector_to_matrix(r0))
+    return int(rot[np.argmax(np.abs(moved - r0))])
 
 
 def _longest_link(robot, params) -> tuple:
@@ -169,10 +269,13 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
     if len(measurements) == 0:
         raise DataError("no readings to identify from", where)
     tracked = ~measurements.contact
-    if not tracked.any():
-        params = fix_unseen_by_contacts(model.robot, params)
-        warnings.warn(BASE_UNSEEN, IdentifiabilityWarning, stacklevel=3)  # the report
-        # groups the fixed parameters by these reasons: no note of its own
+    if measurements.socket is not None and (measurements.socket >= 0).all():
+        params = fix_unseen_by_contacts(model, measurements, params,
+                                        register and params.free[params.index("base")].all())
+        for why in dict.fromkeys(params.fixed_reason[i] for i in params.index("base")):
+            if why.startswith((BASE_UNSEEN, POINT_UNSEEN, LINE_UNSEEN.split("{")[0])):
+                warnings.warn(why, IdentifiabilityWarning, stacklevel=3)  # the report
+                # groups the fixed parameters by these reasons: no note of its own
     elif register and params.free[params.index("base")].all():
         params = register_base(model, measurements if tracked.all() else
                                measurements.subset(tracked), params)

@@ -15,7 +15,7 @@ from doe_calib.model.evaluation import observation_matrix
 
 
 #: How the note of :func:`socket_note` begins.
-_NOTE = re.compile(r"\d+ socket contacts in \d+ sockets ")
+_NOTE = re.compile(r"\d+ socket contacts in \d+ sockets[ ,]")
 
 
 def is_socket_note(text: str) -> bool:
@@ -56,18 +56,27 @@ def socket_note(model, measurements, params, covariance, noise_scale: float = 1.
     Examples
     --------
     >>> socket_note(model, measurements, result.parameters, result.covariance)  # doctest: +SKIP
-    '45 socket contacts in 3 sockets (135 coordinates, less 9 for the sockets' unknown …'
+    '45 socket contacts in 3 sockets (135 coordinates, less 9 for the unknown sockets' …'
     """
     if not measurements.contact.any():
         return ""
-    n, k = int(measurements.contact.sum()), len(measurements.sockets_used)
+    seated = measurements.socket >= 0
+    n, k = int(seated.sum()), len(np.unique(measurements.socket[seated]))
+    unknown = len(measurements.sockets_used)
     where = "; ".join(
         f"{name} at ({', '.join(f'{c:.3f}' for c in point * 1000.0)}) ± "
         f"({', '.join(f'{c:.3f}' for c in std * 1000.0)}) mm, "
         f"{int(np.sum(measurements.socket == measurements.socket_names.index(name)))} contacts"
         for name, (point, std) in located_sockets(model, measurements, params, covariance,
                                                   noise_scale).items())
-    frame = ("the robot's root frame, placed by the fixed base and first joint; the ± leaves "
-             "out what contacts cannot see" if measurements.contact.all() else "the tracker frame")
-    return (f"{n} socket contacts in {k} sockets ({3 * n} coordinates, less {3 * k} for the "
-            f"sockets' unknown points, in the observations counted): {where} ({frame})")
+    if measurements.contact.all():
+        frame = ("the robot's root frame, placed by the fixed base and first joint; the ± "
+                 "leaves out what contacts cannot see")
+    elif seated.all():
+        frame = "the frame of the given socket positions"
+    else:
+        frame = "the tracker frame"
+    given = f", {k - unknown} of given position" if k > unknown else ""
+    return (f"{n} socket contacts in {k} sockets{given} ({3 * n} coordinates, less "
+            f"{3 * unknown} for the unknown sockets' points, in the observations counted): "
+            f"{where} ({frame})")

@@ -39,7 +39,7 @@ def marker_points(model, measurements, values, block: int = BLOCK_CONFIGURATIONS
 
 def socket_mean(measurements, rows, v) -> np.ndarray:
     """For each of ``rows``: the σ⁻²-weighted mean of ``v`` (len(rows), …) over the rows of
-    its socket; 0 for a tracker reading.
+    its socket; 0 for a reading with coordinates (a tracker's, a given socket's).
 
     Parameters
     ----------
@@ -49,7 +49,7 @@ def socket_mean(measurements, rows, v) -> np.ndarray:
     v : ndarray, shape (len(rows), …)
         A quantity per reading (its model point, m; its rows of B).
     """
-    k = measurements.socket[rows]
+    k = np.where(measurements.contact[rows], measurements.socket[rows], -1)
     out = np.zeros_like(v, dtype=float)
     w = measurements.sigma[rows] ** -2.0
     for j in np.unique(k[k >= 0]).tolist():

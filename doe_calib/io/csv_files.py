@@ -200,16 +200,33 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
 
 
 def _check_contacts(table, problems, socket_ids, xyz, tracked_xyz: bool) -> None:
-    """Refuse a contact (a ``socket`` id) with x, y, z and, with ``tracked_xyz``, a tracker
-    reading (no id) without all three (formats.md §3, *Socket contacts*)."""
+    """Refuse a contact (a ``socket`` id) with some of x, y, z, or other x, y, z than the
+    socket's first contact (all rows of a socket give its one known position, or none) and,
+    with ``tracked_xyz``, a tracker reading (no id) without all three (formats.md §3,
+    *Socket contacts*)."""
     seated = np.array([bool(c) for c in socket_ids])
     given = np.isfinite(xyz)
-    problems.check((9, 20), seated & given.any(axis=1), lambda i: (
-        f"socket {socket_ids[i]!r} with x, y, z: a contact's position is the socket's, "
-        f"unknown; leave x, y, z empty (or the socket cell, for a tracker reading)"), "socket")
-    problems.check((9, 21), tracked_xyz & ~seated & ~given.all(axis=1), lambda i: (
+    column = "x" if "x" in table.columns else "socket"
+    problems.check((9, 20), seated & given.any(axis=1) & ~given.all(axis=1), lambda i: (
+        f"socket {socket_ids[i]!r} with some of x, y, z: give all three (the socket's known "
+        f"position, mm) or none (its position unknown)"), column)
+    first = earlier_in_group(codes(socket_ids), seated)
+    f = np.maximum(first, 0)
+    same = np.all(np.where(given & given[f], np.abs(xyz - xyz[f]) <= 1e-9, given == given[f]),
+                  axis=1)
+    problems.check((9, 21), seated & (first >= 0) & ~same, lambda i: (
+        f"socket {socket_ids[i]!r} at {_at_mm(xyz[i])} here but {_at_mm(xyz[first[i]])} on "
+        f"line {table.numbers[first[i]]}: every contact of a socket gives the same x, y, z "
+        f"(its known position, mm) or none (unknown)"), column)
+    problems.check((9, 22), tracked_xyz & ~seated & ~given.all(axis=1), lambda i: (
         "x, y, z missing on a row without a socket: give the tracker reading, or the socket "
-        "id of a contact"), "x" if "x" in table.columns else "socket")
+        "id of a contact"), column)
+
+
+def _at_mm(xyz) -> str:
+    """A socket's position (3,), m, as the file gives it, mm, or "no x, y, z"."""
+    return "no x, y, z" if np.isnan(xyz).all() else \
+        f"({', '.join(f'{v * 1000.0:g}' for v in xyz)}) mm"
 
 
 def _sockets(ids) -> dict:

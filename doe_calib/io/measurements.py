@@ -201,9 +201,10 @@ class Measurements:
         degrees of freedom of σ̂ and χ².
     socket : ndarray of int, shape (K,), optional
         For a contact (formats.md §3, *Socket contacts*): the socket (index into
-        ``socket_names``) in which the marker was seated, its position unknown; −1 for a
-        tracker reading. None: every reading is a tracker reading. A contact's ``xyz`` is
-        NaN.
+        ``socket_names``) in which the marker was seated; −1 for a tracker reading. None:
+        every reading is a tracker reading. A contact's ``xyz`` is its socket's given
+        position (then it counts as a reading of that point), or NaN: unknown (a
+        :attr:`contact`).
     socket_names : tuple of str
         The sockets' ids, in order of first appearance.
     """
@@ -243,8 +244,10 @@ class Measurements:
 
     @property
     def contact(self) -> np.ndarray:
-        """Which readings are socket contacts, shape (K,) bool (none without sockets)."""
-        return np.zeros(len(self), bool) if self.socket is None else self.socket >= 0
+        """Which readings are contacts in a socket of unknown position, shape (K,) bool
+        (a contact in a socket whose position is given is a reading of that point)."""
+        return np.zeros(len(self), bool) if self.socket is None else \
+            (self.socket >= 0) & np.isnan(self.xyz[:, 0])
 
     @property
     def sockets_used(self) -> np.ndarray:
