@@ -214,3 +214,71 @@ def test_contacts_mix_with_tracker_readings(ur10, truth, campaign, tmp_path):
     print(f"mixed file: {rms:.4f} mm at new configurations, tracker frame, no registration")
     assert rms < 0.03
 
+
+#: The socket plate: its frame from the robot's root (rotation vector, rad; origin, m), and
+#: the drawing's (or CMM's) tolerance of each socket's position per axis, mm.
+PLATE = (np.array([0.02, -0.01, 0.6]), np.array([-0.3, 0.2, -0.05]))
+DRAWING_MM = 0.005
+
+
+def _in_plate(points):
+    """Points (…, 3), m, from the robot's root frame to the plate's."""
+    return points @ pin.exp3(PLATE[0]).T + PLATE[1]
+
+
+@pytest.fixture(scope="module")
+def drawing():
+    """Each socket's position as the plate's drawing gives it, mm (plate frame): the true
+    one off by the drawing's tolerance."""
+    rng = np.random.default_rng(17)
+    return {name: _in_plate(np.asarray(p)) * 1e3 + rng.normal(scale=DRAWING_MM, size=3)
+            for name, p in SOCKETS_M.items()}
+
+
+def _identify_and_predict(d, name, seats, given, capsys):
+    """Identify from the contacts with the ``given`` positions, predict the new
+    configurations: (predicted (40, 3), m, plate frame; identify's words)."""
+    count = {s: sum(1 for n, _ in seats if n == s) for s in SOCKETS_M}
+    sigma = {s: float(np.hypot(SEATING_MM, np.sqrt(count[s]) * DRAWING_MM)) if s in given
+             else SEATING_MM for s in SOCKETS_M}  # formats.md §3: a drawing's error is common
+    _write_contacts(d / f"{name}.csv", seats, given, sigma)
+    assert main(["identify", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                 "--data", str(d / f"{name}.csv"), "--model", "joint_offset+geometry",
+                 "--out", str(d / f"{name}.json")]) == 0
+    said = capsys.readouterr()
+    assert main(["predict", "--result", str(d / f"{name}.json"), "--data", str(d / "new.csv"),
+                 "--out", str(d / f"{name}_pred.csv")]) == 0
+    with open(d / f"{name}_pred.csv") as f:
+        pred = np.array([[float(r[c]) for c in "xyz"] for r in
+                         csv.DictReader(line for line in f if not line.startswith("#"))]) / 1e3
+    return pred, said.out + said.err
+
+
+def test_sockets_of_given_position_see_base_and_scale(ur10, truth, campaign, drawing, capsys):
+    """Issue #31's done-when: the ball-in-socket campaign with the plate's drawing giving the
+    sockets' positions is predicted to ≤ 0.03 mm at new configurations, in the plate frame."""
+    d, q_new, seats = campaign
+    pred, said = _identify_and_predict(d, "given3", seats, drawing, capsys)
+    assert "socket contacts" not in said.split("fixed")[0]  # nothing unseen but the flange
+    assert "without a known length" not in said and "base's turn" not in said
+    true = sim.marker_positions(ur10, truth, q_new, np.zeros((40, 6)))[:, 0]
+    plate = np.sqrt(np.mean(np.sum((pred - _in_plate(true)) ** 2, axis=1))) * 1e3
+    rigid = _registered_rms_mm(pred, true)
+    print(f"three given sockets: {plate:.4f} mm in the plate frame, {rigid:.4f} mm after a "
+          f"rigid registration")
+    assert rigid <= 0.03 and plate <= 0.05
+
+
+def test_one_known_length(ur10, truth, campaign, drawing, capsys):
+    """Two sockets given (a known length), one unknown: the scale is seen, the turn about
+    the two sockets' line is not, and is said."""
+    d, q_new, seats = campaign
+    given = {k: drawing[k] for k in ("S1", "S2")}
+    pred, said = _identify_and_predict(d, "given2", seats, given, capsys)
+    assert "cannot see the base's turn about that line" in said
+    assert "without a known length" not in said
+    true = sim.marker_positions(ur10, truth, q_new, np.zeros((40, 6)))[:, 0]
+    rigid, similar = _registered_rms_mm(pred, true), _registered_rms_mm(pred, true, scale=True)
+    print(f"two given sockets, one unknown: {rigid:.4f} mm after a rigid registration, "
+          f"{similar:.4f} mm with a scale")
+    assert rigid <= 0.03
