@@ -26,6 +26,11 @@ SEATING_MM = 0.01
 
 @pytest.fixture(scope="module")
 def truth(ur10):
+    return true_robot(ur10)
+
+
+def true_robot(ur10):
+    """The campaign's true UR10 (placement errors, offsets, the ball 1 mm off nominal)."""
     rng = np.random.default_rng(31)
     n = len(ur10.joints)
     twists = rng.uniform(-1, 1, (n, 6)) * np.r_[[0.5e-3] * 3, [np.radians(0.05)] * 3]
@@ -282,3 +287,33 @@ def test_one_known_length(ur10, truth, campaign, drawing, capsys):
     print(f"two given sockets, one unknown: {rigid:.4f} mm after a rigid registration, "
           f"{similar:.4f} mm with a scale")
     assert rigid <= 0.03
+
+
+def test_socket_column_written_back(campaign, drawing, tmp_path, capsys):
+    """A file of given and unknown sockets reads back the same after writing it, and
+    ``predict`` of contacts keeps each row's socket beside its predicted x, y, z."""
+    from doe_calib.io.csv_files import write_measurements
+
+    d, _, seats = campaign
+    _write_contacts(tmp_path / "mixed.csv", seats, {"S2": drawing["S2"]})
+    robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
+    tool = Tool.from_yaml(d / "tool.yaml")
+    meas = read_measurements(tmp_path / "mixed.csv", robot, tool, sigma=1e-5)
+    assert meas.contact.sum() == 30 and len(meas.sockets_used) == 2  # S2 is a read point
+    write_measurements(tmp_path / "again.csv", meas, robot, tool)
+    again = read_measurements(tmp_path / "again.csv", robot, tool, sigma=1e-5)
+    assert again.socket_names == meas.socket_names
+    assert np.array_equal(again.socket, meas.socket)
+    assert np.array_equal(np.isnan(again.xyz), np.isnan(meas.xyz))
+    assert np.allclose(again.xyz[~again.contact], meas.xyz[~meas.contact])
+    assert main(["identify", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                 "--data", str(tmp_path / "mixed.csv"), "--sigma", str(SEATING_MM),
+                 "--model", "joint_offset+geometry", "--out", str(tmp_path / "r.json")]) == 0
+    assert main(["predict", "--result", str(tmp_path / "r.json"), "--data",
+                 str(tmp_path / "mixed.csv"), "--out", str(tmp_path / "pred.csv")]) == 0
+    said = capsys.readouterr().out
+    assert "a turn of every point about that socket is not seen" in said
+    with open(tmp_path / "pred.csv") as f:
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    assert [r["socket"] for r in rows] == [name for name, _ in seats]
+    assert all(r["x"] for r in rows)

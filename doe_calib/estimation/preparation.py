@@ -132,9 +132,10 @@ def given_sockets(measurements) -> dict:
     (formats.md §3); empty without."""
     if measurements.socket is None:
         return {}
-    at = np.flatnonzero((measurements.socket >= 0) & ~measurements.contact)
-    return {measurements.socket_names[measurements.socket[i]]: measurements.xyz[i]
-            for i in at[::-1]}  # one row per socket: they agree (the reader's check)
+    out = {}
+    for i in np.flatnonzero((measurements.socket >= 0) & ~measurements.contact).tolist():
+        out.setdefault(measurements.socket_names[measurements.socket[i]], measurements.xyz[i])
+    return out  # a socket's rows agree (the reader's check)
 
 
 def _spread(points: dict) -> int:

@@ -1,17 +1,42 @@
-"""Socket contacts after a fit: where each socket is, and the note that says so.
+"""Socket contacts after a fit: where each socket is, the note that says so, and what a
+prediction from contacts alone is relative to.
 
 A socket's point is not a parameter of the fit (the residuals eliminate it:
 :mod:`~doe_calib.estimation.weighted_residuals`); at the fitted parameters it is the
 σ⁻²-weighted mean of the model's points of its contacts.
+
+A fit to contacts alone cannot see a rigid motion of the whole (unless three given
+socket positions not on one line place it) nor its scale (unless two given positions
+are apart): :func:`~doe_calib.estimation.preparation.fix_unseen_by_contacts` fixed
+parameters for them. Its predictions are relative to the sockets' frame, and their
+std is honest only there: the parameters the rank analysis could not separate are
+taken up by the free ones up to such a motion (:func:`frame_unseen_part`), which is
+said in words (:func:`frame_words`), not put in the number.
 """
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 import numpy as np
 
+from doe_calib.estimation.preparation import (
+    BASE_UNSEEN,
+    LINE_UNSEEN,
+    POINT_UNSEEN,
+    SCALE_UNSEEN,
+)
+from doe_calib.estimation.unseen import GENERIC_POSES, tolerances, unseen_part
 from doe_calib.estimation.weighted_residuals import socket_mean
+from doe_calib.io.measurements import Configurations
 from doe_calib.model.evaluation import observation_matrix
+from doe_calib.model.rotations import skew_matrix
+from doe_calib.model.simulate import random_configurations
+
+#: An unseen parameter's effect counts as taken up by the free ones (and the motion the
+#: contacts cannot see) when what they leave of it at generic configurations is below
+#: this share; its unseen part is then that remainder, else its whole effect.
+TAKEN_UP = 0.1
 
 
 #: How the note of :func:`socket_note` begins.
@@ -58,11 +83,14 @@ def socket_note(model, measurements, params, covariance, noise_scale: float = 1.
     >>> socket_note(model, measurements, result.parameters, result.covariance)  # doctest: +SKIP
     '45 socket contacts in 3 sockets (135 coordinates, less 9 for the unknown sockets' …'
     """
-    if not measurements.contact.any():
+    if measurements.socket is None or not (measurements.socket >= 0).any():
         return ""
     seated = measurements.socket >= 0
     n, k = int(seated.sum()), len(np.unique(measurements.socket[seated]))
     unknown = len(measurements.sockets_used)
+    if not unknown:
+        return (f"{n} socket contacts in {k} sockets of given position ({3 * n} coordinates, "
+                f"in the frame of {'the tracker' if not seated.all() else 'the positions'})")
     where = "; ".join(
         f"{name} at ({', '.join(f'{c:.3f}' for c in point * 1000.0)}) ± "
         f"({', '.join(f'{c:.3f}' for c in std * 1000.0)}) mm, "
@@ -80,3 +108,104 @@ def socket_note(model, measurements, params, covariance, noise_scale: float = 1.
     return (f"{n} socket contacts in {k} sockets{given} ({3 * n} coordinates, less "
             f"{3 * unknown} for the unknown sockets' points, in the observations counted): "
             f"{where} ({frame})")
+
+
+def frame_reasons(params) -> list[str]:
+    """The reasons ``params`` (a result's) hold for what a fit to contacts alone cannot
+    see (:mod:`~doe_calib.estimation.preparation`'s words), each once; [] for another fit."""
+    ours = (BASE_UNSEEN, POINT_UNSEEN, LINE_UNSEEN.split("{")[0], SCALE_UNSEEN)
+    return [w for w in dict.fromkeys(params.fixed_reason) if w.startswith(ours)]
+
+
+def from_contacts(result) -> bool:
+    """Whether ``result`` was fitted from socket contacts (its socket note, or what a fit
+    to contacts alone fixes)."""
+    return any(is_socket_note(w) for w in result.warnings) or bool(
+        frame_reasons(result.parameters))
+
+
+def frame_unseen_part(model, params, markers=None, tolerance: dict | None = None) -> tuple:
+    """The unseen part of a fit from socket contacts, relative to the sockets' frame.
+
+    As :func:`~doe_calib.estimation.unseen.unseen_part`, but a not-separable parameter
+    is taken up by the free parameters and, when the contacts cannot see them either, a
+    rigid motion of the whole and a growth about the robot's root; and it is taken up
+    when what they leave of it is below :data:`TAKEN_UP` of its effect (the remainder is
+    then its unseen part: a single ball seen off the flange's axis leaves some 0.3 % of
+    what it cannot separate), not only below 1e-6. Returns ``(part, motion)``:
+    ``part.effect`` leaves in the point the motion ``motion`` (7, D) (translation, m;
+    rotation, rad; growth; per unseen parameter at its tolerance), which
+    :func:`frame_effect` takes out.
+    """
+    part = unseen_part(model, params, markers, tolerance)
+    motion = np.zeros((7, len(part)))
+    if not len(part):
+        return part, motion
+    cfg = Configurations.from_arrays(random_configurations(model.robot, GENERIC_POSES,
+                                                           np.random.default_rng(0)))
+    x, b = observation_matrix(model, params.values, cfg)
+    if markers is not None:
+        pick = [model.tool.index(n) for n in markers]
+        x, b = x[:, pick], b[:, pick]
+    reasons = frame_reasons(params)
+    unseen = 7 if any(w.startswith(SCALE_UNSEEN) for w in reasons) else 6 if reasons else 0
+    frame = _motion_columns(x.reshape(-1, 3))[..., :unseen].reshape(x.size, unseen)
+    b = b.reshape(-1, b.shape[-1])
+    b_dep, taking = b[:, part.index], np.column_stack([b[:, part.free], frame])
+    solved = np.linalg.lstsq(taking * np.r_[params.scales[part.free], np.ones(unseen)],
+                             b_dep, rcond=None)[0]
+    solved[:int(part.free.sum())] *= params.scales[part.free][:, None]
+    rest = np.linalg.norm(b_dep - taking @ solved, axis=0)
+    size = np.linalg.norm(b_dep, axis=0)
+    taken = (size > 0) & (rest <= TAKEN_UP * size)
+    solved[:, ~taken] = 0.0
+    motion[:unseen] = solved[int(part.free.sum()):] * part.tolerance
+    return replace(part, absorbed=solved[:int(part.free.sum())], structural=taken), motion
+
+
+def _motion_columns(points) -> np.ndarray:
+    """How a translation, a small rotation about the root and a growth about it move each
+    point, shape (K, 3, 7)."""
+    out = np.zeros((len(points), 3, 7))
+    out[:, :, :3] = np.eye(3)
+    out[:, :, 3:6] = -np.array([skew_matrix(p) for p in points])
+    out[:, :, 6] = points
+    return out
+
+
+def frame_effect(effect, points, motion) -> np.ndarray:
+    """``effect`` (K, 3, D) of :meth:`UnseenPart.effect` at ``points`` (K, 3), m, less the
+    motion of the whole the fit cannot see (``motion`` of :func:`frame_unseen_part`)."""
+    return effect - _motion_columns(np.asarray(points, float)) @ motion
+
+
+def frame_words(params, tolerance: dict | None = None) -> str:
+    """What a prediction of a fit to contacts alone is relative to, in words ("" for
+    another fit): the motion of the whole its readings cannot see, and the scale's
+    stated tolerance per metre, neither in the std."""
+    reasons = frame_reasons(params)
+    if not reasons:
+        return ""
+    words = []
+    if BASE_UNSEEN in reasons:
+        words.append("relative to the sockets' frame: where the robot stands in it (a rigid "
+                     "motion of every point) is not seen")
+    elif POINT_UNSEEN in reasons:
+        words.append("relative to the frame of the given socket position: a turn of every "
+                     "point about that socket is not seen")
+    elif any(w.startswith(LINE_UNSEEN.split("{")[0]) for w in reasons):
+        line = next(w for w in reasons if w.startswith(LINE_UNSEEN.split("{")[0]))
+        words.append(f"relative to the frame of the given socket positions: a turn of every "
+                     f"point about their line ({line.rsplit('(', 1)[-1].rstrip(')')}) is not "
+                     f"seen")
+    held = [(n, w) for n, w in zip(params.names, params.fixed_reason)
+            if w.startswith(SCALE_UNSEEN)]
+    if held:
+        name, why = held[0]
+        length = float(why.rsplit("(", 1)[-1].split()[0]) / 1000.0
+        tol = float(tolerances(params, [name], tolerance)[0])
+        words.append(f"the scale is not seen (no known length): ±{tol / length * 1000.0:.3g} "
+                     f"mm per metre of distance (1σ; {name} held at the URDF's, "
+                     f"stated tolerance {tol * 1000.0:.3g} mm over {length * 1000.0:.1f} mm)")
+    return "; ".join(words) + ("; neither is in the std" if len(words) > 1 else
+                               ", nor in the std")

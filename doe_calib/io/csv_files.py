@@ -358,15 +358,18 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     The approach columns are written only when reading back would not derive
     the same directions from the order of the rows (module notes); the
     ``session`` column only when the readings come from several sessions; the
-    ``sigma`` column only when some reading has a σ. ``std`` (K, 3), m: a prediction's
-    standard deviation of each coordinate, written as the :data:`PREDICTED_STD` columns in
-    mm (ignored on reading).
+    ``sigma`` column only when some reading has a σ; the ``socket`` column (and x, y, z
+    empty where not known) when some reading is a contact. ``std`` (K, 3), m: a
+    prediction's standard deviation of each coordinate, written as the
+    :data:`PREDICTED_STD` columns in mm (ignored on reading). A prediction of contacts
+    (each row its own x, y, z) is not read back as contacts: a socket's rows must agree.
     """
     cfg, c, sessions = measurements.configurations, measurements.config, measurements.sessions
     order = np.array(list(dict.fromkeys(c.tolist())), int)  # in order of first appearance
     columns = {**_configuration_columns(cfg, c, robot),
                "marker": [tool.names[j] for j in measurements.marker],
-               **_numbers(XYZ, measurements.xyz * 1000.0)}
+               **_numbers(XYZ, measurements.xyz * 1000.0,
+                          unknown_empty=measurements.socket is not None)}
     if np.isfinite(cfg.temperature).any():
         columns.update(_numbers(["temperature"], cfg.env[c, :1], unknown_empty=True))
     if not np.isnan(measurements.sigma).all():  # none given: none written
@@ -376,6 +379,9 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
         columns.update(_approach_cells(cfg, c, robot))
     if len(set(sessions)) > 1:
         columns["session"] = [sessions[i] for i in c]
+    if measurements.socket is not None:
+        columns["socket"] = [measurements.socket_names[k] if k >= 0 else ""
+                             for k in measurements.socket.tolist()]
     if std is not None:
         columns.update(_numbers(PREDICTED_STD, np.asarray(std, float) * 1000.0))
     _write(path, "doe_calib measurements: q in deg (mm for prismatic joints), x/y/z and sigma "
