@@ -10,12 +10,7 @@ from doe_calib.io.measurements import Configurations, Measurements, provisional
 from doe_calib.estimation.labelled import read_only
 from doe_calib.estimation.measured_region import outside_joints
 from doe_calib.estimation.session import error_mm, reregister, session_notes
-from doe_calib.estimation.sockets import (
-    frame_effect,
-    frame_unseen_part,
-    frame_words,
-    from_contacts,
-)
+from doe_calib.estimation.sockets import frame_unseen_part, frame_words, from_contacts
 from doe_calib.estimation.unseen import measured_markers, unseen_notes, unseen_part
 from doe_calib.model.evaluation import observation_matrix
 
@@ -225,17 +220,13 @@ def predict(result, data, model=None, *, registry=None, apriori: bool = False,
     cov = np.asarray(result.cov_params(apriori=apriori))
     var = np.einsum("kif,fg,kig->ki", bf, cov, bf)
     frame, contacts = frame_words(params, tolerance), from_contacts(result)
-    if contacts:
-        part, motion = frame_unseen_part(model, params, measured_markers(result), tolerance)
-    else:
-        part = unseen_part(model, params, measured_markers(result), tolerance)
+    part = (frame_unseen_part if contacts else unseen_part)(model, params,
+                                                           measured_markers(result), tolerance)
     notes = (f"the std is {frame}",) if frame else ()
     if len(part):
         _, b_bare = observation_matrix(model, params.values, type(cfg).from_arrays(
             cfg.q, None, cfg.env))
         effect = part.effect(b[config, marker], b_bare[config, marker])
-        if contacts:
-            effect = frame_effect(effect, x[config, marker], motion)
         notes = notes + unseen_notes(effect, np.sqrt(np.sum(var, 1)), marker,
                                      result.tool.names, part, params)
         var = var + np.sum(effect ** 2, axis=-1)

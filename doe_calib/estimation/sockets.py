@@ -30,7 +30,6 @@ from doe_calib.estimation.unseen import GENERIC_POSES, tolerances, unseen_part
 from doe_calib.estimation.weighted_residuals import socket_mean
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.evaluation import observation_matrix
-from doe_calib.model.rotations import skew_matrix
 from doe_calib.model.simulate import random_configurations
 
 #: An unseen parameter's effect counts as taken up by the free ones (and the motion the
@@ -124,59 +123,38 @@ def from_contacts(result) -> bool:
         frame_reasons(result.parameters))
 
 
-def frame_unseen_part(model, params, markers=None, tolerance: dict | None = None) -> tuple:
+def frame_unseen_part(model, params, markers=None, tolerance: dict | None = None):
     """The unseen part of a fit from socket contacts, relative to the sockets' frame.
 
     As :func:`~doe_calib.estimation.unseen.unseen_part`, but a not-separable parameter
-    is taken up by the free parameters and, when the contacts cannot see them either, a
-    rigid motion of the whole and a growth about the robot's root; and it is taken up
-    when what they leave of it is below :data:`TAKEN_UP` of its effect (the remainder is
-    then its unseen part: a single ball seen off the flange's axis leaves some 0.3 % of
-    what it cannot separate), not only below 1e-6. Returns ``(part, motion)``:
-    ``part.effect`` leaves in the point the motion ``motion`` (7, D) (translation, m;
-    rotation, rad; growth; per unseen parameter at its tolerance), which
-    :func:`frame_effect` takes out.
+    is taken up by the free parameters and by those held for what contacts alone cannot
+    see (:func:`frame_reasons`: a rigid motion of the whole, its scale; the fit cannot
+    see these either, and :func:`frame_words` says so), and it is taken up when what
+    they leave of it is below :data:`TAKEN_UP` of its effect (the remainder is then its
+    unseen part: a single ball seen off the flange's axis leaves some 0.3 % of what it
+    cannot separate), not only below 1e-6. The part's ``free`` are the parameters that
+    take up, so ``part.effect`` of any point (a marker, a TCP, in either frame) leaves
+    out that motion.
     """
     part = unseen_part(model, params, markers, tolerance)
-    motion = np.zeros((7, len(part)))
     if not len(part):
-        return part, motion
+        return part
+    reasons = frame_reasons(params)
+    taking = part.free | np.isin(params.fixed_reason, reasons)
     cfg = Configurations.from_arrays(random_configurations(model.robot, GENERIC_POSES,
                                                            np.random.default_rng(0)))
-    x, b = observation_matrix(model, params.values, cfg)
+    _, b = observation_matrix(model, params.values, cfg)
     if markers is not None:
-        pick = [model.tool.index(n) for n in markers]
-        x, b = x[:, pick], b[:, pick]
-    reasons = frame_reasons(params)
-    unseen = 7 if any(w.startswith(SCALE_UNSEEN) for w in reasons) else 6 if reasons else 0
-    frame = _motion_columns(x.reshape(-1, 3))[..., :unseen].reshape(x.size, unseen)
-    b = b.reshape(-1, b.shape[-1])
-    b_dep, taking = b[:, part.index], np.column_stack([b[:, part.free], frame])
-    solved = np.linalg.lstsq(taking * np.r_[params.scales[part.free], np.ones(unseen)],
-                             b_dep, rcond=None)[0]
-    solved[:int(part.free.sum())] *= params.scales[part.free][:, None]
-    rest = np.linalg.norm(b_dep - taking @ solved, axis=0)
+        b = b[:, [model.tool.index(n) for n in markers]]
+    b = b.reshape(-1, b.shape[-1]) * params.scales  # columns at their typical size
+    b_dep, b_take = b[:, part.index], b[:, taking]
+    absorbed = np.linalg.lstsq(b_take, b_dep, rcond=None)[0]
+    rest = np.linalg.norm(b_dep - b_take @ absorbed, axis=0)
     size = np.linalg.norm(b_dep, axis=0)
     taken = (size > 0) & (rest <= TAKEN_UP * size)
-    solved[:, ~taken] = 0.0
-    motion[:unseen] = solved[int(part.free.sum()):] * part.tolerance
-    return replace(part, absorbed=solved[:int(part.free.sum())], structural=taken), motion
-
-
-def _motion_columns(points) -> np.ndarray:
-    """How a translation, a small rotation about the root and a growth about it move each
-    point, shape (K, 3, 7)."""
-    out = np.zeros((len(points), 3, 7))
-    out[:, :, :3] = np.eye(3)
-    out[:, :, 3:6] = -np.array([skew_matrix(p) for p in points])
-    out[:, :, 6] = points
-    return out
-
-
-def frame_effect(effect, points, motion) -> np.ndarray:
-    """``effect`` (K, 3, D) of :meth:`UnseenPart.effect` at ``points`` (K, 3), m, less the
-    motion of the whole the fit cannot see (``motion`` of :func:`frame_unseen_part`)."""
-    return effect - _motion_columns(np.asarray(points, float)) @ motion
+    absorbed = absorbed * params.scales[taking][:, None] / params.scales[part.index]
+    absorbed[:, ~taken] = 0.0
+    return replace(part, absorbed=absorbed, free=taking, structural=taken)
 
 
 def frame_words(params, tolerance: dict | None = None) -> str:
