@@ -156,6 +156,8 @@ def test_socket_campaign_predicts_new_configurations(ur10, truth, campaign, caps
     said = capsys.readouterr()
     assert "socket contacts cannot see the robot's base pose" in said.out + said.err
     assert said.out.count("45 socket contacts in 3 sockets") == 1  # the kept fit's, once
+    assert "readings               = 45" in said.out  # each socket's point costs 3
+    assert "observations (3K − 3S) = 126 (S = 3 sockets of unknown position)" in said.out
     assert main(["predict", "--result", str(d / "r.json"), "--data", str(d / "new.csv"),
                  "--out", str(d / "pred.csv")]) == 0
     with open(d / "pred.csv") as f:
@@ -264,6 +266,7 @@ def test_sockets_of_given_position_see_base_and_scale(ur10, truth, campaign, dra
     sockets' positions is predicted to ≤ 0.03 mm at new configurations, in the plate frame."""
     d, q_new, seats = campaign
     pred, said = _identify_and_predict(d, "given3", seats, drawing, capsys)
+    assert "readings               = 45" in said and "observations (3K)      = 135" in said
     assert "socket contacts" not in said.split("fixed")[0]  # nothing unseen but the flange
     assert "without a known length" not in said and "base's turn" not in said
     true = sim.marker_positions(ur10, truth, q_new, np.zeros((40, 6)))[:, 0]
