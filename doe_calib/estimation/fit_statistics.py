@@ -179,7 +179,7 @@ def fit_statistics(result) -> FitStatistics:
         return None if v is None else int(v)
 
     readings = result.n_observations // 3
-    if any(is_socket_note(w) for w in result.warnings):  # contacts: K from the residuals
+    if any(is_socket_note(w) for w in getattr(result, "warnings", ())):  # K: the residuals'
         readings = int(result.residuals.get("n", readings))
     return FitStatistics(
         readings=readings, observations=int(result.n_observations),
