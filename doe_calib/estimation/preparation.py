@@ -40,10 +40,8 @@ POINT_UNSEEN = ("socket contacts with one socket of given position cannot see th
 LINE_UNSEEN = ("socket contacts whose given positions lie on one line cannot see the base's "
                "turn about that line: the base rotation's component about it held at the "
                "turn least from the URDF's root axes (sockets {})")
-#: Why the first joint's placement and offset are fixed with part of the base rotation.
-ARM_AS_BASE = ("the first joint's placement and offset move the whole arm as the base pose "
-               "does, the turn the given sockets cannot see included: fixed at their current "
-               "values, the base pose free where the sockets see it")
+#: How the reasons of :func:`fix_base_turn` begin.
+_TURN_REASONS = (POINT_UNSEEN, LINE_UNSEEN.split("{")[0])
 #: Given socket positions closer than this (m) are one point; off a line by less: on it.
 APART = 1e-3
 
@@ -73,7 +71,8 @@ def register_base(model, measurements, params):
 
 
 def fix_unseen_by_contacts(model, measurements, params, start: bool = True):
-    """What readings without a tracker's cannot see, fixed and said in words.
+    """What readings without a tracker's cannot see, fixed and said in words (before the
+    rank analysis; the base's turn a given position cannot see: :func:`fix_base_turn`).
 
     Every reading is a socket contact (formats.md §3). Contacts in sockets of unknown
     position see neither a rigid motion nor a growth of the whole arm (the sockets move
@@ -83,48 +82,57 @@ def fix_unseen_by_contacts(model, measurements, params, start: bool = True):
     - none: the base pose is fixed at the identity (:data:`BASE_UNSEEN`: the URDF's root
       frame), the first joint's placement and offset at their values
       (:data:`ARM_UNSEEN`);
-    - one point: the base starts where it puts that socket's contacts on it, its
-      rotation fixed (:data:`POINT_UNSEEN`: a turn about the point);
-    - on one line: the base starts registered on them, its rotation's component about
-      the line fixed (:data:`LINE_UNSEEN`);
-    - three or more not on one line: nothing (the base is registered and fitted).
+    - one point, or on one line: the base starts at the least turn from the URDF's root
+      that puts their contacts on them (the rank analysis then fixes what moves the arm
+      as the base does);
+    - three or more not on one line: the base starts registered on them.
 
-    With some base rotation fixed, the first joint's placement and offset (which move
-    the arm as the base does) are fixed too (:data:`ARM_AS_BASE`). Without two given
-    positions apart, the placement translation along the longest nominal link is held
-    at its value (:data:`SCALE_UNSEEN`): the scale. These are exact null directions of
-    the Jacobian only where every socket's contacts meet, so the rank analysis at the
-    nominal model does not find them; left free, a fit can turn or shrink the arm.
-    ``start``: set the base's start values (not on a refit, whose base is the fit's).
+    Without two given positions apart, the placement translation along the longest
+    nominal link is held at its value (:data:`SCALE_UNSEEN`): the scale. These are exact
+    null directions of the Jacobian only where every socket's contacts meet, so the rank
+    analysis at the nominal model does not find them; left free, a fit can turn or
+    shrink the arm. ``start``: set the base's start values (not on a refit, whose base
+    is the fit's).
     """
     points = given_sockets(measurements)
     spread = _spread(points)
     if spread >= 2:
         return register_base(model, measurements.subset(~measurements.contact), params) \
             if start else params
-    base = params.index("base")
-    if not len(points):
+    if points:
+        params = _start_base(model, measurements, params, spread) if start else params
+    else:
+        base = params.index("base")
         v = params.values.copy()
         v[base] = 0.0
         params = params.with_values(v).fixed([params.names[i] for i in base], BASE_UNSEEN)
-        arm_words = ARM_UNSEEN
-    else:
-        params = _start_base(model, measurements, params, spread) if start else params
-        turn = base[3:] if spread == 0 else [_base_turn_about(params, points)]
-        params = params.fixed([params.names[i] for i in turn],
-                              POINT_UNSEEN if spread == 0 else LINE_UNSEEN.format(
-                                  ", ".join(points)))
-        arm_words = ARM_AS_BASE
-    robot = model.robot
-    first = robot.joints[0].name
-    arm = [n for n in (f"dq_{first}", *(f"g_{first}_{r}{a}" for r in "tr" for a in "xyz"))
-           if n in params.names]
-    params = params.fixed(arm, arm_words) if arm else params
+        first = model.robot.joints[0].name
+        arm = [n for n in (f"dq_{first}", *(f"g_{first}_{r}{a}" for r in "tr" for a in "xyz"))
+               if n in params.names]
+        params = params.fixed(arm, ARM_UNSEEN) if arm else params
     if spread == 1 or any(why.startswith(SCALE_UNSEEN) for why in params.fixed_reason):
         return params  # a known length; or a refit of the kept parameters: already held
-    name, length = _longest_link(robot, params)
+    name, length = _longest_link(model.robot, params)
     return params.fixed([name], f"{SCALE_UNSEEN} ({length * 1000.0:.1f} mm)") if name \
         else params
+
+
+def fix_base_turn(measurements, params):
+    """The base's turn that given socket positions at one point, or on one line, cannot
+    see, fixed and said in words; ``params`` unchanged for other readings.
+
+    After the rank analysis, which fixed what moves the whole arm as the base does: the
+    base rotation (:data:`POINT_UNSEEN`), or its component a turn about the line changes
+    most (:data:`LINE_UNSEEN`), is then the only way left to turn the arm so.
+    """
+    points = given_sockets(measurements)
+    if not points or not (measurements.socket >= 0).all() or _spread(points) >= 2:
+        return params
+    rotation = params.index("base")[3:]
+    if _spread(points) == 0:
+        return params.fixed([params.names[i] for i in rotation], POINT_UNSEEN)
+    return params.fixed([params.names[_base_turn_about(params, points)]],
+                        LINE_UNSEEN.format(", ".join(points)))
 
 
 def given_sockets(measurements) -> dict:
@@ -273,10 +281,9 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
     if measurements.socket is not None and (measurements.socket >= 0).all():
         params = fix_unseen_by_contacts(model, measurements, params,
                                         register and params.free[params.index("base")].all())
-        for why in dict.fromkeys(params.fixed_reason[i] for i in params.index("base")):
-            if why.startswith((BASE_UNSEEN, POINT_UNSEEN, LINE_UNSEEN.split("{")[0])):
-                warnings.warn(why, IdentifiabilityWarning, stacklevel=3)  # the report
-                # groups the fixed parameters by these reasons: no note of its own
+        if not params.free[params.index("base")].any():
+            warnings.warn(BASE_UNSEEN, IdentifiabilityWarning, stacklevel=3)  # the report
+            # groups the fixed parameters by these reasons: no note of its own
     elif register and params.free[params.index("base")].all():
         params = register_base(model, measurements if tracked.all() else
                                measurements.subset(tracked), params)
@@ -286,4 +293,11 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
                         f"parameters: measure more poses or markers, or use a smaller model", where)
     red = reduce_jacobian(model, measurements, params.values)
     params, notes, absorbed = fix_unidentifiable(model, measurements, params, reduction=red)
+    turned = fix_base_turn(measurements, params)
+    if turned is not params:
+        params = turned
+        told = [why for i, why in enumerate(params.fixed_reason) if i in params.index("base")]
+        warnings.warn(next(w for w in told if w.startswith(_TURN_REASONS)),
+                      IdentifiabilityWarning, stacklevel=3)
+        absorbed = {k: v for k, v in absorbed.items() if params.free[params.position(k)]}
     return params, notes, red, absorbed
