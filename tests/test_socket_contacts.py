@@ -312,6 +312,9 @@ def test_socket_column_written_back(campaign, drawing, tmp_path, capsys):
     assert main(["identify", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
                  "--data", str(tmp_path / "mixed.csv"), "--sigma", str(SEATING_MM),
                  "--model", "joint_offset+geometry", "--out", str(tmp_path / "r.json")]) == 0
+    said = capsys.readouterr()
+    assert "one socket of given position cannot see the base's turn" in said.out + said.err
+    assert "cannot see the robot's scale without a known length" in said.out
     assert main(["predict", "--result", str(tmp_path / "r.json"), "--data",
                  str(tmp_path / "mixed.csv"), "--out", str(tmp_path / "pred.csv")]) == 0
     said = capsys.readouterr().out
