@@ -92,9 +92,10 @@ def campaign(ur10, truth, tmp_path_factory):
     return d, q_new, seats
 
 
-def _write_contacts(path, seats, given=None, sigma_mm=None):
+def _write_contacts(path, seats, given=None, drawn_mm=None):
     """A contacts file of ``seats`` ((socket, q) each); ``given``: socket → its position,
-    mm, written on its rows (else x, y, z empty); ``sigma_mm``: socket → σ of its rows."""
+    mm, written on its rows (else x, y, z empty); ``drawn_mm``: the std of each given
+    position (its drawing's tolerance), mm."""
     given, count = given or {}, {}
     rows = []
     for name, q in seats:
@@ -102,7 +103,8 @@ def _write_contacts(path, seats, given=None, sigma_mm=None):
         xyz = given.get(name, ("", "", ""))
         rows.append({"pose": f"{name}-{count[name]}", **_q_columns(q), "marker": "ball",
                      "socket": name, **{c: str(v) for c, v in zip("xyz", xyz)},
-                     **({"sigma": str(sigma_mm[name])} if sigma_mm else {})})
+                     **({"socket_sigma": str(drawn_mm) if name in given else ""}
+                        if drawn_mm else {})})
     with open(path, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
@@ -245,12 +247,10 @@ def drawing():
 def _identify_and_predict(d, name, seats, given, capsys):
     """Identify from the contacts with the ``given`` positions, predict the new
     configurations: (predicted (40, 3), m, plate frame; identify's words)."""
-    count = {s: sum(1 for n, _ in seats if n == s) for s in SOCKETS_M}
-    sigma = {s: float(np.hypot(SEATING_MM, np.sqrt(count[s]) * DRAWING_MM)) if s in given
-             else SEATING_MM for s in SOCKETS_M}  # formats.md §3: a drawing's error is common
-    _write_contacts(d / f"{name}.csv", seats, given, sigma)
+    _write_contacts(d / f"{name}.csv", seats, given, DRAWING_MM)
     assert main(["identify", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
-                 "--data", str(d / f"{name}.csv"), "--model", "joint_offset+geometry",
+                 "--data", str(d / f"{name}.csv"), "--sigma", str(SEATING_MM),
+                 "--model", "joint_offset+geometry",
                  "--out", str(d / f"{name}.json")]) == 0
     said = capsys.readouterr()
     assert main(["predict", "--result", str(d / f"{name}.json"), "--data", str(d / "new.csv"),
@@ -346,3 +346,53 @@ def test_compensate_says_what_contacts_cannot_see(campaign, capsys):
     with open(d / "compensated.csv") as f:
         rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
     assert max(float(r["predicted_std_mm"]) for r in rows) < 0.05  # before: 1.5–2.5 mm
+
+
+@pytest.mark.parametrize("cell, said", [
+    ("-0.005", "socket_sigma -0.005 mm: a position's std is 0 or more"),
+    ("0.007", r"socket 'S1' with socket_sigma 0.007 mm here but 0.005 mm on line 2"),
+])
+def test_socket_sigma_is_one_per_given_socket(campaign, drawing, tmp_path, cell, said):
+    d, _, seats = campaign
+    _write_contacts(tmp_path / "given.csv", seats, {"S1": drawing["S1"]}, DRAWING_MM)
+    lines = (tmp_path / "given.csv").read_text().splitlines()
+    lines[3] = lines[3].rsplit(",", 1)[0] + "," + cell
+    (tmp_path / "given.csv").write_text("\n".join(lines) + "\n")
+    robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
+    with pytest.raises(DataError, match=f"line 4, column 'socket_sigma'.*{said}"):
+        read_measurements(tmp_path / "given.csv", robot, Tool.from_yaml(d / "tool.yaml"),
+                          sigma=1e-5)
+
+
+def test_given_socket_residuals_are_whitened(ur10, campaign, drawing, tmp_path):
+    """A given socket's std makes its contacts' errors correlated (σ²I + σ_s²11ᵀ per axis):
+    the weighted residuals' ‖r‖² is that correlated χ², for any parameters, and their
+    Jacobian that of finite differences."""
+    from doe_calib.estimation.weighted_residuals import (
+        marker_points,
+        residual_norm2,
+        weighted_residual,
+    )
+    from doe_calib.model.marker_model import build_model
+
+    d, _, seats = campaign
+    _write_contacts(tmp_path / "given.csv", seats, drawing, DRAWING_MM)
+    robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
+    tool = Tool.from_yaml(d / "tool.yaml")
+    meas = read_measurements(tmp_path / "given.csv", robot, tool, sigma=SEATING_MM * 1e-3)
+    model = build_model(robot, tool, "joint_offset+geometry")
+    values = model.nominal().values + np.random.default_rng(2).normal(
+        scale=1e-4, size=len(model.nominal().values))
+    e = meas.xyz - marker_points(model, meas, values)
+    chi2 = 0.0
+    for k in range(len(meas.socket_names)):
+        at = meas.socket == k
+        cov = (SEATING_MM * 1e-3) ** 2 * np.eye(at.sum()) + (DRAWING_MM * 1e-3) ** 2
+        chi2 += float(np.sum(e[at] * np.linalg.solve(cov, e[at])))
+    assert residual_norm2(model, meas, values) == pytest.approx(chi2, rel=1e-9)
+    r, jac = weighted_residual(model, meas, values)
+    for i in (7, 20):
+        step = np.eye(len(values))[i] * 1e-7
+        fd = (weighted_residual(model, meas, values + step, jacobian=False)[0] -
+              weighted_residual(model, meas, values - step, jacobian=False)[0]) / 2e-7
+        assert np.allclose(jac[:, i], fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())

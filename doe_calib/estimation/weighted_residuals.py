@@ -16,6 +16,13 @@ points of that socket's contacts. The residuals here are those of s so eliminate
 and its covariance (the Schur complement of the full problem) are those of
 estimating s alongside p. A socket's mean needs all its contacts at once: a file
 with contacts is taken in one block of configurations.
+
+A socket of given position s₀ with std σ_s per axis (its drawing's tolerance, common to
+its n contacts) makes their errors correlated, covariance D + σ_s²·11ᵀ (D = diag σ²). Its
+residuals are whitened exactly: r = (s₀ + γ (s̄(p) − s₀) − x(p)) / σ, Jacobian
+−(B − γ B̄) / σ, with γ = 1 − (1 + σ_s² Σσ⁻²)^(−1/2) (:func:`socket_pull`): ‖r‖² is
+then the correlated χ² (Sherman–Morrison), and 3 coordinates per contact are counted;
+γ = 1 is a socket of unknown position (σ_s → ∞), γ = 0 an exact one.
 """
 from __future__ import annotations
 
@@ -37,9 +44,34 @@ def marker_points(model, measurements, values, block: int = BLOCK_CONFIGURATIONS
     return out
 
 
+def pooled(measurements, rows) -> np.ndarray:
+    """Which of ``rows`` are pooled with their socket's other contacts, shape (len(rows),)
+    bool: contacts in a socket of unknown position, or of a given one with a std."""
+    out = measurements.contact[rows]
+    if measurements.socket_sigma is not None:
+        out = out | ((measurements.socket[rows] >= 0) & (measurements.socket_sigma[rows] > 0))
+    return out
+
+
+def socket_pull(measurements, rows) -> np.ndarray:
+    """γ of each of ``rows`` (module notes), shape (len(rows),): 1 for a contact in a socket
+    of unknown position; for one in a socket of given position with std σ_s,
+    1 − (1 + σ_s² Σσ⁻²)^(−1/2), the sum over that socket's contacts among ``rows``; else 0."""
+    out = measurements.contact[rows].astype(float)
+    if measurements.socket_sigma is None:
+        return out
+    k, s = measurements.socket[rows], measurements.socket_sigma[rows]
+    w = measurements.sigma[rows] ** -2.0
+    given = pooled(measurements, rows) & ~measurements.contact[rows]
+    for j in np.unique(k[given]).tolist():
+        at = given & (k == j)
+        out[at] = 1.0 - 1.0 / np.sqrt(1.0 + s[at][0] ** 2 * w[at].sum())
+    return out
+
+
 def socket_mean(measurements, rows, v) -> np.ndarray:
     """For each of ``rows``: the σ⁻²-weighted mean of ``v`` (len(rows), …) over the rows of
-    its socket; 0 for a reading with coordinates (a tracker's, a given socket's).
+    its socket; 0 for a reading with coordinates (a tracker's, an exact given socket's).
 
     Parameters
     ----------
@@ -49,7 +81,7 @@ def socket_mean(measurements, rows, v) -> np.ndarray:
     v : ndarray, shape (len(rows), …)
         A quantity per reading (its model point, m; its rows of B).
     """
-    k = np.where(measurements.contact[rows], measurements.socket[rows], -1)
+    k = np.where(pooled(measurements, rows), measurements.socket[rows], -1)
     out = np.zeros_like(v, dtype=float)
     w = measurements.sigma[rows] ** -2.0
     for j in np.unique(k[k >= 0]).tolist():
@@ -60,11 +92,13 @@ def socket_mean(measurements, rows, v) -> np.ndarray:
 
 def targets(measurements, rows, points) -> np.ndarray:
     """What the model's ``points`` (len(rows), 3) of ``rows`` are compared to, m: the reading,
-    or for a contact its socket's point (the mean of its contacts' points)."""
-    if not measurements.contact[rows].any():
+    or for a contact its socket's point (the mean of its contacts' points; for a socket of
+    given position with a std, that position pulled towards the mean: module notes)."""
+    if not pooled(measurements, rows).any():
         return measurements.xyz[rows]
-    seated = measurements.contact[rows, None]
-    return np.where(seated, socket_mean(measurements, rows, points), measurements.xyz[rows])
+    mean, xyz = socket_mean(measurements, rows, points), measurements.xyz[rows]
+    return np.where(measurements.contact[rows, None], mean,
+                    xyz + socket_pull(measurements, rows)[:, None] * (mean - xyz))
 
 
 def marker_residuals(model, measurements, values) -> np.ndarray:
@@ -90,8 +124,9 @@ def weighted_residual(model, measurements, values, jacobian: bool = True):
     flat = b.reshape(-1, 3, b.shape[-1])
     picked = c * b.shape[1] + j
     rows = flat[:len(picked)] if _in_order(picked) else flat[picked]
-    if measurements.contact.any():
-        rows = rows - socket_mean(measurements, every, rows)
+    if pooled(measurements, every).any():
+        rows = rows - socket_pull(measurements, every)[:, None, None] * \
+            socket_mean(measurements, every, rows)
     return r, np.divide(rows, -s[:, :, None]).reshape(3 * len(measurements), -1)
 
 
@@ -152,7 +187,8 @@ def reduce_jacobian(model, measurements, values, columns=None, scale=None,
     if columns.dtype == bool:
         columns = np.flatnonzero(columns)
     scale = np.ones(len(columns)) if scale is None else np.asarray(scale, float)
-    if measurements.contact.any():  # a socket's mean needs all its contacts (module notes)
+    if pooled(measurements, np.arange(len(measurements))).any():  # a socket's mean needs all
+        # its contacts (module notes)
         block = max(block, len(measurements.configurations))
 
     def blocks():
@@ -185,8 +221,9 @@ def augmented_block(measurements, rows, config, x, b, columns, scale) -> np.ndar
     else:
         jac = flat[picked[:, None, None], np.arange(3)[:, None], columns]
     points = x.reshape(-1, 3)[picked]
-    if measurements.contact[rows].any():
-        jac = jac - socket_mean(measurements, rows, jac)
+    if pooled(measurements, rows).any():
+        jac = jac - socket_pull(measurements, rows)[:, None, None] * \
+            socket_mean(measurements, rows, jac)
     np.multiply(jac, -(scale / s)[:, None, :], out=view[:, :, :-1])
     np.divide(targets(measurements, rows, points) - points, s, out=view[:, :, -1])
     return out

@@ -122,14 +122,15 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     contacts = "socket" in table.columns  # x, y, z then empty on a contact's row
     tracked_xyz, require_xyz = require_xyz, require_xyz and not contacts
     required = ["pose", *joint_columns(robot), "marker", *(XYZ if require_xyz else ())]
-    optional = [*WRENCH, "temperature", "sigma", "session", "socket", *approach_columns(robot),
+    optional = [*WRENCH, "temperature", "sigma", "session", "socket", "socket_sigma",
+                *approach_columns(robot),
                 *(() if require_xyz else XYZ), *PREDICTED_STD]
     extra = check_columns(table, required, optional)
     explicit = approach_given(table, robot)
     if sigma is not None and not sigma > 0:
         raise DataError(f"σ must be positive, got {sigma * 1000.0} mm", table.path)
     table.cells(["pose", "marker", "session", "socket"])  # each kind of column in one pass
-    table.floats([*joint_columns(robot), *WRENCH, "temperature", "sigma", *XYZ,
+    table.floats([*joint_columns(robot), *WRENCH, "temperature", "sigma", "socket_sigma", *XYZ,
                   *approach_columns(robot)])
     problems, notes = RowProblems(table), []
     check_width(table, problems, 0)
@@ -150,8 +151,10 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     sigma_m = np.where(np.isnan(sig), np.nan if sigma is None else sigma, sig / 1000.0)
     xyz = numbers(table, problems, 9, XYZ, None if require_xyz else np.nan) / 1000.0
     socket_ids = texts(table, problems, 9, "socket") if contacts else None
+    drawn = numbers(table, problems, 9.5, ["socket_sigma"], 0.0)[:, 0] / 1000.0
     if contacts:
         _check_contacts(table, problems, socket_ids, xyz, tracked_xyz)
+        _check_socket_sigma(table, problems, socket_ids, xyz, drawn)
     appr = approach(table, problems, 10, robot) if explicit else None
     pose_code, session_code = codes(pose), codes(sessions)
     turns = _same_q(table, problems, 5, robot, q, combined([session_code, pose_code]), pose)
@@ -189,7 +192,8 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
                         + tuple(text for i, text in notes if i in kept or i < 0),
                         session, not given,
                         PER_READING if "sigma" in table.columns else GIVEN if given else ESTIMATED,
-                        **(_sockets([socket_ids[r] for r in rows.tolist()]) if contacts else {}))
+                        **(_sockets([socket_ids[r] for r in rows.tolist()], drawn[rows])
+                           if contacts else {}))
     tracked = meas.subset(~meas.contact) if contacts else meas  # the tracker's readings
     finding = metres_finding(tracked.xyz, robot, tracked.configurations.q, tracked.config,
                              tool.position_array[tracked.marker],
@@ -229,12 +233,31 @@ def _at_mm(xyz) -> str:
         f"({', '.join(f'{v * 1000.0:g}' for v in xyz)}) mm"
 
 
-def _sockets(ids) -> dict:
-    """``socket`` and ``socket_names`` of :class:`Measurements` from each reading's socket id
-    ("" for a tracker reading)."""
+def _check_socket_sigma(table, problems, socket_ids, xyz, drawn) -> None:
+    """Refuse a ``socket_sigma`` (the std of a socket's given position, m) that is negative,
+    on a row without a socket's given x, y, z, or other than on the socket's first row."""
+    given = np.array([bool(c) for c in socket_ids]) & np.isfinite(xyz).all(axis=1)
+    problems.check((9, 23), drawn < 0, lambda i: (
+        f"socket_sigma {drawn[i] * 1000.0:g} mm: a position's std is 0 or more"), "socket_sigma")
+    problems.check((9, 24), (drawn > 0) & ~given, lambda i: (
+        "socket_sigma on a row without a socket's given x, y, z: it is the std of a given "
+        "socket position"), "socket_sigma")
+    first = earlier_in_group(codes(socket_ids), given)
+    problems.check((9, 25), given & (first >= 0) & (drawn != drawn[np.maximum(first, 0)]),
+                   lambda i: (f"socket {socket_ids[i]!r} with socket_sigma "
+                              f"{drawn[i] * 1000.0:g} mm here but "
+                              f"{drawn[first[i]] * 1000.0:g} mm on line "
+                              f"{table.numbers[first[i]]}: one std per socket"),
+                   "socket_sigma")
+
+
+def _sockets(ids, drawn) -> dict:
+    """``socket``, ``socket_names`` and ``socket_sigma`` of :class:`Measurements` from each
+    reading's socket id ("" for a tracker reading) and its socket's position std (m)."""
     names = tuple(dict.fromkeys(i for i in ids if i))
     at = {n: k for k, n in enumerate(names)}
-    return {"socket": np.array([at.get(i, -1) for i in ids], int), "socket_names": names}
+    return {"socket": np.array([at.get(i, -1) for i in ids], int), "socket_names": names,
+            **({"socket_sigma": np.asarray(drawn, float)} if np.any(drawn > 0) else {})}
 
 
 def _same_q(table, problems, rank, robot, q, group, pose) -> np.ndarray:
@@ -359,7 +382,8 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     the same directions from the order of the rows (module notes); the
     ``session`` column only when the readings come from several sessions; the
     ``sigma`` column only when some reading has a σ; the ``socket`` column (and x, y, z
-    empty where not known) when some reading is a contact. ``std`` (K, 3), m: a
+    empty where not known) when some reading is a contact, ``socket_sigma`` when some
+    given socket position has a std. ``std`` (K, 3), m: a
     prediction's standard deviation of each coordinate, written as the
     :data:`PREDICTED_STD` columns in mm (ignored on reading). A prediction of contacts
     (each row its own x, y, z) is not read back as contacts: a socket's rows must agree.
@@ -382,6 +406,8 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     if measurements.socket is not None:
         columns["socket"] = [measurements.socket_names[k] if k >= 0 else ""
                              for k in measurements.socket.tolist()]
+    if measurements.socket_sigma is not None:
+        columns.update(_numbers(["socket_sigma"], measurements.socket_sigma[:, None] * 1000.0))
     if std is not None:
         columns.update(_numbers(PREDICTED_STD, np.asarray(std, float) * 1000.0))
     _write(path, "doe_calib measurements: q in deg (mm for prismatic joints), x/y/z and sigma "

@@ -207,6 +207,10 @@ class Measurements:
         :attr:`contact`).
     socket_names : tuple of str
         The sockets' ids, in order of first appearance.
+    socket_sigma : ndarray, shape (K,), optional
+        For a contact in a socket of given position: that position's std per axis (its
+        drawing's tolerance), m, common to all the socket's contacts; 0 (exact) otherwise.
+        None: 0 for every reading.
     """
 
     configurations: Configurations
@@ -224,6 +228,7 @@ class Measurements:
     observed_per_configuration: int = 0
     socket: np.ndarray | None = None
     socket_names: tuple = ()
+    socket_sigma: np.ndarray | None = None
 
     def __post_init__(self):
         if self.sigma_source not in SIGMA_SOURCES:
@@ -269,7 +274,9 @@ class Measurements:
                             sigma_source=self.sigma_source,
                             observed_per_configuration=self.observed_per_configuration,
                             socket=None if self.socket is None else self.socket[rows],
-                            socket_names=self.socket_names)
+                            socket_names=self.socket_names,
+                            socket_sigma=None if self.socket_sigma is None
+                            else self.socket_sigma[rows])
 
     @property
     def sessions(self) -> np.ndarray:
@@ -317,7 +324,10 @@ def concatenate(parts) -> Measurements:
                         sum((p.warnings for p in parts), ()),
                         tuple(s for p in parts for s in p.sessions),
                         any(p.sigma_estimated for p in parts), joined_sigma_source(parts),
-                        _joined_observed(parts), *_joined_sockets(parts))
+                        _joined_observed(parts), *_joined_sockets(parts),
+                        None if all(p.socket_sigma is None for p in parts) else
+                        np.concatenate([np.zeros(len(p)) if p.socket_sigma is None else
+                                        p.socket_sigma for p in parts]))
 
 
 def _joined_sockets(parts) -> tuple:
