@@ -7,8 +7,8 @@ A socket's point is not a parameter of the fit (the residuals eliminate it:
 
 A fit to contacts alone cannot see a rigid motion of the whole (unless three given
 socket positions not on one line place it) nor its scale (unless two given positions
-are apart): :func:`~doe_calib.estimation.preparation.fix_unseen_by_contacts` fixed
-parameters for them. Its predictions are relative to the sockets' frame, and their
+are apart): :func:`~doe_calib.estimation.preparation.fix_unseen_by_contacts` and
+:func:`~doe_calib.estimation.preparation.fix_base_turn` fixed parameters for them. Its predictions are relative to the sockets' frame, and their
 std is honest only there: the parameters the rank analysis could not separate are
 taken up by the free ones up to such a motion (:func:`frame_unseen_part`), which is
 said in words (:func:`frame_words`), not put in the number.
