@@ -17,6 +17,7 @@ from doe_calib.compensation.targets import TRACKER
 from doe_calib.errors import ConvergenceWarning, DataWarning, IdentifiabilityWarning, OptionError
 from doe_calib.estimation.identifiability import blind_motion_words
 from doe_calib.estimation.measured_region import outside_flags
+from doe_calib.estimation.sockets import frame_unseen_part, frame_words, from_contacts
 from doe_calib.estimation.unseen import measured_markers, unseen_part
 from doe_calib.model.evaluation import evaluate
 
@@ -115,7 +116,9 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
     -------
     CompensationResult
         A row not reached keeps its best q′, ``converged`` False and the reason
-        (ConvergenceWarning); a dominating unseen part is an IdentifiabilityWarning; rows
+        (ConvergenceWarning); a dominating unseen part is an IdentifiabilityWarning, and so
+        is, after a fit to socket contacts alone, what ``predicted_std`` is relative to
+        (the sockets' frame; the scale's stated tolerance per metre: not in it); rows
         moved beyond ``max_shift`` or outside the measured joint range are flagged
         (DataWarning).
 
@@ -147,14 +150,18 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
                           DataWarning, stacklevel=2)
     flags = tuple("; ".join(w for w in pair if w) for pair in zip(shifts, outside))
     measured = measured_markers(result)
-    part = unseen_part(model, result.parameters, measured, tolerance)
+    part = (frame_unseen_part if from_contacts(result) else unseen_part)(
+        model, result.parameters, measured, tolerance)
     frame = targets.frame if targets.positions is not None else TRACKER
     placed = targets.placement_std   # robot-frame targets placed by measured base points
     compensated = type(cfg).from_arrays(rows["q"], cfg.wrench, cfg.env, cfg.pose)
     acc = row_accuracy(model, result, compensated, point, part, name,
                        frame if placed is None else TRACKER,
                        None if name else measured or list(model.tool.names))
-    words = unseen_warning(acc, part, result.parameters, frame, name, measured)
+    frame_said = frame_words(result.parameters, tolerance)
+    words = "; ".join(w for w in (frame_said and f"predicted_std is {frame_said}",
+                                  unseen_warning(acc, part, result.parameters, frame, name,
+                                                 measured)) if w)
     if words:
         warnings.warn(words, IdentifiabilityWarning, stacklevel=2)
     std = acc.total if placed is None else np.hypot(acc.total, placed)

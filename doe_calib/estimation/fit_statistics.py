@@ -6,6 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.estimation.chi_square import chi2_quantile, chi2_survival
+from doe_calib.estimation.sockets import is_socket_note
 
 #: Level of the σ̂/σ interval.
 RATIO_LEVEL = 0.95
@@ -21,16 +22,17 @@ class FitStatistics:
     Attributes
     ----------
     readings : int
-        Marker readings K.
+        Marker readings K (socket contacts included).
     observations : int
-        Scalar observations 3K.
+        Scalar observations: 3K, less 3 per socket of unknown position (its point is
+        estimated with the fit: formats.md §3).
     free, fixed : int
         Parameters estimated and held.
     chi2 : float
         ‖r_w‖², the squared norm of the residuals weighted by the a-priori σ
         (equal to ``dof`` by construction when σ was estimated).
     dof : int
-        Degrees of freedom 3K − free.
+        Degrees of freedom: observations − free.
     p_value : float
         P(χ²_dof ≥ χ²): small when the residuals are larger than σ explains.
         NaN when σ was estimated (the test is then not informative).
@@ -47,6 +49,8 @@ class FitStatistics:
     converged : bool
     message : str
         The solver's words.
+    sockets : int
+        Sockets of unknown position among the readings (0 without contacts).
     """
 
     readings: int
@@ -64,6 +68,7 @@ class FitStatistics:
     iterations: int | None
     converged: bool
     message: str
+    sockets: int = 0
 
     @property
     def reduced_chi2(self) -> float:
@@ -79,7 +84,9 @@ class FitStatistics:
         """The statistics as ``name = value`` lines, for reports."""
         lo, hi = self.sigma_ratio_interval
         out = [f"readings               = {self.readings}",
-               f"observations (3K)      = {self.observations}",
+               f"observations (3K)      = {self.observations}" if not self.sockets else
+               f"observations (3K − 3S) = {self.observations} (S = {self.sockets} sockets of "
+               f"unknown position)",
                f"free parameters        = {self.free}",
                f"fixed parameters       = {self.fixed}",
                f"degrees of freedom     = {self.dof}"]
@@ -156,8 +163,8 @@ def ratio_interval(chi2: float, dof: int, level: float = RATIO_LEVEL) -> tuple:
 def fit_statistics(result) -> FitStatistics:
     """The :class:`FitStatistics` of an identification result.
 
-    χ² is ``(σ̂/σ)²·dof`` with dof = observations − free (3K, or 6 per pose of a
-    6-DoF probe), as ``σ̂/σ`` was computed from
+    χ² is ``(σ̂/σ)²·dof`` with dof = observations − free (3K, less 3 per socket of
+    unknown position, or 6 per pose of a 6-DoF probe), as ``σ̂/σ`` was computed from
     ‖r_w‖² (:func:`~doe_calib.estimation.assembly.finish`).
     """
     p, conv = result.parameters, result.convergence
@@ -171,10 +178,14 @@ def fit_statistics(result) -> FitStatistics:
         v = conv.get(key)
         return None if v is None else int(v)
 
+    readings = result.n_observations // 3
+    if any(is_socket_note(w) for w in getattr(result, "warnings", ())):  # K: the residuals'
+        readings = int(result.residuals.get("n", readings))
     return FitStatistics(
-        readings=result.n_observations // 3, observations=int(result.n_observations),
+        readings=readings, observations=int(result.n_observations),
         free=n_free, fixed=len(p) - n_free, chi2=chi2, dof=dof, p_value=p_value,
         sigma_ratio=float(result.sigma_ratio), sigma_ratio_interval=ratio_interval(chi2, dof),
         sigma_source=result.sigma_source, jacobian_evaluations=count("iterations"),
         residual_evaluations=count("evaluations"), iterations=count("iterations"),
-        converged=bool(conv.get("converged", False)), message=str(conv.get("message", "")))
+        converged=bool(conv.get("converged", False)), message=str(conv.get("message", "")),
+        sockets=max(readings - result.n_observations // 3, 0))

@@ -10,6 +10,7 @@ from doe_calib.io.measurements import Configurations, Measurements, provisional
 from doe_calib.estimation.labelled import read_only
 from doe_calib.estimation.measured_region import outside_joints
 from doe_calib.estimation.session import error_mm, reregister, session_notes
+from doe_calib.estimation.sockets import frame_unseen_part, frame_words, from_contacts
 from doe_calib.estimation.unseen import measured_markers, unseen_notes, unseen_part
 from doe_calib.model.evaluation import observation_matrix
 
@@ -179,8 +180,12 @@ def predict(result, data, model=None, *, registry=None, apriori: bool = False,
         parameters and ``G S Gᵀ`` what the calibration's readings could not see
         (:mod:`~doe_calib.estimation.unseen`: ~0 for a marker they measured, the
         tool file's tolerance for one they never did); ``notes`` says so where it
-        dominates. When the readings have x, y, z and the error is far beyond
-        that std, ``notes`` says whether a re-registration removes it.
+        dominates. After a fit to socket contacts alone, positions and std are
+        relative to the sockets' frame (:mod:`~doe_calib.estimation.sockets`): the
+        first note says what the contacts could not see (where the robot stands, the
+        scale with its stated tolerance per metre), which the std leaves out. When the
+        readings have x, y, z and the error is far beyond that std, ``notes`` says
+        whether a re-registration removes it.
 
     Raises
     ------
@@ -214,14 +219,16 @@ def predict(result, data, model=None, *, registry=None, apriori: bool = False,
     bf = b[config, marker][..., params.free]
     cov = np.asarray(result.cov_params(apriori=apriori))
     var = np.einsum("kif,fg,kig->ki", bf, cov, bf)
-    part = unseen_part(model, params, measured_markers(result), tolerance)
-    notes = ()
+    frame, contacts = frame_words(params, tolerance), from_contacts(result)
+    part = (frame_unseen_part if contacts else unseen_part)(model, params,
+                                                           measured_markers(result), tolerance)
+    notes = (f"the std is {frame}",) if frame else ()
     if len(part):
         _, b_bare = observation_matrix(model, params.values, type(cfg).from_arrays(
             cfg.q, None, cfg.env))
         effect = part.effect(b[config, marker], b_bare[config, marker])
-        notes = unseen_notes(effect, np.sqrt(np.sum(var, 1)), marker, result.tool.names, part,
-                             params)
+        notes = notes + unseen_notes(effect, np.sqrt(np.sum(var, 1)), marker,
+                                     result.tool.names, part, params)
         var = var + np.sum(effect ** 2, axis=-1)
     std = np.sqrt(np.clip(var, 0.0, None))
     outside = [f"{p} ({w})" for p, w in

@@ -5,7 +5,9 @@ the parameters the data cannot separate are fixed (at their current values) with
 the reason in words. Readings that are all socket contacts cannot see the base
 pose, a rigid motion of the whole arm or its scale: those are fixed first, said
 in words of their own (:func:`fix_unseen_by_contacts`). Plane touches cannot see them
-either; ballbar readings see the scale (their lengths are known), not the rest.
+either; ballbar readings see the scale (their lengths are known), not the rest. Sockets
+of given position see what points read do: at least three not on one line, everything;
+at one point or on one line, not the base's turn about it (:func:`fix_base_turn`).
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ from doe_calib.estimation.weighted_residuals import (
     reduce_jacobian,
 )
 from doe_calib.model.evaluation import observation_matrix
-from doe_calib.model.rotations import matrix_to_rotation_vector
+from doe_calib.model.rotations import matrix_to_rotation_vector, rotation_vector_to_matrix
 
 #: Condition number of the observation matrix above which the fit warns.
 COND_WARN = 1e6
@@ -39,6 +41,18 @@ ARM_UNSEEN = ("socket contacts cannot see a rigid motion of the whole arm (the f
 SCALE_UNSEEN = ("socket contacts cannot see the robot's scale without a known length (the "
                 "whole arm and the sockets grown alike fit the same): held at its current value "
                 "to fix the scale, the link length it sets")
+#: Why the base rotation is fixed when one socket's position is given: a turn about it.
+POINT_UNSEEN = ("socket contacts with one socket of given position cannot see the base's turn "
+                "about that point: the base rotation held at the URDF's root axes")
+#: Why a base rotation is fixed when the given sockets lie on one line (their ids follow).
+LINE_UNSEEN = ("socket contacts whose given positions lie on one line cannot see the base's "
+               "turn about that line: the base rotation's component about it held at the "
+               "turn least from the URDF's root axes (sockets {})")
+#: How the reasons of :func:`fix_base_turn` begin.
+_TURN_REASONS = (POINT_UNSEEN, LINE_UNSEEN.split("{")[0])
+#: Given socket positions closer than this (m) are one point; off a line by less: on it.
+APART = 1e-3
+
 
 #: What each instrument without coordinates reads, and what it reads against.
 _INSTRUMENTS = {"socket": ("socket contacts", "contact and socket", "sockets"),
@@ -128,6 +142,111 @@ def fix_unseen_by_contacts(robot, params, read=("socket",)):
     name, length = _longest_link(robot, params)
     return params.fixed([name], f"{scale_words} ({length * 1000.0:.1f} mm)") if name \
         else params
+
+
+def fix_unseen_by_given(model, measurements, params, start: bool = True):
+    """Start values of the base, and the scale held, when the only readings with coordinates
+    are contacts in sockets of given position at one point or on one line (formats.md §3;
+    the base's turn they cannot see: :func:`fix_base_turn`, after the rank analysis).
+
+    The base starts at the least turn from the URDF's root that puts their contacts on
+    them (``start``; not on a refit, whose base is the fit's). At one point, without a
+    ballbar's known length, the placement translation along the longest nominal link is
+    held at its value (:data:`SCALE_UNSEEN`): the scale.
+    """
+    spread = _spread(given_sockets(measurements))
+    params = _start_base(model, measurements, params, spread) if start else params
+    if spread == 1 or measurements.ballbar.any() or \
+            any(why.startswith(SCALE_UNSEEN) for why in params.fixed_reason):
+        return params
+    name, length = _longest_link(model.robot, params)
+    return params.fixed([name], f"{SCALE_UNSEEN} ({length * 1000.0:.1f} mm)") if name \
+        else params
+
+
+def _only_given(measurements) -> bool:
+    """Whether every reading with coordinates is a contact in a socket of given position
+    (no tracker reading), and some is."""
+    read = ~measurements.contact
+    return measurements.socket is not None and read.any() and \
+        bool(np.all(measurements.socket[read] >= 0))
+
+
+def fix_base_turn(measurements, params):
+    """The base's turn that given socket positions at one point, or on one line, cannot
+    see, fixed and said in words; ``params`` unchanged for other readings.
+
+    After the rank analysis, which fixed what moves the whole arm as the base does: the
+    base rotation (:data:`POINT_UNSEEN`), or its component a turn about the line changes
+    most (:data:`LINE_UNSEEN`), is then the only way left to turn the arm so.
+    """
+    points = given_sockets(measurements)
+    if not points or not _only_given(measurements) or _spread(points) >= 2:
+        return params
+    rotation = params.index("base")[3:]
+    if _spread(points) == 0:
+        return params.fixed([params.names[i] for i in rotation], POINT_UNSEEN)
+    return params.fixed([params.names[_base_turn_about(params, points)]],
+                        LINE_UNSEEN.format(", ".join(points)))
+
+
+def given_sockets(measurements) -> dict:
+    """Socket id → its given position (3,), m, for each socket whose contacts give it
+    (formats.md §3); empty without."""
+    if measurements.socket is None:
+        return {}
+    out = {}
+    for i in np.flatnonzero((measurements.socket >= 0) & ~measurements.contact).tolist():
+        out.setdefault(measurements.socket_names[measurements.socket[i]], measurements.xyz[i])
+    return out  # a socket's rows agree (the reader's check)
+
+
+def _spread(points: dict) -> int:
+    """0 for no point or one, 1 for points on one line, 2 for points spanning a plane
+    (apart by more than :data:`APART`, m)."""
+    if len(points) < 2:
+        return 0
+    p = np.array(list(points.values()))
+    return int(np.sum(np.linalg.svd(p - p.mean(0), compute_uv=False) > APART))
+
+
+def _start_base(model, measurements, params, spread: int):
+    """Start values of the base pose from given sockets on a line (``spread`` 1) or at one
+    point (0): the turn least from the URDF's root that puts the model's contacts on them."""
+    seen = measurements.subset(~measurements.contact)
+    base = params.index("base")
+    v = params.values.copy()
+    v[base] = 0.0
+    robot_pts, w = marker_points(model, seen, v), seen.sigma ** -2.0
+    rot = np.eye(3)
+    if spread == 1:
+        a, b = (_axis(x, w) for x in (robot_pts, seen.xyz))
+        b = b * np.sign(np.sum(w * ((robot_pts - robot_pts.mean(0)) @ a) *
+                               ((seen.xyz - seen.xyz.mean(0)) @ b)) or 1.0)
+        turn = np.cross(a, b)
+        rot = rotation_vector_to_matrix(turn / max(np.linalg.norm(turn), 1e-300) *
+                                        np.arctan2(np.linalg.norm(turn), a @ b))
+    v[base[:3]] = np.average(seen.xyz, 0, w) - rot @ np.average(robot_pts, 0, w)
+    v[base[3:]] = matrix_to_rotation_vector(rot)
+    return params.with_values(v)
+
+
+def _axis(points, w) -> np.ndarray:
+    """The weighted points' principal direction (3,), unit."""
+    c = points - np.average(points, 0, w)
+    return np.linalg.svd(c * np.sqrt(w)[:, None], full_matrices=False)[2][0]
+
+
+def _base_turn_about(params, points: dict) -> int:
+    """Index of the base's rotation parameter that a turn about the line through
+    ``points`` changes most (fixing it removes that turn)."""
+    p = np.array(list(points.values()))
+    u = np.linalg.svd(p - p.mean(0))[2][0]
+    rot = params.index("base")[3:]
+    r0 = params.values[rot]
+    moved = matrix_to_rotation_vector(rotation_vector_to_matrix(1e-6 * u) @
+                                      rotation_vector_to_matrix(r0))
+    return int(rot[np.argmax(np.abs(moved - r0))])
 
 
 #: Fraction of a parameter's effect on the touched markers below which plane touches do not
@@ -257,6 +376,9 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
             params = fix_unseen_by_touches(model, measurements, params)
         warnings.warn(unseen_words(read)[0], IdentifiabilityWarning, stacklevel=3)  # the report
         # groups the fixed parameters by these reasons: no note of its own
+    elif _only_given(measurements) and _spread(given_sockets(measurements)) < 2:
+        params = fix_unseen_by_given(model, measurements, params,
+                                     register and params.free[params.index("base")].all())
     elif register and params.free[params.index("base")].all():
         params = register_base(model, measurements if tracked.all() else
                                measurements.subset(tracked), params)
@@ -266,4 +388,11 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
                         f"parameters: measure more poses or markers, or use a smaller model", where)
     red = reduce_jacobian(model, measurements, params.values)
     params, notes, absorbed = fix_unidentifiable(model, measurements, params, reduction=red)
+    turned = fix_base_turn(measurements, params)
+    if turned is not params:
+        params = turned
+        told = [why for i, why in enumerate(params.fixed_reason) if i in params.index("base")]
+        warnings.warn(next(w for w in told if w.startswith(_TURN_REASONS)),
+                      IdentifiabilityWarning, stacklevel=3)
+        absorbed = {k: v for k, v in absorbed.items() if params.free[params.position(k)]}
     return params, notes, red, absorbed

@@ -1,22 +1,44 @@
-"""Socket contacts after a fit: where each socket is, and the note that says so.
+"""Socket contacts after a fit: where each socket is, the note that says so, and what a
+prediction from contacts alone is relative to.
 
 A socket's point is not a parameter of the fit (the residuals eliminate it:
 :mod:`~doe_calib.estimation.weighted_residuals`); at the fitted parameters it is the
 σ⁻²-weighted mean of the model's points of its contacts.
+
+A fit to contacts alone cannot see a rigid motion of the whole (unless three given
+socket positions not on one line place it) nor its scale (unless two given positions
+are apart): :func:`~doe_calib.estimation.preparation.fix_unseen_by_contacts` and
+:func:`~doe_calib.estimation.preparation.fix_base_turn` fixed parameters for them. Its predictions are relative to the sockets' frame, and their
+std is honest only there: the parameters the rank analysis could not separate are
+taken up by the free ones up to such a motion (:func:`frame_unseen_part`), which is
+said in words (:func:`frame_words`), not put in the number.
 """
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 import numpy as np
 
 from doe_calib.estimation.ballbar import pivot_spread
+from doe_calib.estimation.preparation import LINE_UNSEEN, POINT_UNSEEN
+from doe_calib.estimation.unseen import GENERIC_POSES, tolerances, unseen_part
 from doe_calib.estimation.weighted_residuals import socket_mean
+from doe_calib.io.measurements import Configurations
 from doe_calib.model.evaluation import observation_matrix
+from doe_calib.model.simulate import random_configurations
+
+#: An unseen parameter's effect counts as taken up by the free ones (and the motion the
+#: contacts cannot see) when what they leave of it at generic configurations is below
+#: this share; its unseen part is then that remainder, else its whole effect.
+TAKEN_UP = 0.1
+#: What the words of a fit to readings without coordinates say when it fixed the base pose,
+#: and the scale (:func:`~doe_calib.estimation.preparation.unseen_words`, any instrument).
+BASE_WORDS, SCALE_WORDS = "cannot see the robot's base pose", "cannot see the robot's scale"
 
 
 #: How the note of :func:`socket_note` begins.
-_NOTE = re.compile(r"\d+ socket contacts( and \d+ ballbar lengths)? in \d+ sockets ")
+_NOTE = re.compile(r"\d+ socket contacts( and \d+ ballbar lengths)? in \d+ sockets[ ,]")
 
 
 def is_socket_note(text: str) -> bool:
@@ -66,20 +88,111 @@ def socket_note(model, measurements, params, covariance, noise_scale: float = 1.
     >>> socket_note(model, measurements, result.parameters, result.covariance)  # doctest: +SKIP
     '45 socket contacts in 3 sockets (135 coordinates, less 9 for the sockets' unknown …'
     """
-    k = len(measurements.sockets_used)
-    if not k:
+    if measurements.socket is None or not (measurements.socket >= 0).any():
         return ""
-    n = int(np.sum((measurements.socket >= 0) & ~measurements.ballbar))
+    seated = measurements.socket >= 0
+    n = int(np.sum(seated & ~measurements.ballbar))
+    k, unknown = len(np.unique(measurements.socket[seated])), len(measurements.sockets_used)
+    if not unknown:
+        return (f"{n} socket contacts in {k} sockets of given position ({3 * n} coordinates, "
+                f"in the frame of {'the tracker' if not seated.all() else 'the positions'})")
     where = "; ".join(
         f"{name} at ({', '.join(f'{c:.3f}' for c in point * 1000.0)}) ± "
         f"({', '.join(f'{c:.3f}' for c in std * 1000.0)}) mm, "
         f"{int(np.sum(measurements.socket == measurements.socket_names.index(name)))} contacts"
         for name, (point, std) in located_sockets(model, measurements, params, covariance,
                                                   noise_scale).items())
-    frame = ("the robot's root frame, placed by the fixed base and first joint; the ± leaves "
-             "out what contacts cannot see" if measurements.contact.all() else "the tracker frame")
+    if measurements.contact.all():
+        frame = ("the robot's root frame, placed by the fixed base and first joint; the ± "
+                 "leaves out what contacts cannot see")
+    elif seated.all():
+        frame = "the frame of the given socket positions"
+    else:
+        frame = "the tracker frame"
     bars = int(measurements.ballbar.sum())
     lengths = f" and {bars} ballbar lengths" if bars else ""
-    return (f"{n} socket contacts{lengths} in {k} sockets ({3 * n + bars} coordinates, less "
-            f"{3 * k} for the sockets' unknown points, in the observations counted): {where} "
-            f"({frame})")
+    given = f", {k - unknown} of given position" if k > unknown else ""
+    return (f"{n} socket contacts{lengths} in {k} sockets{given} ({3 * n + bars} coordinates, "
+            f"less {3 * unknown} for the unknown sockets' points, in the observations "
+            f"counted): {where} ({frame})")
+
+
+def frame_reasons(params) -> list[str]:
+    """The reasons ``params`` (a result's) hold for what a fit to contacts alone cannot
+    see (:mod:`~doe_calib.estimation.preparation`'s words), each once; [] for another fit."""
+    turns = (POINT_UNSEEN, LINE_UNSEEN.split("{")[0])
+    return [w for w in dict.fromkeys(params.fixed_reason)
+            if w.startswith(turns) or BASE_WORDS in w or SCALE_WORDS in w]
+
+
+def from_contacts(result) -> bool:
+    """Whether ``result`` was fitted from socket contacts (its socket note, or what a fit
+    to contacts alone fixes)."""
+    return any(is_socket_note(w) for w in result.warnings) or bool(
+        frame_reasons(result.parameters))
+
+
+def frame_unseen_part(model, params, markers=None, tolerance: dict | None = None):
+    """The unseen part of a fit from socket contacts, relative to the sockets' frame.
+
+    As :func:`~doe_calib.estimation.unseen.unseen_part`, but a not-separable parameter
+    is taken up by the free parameters and by those held for what contacts alone cannot
+    see (:func:`frame_reasons`: a rigid motion of the whole, its scale; the fit cannot
+    see these either, and :func:`frame_words` says so), and it is taken up when what
+    they leave of it is below :data:`TAKEN_UP` of its effect (the remainder is then its
+    unseen part: a single ball seen off the flange's axis leaves some 0.3 % of what it
+    cannot separate), not only below 1e-6. The part's ``free`` are the parameters that
+    take up, so ``part.effect`` of any point (a marker, a TCP, in either frame) leaves
+    out that motion.
+    """
+    part = unseen_part(model, params, markers, tolerance)
+    if not len(part):
+        return part
+    reasons = frame_reasons(params)
+    taking = part.free | np.isin(params.fixed_reason, reasons)
+    cfg = Configurations.from_arrays(random_configurations(model.robot, GENERIC_POSES,
+                                                           np.random.default_rng(0)))
+    _, b = observation_matrix(model, params.values, cfg)
+    if markers is not None:
+        b = b[:, [model.tool.index(n) for n in markers]]
+    b = b.reshape(-1, b.shape[-1]) * params.scales  # columns at their typical size
+    b_dep, b_take = b[:, part.index], b[:, taking]
+    absorbed = np.linalg.lstsq(b_take, b_dep, rcond=None)[0]
+    rest = np.linalg.norm(b_dep - b_take @ absorbed, axis=0)
+    size = np.linalg.norm(b_dep, axis=0)
+    taken = (size > 0) & (rest <= TAKEN_UP * size)
+    absorbed = absorbed * params.scales[taking][:, None] / params.scales[part.index]
+    absorbed[:, ~taken] = 0.0
+    return replace(part, absorbed=absorbed, free=taking, structural=taken)
+
+
+def frame_words(params, tolerance: dict | None = None) -> str:
+    """What a prediction of a fit to contacts alone is relative to, in words ("" for
+    another fit): the motion of the whole its readings cannot see, and the scale's
+    stated tolerance per metre, neither in the std."""
+    reasons = frame_reasons(params)
+    if not reasons:
+        return ""
+    words = []
+    if any(BASE_WORDS in w for w in reasons):
+        words.append("relative to the sockets' frame: where the robot stands in it (a rigid "
+                     "motion of every point) is not seen")
+    elif POINT_UNSEEN in reasons:
+        words.append("relative to the frame of the given socket position: a turn of every "
+                     "point about that socket is not seen")
+    elif any(w.startswith(LINE_UNSEEN.split("{")[0]) for w in reasons):
+        line = next(w for w in reasons if w.startswith(LINE_UNSEEN.split("{")[0]))
+        words.append(f"relative to the frame of the given socket positions: a turn of every "
+                     f"point about their line ({line.rsplit('(', 1)[-1].rstrip(')')}) is not "
+                     f"seen")
+    held = [(n, w) for n, w in zip(params.names, params.fixed_reason)
+            if SCALE_WORDS in w]
+    if held:
+        name, why = held[0]
+        length = float(why.rsplit("(", 1)[-1].split()[0]) / 1000.0
+        tol = float(tolerances(params, [name], tolerance)[0])
+        words.append(f"the scale is not seen (no known length): ±{tol / length * 1000.0:.3g} "
+                     f"mm per metre of distance (1σ; {name} held at the URDF's, "
+                     f"stated tolerance {tol * 1000.0:.3g} mm over {length * 1000.0:.1f} mm)")
+    return "; ".join(words) + ("; neither is in the std" if len(words) > 1 else
+                               ", nor in the std")

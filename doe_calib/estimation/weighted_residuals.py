@@ -20,6 +20,13 @@ estimating s alongside p. A socket with ballbar readings (its point then a pivot
 projection (:mod:`~doe_calib.estimation.variable_projection`). A socket's mean, a pivot
 or a plane needs all its readings at once: a file with contacts is taken in one block of
 configurations.
+
+A socket of given position s₀ with std σ_s per axis (its drawing's tolerance, common to
+its n contacts) makes their errors correlated, covariance D + σ_s²·11ᵀ (D = diag σ²). Its
+residuals are whitened exactly: r = (s₀ + γ (s̄(p) − s₀) − x(p)) / σ, Jacobian
+−(B − γ B̄) / σ, with γ = 1 − (1 + σ_s² Σσ⁻²)^(−1/2) (:func:`socket_pull`): ‖r‖² is
+then the correlated χ² (Sherman–Morrison), and 3 coordinates per contact are counted;
+γ = 1 is a socket of unknown position (σ_s → ∞), γ = 0 an exact one.
 """
 from __future__ import annotations
 
@@ -43,9 +50,42 @@ def marker_points(model, measurements, values, block: int = BLOCK_CONFIGURATIONS
     return out
 
 
+def pooled(measurements, rows) -> np.ndarray:
+    """Which of ``rows`` are pooled with their socket's other contacts, shape (len(rows),)
+    bool: contacts in a socket of unknown position (ballbar readings included), or of a
+    given one with a std."""
+    out = measurements.contact[rows] & (measurements.socket[rows] >= 0) \
+        if measurements.socket is not None else np.zeros(len(rows), bool)
+    if measurements.socket_sigma is not None:
+        out = out | ((measurements.socket[rows] >= 0) & (measurements.socket_sigma[rows] > 0))
+    return out
+
+
+def socket_pull(measurements, rows) -> np.ndarray:
+    """γ of each of ``rows`` (module notes), shape (len(rows),): 1 for a contact in a socket
+    of unknown position; for one in a socket of given position with std σ_s,
+    1 − (1 + σ_s² Σσ⁻²)^(−1/2), the sum over that socket's contacts among ``rows``; else 0."""
+    out = (pooled(measurements, rows) & measurements.contact[rows]).astype(float)
+    if measurements.socket_sigma is None:
+        return out
+    k, s = measurements.socket[rows], measurements.socket_sigma[rows]
+    w = measurements.sigma[rows] ** -2.0
+    given = pooled(measurements, rows) & ~measurements.contact[rows]
+    for j in np.unique(k[given]).tolist():
+        at = given & (k == j)
+        out[at] = 1.0 - 1.0 / np.sqrt(1.0 + s[at][0] ** 2 * w[at].sum())
+    return out
+
+
+def _any_eliminated(measurements, rows) -> bool:
+    """Whether some of ``rows`` is compared to something the readings place (a socket's
+    point, a pivot, a plane; a given socket position pulled by its std)."""
+    return bool(measurements.contact[rows].any() or pooled(measurements, rows).any())
+
+
 def socket_mean(measurements, rows, v) -> np.ndarray:
     """For each of ``rows``: the σ⁻²-weighted mean of ``v`` (len(rows), …) over the rows of
-    its socket; 0 for a tracker reading.
+    its socket; 0 for a reading with coordinates (a tracker's, an exact given socket's).
 
     Parameters
     ----------
@@ -58,7 +98,7 @@ def socket_mean(measurements, rows, v) -> np.ndarray:
     out = np.zeros_like(v, dtype=float)
     if measurements.socket is None:
         return out
-    k = measurements.socket[rows]
+    k = np.where(pooled(measurements, rows), measurements.socket[rows], -1)
     w = measurements.sigma[rows] ** -2.0
     for j in np.unique(k[k >= 0]).tolist():
         at = k == j
@@ -88,12 +128,14 @@ def targets(measurements, rows, points) -> np.ndarray:
     """What the model's ``points`` (len(rows), 3) of ``rows`` are compared to, m: the reading;
     for a contact its socket's point (the mean of its contacts' points); for a ballbar
     reading the point at its length from the pivot, towards it; for a plane touch its foot
-    on the plane (module notes)."""
-    if not measurements.contact[rows].any():
+    on the plane; for a socket of given position with a std, that position pulled towards
+    its contacts' mean (module notes)."""
+    if not _any_eliminated(measurements, rows):
         return measurements.xyz[rows]
-    seated = (measurements.socket[rows] >= 0)[:, None] if measurements.socket is not None \
-        else np.zeros((len(rows), 1), bool)
-    out = np.where(seated, socket_mean(measurements, rows, points), measurements.xyz[rows])
+    seated = ((measurements.socket[rows] >= 0) & measurements.contact[rows])[:, None] \
+        if measurements.socket is not None else np.zeros((len(rows), 1), bool)
+    mean, xyz = socket_mean(measurements, rows, points), measurements.xyz[rows]
+    out = np.where(seated, mean, xyz + socket_pull(measurements, rows)[:, None] * (mean - xyz))
     w = measurements.sigma[rows] ** -2.0
     for kind, at in _eliminated(measurements, rows):
         out[at] = plane_targets(points[at], w[at]) if kind == "plane" else \
@@ -105,7 +147,7 @@ def eliminated_rows(measurements, rows, points, b) -> np.ndarray:
     """Rows B′ (len(rows), 3, P) such that −B′/σ is the Jacobian of the weighted residuals of
     ``rows`` with every socket's point, pivot and plane eliminated (module notes); ``b``
     (len(rows), 3, P) their rows of the observation matrix, ``points`` their model points."""
-    out = b - socket_mean(measurements, rows, b)
+    out = b - socket_pull(measurements, rows)[:, None, None] * socket_mean(measurements, rows, b)
     sigma = measurements.sigma[rows]
     for kind, at in _eliminated(measurements, rows):
         out[at] = plane_rows(points[at], sigma[at], b[at]) if kind == "plane" else \
@@ -136,7 +178,7 @@ def weighted_residual(model, measurements, values, jacobian: bool = True):
     flat = b.reshape(-1, 3, b.shape[-1])
     picked = c * b.shape[1] + j
     rows = flat[:len(picked)] if _in_order(picked) else flat[picked]
-    if measurements.contact.any():
+    if _any_eliminated(measurements, every):
         rows = eliminated_rows(measurements, every, x[c, j], rows)
     return r, np.divide(rows, -s[:, :, None]).reshape(3 * len(measurements), -1)
 
@@ -198,7 +240,8 @@ def reduce_jacobian(model, measurements, values, columns=None, scale=None,
     if columns.dtype == bool:
         columns = np.flatnonzero(columns)
     scale = np.ones(len(columns)) if scale is None else np.asarray(scale, float)
-    if measurements.contact.any():  # a socket's mean needs all its contacts (module notes)
+    if _any_eliminated(measurements, np.arange(len(measurements))):  # a socket's mean needs
+        # all its contacts (module notes)
         block = max(block, len(measurements.configurations))
 
     def blocks():
@@ -231,7 +274,7 @@ def augmented_block(measurements, rows, config, x, b, columns, scale) -> np.ndar
     else:
         jac = flat[picked[:, None, None], np.arange(3)[:, None], columns]
     points = x.reshape(-1, 3)[picked]
-    if measurements.contact[rows].any():
+    if _any_eliminated(measurements, rows):
         jac = eliminated_rows(measurements, rows, points, jac)
     np.multiply(jac, -(scale / s)[:, None, :], out=view[:, :, :-1])
     np.divide(targets(measurements, rows, points) - points, s, out=view[:, :, -1])

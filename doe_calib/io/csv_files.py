@@ -129,15 +129,16 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     contacts = bool({"socket", "plane"} & set(table.columns))  # x, y, z empty on their rows
     tracked_xyz, require_xyz = require_xyz, require_xyz and not contacts
     required = ["pose", *joint_columns(robot), "marker", *(XYZ if require_xyz else ())]
-    optional = [*WRENCH, "temperature", "sigma", "session", "socket", "plane", "distance",
-                *approach_columns(robot), *(() if require_xyz else XYZ), *PREDICTED_STD]
+    optional = [*WRENCH, "temperature", "sigma", "session", "socket", "socket_sigma", "plane",
+                "distance", *approach_columns(robot), *(() if require_xyz else XYZ),
+                *PREDICTED_STD]
     extra = check_columns(table, required, optional)
     explicit = approach_given(table, robot)
     if sigma is not None and not sigma > 0:
         raise DataError(f"σ must be positive, got {sigma * 1000.0} mm", table.path)
     table.cells(["pose", "marker", "session", "socket", "plane"])  # each kind in one pass
     table.floats([*joint_columns(robot), *WRENCH, "temperature", "sigma", *XYZ, "distance",
-                  *approach_columns(robot)])
+                  "socket_sigma", *approach_columns(robot)])
     problems, notes = RowProblems(table), []
     check_width(table, problems, 0)
     pose = texts(table, problems, 1, "pose", "pose id")
@@ -159,9 +160,14 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     socket_ids = texts(table, problems, 9, "socket") if contacts else None
     plane_ids = texts(table, problems, 9, "plane") if contacts else None
     distance = numbers(table, problems, 8.9, ["distance"], np.nan)[:, 0] / 1000.0
+    drawn = numbers(table, problems, 9.5, ["socket_sigma"], 0.0)[:, 0] / 1000.0
     if contacts:
         _check_contacts(table, problems, socket_ids, plane_ids, xyz, tracked_xyz)
+        _check_socket_sigma(table, problems, socket_ids, xyz, drawn)
     _check_distances(table, problems, socket_ids, distance)
+    problems.check((9, 19, 1), np.isfinite(distance) & np.isfinite(xyz).any(axis=1), lambda i: (
+        "distance with x, y, z: a ballbar's pivot is a socket of unknown position; leave "
+        "x, y, z empty"), "distance")
     appr = approach(table, problems, 10, robot) if explicit else None
     pose_code, session_code = codes(pose), codes(sessions)
     turns = _same_q(table, problems, 5, robot, q, combined([session_code, pose_code]), pose)
@@ -202,7 +208,8 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
                         session, not given,
                         PER_READING if "sigma" in table.columns else GIVEN if given else ESTIMATED,
                         **(_without_coordinates(socket_ids, plane_ids, distance, rows)
-                           if contacts else {}))
+                           if contacts else {}),
+                        socket_sigma=drawn[rows] if contacts and np.any(drawn > 0) else None)
     tracked = meas.subset(~meas.contact) if contacts else meas  # the tracker's readings
     finding = metres_finding(tracked.xyz, robot, tracked.configurations.q, tracked.config,
                              tool.position_array[tracked.marker],
@@ -213,15 +220,26 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
 
 
 def _check_contacts(table, problems, socket_ids, plane_ids, xyz, tracked_xyz: bool) -> None:
-    """Refuse a contact (a ``socket`` id) or a touch (a ``plane`` id) with x, y, z, a row with
-    both ids and, with ``tracked_xyz``, a tracker reading (no id) without all three
-    (formats.md §3, *Socket contacts*, *Plane touches*)."""
+    """Refuse a contact (a ``socket`` id) with some of x, y, z, or other x, y, z than the
+    socket's first contact (all rows of a socket give its one known position, or none), a
+    touch (a ``plane`` id) with x, y, z, a row with both ids and, with ``tracked_xyz``, a
+    tracker reading (no id) without all three (formats.md §3, *Socket contacts*, *Plane
+    touches*)."""
     seated = np.array([bool(c) for c in socket_ids])
     touch = np.array([bool(c) for c in plane_ids])
     given = np.isfinite(xyz)
-    problems.check((9, 20), seated & given.any(axis=1), lambda i: (
-        f"socket {socket_ids[i]!r} with x, y, z: a contact's position is the socket's, "
-        f"unknown; leave x, y, z empty (or the socket cell, for a tracker reading)"), "socket")
+    column = "x" if "x" in table.columns else "socket"
+    problems.check((9, 20), seated & given.any(axis=1) & ~given.all(axis=1), lambda i: (
+        f"socket {socket_ids[i]!r} with some of x, y, z: give all three (the socket's known "
+        f"position, mm) or none (its position unknown)"), column)
+    first = earlier_in_group(codes(socket_ids), seated)
+    f = np.maximum(first, 0)
+    same = np.all(np.where(given & given[f], np.abs(xyz - xyz[f]) <= 1e-9, given == given[f]),
+                  axis=1)
+    problems.check((9, 20, 1), seated & (first >= 0) & ~same, lambda i: (
+        f"socket {socket_ids[i]!r} at {_at_mm(xyz[i])} here but {_at_mm(xyz[first[i]])} on "
+        f"line {table.numbers[first[i]]}: every contact of a socket gives the same x, y, z "
+        f"(its known position, mm) or none (unknown)"), column)
     problems.check((9, 20), touch & given.any(axis=1), lambda i: (
         f"plane {plane_ids[i]!r} with x, y, z: a touch's position is on the plane, unknown; "
         f"leave x, y, z empty (or the plane cell, for a tracker reading)"), "plane")
@@ -232,6 +250,12 @@ def _check_contacts(table, problems, socket_ids, plane_ids, xyz, tracked_xyz: bo
         "x, y, z missing on a row without a socket: give the tracker reading, or the socket "
         "id of a contact" + (" (or the plane id of a touch)" if "plane" in table.columns
                              else "")), "x" if "x" in table.columns else "socket")
+
+def _at_mm(xyz) -> str:
+    """A socket's position (3,), m, as the file gives it, mm, or "no x, y, z"."""
+    return "no x, y, z" if np.isnan(xyz).all() else \
+        f"({', '.join(f'{v * 1000.0:g}' for v in xyz)}) mm"
+
 
 
 def _check_distances(table, problems, socket_ids, distance) -> None:
@@ -271,6 +295,24 @@ def _check_counts(table, problems, socket_ids, plane_ids, distance) -> None:
                                f"(lines {lines})": (
                                    f"{said}: its unknown point or plane takes 3 to place; "
                                    f"give it {MIN_TOUCHES} or more"), kind)
+
+
+def _check_socket_sigma(table, problems, socket_ids, xyz, drawn) -> None:
+    """Refuse a ``socket_sigma`` (the std of a socket's given position, m) that is negative,
+    on a row without a socket's given x, y, z, or other than on the socket's first row."""
+    given = np.array([bool(c) for c in socket_ids]) & np.isfinite(xyz).all(axis=1)
+    problems.check((9, 23), drawn < 0, lambda i: (
+        f"socket_sigma {drawn[i] * 1000.0:g} mm: a position's std is 0 or more"), "socket_sigma")
+    problems.check((9, 24), (drawn > 0) & ~given, lambda i: (
+        "socket_sigma on a row without a socket's given x, y, z: it is the std of a given "
+        "socket position"), "socket_sigma")
+    first = earlier_in_group(codes(socket_ids), given)
+    problems.check((9, 25), given & (first >= 0) & (drawn != drawn[np.maximum(first, 0)]),
+                   lambda i: (f"socket {socket_ids[i]!r} with socket_sigma "
+                              f"{drawn[i] * 1000.0:g} mm here but "
+                              f"{drawn[first[i]] * 1000.0:g} mm on line "
+                              f"{table.numbers[first[i]]}: one std per socket"),
+                   "socket_sigma")
 
 
 def _without_coordinates(socket_ids, plane_ids, distance, rows) -> dict:
@@ -411,10 +453,10 @@ def write_measurements(path, measurements, robot, tool, std=None) -> None:
     The approach columns are written only when reading back would not derive
     the same directions from the order of the rows (module notes); the
     ``session`` column only when the readings come from several sessions; the
-    ``sigma`` column only when some reading has a σ; the ``socket``, ``plane`` and
-    ``distance`` columns only when some reading has one. ``std`` (K, 3), m: a prediction's
-    standard deviation of each coordinate, written as the :data:`PREDICTED_STD` columns in
-    mm (ignored on reading).
+    ``sigma`` column only when some reading has a σ; the ``socket``, ``plane``,
+    ``distance`` and ``socket_sigma`` columns only when some reading has one. ``std``
+    (K, 3), m: a prediction's standard deviation of each coordinate, written as the
+    :data:`PREDICTED_STD` columns in mm (ignored on reading).
     """
     cfg, c, sessions = measurements.configurations, measurements.config, measurements.sessions
     order = np.array(list(dict.fromkeys(c.tolist())), int)  # in order of first appearance
@@ -449,6 +491,8 @@ def _contact_cells(measurements) -> dict:
     if measurements.ballbar.any():
         out.update(_numbers(["distance"], measurements.distance[:, None] * 1000.0,
                             unknown_empty=True))
+    if measurements.socket_sigma is not None:
+        out.update(_numbers(["socket_sigma"], measurements.socket_sigma[:, None] * 1000.0))
     return out
 
 

@@ -204,9 +204,10 @@ class Measurements:
         degrees of freedom of σ̂ and χ².
     socket : ndarray of int, shape (K,), optional
         For a contact (formats.md §3, *Socket contacts*): the socket (index into
-        ``socket_names``) in which the marker was seated, its position unknown; −1 for a
-        tracker reading. None: every reading is a tracker reading. A contact's ``xyz`` is
-        NaN. With a ``distance``, the socket is the pivot of a ballbar.
+        ``socket_names``) in which the marker was seated; −1 for a tracker reading. None:
+        every reading is a tracker reading. A contact's ``xyz`` is its socket's given
+        position (then it counts as a reading of that point), or NaN: unknown (a
+        :attr:`contact`). With a ``distance``, the socket is the pivot of a ballbar.
     socket_names : tuple of str
         The sockets' ids, in order of first appearance.
     plane : ndarray of int, shape (K,), optional
@@ -219,6 +220,10 @@ class Measurements:
         For a ballbar reading (formats.md §3, *Ballbar and gauge lengths*): the length
         measured from its socket's point (the pivot) to the marker, m; NaN otherwise (a
         contact seated in its socket). None: no such reading.
+    socket_sigma : ndarray, shape (K,), optional
+        For a contact in a socket of given position: that position's std per axis (its
+        drawing's tolerance), m, common to all the socket's contacts; 0 (exact) otherwise.
+        None: 0 for every reading.
     """
 
     configurations: Configurations
@@ -239,6 +244,7 @@ class Measurements:
     plane: np.ndarray | None = None
     plane_names: tuple = ()
     distance: np.ndarray | None = None
+    socket_sigma: np.ndarray | None = None
 
     def __post_init__(self):
         if self.sigma_source not in SIGMA_SOURCES:
@@ -261,9 +267,10 @@ class Measurements:
 
     @property
     def contact(self) -> np.ndarray:
-        """Which readings have no coordinates, shape (K,) bool: socket contacts, ballbar
-        readings and plane touches (none without them)."""
-        return self._in(self.socket) | self._in(self.plane)
+        """Which readings have no coordinates, shape (K,) bool: contacts in a socket of
+        unknown position, ballbar readings and plane touches (none without them); a contact
+        in a socket whose position is given is a reading of that point."""
+        return self._in(self.socket) & np.isnan(self.xyz[:, 0]) | self._in(self.plane)
 
     @property
     def touch(self) -> np.ndarray:
@@ -290,8 +297,8 @@ class Measurements:
     def sockets_used(self) -> np.ndarray:
         """Indices (into ``socket_names``) of the sockets some reading is seated in: each
         is one unknown point, 3 coordinates the readings must also pay for."""
-        return np.unique(self.socket[self.socket >= 0]) if self.socket is not None else \
-            np.zeros(0, int)
+        return np.unique(self.socket[self._in(self.socket) & self.contact]) \
+            if self.socket is not None else np.zeros(0, int)
 
     def subset(self, rows) -> "Measurements":
         """The readings at ``rows``, keeping only the configurations they use."""
@@ -309,7 +316,9 @@ class Measurements:
                             socket_names=self.socket_names,
                             plane=None if self.plane is None else self.plane[rows],
                             plane_names=self.plane_names,
-                            distance=None if self.distance is None else self.distance[rows])
+                            distance=None if self.distance is None else self.distance[rows],
+                            socket_sigma=None if self.socket_sigma is None
+                            else self.socket_sigma[rows])
 
     @property
     def sessions(self) -> np.ndarray:
@@ -361,7 +370,10 @@ def concatenate(parts) -> Measurements:
                         *_joined_ids(parts, "plane"),
                         None if all(p.distance is None for p in parts) else
                         np.concatenate([np.full(len(p), np.nan) if p.distance is None else
-                                        p.distance for p in parts]))
+                                        p.distance for p in parts]),
+                        None if all(p.socket_sigma is None for p in parts) else
+                        np.concatenate([np.zeros(len(p)) if p.socket_sigma is None else
+                                        p.socket_sigma for p in parts]))
 
 
 def _joined_ids(parts, kind: str) -> tuple:
