@@ -180,7 +180,9 @@ def draw_candidates(setting: Setting, candidates, own_load_case: bool,
         poses = screened_candidates(feasibility, model.robot, candidates, setting.collision)
         return Candidates(feasibility, poses, False)
     if isinstance(candidates, SocketContacts):
-        stage("candidates", f"seating the ball in {len(candidates.sockets.names)} sockets at "
+        what = {"socket": "in {} sockets", "plane": "on {} planes",
+                "ballbar": "about {} ballbar pivots"}[candidates.kind]
+        stage("candidates", f"seating the ball {what.format(len(candidates.sockets.names))} at "
                             f"{candidates.per_socket} tool orientations each")
         poses = candidates.draw(feasibility, model, setting.params.values, setting.rng,
                                 setting.collision)
