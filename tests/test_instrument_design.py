@@ -331,3 +331,20 @@ def test_too_few_touches_for_identify_are_refused(bench, capsys):
                  "--out", str(d / "few.json")]) != 0
     said = capsys.readouterr().err
     assert "40 touches (--poses) are too few" in said and "at least 52 touches" in said
+
+
+def test_touch_program_with_collisions(bench, capsys):
+    """With the URDF's collision model: each approach point on its touch's turns (a touch
+    the reachability check takes a whole turn round keeps its approach point with it), and
+    the program's moves between them checked and routed."""
+    d, _ = bench
+    assert main(["design", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                 "--planes", str(d / "faces.csv"), "--poses", str(N_READINGS),
+                 "--sigma", str(TOUCH_MM), "--model", "joint_offset+geometry", "--seed", "5",
+                 "--out", str(d / "clear.json")]) == 0
+    design = ContactDesign.from_json(d / "clear.json")
+    assert np.abs(design.above - design.configurations.q).max() < 0.5
+    capsys.readouterr()
+    assert main(["export", str(d / "clear.json"), "--format", "urscript", "--out",
+                 str(d / "clear.script")]) == 0
+    assert "moves checked for collisions" in capsys.readouterr().err

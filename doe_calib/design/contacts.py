@@ -283,7 +283,8 @@ class ContactGoal(Goal):
                                              int((~params.free).sum())),
             socket=tuple(cands.sockets.names[k] for k in cands.socket[chosen]),
             ball=model.tool.names[setting.ball], sockets=cands.sockets.to_dict(),
-            above=cands.approach[chosen], lift_mm=1000.0 * setting.contacts.lift,
+            above=cands.approach[chosen] + (q - cands.q[chosen]),  # the contact's turns
+            lift_mm=1000.0 * setting.contacts.lift,
             cone_deg=float(np.degrees(setting.contacts.cone)),
             instrument=setting.contacts.kind,
             length_mm=() if cands.length is None else
