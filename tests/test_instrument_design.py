@@ -348,3 +348,21 @@ def test_touch_program_with_collisions(bench, capsys):
     assert main(["export", str(d / "clear.json"), "--format", "urscript", "--out",
                  str(d / "clear.script")]) == 0
     assert "moves checked for collisions" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("options, said", [
+    (["--ballbar", "550,300:150"], "give the pivot and its lengths as X,Y,Z:LENGTH"),
+    (["--ballbar", "550,300,50:-150"], "a ballbar's length is positive"),
+    (["--ballbar", "550,300,50:150", "--lift", "30"], "--lift is not for --ballbar"),
+    (["--ballbar", "550,300,50:150", "--planes", "faces.csv"], "a design is of one "
+                                                               "instrument's readings"),
+    (["--planes", "bad.csv"], "a zero normal"),
+    (["--planes", "faces.csv", "--load", "5@0,0,50"], "--load is not for --planes"),
+])
+def test_instrument_options_are_checked(bench, options, said, capsys):
+    d, _ = bench
+    (d / "bad.csv").write_text("plane,x,y,z,nx,ny,nz,half\ntable,300,0,50,0,0,0,450\n")
+    options = [str(d / o) if o.endswith(".csv") else o for o in options]
+    assert main(["design", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                 *options, "--no-collision", "--out", str(d / "x.json")]) != 0
+    assert said in capsys.readouterr().err
