@@ -185,8 +185,8 @@ def seated_candidates(feasibility, model, values, rng, collision, ball: int, tar
     all zero: none) is seated on the same branch of the arm, feasible and clear too.
 
     ``group`` (K,) indexes ``names``, the sockets, planes or pivots (``kind`` in words);
-    ``fields``: the :class:`ContactSet`'s own. Raises SolverError when a group keeps
-    none.
+    ``fields``: the :class:`ContactSet`'s own, those of one row per candidate (K, …) kept
+    for the candidates kept. Raises SolverError when a group keeps none.
     """
     robot = model.robot
     lo, hi = feasibility.constraints.bounds(robot)
