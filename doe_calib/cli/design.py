@@ -50,16 +50,29 @@ def add_arguments(c):
                         "points (CSV socket,x,y,z, mm, robot base frame); --poses contacts of "
                         "the tool's ball, seated by IK on the nominal model; the CSV beside "
                         "--out is a measurement CSV of contacts to fill in")
+    c.add_argument("--planes", metavar="FILE",
+                   help="design plane touches instead of tracker poses: the faces (CSV "
+                        "plane,x,y,z,nx,ny,nz,half: a point of the plane of the ball's centre, "
+                        "its normal towards the robot, the half-size of the patch to touch; "
+                        "mm, robot base frame); --poses touches, the approach along the normal")
+    c.add_argument("--ballbar", metavar="X,Y,Z:LENGTH[,LENGTH...]", action="append",
+                   help="design ballbar positions instead of tracker poses: a pivot (mm, "
+                        "robot base frame) and the bar's lengths (mm); repeat for more pivots "
+                        "(named P1, P2, ...); --poses positions over the upper half sphere")
     c.add_argument("--ball", metavar="MARKER",
-                   help="with --sockets: the tool's marker seated (default its only marker)")
+                   help="with --sockets, --planes or --ballbar: the tool's marker seated "
+                        "(default its only marker)")
     c.add_argument("--orientations", type=count("--orientations", 1),
-                   help="with --sockets: tool orientations drawn per socket (default 400)")
+                   help="with --sockets, --planes or --ballbar: tool orientations drawn per "
+                        "socket, plane or pivot (default 400)")
     c.add_argument("--cone", type=positive("--cone", "deg"), metavar="DEG",
                    help="with --sockets: the tool's stem comes down within this angle of the "
-                        "vertical (default 40)")
+                        "vertical; with --planes, of the face's normal; with --ballbar, of "
+                        "the bar (default 40)")
     c.add_argument("--lift", type=positive("--lift", "mm"), metavar="MM",
-                   help="with --sockets: the approach point, this far back along the approach "
-                        "from the socket, must be reachable too (default 50)")
+                   help="with --sockets or --planes: the approach point, this far back along "
+                        "the approach from the socket (off the face along its normal), must "
+                        "be reachable too (default 50)")
     c.add_argument("--augment", metavar="M.csv",
                    help="sequential design: propose --poses new poses that add most to this "
                         "measured campaign (a measurement CSV), for the model's parameters")
@@ -159,8 +172,15 @@ def run(args):
 
     csv_path = _csv_beside(args.out)
     given = [o for o in ("ball", "orientations", "cone", "lift") if getattr(args, o) is not None]
-    if given and not args.sockets:
-        raise OptionError(f"--{given[0]} is for a design of socket contacts: give --sockets FILE")
+    instruments = [o for o in ("sockets", "planes", "ballbar") if getattr(args, o)]
+    if given and not instruments:
+        raise OptionError(f"--{given[0]} is for a design of socket contacts, plane touches or "
+                          f"ballbar positions: give --sockets, --planes or --ballbar")
+    if len(instruments) > 1:
+        raise OptionError(f"--{instruments[0]} and --{instruments[1]}: a design is of one "
+                          f"instrument's readings")
+    if args.lift is not None and args.ballbar:
+        raise OptionError("--lift is not for --ballbar: a mounted ballbar has no approach")
     if args.detect:  # before any work: a detection test's power must be above its level
         power = ("--power", args.power) if args.min_power is None else \
             ("--min-power", args.min_power)
@@ -182,7 +202,7 @@ def run(args):
         parse_floats(args.home, robot.n_joints, "--home") / robot.display_factors
     if args.diagnosis and not args.augment:
         raise OptionError("--diagnosis is read with --augment M.csv (the campaign it diagnosed)")
-    if args.sockets:
+    if instruments:
         from doe_calib.cli.design_contacts import run_contacts
 
         return run_contacts(args, model, constraints, collision, effect_registry(args),

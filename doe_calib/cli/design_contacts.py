@@ -1,4 +1,5 @@
-"""``doe-calib design --sockets FILE``: which socket contacts to seat (formats.md §4,
+"""``doe-calib design --sockets FILE`` (``--planes FILE``, ``--ballbar PIVOT``): which
+socket contacts to seat, plane touches to make, ballbar positions to read (formats.md §4,
 *Contact designs*)."""
 from __future__ import annotations
 
@@ -7,8 +8,10 @@ import sys
 import numpy as np
 
 from doe_calib.cli.common import show_result, stage_progress
+from doe_calib.design.candidates.ballbar_positions import BallbarPositions, parse_pivots
 from doe_calib.design.candidates.sockets import (CONE, LIFT, PER_SOCKET, SocketContacts,
                                                  read_sockets)
+from doe_calib.design.candidates.touches import PlaneTouches, read_planes
 from doe_calib.design.contact_result import write_contact_csv
 from doe_calib.design.contacts import contact_design, with_contact_detectability
 from doe_calib.errors import OptionError
@@ -22,19 +25,27 @@ _REFUSED = {"load": "contacts are seated unloaded", "augment": "augment a campai
 
 
 def run_contacts(args, model, constraints, collision, registry, csv_path, home=None):
-    """Design ``--poses`` contacts in the sockets of ``--sockets``; write ``--out``, the
-    contact CSV beside it and the ``--report``."""
+    """Design ``--poses`` contacts in the sockets of ``--sockets`` (touches of the faces of
+    ``--planes``, positions of the ballbars of ``--ballbar``); write ``--out``, the contact
+    CSV beside it and the ``--report``."""
+    option = "--sockets" if args.sockets else "--planes" if args.planes else "--ballbar"
     for name, why in _REFUSED.items():
         if getattr(args, name):
-            raise OptionError(f"--{name.replace('_', '-')} is not for --sockets: {why}")
+            raise OptionError(f"--{name.replace('_', '-')} is not for {option}: {why}")
     if args.criterion not in ("D", "A", "E"):
-        raise OptionError(f"--sockets designs for the D, A or E criterion; got --criterion "
+        raise OptionError(f"{option} designs for the D, A or E criterion; got --criterion "
                           f"{args.criterion}")
-    contacts = SocketContacts.of_tool(
-        read_sockets(args.sockets), model.tool, args.ball,
-        per_socket=PER_SOCKET if args.orientations is None else args.orientations,
-        cone=CONE if args.cone is None else float(np.radians(args.cone)),
-        lift=LIFT if args.lift is None else args.lift / 1000.0)
+    settings = {"per_socket": PER_SOCKET if args.orientations is None else args.orientations,
+                "cone": CONE if args.cone is None else float(np.radians(args.cone))}
+    if args.ballbar:
+        contacts = BallbarPositions.of_tool(parse_pivots(args.ballbar), model.tool, args.ball,
+                                            **settings)
+    else:
+        settings["lift"] = LIFT if args.lift is None else args.lift / 1000.0
+        kind, read = (SocketContacts, read_sockets) if args.sockets else \
+            (PlaneTouches, read_planes)
+        contacts = kind.of_tool(read(args.sockets or args.planes), model.tool, args.ball,
+                                **settings)
     progress = stage_progress()
     result = contact_design(model, args.poses, contacts, sigma=args.sigma / 1000.0,
                             criterion=args.criterion, constraints=constraints,

@@ -40,7 +40,7 @@ def run_contacts(args, design: ContactDesign, models, checked_visits) -> None:
 
         visits = checked_visits(check_program(visits, models, design.robot),
                                 args.allow_collisions)
-        bad = check_descents(design, models)
+        bad = check_descents(design, models) if design.instrument != "ballbar" else []
         if bad and not args.allow_collisions:
             raise CollisionError(f"the straight move down to {len(bad)} contacts leaves the "
                                  f"clearances: {', '.join(bad[:5])}")
@@ -58,7 +58,8 @@ def run_contacts(args, design: ContactDesign, models, checked_visits) -> None:
     text = contact_csv(design, steps) if args.format == "csv" else \
         contact_urscript(design, steps, args.name, args.handshake)
     path.write_text(text, encoding="utf-8")
-    print(f"{len(design.socket)} contacts in {len(set(design.socket))} sockets, "
+    groups = {"socket": "sockets", "plane": "planes", "ballbar": "pivots"}[design.instrument]
+    print(f"{len(design.socket)} contacts in {len(set(design.socket))} {groups}, "
           f"{len(steps)} steps{'' if models is None else ', moves checked for collisions'}",
           file=sys.stderr)
     print(f"written: {path}", file=sys.stderr)

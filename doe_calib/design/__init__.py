@@ -5,9 +5,10 @@ relaxation → exchange (reachable from home) → refinement → bound → asses
 The goals that plug into it: a criterion of the poses' information
 (:mod:`.optimal`, the criteria D, A, E and task of :mod:`.criteria`), a design
 that can discover effects (:mod:`.discovery`), the poses that add most to a
-measured campaign (:mod:`.augment`) and the socket contacts to seat without a
-tracker (:mod:`.contacts`, its result :mod:`.contact_result`). The candidates and what they must satisfy
-live in :mod:`.candidates`, the solvers in :mod:`.solvers`; the information
+measured campaign (:mod:`.augment`) and the socket contacts to seat, plane
+touches to make or ballbar positions to read without a tracker
+(:mod:`.contacts`, its result :mod:`.contact_result`). The candidates and what
+they must satisfy live in :mod:`.candidates`, the solvers in :mod:`.solvers`; the information
 blocks in :mod:`.problem`; the results in :mod:`.result` (predicted std by name
 from :mod:`.predicted_std`) and :mod:`.augment_result`; :mod:`.comparison` sets
 designs and identification results side by side.

@@ -18,6 +18,16 @@ centred at the relaxation's means and swaps contacts on the exact M
 (:func:`~doe_calib.estimation.preparation.fix_unseen_by_contacts`: base, first joint and
 scale fixed), then those no candidates separate fixed as the rank analysis does.
 Contacts are unloaded and not refined (a seated pose is tied to its socket).
+
+Plane touches and ballbar positions (:mod:`.candidates.touches`,
+:mod:`.candidates.ballbar_positions`) are designed by the same goal: a reading is one
+scalar, the ball's rows read along the plane's normal or the bar, ``r_i = dᵢᵀB_i`` (1, F),
+and each plane or pivot is eliminated through its own columns a_i (3,), M = Σ_g R_gᵀ(I −
+A_g A_g⁺)R_g (:mod:`.solvers.nuisance_exchange`). For any C_g (3, F), Σ (r_i − a_iᵀC_g)ᵀ
+(r_i − a_iᵀC_g) ≥ M likewise: the relaxation is over rows less their group's weighted
+least-squares fit on its own columns, the bound certified as for sockets. What touches
+cannot see is fixed as identify fixes it (:func:`~doe_calib.estimation.preparation.
+fix_unseen_by_touches`, on the candidates); a ballbar sees the scale.
 """
 from __future__ import annotations
 
@@ -27,7 +37,7 @@ import numpy as np
 
 from doe_calib.design.candidates.clearances import pose_clearances
 from doe_calib.design.candidates.sockets import SocketContacts
-from doe_calib.design.contact_result import ContactDesign
+from doe_calib.design.contact_result import ContactDesign, contact_readings
 from doe_calib.design.criteria import AOptimal, Criterion, DOptimal, EOptimal, log_det
 from doe_calib.design.optimal import RANDOM_DESIGNS
 from doe_calib.design.pipeline import Goal, Setting, constraints_used, run
@@ -36,9 +46,10 @@ from doe_calib.design.problem import blocks_for, fixed_unidentifiable, load_conf
 from doe_calib.design.result import BoundRelaxation, Equivalence, RandomDesigns
 from doe_calib.design.solvers.contact_exchange import contact_exchange
 from doe_calib.design.solvers.exchange import exact_design
+from doe_calib.design.solvers.nuisance_exchange import nuisance_exchange, scalar_information
 from doe_calib.design.solvers.relaxation import equivalence_ratio, relax
 from doe_calib.errors import OptionError, SolverError
-from doe_calib.estimation.preparation import fix_unseen_by_contacts
+from doe_calib.estimation.preparation import fix_unseen_by_contacts, fix_unseen_by_touches
 from doe_calib.model.evaluation import observation_matrix
 
 #: Rounds of re-centring the relaxation at most.
@@ -57,6 +68,22 @@ def centred(blocks, socket, weights=None) -> np.ndarray:
     return out
 
 
+def projected(blocks, own, group, weights=None) -> np.ndarray:
+    """``blocks`` (K, r, F) less their group's ``weights``-weighted (default equal)
+    least-squares fit on its ``own`` columns (K, 3) (scalar readings, r = 1), or, ``own``
+    None, :func:`centred` (module notes)."""
+    if own is None:
+        return centred(blocks, group, weights)
+    w = np.ones(len(blocks)) if weights is None else np.asarray(weights, float)
+    out = np.array(blocks, float)
+    for g in np.unique(group):
+        at = group == g
+        root = np.sqrt(w[at] if w[at].sum() > 0 else np.ones(at.sum()))[:, None]
+        fit = np.linalg.lstsq(own[at] * root, blocks[at, 0] * root, rcond=None)[0]
+        out[at, 0] -= own[at] @ fit
+    return out
+
+
 def contact_information(blocks, socket, chosen) -> np.ndarray:
     """M (F, F) of the contacts ``chosen`` (indices, repeats counted), the sockets' points
     eliminated (module notes)."""
@@ -69,8 +96,9 @@ def contact_information(blocks, socket, chosen) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class ContactInformation:
     """The information stage of a contact design: the parameters designed for, the
-    criterion, each candidate's ball rows ``blocks`` (K, 3, F) (not centred), its
-    ``socket`` (K,), the candidate poses ``q`` (K, N) and ``pose_of`` (K,)."""
+    criterion, each candidate's ball rows ``blocks`` (K, 3, F) (not centred; (K, 1, F) for
+    a scalar reading), its ``socket`` (K,) (or plane, or pivot), the candidate poses ``q``
+    (K, N), ``pose_of`` (K,) and, for scalar readings, their ``own`` columns (K, 3)."""
 
     params: object
     criterion: Criterion
@@ -78,6 +106,17 @@ class ContactInformation:
     socket: np.ndarray
     q: np.ndarray
     pose_of: np.ndarray
+    own: np.ndarray = None
+
+    def projected(self, weights=None) -> np.ndarray:
+        """The blocks less their group's fit at ``weights`` (:func:`projected`)."""
+        return projected(self.blocks, self.own, self.socket, weights)
+
+    def of(self, chosen) -> np.ndarray:
+        """M (F, F) of the candidates ``chosen``, each group's own parameters eliminated."""
+        if self.own is None:
+            return contact_information(self.blocks, self.socket, chosen)
+        return scalar_information(self.blocks[:, 0], self.own, self.socket, chosen)
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,7 +136,7 @@ class CentredRelaxation:
 @dataclass(frozen=True)
 class ContactGoal(Goal):
     """Maximise the D, A or E criterion of the contacts' information, the sockets' points
-    eliminated (module notes)."""
+    (planes, pivots) eliminated (module notes)."""
 
     criterion: object = "D"
 
@@ -107,34 +146,62 @@ class ContactGoal(Goal):
         if len(poses.q) < n:
             raise SolverError(f"only {len(poses.q)} contact candidates for {n} contacts")
         stage("information", f"{len(poses.q)} contact candidates")
-        params = fix_unseen_by_contacts(model.robot, setting.params)
+        kind = setting.contacts.kind
+        params = fix_unseen_by_contacts(model.robot, setting.params, (kind,))
         sample = setting.rng.choice(len(poses.q), min(400, len(poses.q)), replace=False)
         cfg = load_configurations(model, params.values, poses.q[sample], ())
-        rows = observation_matrix(model, params.values, cfg)[1][:, setting.ball]
-        params = fixed_unidentifiable(params, centred(rows, poses.socket[sample])
+        if kind == "plane":
+            params = fix_unseen_by_touches(model, contact_readings(
+                cfg, setting.ball, setting.sigma, kind, poses.socket[sample],
+                poses.sockets.names), params)
+        # what identify counts scalar readings against (socket designs keep their old floor)
+        counted = int(params.free.sum()) if kind != "socket" else 0
+        rows = self.read_along(poses, observation_matrix(model, params.values, cfg)[1]
+                               [:, setting.ball], sample)
+        own = None if poses.own is None else poses.own[sample]
+        params = fixed_unidentifiable(params, projected(rows, own, poses.socket[sample])
                                       .reshape(-1, rows.shape[-1]), "the contact candidates")
-        ball = self.ball_rows(setting, params, poses.q)
-        f, s = ball.shape[-1], len(np.unique(poses.socket))
-        if 3 * (n - s) < f:
-            raise OptionError(f"{n} contacts (--poses) are too few: {f} parameters to "
-                              f"identify and each contact gives 3 coordinates, less 3 per "
-                              f"socket for its unknown point ({s} sockets): at least "
-                              f"{s + -(-f // 3)} contacts")
+        ball = self.ball_rows(setting, params, poses)
+        f, s, r = ball.shape[-1], len(np.unique(poses.socket)), ball.shape[1]
+        if r * n - 3 * s < max(f, counted):
+            what = {"socket": ("contact gives 3 coordinates", "socket for its unknown point",
+                               "sockets", "contacts"),
+                    "plane": ("touch gives 1 coordinate", "plane for its unknown position",
+                              "planes", "touches"),
+                    "ballbar": ("position gives 1 length", "pivot for its unknown point",
+                                "pivots", "positions")}[kind]
+            need = max(f, counted)
+            least = s + -(-need // 3) if r == 3 else 3 * s + need
+            counts = f" ({counted} unknown before identify's rank analysis fixes those no " \
+                     f"reading separates)" if counted > f else ""
+            raise OptionError(f"{n} {what[3]} (--poses) are too few: {f} parameters to "
+                              f"identify{counts} and each {what[0]}, less 3 per {what[1]} ({s} "
+                              f"{what[2]}): at least {least} {what[3]}")
         return ContactInformation(params, Criterion.from_name(self.criterion), ball,
-                                  poses.socket, poses.q, np.arange(len(poses.q)))
+                                  poses.socket, poses.q, np.arange(len(poses.q)), poses.own)
 
     @staticmethod
-    def ball_rows(setting, params, q) -> np.ndarray:
-        """The ball's scaled, σ-weighted rows (K, 3, F) of the free parameters at ``q``."""
+    def read_along(poses, rows, at=slice(None)) -> np.ndarray:
+        """``rows`` (K, 3, F) of the candidates ``at``, read along their ``direction`` (K, 1,
+        F) when they are scalar readings."""
+        if poses.direction is None:
+            return rows
+        return np.einsum("ki,kif->kf", poses.direction[at], rows)[:, None]
+
+    @classmethod
+    def ball_rows(cls, setting, params, poses) -> np.ndarray:
+        """The ball's scaled, σ-weighted rows (K, 3, F) of the free parameters at the
+        candidates ``poses`` ((K, 1, F) for scalar readings)."""
         j = setting.ball
-        return blocks_for(setting.model, params, q, (), setting.sigma)[:, 3 * j:3 * j + 3]
+        return cls.read_along(poses, blocks_for(setting.model, params, poses.q, (),
+                                                setting.sigma)[:, 3 * j:3 * j + 3])
 
     def relaxation(self, setting, info, stage) -> CentredRelaxation:
         stage("relaxation", f"{info.criterion.name} criterion over {len(info.blocks)} "
                             f"contact candidates")
         best, weights = None, None
         for r in range(ROUNDS):
-            blocks = centred(info.blocks, info.socket, weights)
+            blocks = info.projected(weights)
             made = relax(blocks, info.criterion, progress=stage.iterations("relaxation"),
                          start=weights)
             if best is None or made.bound(setting.n_poses) < best.outcome.bound(setting.n_poses):
@@ -153,8 +220,15 @@ class ContactGoal(Goal):
                               f"{n} contacts")
         blocks, socket = info.blocks[pool], info.socket[pool]
         weights = relaxed.weights[pool]
-        made = exact_design(centred(blocks, socket, weights), n, info.criterion, weights)
-        chosen, value, sweeps = contact_exchange(blocks, socket, made.indices, info.criterion)
+        own = None if info.own is None else info.own[pool]
+        made = exact_design(projected(blocks, own, socket, weights), n, info.criterion,
+                            weights)
+        if own is None:
+            chosen, value, sweeps = contact_exchange(blocks, socket, made.indices,
+                                                     info.criterion)
+        else:
+            chosen, value, sweeps = nuisance_exchange(blocks[:, 0], own, socket,
+                                                      made.indices, info.criterion)
         return replace(made, indices=pool[chosen], value=value,
                        iterations=made.iterations + sweeps,
                        status=f"{made.status}; then {sweeps} sweeps of swaps on the exact "
@@ -171,16 +245,14 @@ class ContactGoal(Goal):
         model, n, crit, params = setting.model, setting.n_poses, info.criterion, info.params
         chosen, cands = choice.chosen, candidates.poses
         q = choice.q[chosen]
-        m = contact_information(info.blocks, info.socket, chosen)
+        m = info.of(chosen)
         value, limit, p = crit.value(m), relaxed.outcome.bound(n), m.shape[0]
         efficiencies = {crit.name: crit.efficiency(value, limit, p)}
         if not isinstance(crit, DOptimal):
-            d_limit = min(relax(relaxed.centred).bound(n),
-                          relax(centred(info.blocks, info.socket)).bound(n))
+            d_limit = min(relax(relaxed.centred).bound(n), relax(info.projected()).bound(n))
             efficiencies["D"] = DOptimal().efficiency(log_det(m), d_limit, p)
         stage("assessment")
-        at_design = centred(info.blocks, info.socket,
-                            np.bincount(chosen, minlength=len(info.blocks)))
+        at_design = info.projected(np.bincount(chosen, minlength=len(info.blocks)))
         ratio = equivalence_ratio(at_design, m / n, crit)
         target = crit.target(p)
         versus = RandomDesigns.of(random_log_dets(info, n, setting.rng), log_det(m), n, p)
@@ -211,14 +283,17 @@ class ContactGoal(Goal):
                                              int((~params.free).sum())),
             socket=tuple(cands.sockets.names[k] for k in cands.socket[chosen]),
             ball=model.tool.names[setting.ball], sockets=cands.sockets.to_dict(),
-            above=cands.approach[chosen], lift_mm=1000.0 * setting.contacts.lift,
-            cone_deg=float(np.degrees(setting.contacts.cone)))
+            above=cands.approach[chosen] + (q - cands.q[chosen]),  # the contact's turns
+            lift_mm=1000.0 * setting.contacts.lift,
+            cone_deg=float(np.degrees(setting.contacts.cone)),
+            instrument=setting.contacts.kind,
+            length_mm=() if cands.length is None else
+            tuple(float(1000.0 * x) for x in cands.length[chosen]))
 
 
 def random_log_dets(info, n: int, rng, designs: int = RANDOM_DESIGNS) -> list:
     """log det M of ``designs`` random sets of ``n`` distinct contact candidates."""
-    return [log_det(contact_information(info.blocks, info.socket,
-                                        rng.choice(len(info.q), n, replace=False)))
+    return [log_det(info.of(rng.choice(len(info.q), n, replace=False)))
             for _ in range(designs)]
 
 
@@ -237,18 +312,20 @@ class ContactSetting(Setting):
 def contact_design(model, n_contacts: int, contacts: SocketContacts, sigma: float = 1e-5,
                    criterion="D", constraints=None, params=None, rng=None, progress=None,
                    collision=None, home=None) -> ContactDesign:
-    """The ``n_contacts`` socket contacts that best identify ``model``'s parameters.
+    """The ``n_contacts`` socket contacts (plane touches, ballbar positions) that best
+    identify ``model``'s parameters.
 
     Parameters
     ----------
     model : Model
     n_contacts : int
-        Contacts to seat, over all the sockets.
+        Contacts to seat, over all the sockets (planes, pivots).
     contacts : SocketContacts
         The sockets (nominal points), the ball and how the candidates are drawn
-        (:mod:`.candidates.sockets`).
+        (:mod:`.candidates.sockets`); or a :class:`.candidates.touches.PlaneTouches`, a
+        :class:`.candidates.ballbar_positions.BallbarPositions`.
     sigma : float
-        Seating scatter per coordinate, m.
+        Seating scatter per coordinate (a touch's along the normal, a length's), m.
     criterion : {"D", "A", "E"}
     constraints, params, rng, progress, collision, home
         As :func:`.optimal.optimal_design`.

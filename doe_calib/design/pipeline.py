@@ -166,7 +166,8 @@ class Stages:
 def draw_candidates(setting: Setting, candidates, own_load_case: bool,
                     stage: Stages) -> Candidates:
     """The candidates stage: ``candidates`` random feasible poses, the poses of a file
-    screened by the same constraints, or socket contacts (:mod:`.candidates.sockets`).
+    screened by the same constraints, or socket contacts (:mod:`.candidates.sockets`),
+    plane touches or ballbar positions (its subclasses).
 
     ``own_load_case``: each candidate is later judged with its own load case (a goal that
     chooses one per pose), so the constraints here leave the load torques out.
@@ -180,7 +181,9 @@ def draw_candidates(setting: Setting, candidates, own_load_case: bool,
         poses = screened_candidates(feasibility, model.robot, candidates, setting.collision)
         return Candidates(feasibility, poses, False)
     if isinstance(candidates, SocketContacts):
-        stage("candidates", f"seating the ball in {len(candidates.sockets.names)} sockets at "
+        what = {"socket": "in {} sockets", "plane": "on {} planes",
+                "ballbar": "about {} ballbar pivots"}[candidates.kind]
+        stage("candidates", f"seating the ball {what.format(len(candidates.sockets.names))} at "
                             f"{candidates.per_socket} tool orientations each")
         poses = candidates.draw(feasibility, model, setting.params.values, setting.rng,
                                 setting.collision)
@@ -234,8 +237,9 @@ def run(goal: Goal, setting: Setting, candidates, progress=None):
     """The design of ``goal``: every stage in order, each given the results before it.
 
     ``candidates``: random feasible candidates to draw, the poses of a file
-    (:class:`.from_file.CandidatePoses`) or socket contacts
-    (:class:`.candidates.sockets.SocketContacts`); ``progress(done, total, note)``, optional.
+    (:class:`.from_file.CandidatePoses`) or socket contacts, plane touches or ballbar
+    positions (:class:`.candidates.sockets.SocketContacts` and its subclasses);
+    ``progress(done, total, note)``, optional.
     Returns the goal's result (:class:`.result.DesignResult`,
     :class:`.augment_result.AugmentResult`, :class:`.contact_result.ContactDesign`).
     """

@@ -17,6 +17,7 @@ from __future__ import annotations
 import csv
 from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
@@ -95,12 +96,20 @@ def read_sockets(path) -> Sockets:
 @dataclass(frozen=True, eq=False)
 class ContactSet(CandidateSet):
     """Contact candidates (a :class:`.draw.CandidateSet` whose ``q`` are seated contacts)
-    with each one's ``socket`` (K,) (index into ``sockets.names``), its ``approach`` (K, N)
-    joint values (rad, m) at the approach point and the ``sockets``."""
+    with each one's ``socket`` (K,) (index into ``sockets.names``: the sockets, or the
+    planes or ballbar pivots), its ``approach`` (K, N) joint values (rad, m) at the
+    approach point and the ``sockets``. A reading that is one scalar (a touch, a length)
+    has its ``direction`` (K, 3), the unit vector its ball rows are read along, and
+    ``own`` (K, 3), its row of the eliminated plane's or pivot's own columns (None for
+    socket contacts: three rows each, their socket's point eliminated); a ballbar
+    position its ``length`` (K,), m."""
 
     socket: np.ndarray = None
     approach: np.ndarray = None
     sockets: Sockets = None
+    direction: np.ndarray = None
+    own: np.ndarray = None
+    length: np.ndarray = None
 
 
 @dataclass(frozen=True)
@@ -113,6 +122,8 @@ class SocketContacts:
     per_socket: int = PER_SOCKET
     cone: float = CONE
     lift: float = LIFT
+    #: What the readings are: "socket" contacts, "plane" touches, "ballbar" positions.
+    kind: ClassVar[str] = "socket"
 
     @classmethod
     def of_tool(cls, sockets: Sockets, tool, ball: str | None = None, **settings):
@@ -137,63 +148,92 @@ class SocketContacts:
     def draw(self, feasibility, model, values, rng, collision=None) -> ContactSet:
         """The contact candidates (module notes); ``values`` the parameters placing the
         robot (SI). Raises SolverError when a socket keeps none."""
-        robot, s = model.robot, len(self.sockets.names)
-        lo, hi = feasibility.constraints.bounds(robot)
-        revolute = np.array([j.kind == "revolute" for j in robot.joints])
+        s = len(self.sockets.names)
         ball = model.tool.position_array[self.ball]
-        residual = seating_residual(model, values, ball)
         k = s * self.per_socket
         socket = np.repeat(np.arange(s), self.per_socket)
-        down, rotation = self._orientations(ball, k, rng)
+        down, rotation = orientations(ball, k, self.cone, rng)
         target = self.sockets.points[socket]
-        q, ok = seat(residual, target, rotation, rng.uniform(lo, hi, (k, len(lo))), lo, hi,
-                     revolute)
-        up, ok_up = seat(residual, target - self.lift * down, rotation, q, lo, hi, revolute)
+        return seated_candidates(feasibility, model, values, rng, collision, self.ball,
+                                 target, rotation, -self.lift * down, socket,
+                                 self.sockets.names, "socket", self.sockets.source,
+                                 sockets=self.sockets)
+
+
+def orientations(ball, k: int, cone: float, rng, axes=None) -> tuple:
+    """Stem directions (K, 3), base frame, within ``cone`` (rad) of the downward vertical,
+    or of each of ``axes`` (K, 3) (unit), uniform over that cap; and flange rotations
+    (K, 3, 3) that point the stem (flange origin → ``ball``, flange frame) along them,
+    turned about them by a random wrist angle."""
+    stem = ball / np.linalg.norm(ball) if np.linalg.norm(ball) > 1e-6 else np.r_[0, 0, 1.0]
+    tilt = np.arccos(1.0 - rng.uniform(0.0, 1.0, k) * (1.0 - np.cos(cone)))
+    azimuth, wrist = rng.uniform(0.0, 2 * np.pi, (2, k))
+    down = np.c_[np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth),
+                 -np.cos(tilt)]
+    if axes is not None:
+        down = np.einsum("kij,kj->ki", _aligning(np.r_[0, 0, -1.0], axes), down)
+    onto = _aligning(stem, down)
+    return down, np.einsum("kij,kjl->kil", _about(down, wrist), onto)
+
+
+def seated_candidates(feasibility, model, values, rng, collision, ball: int, targets,
+                      rotations, away, group, names, kind: str, source: str,
+                      **fields) -> ContactSet:
+    """The candidates that seat the tool's marker ``ball`` on ``targets`` (K, 3), m, with
+    the flange at ``rotations`` (K, 3, 3), from random seeds: those seated inside the joint
+    bounds, feasible and clear, whose approach point (the ball moved by ``away`` (K, 3), m;
+    all zero: none) is seated on the same branch of the arm, feasible and clear too.
+
+    ``group`` (K,) indexes ``names``, the sockets, planes or pivots (``kind`` in words);
+    ``fields``: the :class:`ContactSet`'s own, those of one row per candidate (K, …) kept
+    for the candidates kept. Raises SolverError when a group keeps none.
+    """
+    robot = model.robot
+    lo, hi = feasibility.constraints.bounds(robot)
+    revolute = np.array([j.kind == "revolute" for j in robot.joints])
+    residual = seating_residual(model, values, model.tool.position_array[ball])
+    k = len(targets)
+    q, ok = seat(residual, targets, rotations, rng.uniform(lo, hi, (k, len(lo))), lo, hi,
+                 revolute)
+    removed = {"not seated inside the joint limits": int((~ok).sum())}
+    ok &= _screen(feasibility, collision, q, ok, removed, "")
+    if np.any(away):
+        up, ok_up = seat(residual, targets + away, rotations, q, lo, hi, revolute)
         up = nearest_equivalent(up, q, robot, lo, hi)
-        removed = {"not seated inside the joint limits": int((~ok).sum())}
-        ok &= self._screen(feasibility, collision, q, ok, removed, "")
         lifted = ok & ~ok_up
         removed["approach point not seated inside the joint limits"] = int(lifted.sum())
         ok &= ok_up
-        away = ok & (np.abs(up - q).max(axis=1) > NEAR)
-        removed["approach point on another branch of the arm"] = int(away.sum())
-        ok &= ~away & self._screen(feasibility, collision, up, ok & ~away, removed,
-                                   "approach point: ")
-        for j, name in enumerate(self.sockets.names):
-            if not ok[socket == j].any():
-                raise SolverError(f"socket {name}: none of {self.per_socket} tool orientations "
-                                  f"is seated within the joint limits and the constraints; "
-                                  f"is it within reach?")
-        removed = {name: n for name, n in removed.items() if n}
-        kept = socket[ok]
-        names = tuple(f"{self.sockets.names[j]}-{int(np.sum(kept[:i] == j)) + 1}"
-                      for i, j in enumerate(kept))
-        return ContactSet(q[ok], k, removed, names, self.sockets.source, socket[ok], up[ok],
-                          self.sockets)
+        far = ok & (np.abs(up - q).max(axis=1) > NEAR)
+        removed["approach point on another branch of the arm"] = int(far.sum())
+        ok &= ~far & _screen(feasibility, collision, up, ok & ~far, removed,
+                             "approach point: ")
+    else:
+        up = q.copy()
+    per = np.bincount(group, minlength=len(names))
+    for j, name in enumerate(names):
+        if not ok[group == j].any():
+            raise SolverError(f"{kind} {name}: none of {per[j]} tool orientations is seated "
+                              f"within the joint limits and the constraints; is it within "
+                              f"reach?")
+    removed = {why: n for why, n in removed.items() if n}
+    kept = group[ok]
+    labels = tuple(f"{names[j]}-{int(np.sum(kept[:i] == j)) + 1}" for i, j in enumerate(kept))
+    return ContactSet(q[ok], k, removed, labels, source, group[ok], up[ok],
+                      **{f: (v[ok] if isinstance(v, np.ndarray) and len(v) == k else v)
+                         for f, v in fields.items()})
 
-    def _orientations(self, ball, k: int, rng) -> tuple:
-        """Approach directions (K, 3), base frame, and flange rotations (K, 3, 3) that point
-        the stem along them, turned about them by a random wrist angle."""
-        stem = ball / np.linalg.norm(ball) if np.linalg.norm(ball) > 1e-6 else np.r_[0, 0, 1.0]
-        tilt = np.arccos(1.0 - rng.uniform(0.0, 1.0, k) * (1.0 - np.cos(self.cone)))
-        azimuth, wrist = rng.uniform(0.0, 2 * np.pi, (2, k))
-        down = np.c_[np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth),
-                     -np.cos(tilt)]
-        onto = _aligning(stem, down)
-        return down, np.einsum("kij,kjl->kil", _about(down, wrist), onto)
 
-    @staticmethod
-    def _screen(feasibility, collision, q, ok, removed: dict, prefix: str) -> np.ndarray:
-        """Those of ``q`` (where ``ok``) that meet the constraints and clearances; the
-        violations counted into ``removed`` under ``prefix``."""
-        good, violated = feasibility.feasible(q)
-        good &= ok
-        if collision is not None and good.any():
-            good, hits = screen_collisions(collision, q, good, Workspace(collision))
-            violated.update(hits)
-        for name, v in violated.items():
-            removed[prefix + name] = removed.get(prefix + name, 0) + int((v & ok).sum())
-        return good
+def _screen(feasibility, collision, q, ok, removed: dict, prefix: str) -> np.ndarray:
+    """Those of ``q`` (where ``ok``) that meet the constraints and clearances; the
+    violations counted into ``removed`` under ``prefix``."""
+    good, violated = feasibility.feasible(q)
+    good &= ok
+    if collision is not None and good.any():
+        good, hits = screen_collisions(collision, q, good, Workspace(collision))
+        violated.update(hits)
+    for name, v in violated.items():
+        removed[prefix + name] = removed.get(prefix + name, 0) + int((v & ok).sum())
+    return good
 
 
 def _aligning(a, b) -> np.ndarray:
