@@ -141,3 +141,24 @@ def test_sockets_refusals(designed, capsys):
     assert _simulate(d, "x.csv", "--design", str(d / "contacts.json"), "--load",
                      "5@0,0,50") == 2
     assert "--load is not taken with a contact design" in capsys.readouterr().err
+
+
+def test_a_touch_design_is_simulated_as_its_touches(designed, capsys):
+    """``--design`` of ``design --planes``: each logged q puts the true ball on its plane."""
+    d, robot, tool, model = designed
+    (d / "planes.csv").write_text("plane,x,y,z,nx,ny,nz,half\ntable,1800,0,400,0,0,1,400\n"
+                                  "front,2200,0,700,-1,0,0,250\n"
+                                  "slant,1700,-700,700,0,0.5,0.866,250\n")
+    assert main(["design", "--robot", ROBOT_URDF, "--tool", BALL_TOOL_YAML, "--planes",
+                 str(d / "planes.csv"), "--model", MODEL, "--poses", "60", "--orientations",
+                 "150", "--sigma", "0.01", "--seed", "1", "--out", str(d / "touches.json")]) == 0
+    capsys.readouterr()
+    assert _simulate(d, "touched.csv", "--design", str(d / "touches.json"),
+                     "--sigma", "1e-9") == 0
+    assert "60 touches of 3 planes" in capsys.readouterr().out
+    meas, _, ball = _true_balls(d, "touched.csv", model, robot, tool)
+    assert meas.touch.all()
+    for k in meas.planes_used:
+        at = ball[meas.plane == k]
+        centred = at - at.mean(axis=0)
+        assert np.linalg.svd(centred, compute_uv=False)[-1] < 1e-8  # all on one plane

@@ -202,7 +202,7 @@ def simulate_readings(model, values, template, sigma: float, rng=None, points=No
     for k in template.sockets_used.tolist():
         targets[template.socket == k] = np.asarray(where[template.socket_names[k]], float)
     given = given_rows(template)
-    for k in np.unique(template.socket[given]).tolist():
+    for k in np.unique(template.socket[given]).tolist() if given.any() else ():
         at = given & (template.socket == k)
         tolerance = 0.0 if template.socket_sigma is None else template.socket_sigma[at][0]
         targets[at] = template.xyz[at][0] + tolerance * rng.standard_normal(3)
