@@ -61,10 +61,11 @@ def add_arguments(c):
     c.add_argument("--truth", help="JSON with the true parameters (else random errors)")
     c.add_argument("--tracker", help="placement X,Y,Z,RX,RY,RZ (mm, rotation vector in deg) "
                                      "of the frame of the readings when errors are random: "
-                                     "the tracker's, or the socket plate's of --sockets "
-                                     "(default: a few metres away at any angle; with "
-                                     "--sockets, within a few mm and 0.1° of the robot's "
-                                     "base frame, as the design put the plate)")
+                                     "the tracker's, or the socket plate's (default: a few "
+                                     "metres away at any angle; with sockets of given "
+                                     "position, --sockets or x, y, z on a template's rows, "
+                                     "within a few mm and 0.1° of the robot's base frame, "
+                                     "as the design put the plate)")
     add_options(c, "--seed")
     c.add_argument("--out", required=True, help="measurement CSV to write")
     c.add_argument("--truth-out", help="JSON to write the true parameters to")
@@ -84,7 +85,7 @@ def run(args):
     from doe_calib.estimation.result import load_parameters, save_parameters
     from doe_calib.io.csv_files import write_measurements
     from doe_calib.model.marker_model import build_model
-    from doe_calib.model.seating import simulate_readings
+    from doe_calib.model.seating import given_rows, simulate_readings
     from doe_calib.model.simulate import random_truth, simulate
 
     robot, tool = load_robot_tool(args)
@@ -99,7 +100,7 @@ def run(args):
         if args.tracker:
             t = parse_floats(args.tracker, 6, "--tracker (mm, deg)")
             base = np.r_[t[:3] / 1000.0, np.radians(t[3:])]
-        elif args.sockets:
+        elif template is not None and given_rows(template).any():
             base = np.r_[rng.normal(0.0, PLATE_PLACEMENT[0], 3),
                          rng.normal(0.0, PLATE_PLACEMENT[1], 3)]
         truth = model.nominal().with_values(random_truth(model, rng, base=base))
@@ -137,13 +138,13 @@ def _without_coordinates(meas) -> str:
     bar, touch, given = meas.ballbar, meas.touch, given_rows(meas)
     seated = meas.contact & ~touch & ~bar
     said = []
-    for rows, what in ((seated, "socket contacts in {} of unknown position"),
-                       (given, "socket contacts in {} of given position"),
-                       (bar, "ballbar lengths from {}")):
+    sockets = ("socket", "sockets")
+    for rows, what, kind in ((seated, "socket contacts in {} of unknown position", sockets),
+                             (given, "socket contacts in {} of given position", sockets),
+                             (bar, "ballbar lengths from {}", ("pivot", "pivots"))):
         if rows.any():
-            groups = len(np.unique(meas.socket[rows]))
-            kind = ("pivot", "pivots") if what.startswith("ballbar") else ("socket", "sockets")
-            said.append(f"{int(rows.sum())} " + what.format(counted(groups, *kind)))
+            groups = counted(len(np.unique(meas.socket[rows])), *kind)
+            said.append(f"{int(rows.sum())} " + what.format(groups))
     if touch.any():
         planes = counted(len(meas.planes_used), "plane", "planes")
         said.append(f"{int(touch.sum())} touches of {planes}")
