@@ -1,4 +1,7 @@
-"""README's "The whole loop", run as written: every command exits 0 and writes its files."""
+"""README's "The whole loop", run as written: every command exits 0 and writes its files.
+
+:func:`loop_commands` and :func:`run_loop` run any section's block (tests/
+test_readme_loop_without_tracker.py runs "The loop without a tracker")."""
 import csv
 import re
 import shlex
@@ -10,11 +13,15 @@ ROOT = Path(__file__).resolve().parents[1]
 OUTPUTS = ("--out", "--truth-out", "--program-out")
 
 
-def loop_commands() -> list[str]:
-    """The lines of the section's bash block, in order."""
+def section_text(title: str) -> str:
+    """The README's section ``## title``, up to the next section."""
     text = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = text.split("## The whole loop", 1)[1].split("\n## ", 1)[0]
-    block = re.search(r"```bash\n(.*?)```", section, re.S).group(1)
+    return text.split(f"## {title}\n", 1)[1].split("\n## ", 1)[0]
+
+
+def loop_commands(title: str = "The whole loop") -> list[str]:
+    """The lines of the bash block of the README's section ``## title``, in order."""
+    block = re.search(r"```bash\n(.*?)```", section_text(title), re.S).group(1)
     return [line.strip() for line in block.splitlines() if line.strip()]
 
 
@@ -22,10 +29,13 @@ def _expand(line: str, variables: dict) -> str:
     return re.sub(r"\$(\w+)", lambda m: variables[m.group(1)], line)
 
 
-def test_readme_loop_runs_in_order(tmp_path, monkeypatch):
+def run_loop(title: str, tmp_path, monkeypatch, capsys=None) -> tuple[list, list]:
+    """Run the block of the README's section ``## title`` in ``tmp_path``: every command
+    exits 0 and writes its outputs. Returns each command's name and, with ``capsys``, what
+    each printed (stdout and stderr)."""
     monkeypatch.chdir(tmp_path)
-    variables, ran = {}, []
-    for line in loop_commands():
+    variables, ran, printed = {}, [], []
+    for line in loop_commands(title):
         assignment = re.fullmatch(r"(\w+)=(\S+)", line)
         if assignment:   # paths are the repository's (the README runs from its root)
             name, value = assignment.groups()
@@ -39,6 +49,14 @@ def test_readme_loop_runs_in_order(tmp_path, monkeypatch):
                 out = Path(path)
                 assert out.is_file() or (out.is_dir() and any(out.iterdir())), line
         ran.append(argv[1])
+        if capsys is not None:
+            said = capsys.readouterr()
+            printed.append(said.out + said.err)
+    return ran, printed
+
+
+def test_readme_loop_runs_in_order(tmp_path, monkeypatch):
+    ran, _ = run_loop("The whole loop", tmp_path, monkeypatch)
     assert ran == ["design", "export", "simulate", "simulate", "identify", "diagnose", "refine",
                    "export", "compensate", "export-urdf", "iso9283", "export", "simulate",
                    "compensate", "simulate", "iso9283"]

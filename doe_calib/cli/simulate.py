@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 
 from doe_calib.cli.common import (
     add_options,
@@ -15,7 +16,7 @@ from doe_calib.cli.common import (
     robot_arguments,
 )
 from doe_calib.cli.options import count, positive
-from doe_calib.errors import OptionError
+from doe_calib.errors import DataError, OptionError
 from doe_calib.io.json_file import strict_json
 
 HELP = "simulate a measurement campaign"
@@ -26,7 +27,9 @@ EXAMPLE = ("doe-calib simulate --robot kr270.urdf --tool tool.yaml --poses 40 "
 def add_arguments(c):
     robot_arguments(c)
     c.add_argument("--design", help="design of poses and loads: the JSON doe-calib design "
-                                    "writes, or its CSV (else random poses)")
+                                    "writes, or its CSV (else random poses); a contact design "
+                                    "(design --sockets, --planes, --ballbar: its JSON) is "
+                                    "simulated as --template simulates its CSV")
     c.add_argument("--template", metavar="CSV",
                    help="measurement CSV whose readings are simulated as they stand: its "
                         "poses, loads, markers, socket contacts, plane touches and ballbar "
@@ -37,6 +40,12 @@ def add_arguments(c):
                         "through the truth's ball at its rows; a ballbar row keeps its q and "
                         "logs the true ball's distance from the pivot (the centre that best "
                         "fits the row's lengths on the truth, or its seated contacts' mean)")
+    c.add_argument("--sockets", metavar="FILE",
+                   help="with --template or a contact --design: the sockets of given position, "
+                        "a socket plate's drawing (CSV socket,x,y,z[,socket_sigma], mm, the "
+                        "frame of the readings, which --tracker places); the truth seats the "
+                        "ball at each point moved by a draw of its socket_sigma (the plate as "
+                        "made), the rows carry the drawing's x, y, z and socket_sigma")
     c.add_argument("--poses", type=count("--poses", 1, "pose"), default=30,
                    help="random poses when no design")
     c.add_argument("--constraints", metavar="CELL.yaml",
@@ -50,8 +59,13 @@ def add_arguments(c):
                    help="noise σ per coordinate, mm (a socket contact's seating scatter per "
                         "axis, a touch's along its plane's normal, a ballbar length's)")
     c.add_argument("--truth", help="JSON with the true parameters (else random errors)")
-    c.add_argument("--tracker", help="tracker placement X,Y,Z,RX,RY,RZ (mm, rotation vector "
-                                     "in deg) when errors are random")
+    c.add_argument("--tracker", help="placement X,Y,Z,RX,RY,RZ (mm, rotation vector in deg) "
+                                     "of the frame of the readings when errors are random: "
+                                     "the tracker's, or the socket plate's (default: a few "
+                                     "metres away at any angle; with sockets of given "
+                                     "position, --sockets or x, y, z on a template's rows, "
+                                     "within a few mm and 0.1° of the robot's base frame, "
+                                     "as the design put the plate)")
     add_options(c, "--seed")
     c.add_argument("--out", required=True, help="measurement CSV to write")
     c.add_argument("--truth-out", help="JSON to write the true parameters to")
@@ -61,6 +75,8 @@ def add_arguments(c):
 
 
 OUTPUTS = {"out": "file", "truth_out": "file"}
+#: The std of a random socket plate's placement about the robot's base frame (m, rad).
+PLATE_PLACEMENT = (2e-3, 1.7e-3)
 
 
 def run(args):
@@ -69,12 +85,14 @@ def run(args):
     from doe_calib.estimation.result import load_parameters, save_parameters
     from doe_calib.io.csv_files import write_measurements
     from doe_calib.model.marker_model import build_model
+    from doe_calib.model.seating import given_rows, simulate_readings
     from doe_calib.model.simulate import random_truth, simulate
 
     robot, tool = load_robot_tool(args)
     check_payloads(robot, [args.load] if args.load else [])
     model = build_model(robot, tool, args.model, registry=effect_registry(args))
     rng = np.random.default_rng(args.seed)
+    template = _template(args, model)
     if args.truth:
         truth = load_parameters(args.truth, model)
     else:
@@ -82,9 +100,13 @@ def run(args):
         if args.tracker:
             t = parse_floats(args.tracker, 6, "--tracker (mm, deg)")
             base = np.r_[t[:3] / 1000.0, np.radians(t[3:])]
+        elif template is not None and given_rows(template).any():
+            base = np.r_[rng.normal(0.0, PLATE_PLACEMENT[0], 3),
+                         rng.normal(0.0, PLATE_PLACEMENT[1], 3)]
         truth = model.nominal().with_values(random_truth(model, rng, base=base))
-    if args.template:
-        meas = _from_template(args, model, truth, rng)
+    if template is not None:
+        meas = simulate_readings(model, truth, template, args.sigma / 1000.0, rng,
+                                 source=args.out)
     else:
         meas = simulate(model, truth, _configurations(args, model, truth, rng),
                         args.sigma / 1000.0, rng, source=args.out)
@@ -104,17 +126,29 @@ def run(args):
 
 
 def _without_coordinates(meas) -> str:
-    """The readings without coordinates of ``meas`` in words ("" with none)."""
-    seated = int((meas.contact & ~meas.touch & ~meas.ballbar).sum())
-    touches, lengths = int(meas.touch.sum()), int(meas.ballbar.sum())
+    """The readings without coordinates of ``meas``, and the contacts in sockets of given
+    position, in words ("" with none)."""
+    import numpy as np
+
+    from doe_calib.model.seating import given_rows
+
+    def counted(n, one, many):
+        return f"{n} {one if n == 1 else many}"
+
+    bar, touch, given = meas.ballbar, meas.touch, given_rows(meas)
+    seated = meas.contact & ~touch & ~bar
     said = []
-    if seated or lengths:
-        said.append(f"{seated} socket contacts" + (f" and {lengths} ballbar lengths" if lengths
-                                                   else "") +
-                    f" in {len(meas.sockets_used)} sockets")
-    if touches:
-        said.append(f"{touches} touches of {len(meas.planes_used)} planes")
-    if seated or touches:
+    sockets = ("socket", "sockets")
+    for rows, what, kind in ((seated, "socket contacts in {} of unknown position", sockets),
+                             (given, "socket contacts in {} of given position", sockets),
+                             (bar, "ballbar lengths from {}", ("pivot", "pivots"))):
+        if rows.any():
+            groups = counted(len(np.unique(meas.socket[rows])), *kind)
+            said.append(f"{int(rows.sum())} " + what.format(groups))
+    if touch.any():
+        planes = counted(len(meas.planes_used), "plane", "planes")
+        said.append(f"{int(touch.sum())} touches of {planes}")
+    if (seated | given | touch).any():
         said.append("each q of a contact or touch the one seating the true ball")
     return "".join(f"; {s}" for s in said)
 
@@ -143,19 +177,91 @@ def _configurations(args, model, truth, rng):
     return Configurations.from_arrays(q)
 
 
-def _from_template(args, model, truth, rng):
-    """The readings of ``--template`` simulated on ``truth``
-    (:func:`~doe_calib.model.seating.simulate_readings`)."""
+def _template(args, model):
+    """The readings to simulate as they stand (:func:`~doe_calib.model.seating.
+    simulate_readings`): ``--template``'s, or a contact ``--design``'s; with ``--sockets``
+    given positions on their sockets' rows; None: configurations to simulate."""
+    from doe_calib.cli.export_contacts import contact_design
     from doe_calib.io.csv_files import read_measurements
-    from doe_calib.model.seating import simulate_readings
 
-    for given, name in ((args.design, "--design"), (args.load, "--load"),
-                        (args.constraints, "--constraints")):
-        if given:
-            raise OptionError(f"{name} is not taken with --template: the template's rows are "
-                              f"the poses, loads and readings simulated")
-    template = read_measurements(args.template, model.robot, model.tool, require_xyz=False)
-    return simulate_readings(model, truth, template, args.sigma / 1000.0, rng, source=args.out)
+    design = contact_design(args.design) if args.design else None
+    if args.template:
+        for given, name in ((args.design, "--design"), (args.load, "--load"),
+                            (args.constraints, "--constraints")):
+            if given:
+                raise OptionError(f"{name} is not taken with --template: the template's rows "
+                                  f"are the poses, loads and readings simulated")
+        template = read_measurements(args.template, model.robot, model.tool,
+                                     require_xyz=False)
+    elif design is not None:
+        for given, name in ((args.load, "--load"), (args.constraints, "--constraints")):
+            if given:
+                raise OptionError(f"{name} is not taken with a contact design: its contacts "
+                                  f"are the readings simulated")
+        template = design.readings(model, args.sigma / 1000.0)
+    elif args.sockets:
+        raise OptionError("--sockets gives the positions of a template's sockets: give "
+                          "--template or a contact --design")
+    else:
+        return None
+    return _with_given_sockets(template, args.sockets) if args.sockets else template
+
+
+def _with_given_sockets(template, path):
+    """``template`` whose contacts in the sockets of the file ``path`` carry their given
+    position (x, y, z) and ``socket_sigma``, m.
+
+    Raises
+    ------
+    DataError
+        A socket of the file no row of the template is seated in; a ``socket_sigma`` not a
+        number, or negative (the file, line and column named).
+    """
+    import numpy as np
+
+    from doe_calib.design.candidates.sockets import read_sockets
+
+    sockets = read_sockets(path)
+    tolerance = _socket_sigmas(path, sockets.names)
+    seated = template.contact & ~template.ballbar & ~template.touch
+    names = template.socket_names
+    xyz = template.xyz.copy()
+    drawn = np.zeros(len(template)) if template.socket_sigma is None else \
+        template.socket_sigma.copy()
+    for name, point, sigma in zip(sockets.names, sockets.points, tolerance):
+        at = seated & (template.socket == names.index(name)) if name in names else \
+            np.zeros(len(template), bool)
+        if not at.any():
+            raise DataError(f"socket {name!r}: no contact of the template is seated in it "
+                            f"(its sockets: {', '.join(names) or 'none'})", path)
+        xyz[at], drawn[at] = point, sigma
+    return replace(template, xyz=xyz, socket_sigma=drawn if np.any(drawn > 0) else None)
+
+
+def _socket_sigmas(path, names) -> list:
+    """Each socket's ``socket_sigma`` (m) in the sockets file ``path`` (0 without the
+    column or with an empty cell)."""
+    import csv
+    import math
+
+    with open(path, newline="", encoding="utf-8") as f:
+        rows = [(i, r) for i, r in enumerate(csv.reader(f), start=1)
+                if r and not r[0].lstrip().startswith("#")]
+    columns = [c.strip().lower() for c in rows[0][1]]
+    if "socket_sigma" not in columns:
+        return [0.0] * len(names)
+    out = []
+    for line, row in rows[1:]:
+        cell = dict(zip(columns, (c.strip() for c in row))).get("socket_sigma", "")
+        try:
+            value = float(cell) if cell else 0.0
+        except ValueError:
+            value = math.nan
+        if not value >= 0.0 or math.isinf(value):
+            raise DataError(f"socket_sigma {cell!r}: a position's std is a number of mm, 0 or "
+                            f"more", path, line, "socket_sigma")
+        out.append(value / 1000.0)
+    return out
 
 
 def _poses_in_cell(args, model, truth, robot, tool, rng):

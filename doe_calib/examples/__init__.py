@@ -20,3 +20,7 @@ EFFECT_FILE = str(_DATA / "example_effect.py")
 UR5_CELL_YAML = str(_DATA / "ur5_cell.yaml")
 #: A three-SMR plate for a UR flange ``tool0`` (mm).
 UR_TOOL_YAML = str(_DATA / "ur_tool.yaml")
+#: A ball on a stem for the KR 270-class flange (mm): the marker of socket contacts.
+BALL_TOOL_YAML = str(_DATA / "kr270_ball.yaml")
+#: A socket plate in front of the KR 270: its drawing (socket,x,y,z,socket_sigma, mm).
+SOCKETS_CSV = str(_DATA / "kr270_sockets.csv")

@@ -16,6 +16,11 @@ planned q) on its plane, give or take a scatter along the normal. A ballbar read
 (*Ballbar and gauge lengths*) is a commanded q and a measured length: its q is logged as
 planned and its length is the true ball's distance from the pivot, give or take the noise.
 
+A socket of given position (its rows carry the drawing's x, y, z, in the frame of the
+readings: the tracker's, or the socket plate's) is where the truth's base transform puts
+that point, moved by one draw of the drawing's tolerance (``socket_sigma``) common to its
+contacts: the plate as made, not as drawn. Its rows keep the drawing's position.
+
 Where the unknowns are, unless given: a socket's point is where the truth puts the ball on
 average over its seated contacts at their planned q; a plane is the best (least-squares)
 plane through the true ball's points at its touches' planned q; a pivot is the mean of its
@@ -76,10 +81,18 @@ def _sphere_centre(points, lengths) -> np.ndarray:
     return np.linalg.lstsq(a, np.sum(points ** 2, axis=1) - lengths ** 2, rcond=None)[0][:3]
 
 
+def given_rows(template) -> np.ndarray:
+    """Which readings of ``template`` are contacts in a socket of given position (its x, y, z
+    on the row), shape (K,) bool."""
+    if template.socket is None:
+        return np.zeros(len(template), bool)
+    return (template.socket >= 0) & np.isfinite(template.xyz[:, 0]) & ~template.ballbar
+
+
 def seated_configurations(model, values, template, targets) -> Configurations:
     """The template's configurations with the joint values that put the ball of each seated
-    contact and each plane touch on its target (module notes); configurations without one
-    are kept as they are.
+    contact (in a socket of unknown or given position) and each plane touch on its target
+    (module notes); configurations without one are kept as they are.
 
     Parameters
     ----------
@@ -98,7 +111,7 @@ def seated_configurations(model, values, template, targets) -> Configurations:
         A contact or a touch the true robot cannot seat from its planned q (out of reach, or
         at a singular configuration), naming its pose.
     """
-    rows = np.flatnonzero(template.contact & ~template.ballbar)
+    rows = np.flatnonzero(template.contact & ~template.ballbar | given_rows(template))
     cfg = template.configurations
     if rows.size == 0:
         return cfg
@@ -141,7 +154,8 @@ def simulate_readings(model, values, template, sigma: float, rng=None, points=No
                       source: str = "simulated", planes=None) -> Measurements:
     """The readings of ``template`` simulated on the true model (module notes): tracker
     readings with Gaussian noise; socket contacts seated (:func:`seated_configurations`) on
-    their socket's point plus a seating scatter, plane touches on their plane plus a scatter
+    their socket's point plus a seating scatter (a given point moved by a draw of its
+    ``socket_sigma`` first), plane touches on their plane plus a scatter
     along its normal, their logged q the seated ones; ballbar lengths at their planned q,
     the true distance from the pivot plus noise.
 
@@ -152,7 +166,7 @@ def simulate_readings(model, values, template, sigma: float, rng=None, points=No
         True parameter values, SI.
     template : Measurements
         Which configurations (planned q, loads), markers and sockets; its x, y, z are not
-        used.
+        used but on the rows of a socket of given position (with its ``socket_sigma``).
     sigma : float
         Noise σ per coordinate of a tracker reading, seating scatter per axis of a contact,
         scatter along the normal of a touch, noise of a length, m.
@@ -173,7 +187,8 @@ def simulate_readings(model, values, template, sigma: float, rng=None, points=No
     -------
     Measurements
         The template's readings in its order, readings without coordinates without x, y, z
-        (NaN).
+        (NaN), contacts in a socket of given position with the template's x, y, z and
+        ``socket_sigma``.
     """
     rng = np.random.default_rng() if rng is None else rng
     values = np.asarray(getattr(values, "values", values), float)
@@ -186,7 +201,12 @@ def simulate_readings(model, values, template, sigma: float, rng=None, points=No
     targets = np.full((len(template), 3), np.nan)
     for k in template.sockets_used.tolist():
         targets[template.socket == k] = np.asarray(where[template.socket_names[k]], float)
-    seated = contact & ~bar & ~touch
+    given = given_rows(template)
+    for k in np.unique(template.socket[given]).tolist() if given.any() else ():
+        at = given & (template.socket == k)
+        tolerance = 0.0 if template.socket_sigma is None else template.socket_sigma[at][0]
+        targets[at] = template.xyz[at][0] + tolerance * rng.standard_normal(3)
+    seated = contact & ~bar & ~touch | given
     targets[seated] += sigma * rng.standard_normal((int(seated.sum()), 3))
     if touch.any():
         planned = marker_positions(model, values, template.configurations)
@@ -201,6 +221,7 @@ def simulate_readings(model, values, template, sigma: float, rng=None, points=No
     x = marker_positions(model, values, cfg)[template.config, template.marker]
     xyz = np.where(contact[:, None], np.nan,
                    x + sigma * rng.standard_normal((len(template), 3)))
+    xyz[given] = template.xyz[given]
     distance = None
     if template.distance is not None:
         distance = np.full(len(template), np.nan)
@@ -210,7 +231,8 @@ def simulate_readings(model, values, template, sigma: float, rng=None, points=No
                         np.full(len(template), sigma if sigma > 0 else 1e-6),
                         np.zeros(len(template), int), source, socket=template.socket,
                         socket_names=template.socket_names, plane=template.plane,
-                        plane_names=template.plane_names, distance=distance)
+                        plane_names=template.plane_names, distance=distance,
+                        socket_sigma=template.socket_sigma)
 
 
 def _given(kind, names, used, given, template) -> dict:
