@@ -16,7 +16,7 @@ STUDIES = {"table1": "studies.table1", **{
     name: f"studies.{name}.__main__" for name in (
         "tiago_mocap", "tiago_refine", "tiago_single_point", "tiago_one_session", "table2",
         "diagnosis", "design_sweep", "compensation", "tiago_compensation", "sequential",
-        "tiago_sequential")}}
+        "tiago_sequential", "no_tracker")}}
 
 HELP = "run a study and write its results"
 EXAMPLE = "doe-calib study table1 --out results [--scheduler tcp://host:8786]"

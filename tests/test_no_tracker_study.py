@@ -1,0 +1,47 @@
+"""The no-tracker study's campaigns (studies/no_tracker), small: written in the documented
+format from the independent UR10 truth, identified and predicted by the commands a user
+runs, judged against that truth."""
+import numpy as np
+import pytest
+
+from studies.independent import independent_sim
+from studies.no_tracker import campaigns as cp
+from studies.no_tracker import study
+
+
+@pytest.fixture(scope="module")
+def setting(tmp_path_factory):
+    sim = independent_sim()
+    if sim.ur10_urdf() is None:
+        pytest.skip("example-robot-data's UR10 is not installed")
+    chain = sim.Chain.from_urdf(sim.ur10_urdf(), "tool0")
+    work = tmp_path_factory.mktemp("no_tracker")
+    (work / "tool.yaml").write_text("flange: tool0\nmarkers:\n  ball: [0.0, 0.0, 100.0]\n")
+    q_new = sim.random_configurations(chain, 40, np.random.default_rng(7), within=cp.WITHIN)
+    return sim, chain, cp.truth(sim, chain), work, q_new
+
+
+def test_sockets_from_the_plate_drawing_predict_to_the_issue_target(setting):
+    sim, chain, t, work, q_new = setting
+    rows = cp.socket_rows(sim, chain, t, 12, 0.01, np.random.default_rng(3),
+                          given=tuple(cp.SOCKETS_M))
+    out = study.fit(work, sim, chain, t, "drawn", rows, 0.01, q_new)
+    assert out["rigid_mm"] <= 0.03 and out["unseen"] == {}
+
+
+def test_unknown_sockets_say_the_scale_is_unseen_and_miss_it(setting):
+    sim, chain, t, work, q_new = setting
+    rows = cp.socket_rows(sim, chain, t, 12, 0.01, np.random.default_rng(3))
+    out = study.fit(work, sim, chain, t, "unknown", rows, 0.01, q_new)
+    assert any("scale" in reason for reason in out["unseen"])
+    assert out["similarity_mm"] <= 0.03 < out["rigid_mm"]
+
+
+def test_a_seated_stem_keeps_within_its_cone(setting):
+    sim, chain, t, _, _ = setting
+    rows = cp.socket_rows(sim, chain, t, 2, 0.0, np.random.default_rng(5), cone_deg=40.0)
+    for row in rows:
+        q = np.radians([float(row[f"q{k + 1}"]) for k in range(6)])
+        assert cp.stem_angle_deg(sim, chain, t, q) <= 40.0
+        ball = cp.ball(sim, chain, t, q)[0]
+        assert np.linalg.norm(ball - cp.SOCKETS_M[row["socket"]]) < 1e-9
