@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.compensation.targets import TRACKER
-from doe_calib.estimation.unseen import UnseenPart
+from doe_calib.estimation.unseen import ASK, UnseenPart
 from doe_calib.model.evaluation import evaluate
 from doe_calib.model.rotations import skew_matrix
 
@@ -136,7 +136,9 @@ def unseen_warning(accuracy: RowAccuracy, part: UnseenPart, params, frame: str,
     if not causes:
         causes.append(f"the readings cannot see {', '.join(accuracy.largest)}")
         remedies.append("measure poses that move these parameters")
-    return (f"{'; and '.join(causes)}. At the stated tolerances of the parameters the readings "
+    if part.defaulted:
+        remedies.append(ASK)
+    return (f"{'; and '.join(causes)}. At the tolerances of the parameters the readings "
             f"cannot separate ({part.stated(params)}), this moves the TCP by up to "
             f"{np.max(accuracy.unseen) * 1000:.3g} mm (1σ), against "
             f"{np.max(accuracy.seen) * 1000:.3g} mm from the fit; predicted_std includes it. "

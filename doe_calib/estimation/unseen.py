@@ -16,11 +16,17 @@ split the base pose from the first joint (its rotation about A1 from the A1
 offset). With a stated tolerance (prior std) ``s_d`` on each unseen
 parameter, that part's covariance is ``G diag(s²) Gᵀ``.
 
-``A`` is found on configurations drawn over the whole joint range, unloaded
-(the dependence the fit found is a property of the model and of the markers
-read). A parameter whose effect the free ones cannot reproduce there — one
-the campaign did not excite (a compliance), a marker never read — is not
-taken up: ``A`` is 0 for it and it moves the point by its full effect.
+``A`` is the least-squares fit of the free parameters to each unseen one's effect on
+the measured markers, at configurations drawn over the whole joint range, unloaded
+(the dependence the fit found is a property of the model and of the markers read).
+What they take up is not unseen, however much or little of it: what they leave is
+``G``, and nothing else (no threshold on the share taken up). A parameter without
+effect there — a compliance, unloaded; a marker never read — is not taken up at all
+(``A`` is 0) and moves the point by its full effect.
+
+Only the user knows how far an unseen parameter may be from its nominal value. A
+tolerance not given is the parameter's typical deviation (1 mm, 1 mrad): the words
+(:meth:`UnseenPart.stated`) say so, and ask for the user's.
 """
 from __future__ import annotations
 
@@ -36,8 +42,6 @@ from doe_calib.model.simulate import random_configurations
 
 #: Configurations over the joint range on which the dependence is found (fixed seed).
 GENERIC_POSES = 40
-#: Remaining share of a column above which its dependence is not structural (``A`` is 0).
-STRUCTURAL = 1e-6
 
 
 def measured_markers(result) -> list[str] | None:
@@ -82,9 +86,21 @@ def tolerances(params, names, given: dict | None = None) -> np.ndarray:
     out = []
     for i in params.index(list(names)) if len(names) else []:
         p = params.parameters[i]
-        keys = (p.name, f"{p.name}:{p.unit}", f"{p.block}:{p.unit}", p.unit)
-        out.append(next((given[k] for k in keys if k in given), p.scale))
+        out.append(next((given[k] for k in _keys(p) if k in given), p.scale))
     return np.array(out, float)
+
+
+def given_tolerances(params, names, given: dict | None = None) -> np.ndarray:
+    """Whether a key of ``given`` names each parameter of ``names`` (:func:`tolerances`);
+    False: its tolerance is its typical deviation, not the user's. Shape (D,), bool."""
+    given = {} if given is None else given
+    return np.array([any(k in given for k in _keys(params.parameters[i]))
+                     for i in (params.index(list(names)) if len(names) else [])], bool)
+
+
+def _keys(p) -> tuple:
+    """The keys that name parameter ``p`` in a tolerance dict, the most specific first."""
+    return p.name, f"{p.name}:{p.unit}", f"{p.block}:{p.unit}", p.unit
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,17 +114,19 @@ class UnseenPart:
     reasons : tuple of str
         Why each is not separable (the result's words).
     tolerance : ndarray, shape (D,)
-        Stated prior std of each, SI (m, rad, rad/(N·m)).
+        Prior std of each, SI (m, rad, rad/(N·m)): the user's, or its typical deviation.
     absorbed : ndarray, shape (F, D)
-        ``A``: the free parameters' change that reproduces each one's effect on the
-        measured markers (0 for one whose effect they cannot reproduce).
+        ``A``: the free parameters' change that best reproduces each one's effect on
+        the measured markers (least squares; 0 for one without effect on them).
     free : ndarray of bool, shape (P,)
-        The result's free parameters.
+        The parameters that take up (the result's free ones).
     index : ndarray of int, shape (D,)
         Position of each unseen parameter in the parameter vector.
     structural : ndarray of bool, shape (D,)
-        Whether the free parameters reproduce its effect on the measured markers
-        (``absorbed`` holds how), or the readings just did not excite it.
+        Whether it has an effect on the measured markers unloaded (``absorbed`` holds
+        how much of it the free parameters take up), or none (a compliance).
+    given : ndarray of bool, shape (D,)
+        Whether the user gave its tolerance.
     """
 
     names: tuple
@@ -118,6 +136,7 @@ class UnseenPart:
     free: np.ndarray
     index: np.ndarray
     structural: np.ndarray
+    given: np.ndarray
 
     def __len__(self) -> int:
         return len(self.names)
@@ -153,16 +172,30 @@ class UnseenPart:
         return [self.names[i] for i in order if size[i] > 0]
 
     def stated(self, params) -> str:
-        """The tolerances in words, display units: ``1 mm (7 parameters), 0.0573 deg (9 …)``."""
+        """The tolerances in words, display units: ``1 mm (7 parameters), 0.0573 deg (9 …)``,
+        those not given by the user said to be each parameter's typical deviation."""
         by = {}
-        for name, s in zip(self.names, self.tolerance):
+        for name, s, given in zip(self.names, self.tolerance, self.given):
             p = params.parameters[params.position(name)]
-            key = f"{s * p.display_factor:.3g} {p.display_unit}"
+            key = (f"{s * p.display_factor:.3g} {p.display_unit}", bool(given))
             by[key] = by.get(key, 0) + 1
-        return ", ".join(f"{k} ({n} parameter{'s' if n > 1 else ''})" for k, n in by.items())
+        return ", ".join(f"{k} ({n} parameter{'s' if n > 1 else ''}"
+                         f"{'' if given else ', not given: its typical deviation'})"
+                         for (k, given), n in by.items())
+
+    @property
+    def defaulted(self) -> bool:
+        """Whether some tolerance is not the user's (the words then ask for it)."""
+        return not bool(np.all(self.given))
 
 
-def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> UnseenPart:
+#: What the words say when some tolerance is not the user's.
+ASK = ("state how far they may be from the nominal with tolerance= (--unseen-tolerance, "
+       "e.g. 0.2mm geometry:0.01deg)")
+
+
+def unseen_part(model, params, markers=None, tolerance: dict | None = None,
+                taking=None) -> UnseenPart:
     """The unseen part of a result: its not-separable parameters and how the fit took them up.
 
     Parameters
@@ -176,7 +209,11 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> U
         The markers the readings measured (default all of the tool's).
     tolerance : dict, optional
         Stated prior std of the unseen parameters (SI) by name, ``block:unit`` or unit
-        (:func:`tolerances`); default each parameter's scale.
+        (:func:`tolerances`); default each parameter's scale, said in words.
+    taking : ndarray of bool, shape (P,), optional
+        Held parameters that take up too (besides the free ones): a motion the
+        readings cannot see and the caller states in words
+        (:func:`~doe_calib.estimation.sockets.frame_unseen_part`).
 
     Returns
     -------
@@ -196,6 +233,8 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> U
     index = np.array(params.index(names), int) if names else np.zeros(0, int)
     free = np.asarray(params.free, bool).copy()
     free[index] = False
+    if taking is not None:
+        free |= np.asarray(taking, bool)
     absorbed = np.zeros((int(free.sum()), len(names)))
     structural = np.ones(len(names), bool)
     if names:
@@ -206,19 +245,15 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> U
             b = b[:, [model.tool.index(n) for n in markers]]
         b = b.reshape(-1, b.shape[-1]) * params.scales   # columns at their typical size
         b_free, b_dep = b[:, free], b[:, index]
+        # least squares: a column without effect (a compliance, unloaded; an unmeasured
+        # marker) gets A = 0, and its full effect under the row's load counts
         absorbed = np.linalg.lstsq(b_free, b_dep, rcond=None)[0]
         absorbed *= params.scales[free][:, None] / params.scales[index]
-        b_dep = b_dep / params.scales[index]
-        b_free = b_free / params.scales[free]
-        rest = np.linalg.norm(b_dep - b_free @ absorbed, axis=0)
-        size = np.linalg.norm(b_dep, axis=0)
-        # a column without effect here (a compliance, unloaded; an unmeasured marker) is not
-        # taken up by the free parameters: its full effect under the row's load counts
-        structural = (size > 0) & (rest <= STRUCTURAL * size)
-        absorbed[:, ~structural] = 0.0
+        structural = np.linalg.norm(b_dep, axis=0) > 0
     reasons = tuple(params.fixed_reason[i] for i in index)
     return UnseenPart(tuple(names), reasons, tolerances(params, names, tolerance),
-                      absorbed, free, index, structural)
+                      absorbed, free, index, structural,
+                      given_tolerances(params, names, tolerance))
 
 
 def unseen_notes(effect, seen, marker, names, part: UnseenPart, params) -> tuple:
@@ -241,6 +276,7 @@ def unseen_notes(effect, seen, marker, names, part: UnseenPart, params) -> tuple
     size = np.sqrt(np.sum(effect[over] ** 2, axis=(0, 1)))
     top = [part.names[i] for i in np.argsort(-size, kind="stable")[:3] if size[i] > 0]
     return (f"{int(over.sum())} predicted reading(s) of marker(s) {', '.join(which)} rest on "
-            f"what the calibration's readings could not see ({', '.join(top)}): at the stated "
-            f"tolerances ({part.stated(params)}) up to {np.max(unseen) * 1000:.3g} mm (1σ, "
-            f"3-D), included in the std; measure those markers in the calibration to remove it",)
+            f"what the calibration's readings could not see ({', '.join(top)}): at the "
+            f"tolerances {part.stated(params)} up to {np.max(unseen) * 1000:.3g} mm (1σ, "
+            f"3-D), included in the std; measure those markers in the calibration to remove "
+            f"it{'; ' + ASK if part.defaulted else ''}",)
