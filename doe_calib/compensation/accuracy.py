@@ -5,9 +5,10 @@ The predicted std of a row has two parts (both 3-D, 1σ, m):
 * **seen**: ``√tr(J Σ Jᵀ)``, J the TCP's Jacobian wrt the free parameters and
   Σ the result's a-posteriori covariance;
 * **unseen**: ``√tr(G diag(s²) Gᵀ)`` of the parameters the readings could not
-  separate, at their stated tolerances s (:mod:`doe_calib.estimation.unseen`):
-  ~0 for a measured marker in the tracker frame, not for a TCP never measured or
-  targets in a robot frame (the base pose does not split from the first joint).
+  separate, at their tolerances s (the user's, else each one's typical deviation, said
+  so; :mod:`doe_calib.estimation.unseen`): ~0 for a measured marker in the tracker
+  frame, not for a TCP never measured or targets in a robot frame (the base pose does
+  not split from the first joint).
 
 A TCP given as a point is taken rigid with the measured markers (the tolerance of a
 TCP known only on the mechanical flange is yours to add); targets in a robot frame use

@@ -180,7 +180,7 @@ class UnseenPart:
             key = (f"{s * p.display_factor:.3g} {p.display_unit}", bool(given))
             by[key] = by.get(key, 0) + 1
         return ", ".join(f"{k} ({n} parameter{'s' if n > 1 else ''}"
-                         f"{'' if given else ', not given: its typical deviation'})"
+                         f"{'' if given else ', not given: the typical deviation'})"
                          for (k, given), n in by.items())
 
     @property
@@ -277,6 +277,6 @@ def unseen_notes(effect, seen, marker, names, part: UnseenPart, params) -> tuple
     top = [part.names[i] for i in np.argsort(-size, kind="stable")[:3] if size[i] > 0]
     return (f"{int(over.sum())} predicted reading(s) of marker(s) {', '.join(which)} rest on "
             f"what the calibration's readings could not see ({', '.join(top)}): at the "
-            f"tolerances {part.stated(params)} up to {np.max(unseen) * 1000:.3g} mm (1σ, "
+            f"tolerances ({part.stated(params)}) up to {np.max(unseen) * 1000:.3g} mm (1σ, "
             f"3-D), included in the std; measure those markers in the calibration to remove "
             f"it{'; ' + ASK if part.defaulted else ''}",)
