@@ -224,10 +224,14 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None,
     >>> from doe_calib import Robot, Tool, build_model, examples
     >>> m = build_model(Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML),
     ...                 "joint_offset")
-    >>> p = m.nominal().fixed(["dq_a1"], "offset of joint a1 is not separable from base rz")
+    >>> from doe_calib.estimation.preparation import NOT_SEPARABLE
+    >>> p = m.nominal().fixed(["dq_a1"], "offset of joint a1 (dq_a1) is not separable from "
+    ...                       "base rotation vector z (base_rz)" + NOT_SEPARABLE)
     >>> part = unseen_part(m, p)
-    >>> part.names, part.tolerance
-    (('dq_a1',), array([0.001]))
+    >>> part.names, part.tolerance, part.given
+    (('dq_a1',), array([0.001]), array([False]))
+    >>> bool(abs(part.absorbed).max() > 0.5)  # the base's turn takes it up
+    True
     """
     names = not_separable(params)
     index = np.array(params.index(names), int) if names else np.zeros(0, int)
