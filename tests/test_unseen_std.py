@@ -130,3 +130,19 @@ def test_what_no_reading_sees_holds_over_truths_at_the_stated_tolerance(setting,
     assert not any("not given" in n for n in pred.notes)
     with pytest.warns(IdentifiabilityWarning, match="not given: the typical deviation"):
         compensate(model, only_a, targets, "A")
+
+
+def test_tolerances_not_given_are_said(setting):
+    """Each tolerance is the user's or said to be the typical deviation, group by group."""
+    from doe_calib.estimation.preparation import NOT_SEPARABLE
+    from doe_calib.estimation.unseen import unseen_part
+
+    model = setting[1]
+    params = model.nominal().fixed(["dq_a1", "g_a1_tx"], "not separable from the base"
+                                   + NOT_SEPARABLE)
+    half = unseen_part(model, params, tolerance={"m": 2e-4})
+    assert half.defaulted and half.names == ("dq_a1", "g_a1_tx")
+    assert list(half.given) == [False, True]
+    assert half.stated(params) == ("0.0573 deg (1 parameter, not given: the typical "
+                                   "deviation), 0.2 mm (1 parameter)")
+    assert not unseen_part(model, params, tolerance={"m": 2e-4, "rad": 1e-4}).defaulted

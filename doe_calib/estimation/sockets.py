@@ -21,7 +21,7 @@ import numpy as np
 
 from doe_calib.estimation.ballbar import pivot_spread
 from doe_calib.estimation.preparation import LINE_UNSEEN, POINT_UNSEEN
-from doe_calib.estimation.unseen import tolerances, unseen_part
+from doe_calib.estimation.unseen import given_tolerances, tolerances, unseen_part
 from doe_calib.estimation.weighted_residuals import socket_mean
 from doe_calib.model.evaluation import observation_matrix
 
@@ -165,8 +165,10 @@ def frame_words(params, tolerance: dict | None = None) -> str:
         name, why = held[0]
         length = float(why.rsplit("(", 1)[-1].split()[0]) / 1000.0
         tol = float(tolerances(params, [name], tolerance)[0])
+        whose = "stated tolerance" if given_tolerances(params, [name], tolerance)[0] else \
+            "tolerance not given, the typical deviation"
         words.append(f"the scale is not seen (no known length): ±{tol / length * 1000.0:.3g} "
                      f"mm per metre of distance (1σ; {name} held at the URDF's, "
-                     f"stated tolerance {tol * 1000.0:.3g} mm over {length * 1000.0:.1f} mm)")
+                     f"{whose} {tol * 1000.0:.3g} mm over {length * 1000.0:.1f} mm)")
     return "; ".join(words) + ("; neither is in the std" if len(words) > 1 else
                                ", nor in the std")

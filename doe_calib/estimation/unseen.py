@@ -122,7 +122,7 @@ class UnseenPart:
         The parameters that take up (the result's free ones).
     index : ndarray of int, shape (D,)
         Position of each unseen parameter in the parameter vector.
-    structural : ndarray of bool, shape (D,)
+    taken : ndarray of bool, shape (D,)
         Whether it has an effect on the measured markers unloaded (``absorbed`` holds
         how much of it the free parameters take up), or none (a compliance).
     given : ndarray of bool, shape (D,)
@@ -135,7 +135,7 @@ class UnseenPart:
     absorbed: np.ndarray
     free: np.ndarray
     index: np.ndarray
-    structural: np.ndarray
+    taken: np.ndarray
     given: np.ndarray
 
     def __len__(self) -> int:
@@ -149,7 +149,7 @@ class UnseenPart:
         jac : ndarray, shape (…, k, P)
             Jacobian of the quantity (a point: k = 3, m) wrt every parameter.
         unloaded : ndarray, shape (…, k, P), optional
-            The same without the wrench, for the structural columns: ``A`` holds
+            The same without the wrench, for the columns taken up: ``A`` holds
             their dependence unloaded, and a load adds only the change of its
             deflection with the geometry (second order: compliance × deviation,
             µm), which the readings of a loaded campaign do not split either.
@@ -157,7 +157,7 @@ class UnseenPart:
         jac = np.asarray(jac, float)
         base = jac if unloaded is None else np.asarray(unloaded, float)
         g = base[..., self.index] - base[..., self.free] @ self.absorbed
-        g[..., ~self.structural] = jac[..., self.index[~self.structural]]
+        g[..., ~self.taken] = jac[..., self.index[~self.taken]]
         return g * self.tolerance
 
     def std_3d(self, jac, unloaded=None) -> np.ndarray:
@@ -190,8 +190,8 @@ class UnseenPart:
 
 
 #: What the words say when some tolerance is not the user's.
-ASK = ("state how far they may be from the nominal with tolerance= (--unseen-tolerance, "
-       "e.g. 0.2mm geometry:0.01deg)")
+ASK = ("state how far they may be from the nominal (tolerance= of predict and compensate; "
+       "doe-calib compensate --unseen-tolerance, e.g. 0.2mm geometry:0.01deg)")
 
 
 def unseen_part(model, params, markers=None, tolerance: dict | None = None,
@@ -240,7 +240,7 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None,
     if taking is not None:
         free |= np.asarray(taking, bool)
     absorbed = np.zeros((int(free.sum()), len(names)))
-    structural = np.ones(len(names), bool)
+    taken = np.ones(len(names), bool)
     if names:
         rng = np.random.default_rng(0)
         cfg = Configurations.from_arrays(random_configurations(model.robot, GENERIC_POSES, rng))
@@ -253,10 +253,10 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None,
         # marker) gets A = 0, and its full effect under the row's load counts
         absorbed = np.linalg.lstsq(b_free, b_dep, rcond=None)[0]
         absorbed *= params.scales[free][:, None] / params.scales[index]
-        structural = np.linalg.norm(b_dep, axis=0) > 0
+        taken = np.linalg.norm(b_dep, axis=0) > 0
     reasons = tuple(params.fixed_reason[i] for i in index)
     return UnseenPart(tuple(names), reasons, tolerances(params, names, tolerance),
-                      absorbed, free, index, structural,
+                      absorbed, free, index, taken,
                       given_tolerances(params, names, tolerance))
 
 
