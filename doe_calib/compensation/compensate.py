@@ -151,7 +151,7 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
     flags = tuple("; ".join(w for w in pair if w) for pair in zip(shifts, outside))
     measured = measured_markers(result)
     part = (frame_unseen_part if from_contacts(result) else unseen_part)(
-        model, result.parameters, measured, tolerance)
+        model, result.parameters, measured, tolerance, within=result.joint_range)
     frame = targets.frame if targets.positions is not None else TRACKER
     placed = targets.placement_std   # robot-frame targets placed by measured base points
     compensated = type(cfg).from_arrays(rows["q"], cfg.wrench, cfg.env, cfg.pose)

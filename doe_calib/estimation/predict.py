@@ -220,8 +220,8 @@ def predict(result, data, model=None, *, registry=None, apriori: bool = False,
     cov = np.asarray(result.cov_params(apriori=apriori))
     var = np.einsum("kif,fg,kig->ki", bf, cov, bf)
     frame, contacts = frame_words(params, tolerance), from_contacts(result)
-    part = (frame_unseen_part if contacts else unseen_part)(model, params,
-                                                           measured_markers(result), tolerance)
+    part = (frame_unseen_part if contacts else unseen_part)(
+        model, params, measured_markers(result), tolerance, within=result.joint_range)
     notes = (f"the std is {frame}",) if frame else ()
     if len(part):
         _, b_bare = observation_matrix(model, params.values, type(cfg).from_arrays(

@@ -125,7 +125,8 @@ def from_contacts(result) -> bool:
         frame_reasons(result.parameters))
 
 
-def frame_unseen_part(model, params, markers=None, tolerance: dict | None = None):
+def frame_unseen_part(model, params, markers=None, tolerance: dict | None = None,
+                      within=None):
     """The unseen part of a fit from socket contacts, relative to the sockets' frame.
 
     As :func:`~doe_calib.estimation.unseen.unseen_part`, but a not-separable parameter
@@ -137,7 +138,7 @@ def frame_unseen_part(model, params, markers=None, tolerance: dict | None = None
     seen off the flange's axis leaves some 0.3 % of what it cannot separate).
     """
     return unseen_part(model, params, markers, tolerance,
-                       taking=np.isin(params.fixed_reason, frame_reasons(params)))
+                       taking=np.isin(params.fixed_reason, frame_reasons(params)), within=within)
 
 
 def frame_words(params, tolerance: dict | None = None) -> str:

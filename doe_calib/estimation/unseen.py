@@ -17,10 +17,12 @@ offset). With a stated tolerance (prior std) ``s_d`` on each unseen
 parameter, that part's covariance is ``G diag(s²) Gᵀ``.
 
 ``A`` is the least-squares fit of the free parameters to each unseen one's effect on
-the measured markers, at configurations drawn over the whole joint range, unloaded
-(the dependence the fit found is a property of the model and of the markers read).
-What they take up is not unseen, however much or little of it: what they leave is
-``G``, and nothing else (no threshold on the share taken up). A parameter without
+the measured markers, at configurations drawn over the joint range the calibration
+measured (the result's ``joint_range``; the joint limits when not known), unloaded: the
+fit took it up on its readings, there (a joint it held still leaves a dependence that
+configurations moving that joint would not have). What they take up is not unseen,
+however much or little of it: what they leave is ``G``, and nothing else (no threshold
+on the share taken up). A parameter without
 effect there — a compliance, unloaded; a marker never read — is not taken up at all
 (``A`` is 0) and moves the point by its full effect.
 
@@ -40,7 +42,7 @@ from doe_calib.io.measurements import Configurations
 from doe_calib.model.evaluation import observation_matrix
 from doe_calib.model.simulate import random_configurations
 
-#: Configurations over the joint range on which the dependence is found (fixed seed).
+#: Configurations over the measured joint range on which the dependence is found (fixed seed).
 GENERIC_POSES = 40
 
 
@@ -195,7 +197,7 @@ ASK = ("state how far they may be from the nominal (tolerance= of predict and co
 
 
 def unseen_part(model, params, markers=None, tolerance: dict | None = None,
-                taking=None) -> UnseenPart:
+                taking=None, within=None) -> UnseenPart:
     """The unseen part of a result: its not-separable parameters and how the fit took them up.
 
     Parameters
@@ -214,6 +216,9 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None,
         Held parameters that take up too (besides the free ones): a motion the
         readings cannot see and the caller states in words
         (:func:`~doe_calib.estimation.sockets.frame_unseen_part`).
+    within : ndarray, shape (N, 2), optional
+        The joint range the readings covered, rad (m): the result's ``joint_range``.
+        Default the joint limits.
 
     Returns
     -------
@@ -243,7 +248,9 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None,
     taken = np.ones(len(names), bool)
     if names:
         rng = np.random.default_rng(0)
-        cfg = Configurations.from_arrays(random_configurations(model.robot, GENERIC_POSES, rng))
+        q = random_configurations(model.robot, GENERIC_POSES, rng) if within is None else \
+            rng.uniform(*np.asarray(within, float).T, (GENERIC_POSES, len(within)))
+        cfg = Configurations.from_arrays(q)
         _, b = observation_matrix(model, params.values, cfg)
         if markers is not None:
             b = b[:, [model.tool.index(n) for n in markers]]
