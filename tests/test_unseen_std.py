@@ -10,7 +10,8 @@ honest (much larger is as wrong as much smaller).
   flange's turn about the ball unseen; A after a fit to three markers, nothing unseen);
 * a fresh truth each repeat, drawn with the spread stated as the tolerances: what no
   reading sees (B after a fit to A alone; targets in the robot's base frame, where the
-  base pose does not split from the first joint), whose error is the truth's own.
+  base pose does not split from the first joint), whose error is the truth's own;
+* the same over truths after a campaign that holds a4 still, predicted where a4 moves.
 """
 import warnings
 from dataclasses import replace

@@ -110,7 +110,8 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
         Largest joint move (deg; mm for a prismatic joint) of a row not flagged.
     tolerance : dict, optional
         Stated prior std (SI) of the parameters the readings cannot separate
-        (:func:`~doe_calib.estimation.unseen.tolerances`).
+        (:func:`~doe_calib.estimation.unseen.tolerances`); one not given is its typical
+        deviation (1 mm, 1 mrad), and the words say so.
 
     Returns
     -------

@@ -170,7 +170,7 @@ def predict(result, data, model=None, *, registry=None, apriori: bool = False,
     tolerance : dict, optional
         Stated prior std (SI) of the parameters the readings could not separate,
         by name, ``block:unit`` or unit (:func:`~doe_calib.estimation.unseen.tolerances`;
-        default each one's scale, 1 mm, 1 mrad).
+        default each one's scale, 1 mm, 1 mrad, which the notes say is not the user's).
 
     Returns
     -------
