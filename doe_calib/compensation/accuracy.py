@@ -5,9 +5,10 @@ The predicted std of a row has two parts (both 3-D, 1σ, m):
 * **seen**: ``√tr(J Σ Jᵀ)``, J the TCP's Jacobian wrt the free parameters and
   Σ the result's a-posteriori covariance;
 * **unseen**: ``√tr(G diag(s²) Gᵀ)`` of the parameters the readings could not
-  separate, at their stated tolerances s (:mod:`doe_calib.estimation.unseen`):
-  ~0 for a measured marker in the tracker frame, not for a TCP never measured or
-  targets in a robot frame (the base pose does not split from the first joint).
+  separate, at their tolerances s (the user's, else each one's typical deviation, said
+  so; :mod:`doe_calib.estimation.unseen`): ~0 for a measured marker in the tracker
+  frame, not for a TCP never measured or targets in a robot frame (the base pose does
+  not split from the first joint).
 
 A TCP given as a point is taken rigid with the measured markers (the tolerance of a
 TCP known only on the mechanical flange is yours to add); targets in a robot frame use
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.compensation.targets import TRACKER
-from doe_calib.estimation.unseen import UnseenPart
+from doe_calib.estimation.unseen import ASK, UnseenPart
 from doe_calib.model.evaluation import evaluate
 from doe_calib.model.rotations import skew_matrix
 
@@ -136,7 +137,9 @@ def unseen_warning(accuracy: RowAccuracy, part: UnseenPart, params, frame: str,
     if not causes:
         causes.append(f"the readings cannot see {', '.join(accuracy.largest)}")
         remedies.append("measure poses that move these parameters")
-    return (f"{'; and '.join(causes)}. At the stated tolerances of the parameters the readings "
+    if part.defaulted:
+        remedies.append(ASK)
+    return (f"{'; and '.join(causes)}. At the tolerances of the parameters the readings "
             f"cannot separate ({part.stated(params)}), this moves the TCP by up to "
             f"{np.max(accuracy.unseen) * 1000:.3g} mm (1σ), against "
             f"{np.max(accuracy.seen) * 1000:.3g} mm from the fit; predicted_std includes it. "

@@ -110,7 +110,8 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
         Largest joint move (deg; mm for a prismatic joint) of a row not flagged.
     tolerance : dict, optional
         Stated prior std (SI) of the parameters the readings cannot separate
-        (:func:`~doe_calib.estimation.unseen.tolerances`).
+        (:func:`~doe_calib.estimation.unseen.tolerances`); one not given is its typical
+        deviation (1 mm, 1 mrad), and the words say so.
 
     Returns
     -------
@@ -151,7 +152,7 @@ def compensate(model, result, targets, tcp, problem: CompensationProblem | None 
     flags = tuple("; ".join(w for w in pair if w) for pair in zip(shifts, outside))
     measured = measured_markers(result)
     part = (frame_unseen_part if from_contacts(result) else unseen_part)(
-        model, result.parameters, measured, tolerance)
+        model, result.parameters, measured, tolerance, within=result.joint_range)
     frame = targets.frame if targets.positions is not None else TRACKER
     placed = targets.placement_std   # robot-frame targets placed by measured base points
     compensated = type(cfg).from_arrays(rows["q"], cfg.wrench, cfg.env, cfg.pose)

@@ -55,7 +55,8 @@ class CompensationResult:
     frame : str
         The frame the targets were given in (``tracker`` or a robot frame).
     unseen, tolerances : str
-        The warning on the unseen part, and the stated tolerances it is for; "" if none.
+        The warning on the unseen part, and the tolerances it is for (those the user
+        did not give said to be the typical deviation); "" if none.
     """
 
     robot: Robot
@@ -115,7 +116,7 @@ class CompensationResult:
                          f"{self.residual[i] * 1000:11.2e}  "
                          f"{'; '.join(w for w in (self.note[i] or 'reached', self.flag[i]) if w)}")
         if self.tolerances:
-            lines += ["", f"unseen part for the stated tolerances of the parameters the "
+            lines += ["", f"unseen part for the tolerances of the parameters the "
                           f"readings cannot separate: {self.tolerances}"]
         if self.unseen:
             lines += ["", f"note: {self.unseen}"]
@@ -165,7 +166,7 @@ class CompensationResult:
                   "largest |q' - q| (deg, or mm for a prismatic joint); predicted_std_mm "
                   f"is in the {self.frame} frame"
                   " and holds unseen_std_mm, what the readings cannot see"
-                  + (f" (stated tolerances: {self.tolerances})" if self.tolerances else "")
+                  + (f" (tolerances: {self.tolerances})" if self.tolerances else "")
                   + "\n")
         if self.unseen:
             buf.write(f"# note: {self.unseen}\n")

@@ -170,7 +170,7 @@ def predict(result, data, model=None, *, registry=None, apriori: bool = False,
     tolerance : dict, optional
         Stated prior std (SI) of the parameters the readings could not separate,
         by name, ``block:unit`` or unit (:func:`~doe_calib.estimation.unseen.tolerances`;
-        default each one's scale, 1 mm, 1 mrad).
+        default each one's scale, 1 mm, 1 mrad, which the notes say is not the user's).
 
     Returns
     -------
@@ -220,8 +220,8 @@ def predict(result, data, model=None, *, registry=None, apriori: bool = False,
     cov = np.asarray(result.cov_params(apriori=apriori))
     var = np.einsum("kif,fg,kig->ki", bf, cov, bf)
     frame, contacts = frame_words(params, tolerance), from_contacts(result)
-    part = (frame_unseen_part if contacts else unseen_part)(model, params,
-                                                           measured_markers(result), tolerance)
+    part = (frame_unseen_part if contacts else unseen_part)(
+        model, params, measured_markers(result), tolerance, within=result.joint_range)
     notes = (f"the std is {frame}",) if frame else ()
     if len(part):
         _, b_bare = observation_matrix(model, params.values, type(cfg).from_arrays(

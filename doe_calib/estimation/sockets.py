@@ -16,22 +16,15 @@ said in words (:func:`frame_words`), not put in the number.
 from __future__ import annotations
 
 import re
-from dataclasses import replace
 
 import numpy as np
 
 from doe_calib.estimation.ballbar import pivot_spread
 from doe_calib.estimation.preparation import LINE_UNSEEN, POINT_UNSEEN
-from doe_calib.estimation.unseen import GENERIC_POSES, tolerances, unseen_part
+from doe_calib.estimation.unseen import given_tolerances, tolerances, unseen_part
 from doe_calib.estimation.weighted_residuals import socket_mean
-from doe_calib.io.measurements import Configurations
 from doe_calib.model.evaluation import observation_matrix
-from doe_calib.model.simulate import random_configurations
 
-#: An unseen parameter's effect counts as taken up by the free ones (and the motion the
-#: contacts cannot see) when what they leave of it at generic configurations is below
-#: this share; its unseen part is then that remainder, else its whole effect.
-TAKEN_UP = 0.1
 #: What the words of a fit to readings without coordinates say when it fixed the base pose,
 #: and the scale (:func:`~doe_calib.estimation.preparation.unseen_words`, any instrument).
 BASE_WORDS, SCALE_WORDS = "cannot see the robot's base pose", "cannot see the robot's scale"
@@ -132,38 +125,20 @@ def from_contacts(result) -> bool:
         frame_reasons(result.parameters))
 
 
-def frame_unseen_part(model, params, markers=None, tolerance: dict | None = None):
+def frame_unseen_part(model, params, markers=None, tolerance: dict | None = None,
+                      within=None):
     """The unseen part of a fit from socket contacts, relative to the sockets' frame.
 
     As :func:`~doe_calib.estimation.unseen.unseen_part`, but a not-separable parameter
     is taken up by the free parameters and by those held for what contacts alone cannot
     see (:func:`frame_reasons`: a rigid motion of the whole, its scale; the fit cannot
-    see these either, and :func:`frame_words` says so), and it is taken up when what
-    they leave of it is below :data:`TAKEN_UP` of its effect (the remainder is then its
-    unseen part: a single ball seen off the flange's axis leaves some 0.3 % of what it
-    cannot separate), not only below 1e-6. The part's ``free`` are the parameters that
-    take up, so ``part.effect`` of any point (a marker, a TCP, in either frame) leaves
-    out that motion.
+    see these either, and :func:`frame_words` says so). The part's ``free`` are the
+    parameters that take up, so ``part.effect`` of any point (a marker, a TCP, in either
+    frame) leaves out that motion; what they leave is its unseen part (a single ball
+    seen off the flange's axis leaves some 0.3 % of what it cannot separate).
     """
-    part = unseen_part(model, params, markers, tolerance)
-    if not len(part):
-        return part
-    reasons = frame_reasons(params)
-    taking = part.free | np.isin(params.fixed_reason, reasons)
-    cfg = Configurations.from_arrays(random_configurations(model.robot, GENERIC_POSES,
-                                                           np.random.default_rng(0)))
-    _, b = observation_matrix(model, params.values, cfg)
-    if markers is not None:
-        b = b[:, [model.tool.index(n) for n in markers]]
-    b = b.reshape(-1, b.shape[-1]) * params.scales  # columns at their typical size
-    b_dep, b_take = b[:, part.index], b[:, taking]
-    absorbed = np.linalg.lstsq(b_take, b_dep, rcond=None)[0]
-    rest = np.linalg.norm(b_dep - b_take @ absorbed, axis=0)
-    size = np.linalg.norm(b_dep, axis=0)
-    taken = (size > 0) & (rest <= TAKEN_UP * size)
-    absorbed = absorbed * params.scales[taking][:, None] / params.scales[part.index]
-    absorbed[:, ~taken] = 0.0
-    return replace(part, absorbed=absorbed, free=taking, structural=taken)
+    return unseen_part(model, params, markers, tolerance,
+                       taking=np.isin(params.fixed_reason, frame_reasons(params)), within=within)
 
 
 def frame_words(params, tolerance: dict | None = None) -> str:
@@ -191,8 +166,10 @@ def frame_words(params, tolerance: dict | None = None) -> str:
         name, why = held[0]
         length = float(why.rsplit("(", 1)[-1].split()[0]) / 1000.0
         tol = float(tolerances(params, [name], tolerance)[0])
+        whose = "stated tolerance" if given_tolerances(params, [name], tolerance)[0] else \
+            "tolerance not given, the typical deviation"
         words.append(f"the scale is not seen (no known length): ±{tol / length * 1000.0:.3g} "
                      f"mm per metre of distance (1σ; {name} held at the URDF's, "
-                     f"stated tolerance {tol * 1000.0:.3g} mm over {length * 1000.0:.1f} mm)")
+                     f"{whose} {tol * 1000.0:.3g} mm over {length * 1000.0:.1f} mm)")
     return "; ".join(words) + ("; neither is in the std" if len(words) > 1 else
                                ", nor in the std")

@@ -16,11 +16,19 @@ split the base pose from the first joint (its rotation about A1 from the A1
 offset). With a stated tolerance (prior std) ``s_d`` on each unseen
 parameter, that part's covariance is ``G diag(s²) Gᵀ``.
 
-``A`` is found on configurations drawn over the whole joint range, unloaded
-(the dependence the fit found is a property of the model and of the markers
-read). A parameter whose effect the free ones cannot reproduce there — one
-the campaign did not excite (a compliance), a marker never read — is not
-taken up: ``A`` is 0 for it and it moves the point by its full effect.
+``A`` is the least-squares fit of the free parameters to each unseen one's effect on
+the measured markers, at configurations drawn over the joint range the calibration
+measured (the result's ``joint_range``; the joint limits when not known), unloaded: the
+fit took it up on its readings, there (a joint it held still leaves a dependence that
+configurations moving that joint would not have). What they take up is not unseen,
+however much or little of it: what they leave is ``G``, and nothing else (no threshold
+on the share taken up). A parameter without
+effect there — a compliance, unloaded; a marker never read — is not taken up at all
+(``A`` is 0) and moves the point by its full effect.
+
+Only the user knows how far an unseen parameter may be from its nominal value. A
+tolerance not given is the parameter's typical deviation (1 mm, 1 mrad): the words
+(:meth:`UnseenPart.stated`) say so, and ask for the user's.
 """
 from __future__ import annotations
 
@@ -34,10 +42,8 @@ from doe_calib.io.measurements import Configurations
 from doe_calib.model.evaluation import observation_matrix
 from doe_calib.model.simulate import random_configurations
 
-#: Configurations over the joint range on which the dependence is found (fixed seed).
+#: Configurations over the measured joint range on which the dependence is found (fixed seed).
 GENERIC_POSES = 40
-#: Remaining share of a column above which its dependence is not structural (``A`` is 0).
-STRUCTURAL = 1e-6
 
 
 def measured_markers(result) -> list[str] | None:
@@ -82,9 +88,21 @@ def tolerances(params, names, given: dict | None = None) -> np.ndarray:
     out = []
     for i in params.index(list(names)) if len(names) else []:
         p = params.parameters[i]
-        keys = (p.name, f"{p.name}:{p.unit}", f"{p.block}:{p.unit}", p.unit)
-        out.append(next((given[k] for k in keys if k in given), p.scale))
+        out.append(next((given[k] for k in _keys(p) if k in given), p.scale))
     return np.array(out, float)
+
+
+def given_tolerances(params, names, given: dict | None = None) -> np.ndarray:
+    """Whether a key of ``given`` names each parameter of ``names`` (:func:`tolerances`);
+    False: its tolerance is its typical deviation, not the user's. Shape (D,), bool."""
+    given = {} if given is None else given
+    return np.array([any(k in given for k in _keys(params.parameters[i]))
+                     for i in (params.index(list(names)) if len(names) else [])], bool)
+
+
+def _keys(p) -> tuple:
+    """The keys that name parameter ``p`` in a tolerance dict, the most specific first."""
+    return p.name, f"{p.name}:{p.unit}", f"{p.block}:{p.unit}", p.unit
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,17 +116,19 @@ class UnseenPart:
     reasons : tuple of str
         Why each is not separable (the result's words).
     tolerance : ndarray, shape (D,)
-        Stated prior std of each, SI (m, rad, rad/(N·m)).
+        Prior std of each, SI (m, rad, rad/(N·m)): the user's, or its typical deviation.
     absorbed : ndarray, shape (F, D)
-        ``A``: the free parameters' change that reproduces each one's effect on the
-        measured markers (0 for one whose effect they cannot reproduce).
+        ``A``: the free parameters' change that best reproduces each one's effect on
+        the measured markers (least squares; 0 for one without effect on them).
     free : ndarray of bool, shape (P,)
-        The result's free parameters.
+        The parameters that take up (the result's free ones).
     index : ndarray of int, shape (D,)
         Position of each unseen parameter in the parameter vector.
-    structural : ndarray of bool, shape (D,)
-        Whether the free parameters reproduce its effect on the measured markers
-        (``absorbed`` holds how), or the readings just did not excite it.
+    taken : ndarray of bool, shape (D,)
+        Whether it has an effect on the measured markers unloaded (``absorbed`` holds
+        how much of it the free parameters take up), or none (a compliance).
+    given : ndarray of bool, shape (D,)
+        Whether the user gave its tolerance.
     """
 
     names: tuple
@@ -117,7 +137,8 @@ class UnseenPart:
     absorbed: np.ndarray
     free: np.ndarray
     index: np.ndarray
-    structural: np.ndarray
+    taken: np.ndarray
+    given: np.ndarray
 
     def __len__(self) -> int:
         return len(self.names)
@@ -130,7 +151,7 @@ class UnseenPart:
         jac : ndarray, shape (…, k, P)
             Jacobian of the quantity (a point: k = 3, m) wrt every parameter.
         unloaded : ndarray, shape (…, k, P), optional
-            The same without the wrench, for the structural columns: ``A`` holds
+            The same without the wrench, for the columns taken up: ``A`` holds
             their dependence unloaded, and a load adds only the change of its
             deflection with the geometry (second order: compliance × deviation,
             µm), which the readings of a loaded campaign do not split either.
@@ -138,7 +159,7 @@ class UnseenPart:
         jac = np.asarray(jac, float)
         base = jac if unloaded is None else np.asarray(unloaded, float)
         g = base[..., self.index] - base[..., self.free] @ self.absorbed
-        g[..., ~self.structural] = jac[..., self.index[~self.structural]]
+        g[..., ~self.taken] = jac[..., self.index[~self.taken]]
         return g * self.tolerance
 
     def std_3d(self, jac, unloaded=None) -> np.ndarray:
@@ -153,16 +174,30 @@ class UnseenPart:
         return [self.names[i] for i in order if size[i] > 0]
 
     def stated(self, params) -> str:
-        """The tolerances in words, display units: ``1 mm (7 parameters), 0.0573 deg (9 …)``."""
+        """The tolerances in words, display units: ``1 mm (7 parameters), 0.0573 deg (9 …)``,
+        those not given by the user said to be each parameter's typical deviation."""
         by = {}
-        for name, s in zip(self.names, self.tolerance):
+        for name, s, given in zip(self.names, self.tolerance, self.given):
             p = params.parameters[params.position(name)]
-            key = f"{s * p.display_factor:.3g} {p.display_unit}"
+            key = (f"{s * p.display_factor:.3g} {p.display_unit}", bool(given))
             by[key] = by.get(key, 0) + 1
-        return ", ".join(f"{k} ({n} parameter{'s' if n > 1 else ''})" for k, n in by.items())
+        return ", ".join(f"{k} ({n} parameter{'s' if n > 1 else ''}"
+                         f"{'' if given else ', not given: the typical deviation'})"
+                         for (k, given), n in by.items())
+
+    @property
+    def defaulted(self) -> bool:
+        """Whether some tolerance is not the user's (the words then ask for it)."""
+        return not bool(np.all(self.given))
 
 
-def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> UnseenPart:
+#: What the words say when some tolerance is not the user's.
+ASK = ("state how far they may be from the nominal (tolerance= of predict and compensate; "
+       "doe-calib compensate --unseen-tolerance, e.g. 0.2mm geometry:0.01deg)")
+
+
+def unseen_part(model, params, markers=None, tolerance: dict | None = None,
+                taking=None, within=None) -> UnseenPart:
     """The unseen part of a result: its not-separable parameters and how the fit took them up.
 
     Parameters
@@ -176,7 +211,14 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> U
         The markers the readings measured (default all of the tool's).
     tolerance : dict, optional
         Stated prior std of the unseen parameters (SI) by name, ``block:unit`` or unit
-        (:func:`tolerances`); default each parameter's scale.
+        (:func:`tolerances`); default each parameter's scale, said in words.
+    taking : ndarray of bool, shape (P,), optional
+        Held parameters that take up too (besides the free ones): a motion the
+        readings cannot see and the caller states in words
+        (:func:`~doe_calib.estimation.sockets.frame_unseen_part`).
+    within : ndarray, shape (N, 2), optional
+        The joint range the readings covered, rad (m): the result's ``joint_range``.
+        Default the joint limits.
 
     Returns
     -------
@@ -187,38 +229,42 @@ def unseen_part(model, params, markers=None, tolerance: dict | None = None) -> U
     >>> from doe_calib import Robot, Tool, build_model, examples
     >>> m = build_model(Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML),
     ...                 "joint_offset")
-    >>> p = m.nominal().fixed(["dq_a1"], "offset of joint a1 is not separable from base rz")
+    >>> from doe_calib.estimation.preparation import NOT_SEPARABLE
+    >>> p = m.nominal().fixed(["dq_a1"], "offset of joint a1 (dq_a1) is not separable from "
+    ...                       "base rotation vector z (base_rz)" + NOT_SEPARABLE)
     >>> part = unseen_part(m, p)
-    >>> part.names, part.tolerance
-    (('dq_a1',), array([0.001]))
+    >>> part.names, part.tolerance, part.given
+    (('dq_a1',), array([0.001]), array([False]))
+    >>> bool(abs(part.absorbed).max() > 0.5)  # the base's turn takes it up
+    True
     """
     names = not_separable(params)
     index = np.array(params.index(names), int) if names else np.zeros(0, int)
     free = np.asarray(params.free, bool).copy()
     free[index] = False
+    if taking is not None:
+        free |= np.asarray(taking, bool)
     absorbed = np.zeros((int(free.sum()), len(names)))
-    structural = np.ones(len(names), bool)
+    taken = np.ones(len(names), bool)
     if names:
         rng = np.random.default_rng(0)
-        cfg = Configurations.from_arrays(random_configurations(model.robot, GENERIC_POSES, rng))
+        q = random_configurations(model.robot, GENERIC_POSES, rng) if within is None else \
+            rng.uniform(*np.asarray(within, float).T, (GENERIC_POSES, len(within)))
+        cfg = Configurations.from_arrays(q)
         _, b = observation_matrix(model, params.values, cfg)
         if markers is not None:
             b = b[:, [model.tool.index(n) for n in markers]]
         b = b.reshape(-1, b.shape[-1]) * params.scales   # columns at their typical size
         b_free, b_dep = b[:, free], b[:, index]
+        # least squares: a column without effect (a compliance, unloaded; an unmeasured
+        # marker) gets A = 0, and its full effect under the row's load counts
         absorbed = np.linalg.lstsq(b_free, b_dep, rcond=None)[0]
         absorbed *= params.scales[free][:, None] / params.scales[index]
-        b_dep = b_dep / params.scales[index]
-        b_free = b_free / params.scales[free]
-        rest = np.linalg.norm(b_dep - b_free @ absorbed, axis=0)
-        size = np.linalg.norm(b_dep, axis=0)
-        # a column without effect here (a compliance, unloaded; an unmeasured marker) is not
-        # taken up by the free parameters: its full effect under the row's load counts
-        structural = (size > 0) & (rest <= STRUCTURAL * size)
-        absorbed[:, ~structural] = 0.0
+        taken = np.linalg.norm(b_dep, axis=0) > 0
     reasons = tuple(params.fixed_reason[i] for i in index)
     return UnseenPart(tuple(names), reasons, tolerances(params, names, tolerance),
-                      absorbed, free, index, structural)
+                      absorbed, free, index, taken,
+                      given_tolerances(params, names, tolerance))
 
 
 def unseen_notes(effect, seen, marker, names, part: UnseenPart, params) -> tuple:
@@ -241,6 +287,7 @@ def unseen_notes(effect, seen, marker, names, part: UnseenPart, params) -> tuple
     size = np.sqrt(np.sum(effect[over] ** 2, axis=(0, 1)))
     top = [part.names[i] for i in np.argsort(-size, kind="stable")[:3] if size[i] > 0]
     return (f"{int(over.sum())} predicted reading(s) of marker(s) {', '.join(which)} rest on "
-            f"what the calibration's readings could not see ({', '.join(top)}): at the stated "
+            f"what the calibration's readings could not see ({', '.join(top)}): at the "
             f"tolerances ({part.stated(params)}) up to {np.max(unseen) * 1000:.3g} mm (1σ, "
-            f"3-D), included in the std; measure those markers in the calibration to remove it",)
+            f"3-D), included in the std; measure those markers in the calibration to remove "
+            f"it{'; ' + ASK if part.defaulted else ''}",)
