@@ -1,6 +1,7 @@
 """Readings without coordinates counted and said as they are (issue #31): a plane touch or
 a ballbar length is one coordinate, each unknown socket, plane or pivot costs 3; the fit
-statistics, the HTML report and the residual RMS per coordinate say so, naming each kind."""
+statistics, the HTML report, the residual RMS per coordinate and the diagnosis caption say
+so, naming each kind."""
 import warnings
 
 import numpy as np
@@ -14,6 +15,7 @@ from doe_calib.estimation.fit_statistics import FitStatistics
 from doe_calib.estimation.observation_count import coordinate_words, reading_counts
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.io.measurements import Configurations, Measurements
+from doe_calib.report.diagnosis import _frame_words
 from doe_calib.report.identification import fit_table
 
 
@@ -108,3 +110,14 @@ def test_touches_are_counted_against_what_they_separate(campaigns):  # noqa: F81
                                             r"of 3 planes of unknown position\): they separate "
                                             r"as many .* \(at least 19 coordinates"):
             identify(model, first(9))
+
+
+def test_the_caption_says_each_kind_of_residual():
+    m = _every_kind()
+    said = _frame_words(m)
+    assert said.startswith("tracker frame; a socket contact's is its socket's point")
+    assert "a plane touch's is its foot on its plane" in said and "signed distance" in said
+    assert "a ballbar length's is the measured less the modelled length" in said
+    touches = m.subset(m.touch)
+    assert _frame_words(touches).startswith("the robot's root frame; a plane touch's")
+    assert "socket" not in _frame_words(touches) and "ballbar" not in _frame_words(touches)
