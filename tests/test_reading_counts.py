@@ -1,7 +1,7 @@
 """Readings without coordinates counted and said as they are (issue #31): a plane touch or
 a ballbar length is one coordinate, each unknown socket, plane or pivot costs 3; the fit
-statistics, the HTML report, the residual RMS per coordinate and the diagnosis caption say
-so, naming each kind."""
+statistics, the HTML report, the residual RMS per coordinate, the diagnosis caption and an
+outlier's causes say so, naming each kind."""
 import warnings
 
 import numpy as np
@@ -9,6 +9,7 @@ import pytest
 from test_plane_and_ballbar import _robot_tool, campaigns, truth  # noqa: F401 (fixtures)
 
 from doe_calib import build_model, identify
+from doe_calib.diagnosis.outliers import Outlier, _group_names, causes, outlier_verdict
 from doe_calib.diagnosis.residuals import residuals
 from doe_calib.errors import DataError
 from doe_calib.estimation.fit_statistics import FitStatistics
@@ -121,3 +122,26 @@ def test_the_caption_says_each_kind_of_residual():
     touches = m.subset(m.touch)
     assert _frame_words(touches).startswith("the robot's root frame; a plane touch's")
     assert "socket" not in _frame_words(touches) and "ballbar" not in _frame_words(touches)
+
+
+def _outlier(**where):
+    return Outlier("p1", "ball", 3, "m.csv", 0.2, 20.0, 1e-9, 50, **where)
+
+
+def test_an_outlier_says_its_own_causes():
+    m = _every_kind()
+    assert _group_names(m, 7) == ("", "", "P")  # a length: its pivot
+    assert _group_names(m, 11) == ("P", "", "")  # a contact seated on the pivot: its socket
+    assert _group_names(m, 0) == ("", "T", "")
+    bar = _outlier(pivot="P")
+    assert "marker ball from pivot P (line 3" in bar.words()
+    assert causes([bar]) == ("A ballbar not seated in its cups (dirt, a cup slipped, the bar "
+                             "lifted), a length misread or mistyped, a length written under "
+                             "the wrong pivot's id, or a pose typed wrong")
+    seated = causes([_outlier(socket="S")])
+    assert seated.startswith("A ball not seated home in its socket") and "length" not in seated
+    both = outlier_verdict([bar, _outlier(plane="T")], "σ̂/σ = 3")
+    assert "A touch off its plane (dirt, a burr, the probe triggered early), a touch written " \
+           "under another plane's id; a ballbar not seated in its cups" in both
+    assert causes([_outlier()]).startswith("A reading off its target")
+    assert Outlier.from_dict(bar.to_dict()) == bar
