@@ -353,6 +353,38 @@ def test_the_fewest_touches_a_design_makes_identify_takes(ur10, truth, bench, ca
     assert "free parameters        = 18" in out and "degrees of freedom     = 1" in out
 
 
+def test_the_fewest_ballbar_positions_a_design_makes_identify_takes(ur10, truth, bench,
+                                                                     capsys):
+    """As touches: the fewest ballbar positions about two pivots a design makes, read on the
+    independent true robot, identify fits; one fewer the design refuses."""
+    d, _ = bench
+    bars = [a for p, ls in PIVOTS.values() for a in (
+        "--ballbar", f"{','.join(f'{1000 * v:g}' for v in p)}:"
+                     f"{','.join(f'{1000 * x:g}' for x in ls)}")]
+
+    def design(n):
+        return main(["design", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                     *bars, "--poses", str(n), "--model", "joint_offset+geometry",
+                     "--no-collision", "--seed", "5", "--sigma", str(BAR_MM),
+                     "--out", str(d / f"fewest-bar{n}.json")])
+
+    assert design(10) != 0
+    said = capsys.readouterr().err
+    assert "10 positions (--poses) are too few" in said
+    least = int(said.split("at least ")[1].split()[0])
+    assert design(least - 1) != 0 and design(least) == 0
+    made = ContactDesign.from_json(d / f"fewest-bar{least}.json")
+    _write(d / "fewest-bar.csv", _bar_rows(ur10, truth, made.configurations.q, made.socket,
+                                           np.random.default_rng(7)))
+    assert main(["identify", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                 "--data", str(d / "fewest-bar.csv"), "--sigma", str(BAR_MM),
+                 "--model", "joint_offset+geometry", "--out", str(d / "fewest-bar.json")]) == 0
+    out = capsys.readouterr().out
+    used = len(set(made.socket))
+    assert f"observations (L − 3V)  = {least - 3 * used} (V = {used} ballbar pivots of " \
+           f"unknown position)" in out
+
+
 def test_touch_program_with_collisions(bench, capsys):
     """With the URDF's collision model: each approach point on its touch's turns (a touch
     the reachability check takes a whole turn round keeps its approach point with it), and
