@@ -127,6 +127,44 @@ def test_too_few_contacts_are_refused(ur10_model):
                        rng=np.random.default_rng(0))
 
 
+def test_the_fewest_contacts_a_design_makes_identify_takes(ur10, truth, designed, capsys):
+    """Design and identify count socket contacts alike, against the parameters they separate,
+    one coordinate more: the fewest contacts in three sockets a design makes, seated on the
+    independent true robot, identify fits; one fewer the design refuses."""
+    d, _ = designed
+
+    def design(n):
+        return main(["design", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                     "--sockets", str(d / "sockets.csv"), "--poses", str(n), "--sigma",
+                     str(SEATING_MM), "--model", "joint_offset+geometry", "--no-collision",
+                     "--seed", "5", "--out", str(d / f"fewest{n}.json")])
+
+    assert design(6) != 0
+    said = capsys.readouterr().err
+    assert "6 contacts (--poses) are too few" in said
+    least = int(said.split("at least ")[1].split()[0])
+    assert design(least - 1) != 0 and design(least) == 0
+    made = ContactDesign.from_json(d / f"fewest{least}.json")
+    rng = np.random.default_rng(7)
+    rows = []
+    for i, (q, s) in enumerate(zip(made.configurations.q, made.socket)):
+        target = np.asarray(SOCKETS_M[s]) + rng.normal(scale=SEATING_MM * 1e-3, size=3)
+        rows.append({"pose": f"c{i}", **_q_columns(_seat_near(ur10, truth, target, q)),
+                     "marker": "ball", "socket": s})
+    with open(d / "fewest.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    assert main(["identify", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                 "--data", str(d / "fewest.csv"), "--sigma", str(SEATING_MM),
+                 "--model", "joint_offset+geometry", "--out", str(d / "fewest.json")]) == 0
+    out = capsys.readouterr().out
+    used = len(set(made.socket))  # the design may leave a socket out: 3 coordinates more
+    assert f"readings               = {least} ({least} socket contacts)" in out
+    assert f"observations (3K − 3S) = {3 * least - 3 * used} (S = {used} sockets of unknown " \
+        f"position)" in out
+
+
 def _seat_near(ur10, truth, target, q):
     """Commanded q that puts the true ball centre on ``target``, by damped Gauss–Newton on
     position from the designed ``q`` (the operator guides the ball into the socket from

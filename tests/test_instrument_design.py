@@ -69,7 +69,7 @@ def test_nuisance_exchange_swaps_on_the_exact_information():
 
 # -- designs on the independent UR10 of tests/test_socket_contacts.py -------------------
 
-N_READINGS = 60  # identify counts 43 unknowns of the model before its rank analysis
+N_READINGS = 60  # of three faces: over twice the fewest (28: 18 parameters separated)
 TOUCH_MM, BAR_MM = 0.01, 0.001
 BALL_M = np.array([0.0, 0.0, 0.10])
 #: Faces (point, normal towards the robot, half-size; m): a table top, an upright face
@@ -321,16 +321,68 @@ def test_designed_ballbar_positions_beat_random_ones(ur10, truth, ur10_model, le
     assert np.mean(ours) < 0.8 * np.mean(theirs)
 
 
-def test_too_few_touches_for_identify_are_refused(bench, capsys):
-    """identify counts a touch campaign against the model's unknowns before its rank
-    analysis: a design it would refuse is refused, saying how many touches it takes."""
+def test_the_fewest_touches_a_design_makes_identify_takes(ur10, truth, bench, capsys):
+    """Design and identify count touches alike, against the parameters they separate (18
+    of the 43 joint_offset+geometry leaves free), one coordinate more: the fewest touches
+    of three faces a design makes, touched on the independent true robot, identify fits;
+    one fewer the design refuses, saying how many it takes."""
     d, _ = bench
-    assert main(["design", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
-                 "--planes", str(d / "faces.csv"), "--poses", "40", "--orientations", "60",
-                 "--model", "joint_offset+geometry", "--no-collision",
-                 "--out", str(d / "few.json")]) != 0
+
+    def design(n):
+        return main(["design", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                     "--planes", str(d / "faces.csv"), "--poses", str(n), "--orientations",
+                     "60", "--model", "joint_offset+geometry", "--no-collision", "--seed", "5",
+                     "--sigma", str(TOUCH_MM), "--out", str(d / f"fewest{n}.json")])
+
+    assert design(20) != 0
     said = capsys.readouterr().err
-    assert "40 touches (--poses) are too few" in said and "at least 52 touches" in said
+    assert "20 touches (--poses) are too few: 18 parameters to identify" in said
+    least = int(said.split("at least ")[1].split()[0])
+    assert least == 3 * 3 + 18 + 1  # was 52: the 43 free before identify's rank analysis
+    assert design(least - 1) != 0 and design(least) == 0
+    made = ContactDesign.from_json(d / f"fewest{least}.json")
+    rows = _touch_rows(ur10, truth, made.configurations.q, made.socket,
+                       np.random.default_rng(7))
+    _write(d / "fewest.csv", rows)
+    assert main(["identify", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                 "--data", str(d / "fewest.csv"), "--sigma", str(TOUCH_MM),
+                 "--model", "joint_offset+geometry", "--out", str(d / "fewest.json")]) == 0
+    out = capsys.readouterr().out
+    assert f"readings               = {least} ({least} plane touches)" in out
+    assert "observations (T − 3P)  = 19 (P = 3 planes of unknown position)" in out
+    assert "free parameters        = 18" in out and "degrees of freedom     = 1" in out
+
+
+def test_the_fewest_ballbar_positions_a_design_makes_identify_takes(ur10, truth, bench,
+                                                                     capsys):
+    """As touches: the fewest ballbar positions about two pivots a design makes, read on the
+    independent true robot, identify fits; one fewer the design refuses."""
+    d, _ = bench
+    bars = [a for p, ls in PIVOTS.values() for a in (
+        "--ballbar", f"{','.join(f'{1000 * v:g}' for v in p)}:"
+                     f"{','.join(f'{1000 * x:g}' for x in ls)}")]
+
+    def design(n):
+        return main(["design", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                     *bars, "--poses", str(n), "--model", "joint_offset+geometry",
+                     "--no-collision", "--seed", "5", "--sigma", str(BAR_MM),
+                     "--out", str(d / f"fewest-bar{n}.json")])
+
+    assert design(10) != 0
+    said = capsys.readouterr().err
+    assert "10 positions (--poses) are too few" in said
+    least = int(said.split("at least ")[1].split()[0])
+    assert design(least - 1) != 0 and design(least) == 0
+    made = ContactDesign.from_json(d / f"fewest-bar{least}.json")
+    _write(d / "fewest-bar.csv", _bar_rows(ur10, truth, made.configurations.q, made.socket,
+                                           np.random.default_rng(7)))
+    assert main(["identify", "--robot", str(sim.ur10_urdf()), "--tool", str(d / "tool.yaml"),
+                 "--data", str(d / "fewest-bar.csv"), "--sigma", str(BAR_MM),
+                 "--model", "joint_offset+geometry", "--out", str(d / "fewest-bar.json")]) == 0
+    out = capsys.readouterr().out
+    used = len(set(made.socket))
+    assert f"observations (L − 3V)  = {least - 3 * used} (V = {used} ballbar pivots of " \
+           f"unknown position)" in out
 
 
 def test_touch_program_with_collisions(bench, capsys):

@@ -154,8 +154,6 @@ class ContactGoal(Goal):
             params = fix_unseen_by_touches(model, contact_readings(
                 cfg, setting.ball, setting.sigma, kind, poses.socket[sample],
                 poses.sockets.names), params)
-        # what identify counts scalar readings against (socket designs keep their old floor)
-        counted = int(params.free.sum()) if kind != "socket" else 0
         rows = self.read_along(poses, observation_matrix(model, params.values, cfg)[1]
                                [:, setting.ball], sample)
         own = None if poses.own is None else poses.own[sample]
@@ -163,20 +161,18 @@ class ContactGoal(Goal):
                                       .reshape(-1, rows.shape[-1]), "the contact candidates")
         ball = self.ball_rows(setting, params, poses)
         f, s, r = ball.shape[-1], len(np.unique(poses.socket)), ball.shape[1]
-        if r * n - 3 * s < max(f, counted):
+        if r * n - 3 * s <= f:  # identify asks one coordinate more than it separates
             what = {"socket": ("contact gives 3 coordinates", "socket for its unknown point",
                                "sockets", "contacts"),
                     "plane": ("touch gives 1 coordinate", "plane for its unknown position",
                               "planes", "touches"),
                     "ballbar": ("position gives 1 length", "pivot for its unknown point",
                                 "pivots", "positions")}[kind]
-            need = max(f, counted)
-            least = s + -(-need // 3) if r == 3 else 3 * s + need
-            counts = f" ({counted} unknown before identify's rank analysis fixes those no " \
-                     f"reading separates)" if counted > f else ""
+            least = s + -(-(f + 1) // 3) if r == 3 else 3 * s + f + 1
             raise OptionError(f"{n} {what[3]} (--poses) are too few: {f} parameters to "
-                              f"identify{counts} and each {what[0]}, less 3 per {what[1]} ({s} "
-                              f"{what[2]}): at least {least} {what[3]}")
+                              f"identify, and identify asks one coordinate more: each "
+                              f"{what[0]}, less 3 per {what[1]} ({s} {what[2]}): at least "
+                              f"{least} {what[3]}")
         return ContactInformation(params, Criterion.from_name(self.criterion), ball,
                                   poses.socket, poses.q, np.arange(len(poses.q)), poses.own)
 

@@ -69,9 +69,11 @@ class Outlier:
     n_readings : int
         K, the readings it was judged among.
     socket : str
-        For a socket contact or a ballbar length, its socket's id ("" otherwise).
+        For a socket contact, its socket's id ("" otherwise).
     plane : str
         For a plane touch, its plane's id ("" otherwise).
+    pivot : str
+        For a ballbar length, its pivot's id ("" otherwise).
     """
 
     pose: str
@@ -84,12 +86,15 @@ class Outlier:
     n_readings: int
     socket: str = ""
     plane: str = ""
+    pivot: str = ""
 
     def words(self) -> str:
         """``pose 17, marker B (line 102 of m.csv): 1.5 mm = 50 σ off (p = 1e-300 …)``; a
-        contact's says its socket (``marker ball in socket S2``), a touch its plane."""
+        contact's says its socket (``marker ball in socket S2``), a touch its plane, a
+        ballbar length its pivot (``marker ball from pivot P1``)."""
         where = (f" in socket {self.socket}" if self.socket else "") + \
             (f" on plane {self.plane}" if self.plane else "") + \
+            (f" from pivot {self.pivot}" if self.pivot else "") + \
             (f" (line {self.line} of {self.source})" if self.line else "")
         p = f"p = {self.p_value:.2g}" if self.p_value >= 1e-300 else "p < 1e-300"
         return (f"pose {self.pose}, marker {self.marker}{where}: {self.size_mm:.3g} mm = "
@@ -260,11 +265,31 @@ def gross_outliers(model, measurements, fit, level: float = 0.01, tolerance: flo
 
 
 def _group_names(measurements, i) -> tuple:
-    """(socket id, plane id) of reading ``i`` ("" where it has none)."""
+    """(socket id, plane id, pivot id) of reading ``i`` ("" where it has none): a ballbar
+    length's socket is its pivot."""
     socket = measurements.socket_names[measurements.socket[i]] \
         if measurements.socket is not None and measurements.socket[i] >= 0 else ""
     plane = measurements.plane_names[measurements.plane[i]] if measurements.touch[i] else ""
-    return socket, plane
+    return ("", plane, socket) if measurements.ballbar[i] else (socket, plane, "")
+
+
+#: What may have made an outlier of each kind of reading, in words.
+CAUSES = {"point": "a reading off its target, a marker moved or swapped",
+          "socket": "a ball not seated home in its socket (dirt, a slipped seat), a contact "
+                    "written under another socket's id",
+          "plane": "a touch off its plane (dirt, a burr, the probe triggered early), a touch "
+                   "written under another plane's id",
+          "pivot": "a ballbar not seated in its cups (dirt, a cup slipped, the bar lifted), a "
+                   "length misread or mistyped, a length written under the wrong pivot's id"}
+
+
+def causes(outliers) -> str:
+    """What may have made ``outliers``, in one sentence: the causes of each kind of reading
+    among them (:data:`CAUSES`), and a pose typed wrong."""
+    kinds = {"socket" if o.socket else "plane" if o.plane else "pivot" if o.pivot else "point"
+             for o in outliers}
+    said = "; ".join(CAUSES[k] for k in CAUSES if k in kinds)
+    return f"{said[0].upper()}{said[1:]}, or a pose typed wrong"
 
 
 def outlier_verdict(outliers, adequacy_words: str) -> str:
@@ -282,15 +307,8 @@ def outlier_verdict(outliers, adequacy_words: str) -> str:
         f"{len(outliers)} readings are gross errors"
     listed = "; ".join(o.words() for o in outliers)
     python = "[" + ", ".join(repr(p) for p in poses) + "]"
-    causes = "A reading off its target, a marker moved or swapped, or a pose typed wrong"
-    if any(o.socket for o in outliers):
-        causes = ("A ball not seated home in its socket (dirt, a slipped seat), a contact "
-                  "written under another socket's id, a length misread, or a pose typed wrong")
-    if any(o.plane for o in outliers):
-        causes = ("A touch off its plane (dirt, a burr, the probe triggered early), a touch "
-                  "written under another plane's id, or a pose typed wrong")
     return (f"The model is NOT adequate ({adequacy_words}), but {head}, not an effect: {listed}. "
-            f"{causes}. "
+            f"{causes(outliers)}. "
             f"Re-measure {'that pose' if len(poses) == 1 else 'those poses'} or leave "
             f"{'it' if len(poses) == 1 else 'them'} out: rerun with --exclude-poses "
             f"{','.join(poses)} (each exclusion is reported; in Python "

@@ -9,6 +9,7 @@ import numpy as np
 
 from doe_calib.errors import ConvergenceWarning
 from doe_calib.estimation.covariance import covariance_from_r_factor
+from doe_calib.estimation.observation_count import reading_counts
 from doe_calib.estimation.measured_region import joint_range
 from doe_calib.estimation.result import IdentificationResult
 from doe_calib.estimation.planes import plane_note
@@ -20,17 +21,24 @@ SIGMA_ESTIMATED = "σ estimated from the residuals"
 
 
 def residual_statistics(model, measurements, values) -> dict:
-    """Residual RMS (per coordinate) and max 3-D error, overall, per marker and per pose, mm."""
+    """Residual RMS (per coordinate) and max 3-D error, overall, per marker and per pose, mm;
+    ``counts``: the readings by kind (:func:`reading_counts`).
+
+    A plane touch or a ballbar length is one coordinate, its residual (along the plane's
+    normal, along the bar) its whole error; any other reading is three.
+    """
     e = marker_residuals(model, measurements, values) * 1000.0
     sq, d = np.sum(e ** 2, axis=1), np.linalg.norm(e, axis=1)
+    coordinates = np.where(measurements.touch | measurements.ballbar, 1, 3)
 
     def stats(groups, names):
         n = np.bincount(groups, minlength=len(names))
         ss = np.bincount(groups, sq, minlength=len(names))
+        read = np.bincount(groups, coordinates, minlength=len(names))
         worst = np.full(len(names), -np.inf)
         np.maximum.at(worst, groups, d)
         seen = n > 0  # one vectorised pass, then plain floats (same values as one by one)
-        rms = np.sqrt(ss[seen] / (3 * n[seen]))
+        rms = np.sqrt(ss[seen] / read[seen])
         return {name: {"rms_mm": r, "max_3d_mm": w, "n": c} for name, r, w, c in
                 zip(np.asarray(names, object)[seen], rms.tolist(), worst[seen].tolist(),
                     n[seen].tolist())}
@@ -43,6 +51,7 @@ def residual_statistics(model, measurements, values) -> dict:
     # poses in order of first reading, as in the file
     first = dict.fromkeys(np.asarray(pose_names)[pose_of_config[measurements.config]])
     out["per_pose"] = {p: per_pose[p] for p in first}
+    out["counts"] = reading_counts(measurements)
     return out
 
 

@@ -1,11 +1,13 @@
 """Fit statistics of an identification: χ², dof, p, σ̂/σ with its interval, evaluations."""
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from doe_calib.estimation.chi_square import chi2_quantile, chi2_survival
+from doe_calib.estimation.observation_count import COUNTED
 from doe_calib.estimation.sockets import is_socket_note
 
 #: Level of the σ̂/σ interval.
@@ -22,10 +24,12 @@ class FitStatistics:
     Attributes
     ----------
     readings : int
-        Marker readings K (socket contacts included).
+        Marker readings, every kind (socket contacts, plane touches, ballbar lengths
+        included).
     observations : int
-        Scalar observations: 3K, less 3 per socket of unknown position (its point is
-        estimated with the fit: formats.md §3).
+        Scalar observations: 3 per reading of a point (a tracker's reading or a socket
+        contact), 1 per plane touch or ballbar length, less 3 per socket, plane or pivot
+        of unknown position (its point is estimated with the fit: formats.md §3).
     free, fixed : int
         Parameters estimated and held.
     chi2 : float
@@ -50,7 +54,13 @@ class FitStatistics:
     message : str
         The solver's words.
     sockets : int
-        Sockets of unknown position among the readings (0 without contacts).
+        Sockets of unknown position among the readings (0 without contacts), ballbar pivots
+        not counted.
+    contacts, touches, lengths : int
+        Socket contacts (in sockets of unknown position), plane touches and ballbar lengths
+        among the readings.
+    planes, pivots : int
+        Planes touched and ballbar pivots, each of unknown position.
     """
 
     readings: int
@@ -69,6 +79,11 @@ class FitStatistics:
     converged: bool
     message: str
     sockets: int = 0
+    contacts: int = 0
+    touches: int = 0
+    lengths: int = 0
+    planes: int = 0
+    pivots: int = 0
 
     @property
     def reduced_chi2(self) -> float:
@@ -83,10 +98,9 @@ class FitStatistics:
     def lines(self) -> list[str]:
         """The statistics as ``name = value`` lines, for reports."""
         lo, hi = self.sigma_ratio_interval
-        out = [f"readings               = {self.readings}",
-               f"observations (3K)      = {self.observations}" if not self.sockets else
-               f"observations (3K − 3S) = {self.observations} (S = {self.sockets} sockets of "
-               f"unknown position)",
+        kinds = self.kinds()
+        out = [f"readings               = {self.readings}" + (f" ({kinds})" if kinds else ""),
+               self._observations(),
                f"free parameters        = {self.free}",
                f"fixed parameters       = {self.fixed}",
                f"degrees of freedom     = {self.dof}"]
@@ -110,6 +124,41 @@ class FitStatistics:
                    f"{self.message}")
         return out
 
+    def kinds(self) -> str:
+        """The readings by kind (``20 points read, 20 plane touches``) when any has no
+        coordinates; '' otherwise."""
+        points = self.readings - self.contacts - self.touches - self.lengths
+        kinds = [_count(n, what) for n, what in ((points, "point(s) read"),
+                                                 (self.contacts, "socket contact(s)"),
+                                                 (self.touches, "plane touch(es)"),
+                                                 (self.lengths, "ballbar length(s)")) if n]
+        return ", ".join(kinds) if points != self.readings else ""
+
+    def observations_words(self) -> tuple:
+        """(``observations (T − 3P)``, ``P = 3 planes of unknown position``): the
+        observations as a formula of the readings' kinds, and each of its letters that is not
+        all the readings ('' when none); ``observations`` alone when they are not counted so
+        (6 per pose of a 6-DoF probe)."""
+        k = self.readings - self.touches - self.lengths
+        terms = [(k, "3K", f"K = {_count(k, 'reading(s)')} of three coordinates"),
+                 (self.touches, "T", f"T = {_count(self.touches, 'plane touch(es)')}"),
+                 (self.lengths, "L", f"L = {_count(self.lengths, 'ballbar length(s)')}")]
+        less = [(n, f"3{letter}", f"{letter} = {_count(n, what)} of unknown position")
+                for n, letter, what in ((self.sockets, "S", "socket(s)"),
+                                        (self.planes, "P", "plane(s)"),
+                                        (self.pivots, "V", "ballbar pivot(s)"))]
+        if 3 * k + self.touches + self.lengths - \
+                3 * (self.sockets + self.planes + self.pivots) != self.observations:
+            return "observations", ""  # counted per pose (a 6-DoF probe's)
+        added = [t for t in terms if t[0]]
+        formula = " + ".join(t[1] for t in added) + "".join(f" − {t[1]}" for t in less if t[0])
+        said = [t[2] for t in added if t[0] != self.readings] + [t[2] for t in less if t[0]]
+        return f"observations ({formula})", ", ".join(said)
+
+    def _observations(self) -> str:
+        name, legend = self.observations_words()
+        return f"{name:<22} = {self.observations}" + (f" ({legend})" if legend else "")
+
     def summary(self) -> str:
         """The statistics as text, one ``name = value`` line each."""
         return "\n".join(self.lines())
@@ -119,6 +168,12 @@ class FitStatistics:
     def _repr_pretty_(self, printer, cycle) -> None:
         """What IPython and Jupyter show: the summary, not the dataclass's fields."""
         printer.text(self.summary())
+
+
+def _count(n: int, what: str) -> str:
+    """``1 plane touch``, ``3 plane touches``: ``what`` with its plural's ending in brackets
+    (``plane touch(es)``, ``point(s) read``)."""
+    return f"{n} " + re.sub(r"[(](\w+)[)]", r"\1" if n != 1 else "", what)
 
 
 def misfit_finding(stats: FitStatistics, sigma_mm: float) -> str | None:
@@ -178,9 +233,12 @@ def fit_statistics(result) -> FitStatistics:
         v = conv.get(key)
         return None if v is None else int(v)
 
-    readings = result.n_observations // 3
-    if any(is_socket_note(w) for w in getattr(result, "warnings", ())):  # K: the residuals'
-        readings = int(result.residuals.get("n", readings))
+    residuals = getattr(result, "residuals", {})
+    counts = residuals.get("counts", {})
+    readings = int(residuals.get("n", result.n_observations // 3))
+    if not counts and any(is_socket_note(w) for w in getattr(result, "warnings", ())):
+        counts = {"sockets": max(readings - result.n_observations // 3, 0)}  # a result
+        # written before the counts were kept: sockets were the only readings without x, y, z
     return FitStatistics(
         readings=readings, observations=int(result.n_observations),
         free=n_free, fixed=len(p) - n_free, chi2=chi2, dof=dof, p_value=p_value,
@@ -188,4 +246,4 @@ def fit_statistics(result) -> FitStatistics:
         sigma_source=result.sigma_source, jacobian_evaluations=count("iterations"),
         residual_evaluations=count("evaluations"), iterations=count("iterations"),
         converged=bool(conv.get("converged", False)), message=str(conv.get("message", "")),
-        sockets=max(readings - result.n_observations // 3, 0))
+        **{k: int(counts.get(k, 0)) for k in COUNTED})

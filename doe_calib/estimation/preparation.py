@@ -17,6 +17,7 @@ import numpy as np
 
 from doe_calib.errors import ConditioningWarning, DataError, IdentifiabilityWarning
 from doe_calib.estimation.identifiability import analyse, blind_motion_words
+from doe_calib.estimation.observation_count import check_count
 from doe_calib.estimation.planes import check_planes
 from doe_calib.estimation.registration import register
 from doe_calib.estimation.weighted_residuals import (
@@ -314,10 +315,18 @@ def fix_unidentifiable(model, measurements, params, tol: float = 1e-7, reduction
     ``reduction``: of ``[J | r]`` for all parameters at ``params.values``, when at hand.
     Returns the new parameter set, the warnings issued, in words, and what each kept
     parameter absorbs of the fixed ones (:attr:`Identifiability.absorbed`).
+
+    Raises
+    ------
+    DataError
+        Readings all without coordinates that separate as many parameters as they have
+        coordinates, and not all of them
+        (:func:`~doe_calib.estimation.observation_count.check_count`).
     """
     red = reduce_jacobian(model, measurements, params.values) if reduction is None \
         else reduction
     ident = analyse(red.r_factor, params, tol=tol)  # RᵀR = JᵀJ: same columns' geometry
+    check_count(measurements, params, ident)
     notes = []
     blind, unseen = blind_motion_words(model.tool), False
     if ident.dependent:
@@ -360,7 +369,8 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
     Raises
     ------
     DataError
-        No readings, or fewer observed coordinates than free parameters.
+        No readings, or too few
+        (:func:`~doe_calib.estimation.observation_count.check_count`).
     """
     params = model.nominal() if params is None else params
     where = measurements.source or "<measurements>"
@@ -382,10 +392,7 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
     elif register and params.free[params.index("base")].all():
         params = register_base(model, measurements if tracked.all() else
                                measurements.subset(tracked), params)
-    n_free = int(params.free.sum())
-    if measurements.n_coordinates < n_free:
-        raise DataError(f"{measurements.n_coordinates} observed coordinates for {n_free} unknown "
-                        f"parameters: measure more poses or markers, or use a smaller model", where)
+    check_count(measurements, params)
     red = reduce_jacobian(model, measurements, params.values)
     params, notes, absorbed = fix_unidentifiable(model, measurements, params, reduction=red)
     turned = fix_base_turn(measurements, params)

@@ -36,12 +36,21 @@ def _by_direction(diagnosis, columns, top: int = 3):
 
 
 def _frame_words(measurements) -> str:
-    """The frame of the residuals' x, y, z and, with socket contacts, what a contact's is."""
+    """The frame of the residuals' x, y, z and, for each kind of reading without coordinates
+    present, what its residual is."""
     if not measurements.contact.any():
         return "tracker frame"
     frame = "the robot's root frame" if measurements.contact.all() else "tracker frame"
-    return (f"{frame}; a socket contact's is its socket's point, the mean of the model's "
-            f"points of its contacts, less its own")
+    seated = measurements.contact & ~measurements.touch & ~measurements.ballbar
+    kinds = [words for used, words in (
+        (seated.any(), "a socket contact's is its socket's point (the mean of the model's "
+                       "points of its contacts) less its own"),
+        (measurements.touch.any(), "a plane touch's is its foot on its plane (the plane best "
+                                   "through the model's points of its touches) less its own "
+                                   "point: its signed distance to the plane along the normal"),
+        (measurements.ballbar.any(), "a ballbar length's is the measured less the modelled "
+                                     "length, along the bar from its pivot")) if used]
+    return f"{frame}; " + "; ".join(kinds)
 
 
 def failure_sections(diagnosis, model, measurements, fit, dpi: int = 90,

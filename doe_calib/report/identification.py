@@ -63,8 +63,12 @@ def fit_table(result):
     """The fit statistics (χ², dof, p, σ̂/σ, …) as a two-column table."""
     res, p, st = result.residuals, result.parameters, result.fit_statistics
     lo, hi = st.sigma_ratio_interval
+    observations, legend = st.observations_words()
+    kinds = st.kinds()
     rows = [["estimator", result.estimator], ["model", result.model or "(base + markers)"],
-            ["readings", st.readings], ["observations 3K", result.n_observations],
+            ["readings", f"{st.readings} ({kinds})" if kinds else st.readings],
+            [observations, f"{result.n_observations} ({legend})" if legend
+             else result.n_observations],
             ["free parameters", int(p.free.sum())], ["fixed parameters", int((~p.free).sum())],
             ["residual RMS per coordinate (mm)", res["rms_mm"]],
             ["max 3-D residual (mm)", res["max_3d_mm"]], ["σ a priori (mm)", result.sigma_mm],
