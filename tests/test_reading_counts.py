@@ -145,3 +145,21 @@ def test_an_outlier_says_its_own_causes():
            "under another plane's id; a ballbar not seated in its cups" in both
     assert causes([_outlier()]).startswith("A reading off its target")
     assert Outlier.from_dict(bar.to_dict()) == bar
+
+
+def test_a_flagged_pose_of_touches_gives_its_rms_per_coordinate():
+    """A pose of four touches, each 0.1 mm off its plane (carried as ρ·n, one coordinate
+    each), and nine quiet poses of tracker readings: the flagged pose's RMS is 0.1 mm, not
+    0.1/√3."""
+    from doe_calib.diagnosis.residuals import Residuals, flagged_poses
+
+    normal = np.array([0.0, 0.6, 0.8])
+    touches = np.tile(1e-4 * normal, (4, 1))
+    quiet = np.random.default_rng(0).normal(scale=1e-5, size=(27, 3))
+    error = np.r_[touches, quiet]
+    pose = ("T",) * 4 + tuple(str(i // 3) for i in range(27))
+    res = Residuals(error, error / 1e-5, np.arange(31), pose,
+                    coordinates=np.r_[np.ones(4, int), np.full(27, 3)])
+    flagged = flagged_poses(res, dof_fraction=0.9)
+    assert [f["pose"] for f in flagged] == ["T"]
+    assert flagged[0]["rms_mm"] == pytest.approx(0.1, rel=1e-12)

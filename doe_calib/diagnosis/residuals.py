@@ -169,7 +169,8 @@ def flagged_poses(res: Residuals, dof_fraction: float, level: float = 1e-3,
             mine = np.flatnonzero(of == g)
             worst = mine[np.argmax(r2[mine])]
             out.append({"pose": str(ids[g]),
-                        "rms_mm": float(np.sqrt(np.mean(res.error[mine] ** 2)) * 1e3),
+                        "rms_mm": float(np.sqrt(np.sum(res.error[mine] ** 2)
+                                                / res.per_reading[mine].sum()) * 1e3),
                         "chi2_per_dof": t / dof, "chi2": t, "p_value": min(pv, 1.0),
                         "worst_line": int(lines[worst]) if lines is not None else 0})
     return sorted(out, key=lambda d: -d["chi2_per_dof"])

@@ -207,7 +207,7 @@ class IdentificationResult:
 
     def __repr__(self) -> str:
         return (f"<IdentificationResult {self.model or '(base + markers)'}, {self.estimator} "
-                f"estimator, {self.n_observations // 3} readings, RMS "
+                f"estimator, {self.residuals.get('n', self.n_observations // 3)} readings, RMS "
                 f"{self.residuals['rms_mm']:.4g} mm, σ̂/σ {self.sigma_ratio:.3g}"
                 f"{' (σ estimated)' if self.sigma_estimated else ''}>")
 
