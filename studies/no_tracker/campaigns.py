@@ -74,14 +74,16 @@ def stem_angle_deg(sim, chain, t, q) -> float:
     return float(np.degrees(np.arccos(-stem[2] / np.linalg.norm(stem))))
 
 
-def _seated(sim, chain, t, targets, rng, cone_deg=None):
-    """The configuration reaching each target, in order; a target that fails, or whose stem
-    leans more than ``cone_deg`` from the downward vertical, is retried from another start."""
+def _seated(sim, chain, t, targets, rng, cone_deg=None, clear=None):
+    """The configuration reaching each target, in order; a target that fails, whose stem
+    leans more than ``cone_deg`` from the downward vertical, or whose configuration
+    ``clear(q)`` refuses, is retried from another start."""
     out = []
     for target in targets:
         q = None
         while q is None or (cone_deg is not None
-                            and stem_angle_deg(sim, chain, t, q) > cone_deg):
+                            and stem_angle_deg(sim, chain, t, q) > cone_deg) or \
+                (clear is not None and not clear(q)):
             q = seat(sim, chain, t, target, rng)
         out.append(q)
     return np.array(out)
@@ -103,15 +105,16 @@ def designed_socket_rows(sim, chain, t, design: dict, seating_mm: float, rng):
 
 
 def socket_rows(sim, chain, t, per_socket: int, seating_mm: float, rng, given=(),
-                cone_deg=None):
+                cone_deg=None, clear=None):
     """Rows of ``per_socket`` contacts in each socket, seated from random starts (with
-    ``cone_deg``, only those whose stem comes down within that angle of the vertical); the
+    ``cone_deg``, only those whose stem comes down within that angle of the vertical; with
+    ``clear``, only configurations ``clear(q)`` accepts); the
     sockets named in ``given`` carry their drawing position (x, y, z, mm), the others leave
     x, y, z empty."""
     rows = []
     for name, point in SOCKETS_M.items():
         targets = np.asarray(point) + rng.normal(scale=seating_mm * 1e-3, size=(per_socket, 3))
-        for k, q in enumerate(_seated(sim, chain, t, targets, rng, cone_deg)):
+        for k, q in enumerate(_seated(sim, chain, t, targets, rng, cone_deg, clear)):
             xyz = [repr(1e3 * v) for v in point] if name in given else ["", "", ""]
             rows.append({"pose": f"{name}-{k + 1}", **q_columns(q), "marker": "ball",
                          "socket": name, "x": xyz[0], "y": xyz[1], "z": xyz[2]})
