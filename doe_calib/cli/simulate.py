@@ -241,27 +241,17 @@ def _with_given_sockets(template, path):
 def _socket_sigmas(path, names) -> list:
     """Each socket's ``socket_sigma`` (m) in the sockets file ``path`` (0 without the
     column or with an empty cell)."""
-    import csv
-    import math
+    import numpy as np
 
-    with open(path, newline="", encoding="utf-8") as f:
-        rows = [(i, r) for i, r in enumerate(csv.reader(f), start=1)
-                if r and not r[0].lstrip().startswith("#")]
-    columns = [c.strip().lower() for c in rows[0][1]]
-    if "socket_sigma" not in columns:
-        return [0.0] * len(names)
-    out = []
-    for line, row in rows[1:]:
-        cell = dict(zip(columns, (c.strip() for c in row))).get("socket_sigma", "")
-        try:
-            value = float(cell) if cell else 0.0
-        except ValueError:
-            value = math.nan
-        if not value >= 0.0 or math.isinf(value):
-            raise DataError(f"socket_sigma {cell!r}: a position's std is a number of mm, 0 or "
-                            f"more", path, line, "socket_sigma")
-        out.append(value / 1000.0)
-    return out
+    from doe_calib.io.named_rows import read_named_rows
+
+    _, v, lines = read_named_rows(path, "socket", ("x", "y", "z"), ["socket_sigma"])
+    sigma = np.nan_to_num(v["socket_sigma"], nan=0.0)
+    for value, line in zip(sigma, lines):
+        if value < 0.0:
+            raise DataError(f"socket_sigma '{value:g}': a position's std is a number of mm, 0 "
+                            f"or more", path, line, "socket_sigma")
+    return (sigma / 1000.0).tolist()
 
 
 def _poses_in_cell(args, model, truth, robot, tool, rng):

@@ -14,7 +14,6 @@ and clear too (the program comes down from there).
 """
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
@@ -25,7 +24,8 @@ from doe_calib.collision import Workspace
 from doe_calib.design.candidates.draw import CandidateSet, screen_collisions
 from doe_calib.design.candidates.reachability import nearest_equivalent
 from doe_calib.design.candidates.seating import seat, seating_residual
-from doe_calib.errors import DataError, OptionError, SolverError
+from doe_calib.errors import OptionError, SolverError
+from doe_calib.io.named_rows import read_named_rows
 
 #: Orientations drawn per socket, the approach cone's half-angle (rad) and the lift (m).
 PER_SOCKET = 400
@@ -59,38 +59,9 @@ def read_sockets(path) -> Sockets:
         no socket; with the file, line and column.
     """
     path = Path(path)
-    with open(path, newline="", encoding="utf-8") as f:
-        lines = [(i, r) for i, r in enumerate(csv.reader(f), start=1)
-                 if r and not r[0].lstrip().startswith("#")]
-    if not lines:
-        raise DataError("no header: the sockets file is a CSV socket,x,y,z (mm)", path)
-    line, header = lines[0]
-    columns = [c.strip().lower() for c in header]
-    for c in ("socket", "x", "y", "z"):
-        if c not in columns:
-            raise DataError(f"no column {c!r}: the sockets file is a CSV socket,x,y,z (mm, "
-                            f"robot base frame)", path, line)
-    names, points = [], []
-    for line, row in lines[1:]:
-        cells = dict(zip(columns, (c.strip() for c in row)))
-        name = cells.get("socket", "")
-        if not name:
-            raise DataError("a socket without a name", path, line, "socket")
-        if name in names:
-            raise DataError(f"socket {name!r} given twice", path, line, "socket")
-        xyz = []
-        for c in "xyz":
-            try:
-                xyz.append(float(cells.get(c, "")))
-            except ValueError:
-                xyz.append(np.nan)
-            if not np.isfinite(xyz[-1]):
-                raise DataError(f"{cells.get(c, '')!r} is not a number (mm)", path, line, c)
-        names.append(name)
-        points.append(xyz)
-    if not names:
-        raise DataError("no socket in the file", path)
-    return Sockets(tuple(names), np.array(points) / 1000.0, path.name)
+    names, v, _ = read_named_rows(path, "socket", ("x", "y", "z"), form="the sockets file is a CSV "
+                                  "socket,x,y,z (mm, robot base frame)")
+    return Sockets(names, np.c_[v["x"], v["y"], v["z"]] / 1000.0, path.name)
 
 
 @dataclass(frozen=True, eq=False)

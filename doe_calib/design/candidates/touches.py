@@ -18,7 +18,6 @@ eliminated (3 numbers: its offset and two tilts), whose own columns at a touch a
 """
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
@@ -28,6 +27,7 @@ import numpy as np
 from doe_calib.design.candidates.sockets import (SocketContacts, orientations,
                                                  seated_candidates)
 from doe_calib.errors import DataError
+from doe_calib.io.named_rows import read_named_rows
 
 #: The planes file's columns: id, a point of the face, its normal, the patch's half-size.
 COLUMNS = ("plane", "x", "y", "z", "nx", "ny", "nz", "half")
@@ -77,47 +77,19 @@ def read_planes(path) -> Planes:
         not positive, a plane named twice, or no plane; with the file, line and column.
     """
     path = Path(path)
-    with open(path, newline="", encoding="utf-8") as f:
-        lines = [(i, r) for i, r in enumerate(csv.reader(f), start=1)
-                 if r and not r[0].lstrip().startswith("#")]
-    form = "the planes file is a CSV plane,x,y,z,nx,ny,nz,half (mm, robot base frame)"
-    if not lines:
-        raise DataError(f"no header: {form}", path)
-    line, header = lines[0]
-    columns = [c.strip().lower() for c in header]
-    for c in COLUMNS:
-        if c not in columns:
-            raise DataError(f"no column {c!r}: {form}", path, line)
-    names, values = [], []
-    for line, row in lines[1:]:
-        cells = dict(zip(columns, (c.strip() for c in row)))
-        name = cells.get("plane", "")
-        if not name:
-            raise DataError("a plane without a name", path, line, "plane")
-        if name in names:
-            raise DataError(f"plane {name!r} given twice", path, line, "plane")
-        numbers = []
-        for c in COLUMNS[1:]:
-            try:
-                numbers.append(float(cells.get(c, "")))
-            except ValueError:
-                numbers.append(np.nan)
-            if not np.isfinite(numbers[-1]):
-                raise DataError(f"{cells.get(c, '')!r} is not a number", path, line, c)
-        if np.linalg.norm(numbers[3:6]) == 0:
+    names, v, lines = read_named_rows(path, "plane", COLUMNS[1:], form="the planes file is a "
+                                      "CSV plane,x,y,z,nx,ny,nz,half (mm, robot base frame)")
+    normal = np.c_[v["nx"], v["ny"], v["nz"]]
+    for k, line in enumerate(lines):
+        if np.linalg.norm(normal[k]) == 0:
             raise DataError("a zero normal: give the face's normal, towards the robot", path,
                             line, "nx")
-        if numbers[6] <= 0:
-            raise DataError(f"half-size {numbers[6]:g} mm: the patch's half-size is positive",
-                            path, line, "half")
-        names.append(name)
-        values.append(numbers)
-    if not names:
-        raise DataError("no plane in the file", path)
-    v = np.array(values)
-    return Planes(tuple(names), v[:, :3] / 1000.0,
-                  v[:, 3:6] / np.linalg.norm(v[:, 3:6], axis=1, keepdims=True),
-                  v[:, 6] / 1000.0, path.name)
+        if v["half"][k] <= 0:
+            raise DataError(f"half-size {v['half'][k]:g} mm: the patch's half-size is "
+                            f"positive", path, line, "half")
+    return Planes(names, np.c_[v["x"], v["y"], v["z"]] / 1000.0,
+                  normal / np.linalg.norm(normal, axis=1, keepdims=True), v["half"] / 1000.0,
+                  path.name)
 
 
 @dataclass(frozen=True)
