@@ -349,6 +349,19 @@ def write_campaign(path, chain, truth, q_si, wrench, marker_names, sigma_mm: flo
             "outlier_rows": tuple(int(r) for r, _ in outliers)}
 
 
+def ball_on_stem_truth(chain, effects=(), seed: int = 31) -> Truth:
+    """Issue #31's robot without a tracker: every joint placement off by a rigid transform
+    (uniform up to 0.5 mm and 0.05° on each axis), joint offsets up to 0.1°, the tool's ball
+    1 mm off its nominal 100 mm on the flange axis, the base at the root; ``effects`` added."""
+    rng = np.random.default_rng(seed)
+    n = len(chain.joints)
+    twists = rng.uniform(-1, 1, (n, 6)) * np.r_[[0.5e-3] * 3, [np.radians(0.05)] * 3]
+    offsets = rng.uniform(-1, 1, n) * np.radians(0.1)
+    off = rng.normal(size=3)
+    ball = np.array([0.0, 0.0, 0.10]) + 1e-3 * off / np.linalg.norm(off)
+    return Truth(np.zeros(3), np.zeros(3), ball[None], offsets, twists, tuple(effects))
+
+
 def ur10_urdf():
     """Path of example-robot-data's ``ur10_robot.urdf``, or None if it is not installed."""
     try:

@@ -34,13 +34,7 @@ LENGTHS_MM = (150.0, 225.0, 300.0)
 
 @pytest.fixture(scope="module")
 def truth(ur10):
-    rng = np.random.default_rng(31)  # the truth of tests/test_socket_contacts.py
-    n = len(ur10.joints)
-    twists = rng.uniform(-1, 1, (n, 6)) * np.r_[[0.5e-3] * 3, [np.radians(0.05)] * 3]
-    offsets = rng.uniform(-1, 1, n) * np.radians(0.1)
-    off = rng.normal(size=3)
-    ball = BALL_M + 1e-3 * off / np.linalg.norm(off)
-    return sim.Truth(np.zeros(3), np.zeros(3), ball[None], offsets, twists)
+    return sim.ball_on_stem_truth(ur10)
 
 
 def _ball(ur10, truth, q):

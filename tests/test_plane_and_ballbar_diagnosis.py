@@ -20,7 +20,6 @@ from seated_contacts import q_columns, write_lengths, write_touches
 
 from doe_calib.cli import main
 
-BALL_M = np.array([0.0, 0.0, 0.10])
 SHOULDER = sim.Cyclic(1, np.radians(0.03), 2)  # joint 2, 2 per revolution
 MODEL = "joint_offset+geometry"
 TOUCH_MM, BAR_MM = 0.01, 0.001
@@ -33,13 +32,7 @@ LENGTHS_MM = (150.0, 225.0, 300.0)
 
 
 def _truth(ur10, effects):
-    rng = np.random.default_rng(31)
-    n = len(ur10.joints)
-    twists = rng.uniform(-1, 1, (n, 6)) * np.r_[[0.5e-3] * 3, [np.radians(0.05)] * 3]
-    offsets = rng.uniform(-1, 1, n) * np.radians(0.1)
-    off = rng.normal(size=3)
-    ball = BALL_M + 1e-3 * off / np.linalg.norm(off)
-    return sim.Truth(np.zeros(3), np.zeros(3), ball[None], offsets, twists, tuple(effects))
+    return sim.ball_on_stem_truth(ur10, effects)
 
 
 def _campaigns(ur10, d, effects):

@@ -24,7 +24,6 @@ from doe_calib.estimation.weighted_residuals import marker_points
 from doe_calib.io.csv_files import read_measurements
 from doe_calib.model.marker_model import build_model
 
-BALL_M = np.array([0.0, 0.0, 0.10])
 SOCKETS_M = {"S1": [0.65, 0.25, 0.05], "S2": [0.45, -0.55, 0.05], "S3": [-0.25, 0.70, 0.05],
              "S4": [-0.60, -0.40, 0.30]}
 PER_SOCKET = 20
@@ -33,13 +32,7 @@ MODEL = "joint_offset+geometry"
 
 
 def _truth(ur10, effects=(SHOULDER,)):
-    rng = np.random.default_rng(31)
-    n = len(ur10.joints)
-    twists = rng.uniform(-1, 1, (n, 6)) * np.r_[[0.5e-3] * 3, [np.radians(0.05)] * 3]
-    offsets = rng.uniform(-1, 1, n) * np.radians(0.1)
-    off = rng.normal(size=3)
-    ball = BALL_M + 1e-3 * off / np.linalg.norm(off)
-    return sim.Truth(np.zeros(3), np.zeros(3), ball[None], offsets, twists, tuple(effects))
+    return sim.ball_on_stem_truth(ur10, effects)
 
 
 @pytest.fixture(scope="module")

@@ -35,14 +35,8 @@ WITHIN = np.c_[-np.pi * np.ones(6), np.pi * np.ones(6)]
 
 
 def truth(sim, chain, seed: int = 31):
-    """Issue #31's UR10 truth: placements, offsets and the ball, drawn from ``seed``."""
-    rng = np.random.default_rng(seed)
-    n = len(chain.joints)
-    twists = rng.uniform(-1, 1, (n, 6)) * np.r_[[0.5e-3] * 3, [np.radians(0.05)] * 3]
-    offsets = rng.uniform(-1, 1, n) * np.radians(0.1)
-    off = rng.normal(size=3)
-    ball = BALL_M + 1e-3 * off / np.linalg.norm(off)
-    return sim.Truth(np.zeros(3), np.zeros(3), ball[None], offsets, twists)
+    """Issue #31's UR10 truth (the independent simulator's), drawn from ``seed``."""
+    return sim.ball_on_stem_truth(chain, seed=seed)
 
 
 def ball(sim, chain, t, q) -> np.ndarray:
