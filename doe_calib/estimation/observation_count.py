@@ -2,7 +2,8 @@
 
 A reading of a point (a tracker's, or a socket contact) gives 3 coordinates, a plane touch
 or a ballbar length 1 (along the plane's normal, along the bar); each socket, plane or pivot
-of unknown position costs 3, estimated with the fit (formats.md §3). The readings are
+of unknown position costs 3, estimated with the fit, a plane of given position nothing
+(formats.md §3). The readings are
 counted against the parameters they separate (the rank analysis), not against every free
 one, when none has coordinates: touches of three faces see some 18 of a UR10's 43 free
 geometric parameters.
@@ -47,8 +48,11 @@ def coordinate_words(measurements) -> str:
     k = int(np.sum(~(measurements.touch | measurements.ballbar)))
     parts = [f"3 for each of {k} points read" + (" or socket contacts" if n["contacts"] else "")
              ] if k else []
+    given = int(np.sum(measurements.given_plane))
     parts += [f"1 for each of {n[key]} {what}" for key, what in (
-        ("touches", "plane touches"), ("lengths", "ballbar lengths")) if n[key]]
+        ("touches", "plane touches" + (f" ({given} on planes of given position)" if given
+                                       else "")),
+        ("lengths", "ballbar lengths")) if n[key]]
     unknown = [f"{n[key]} {key if n[key] > 1 else key[:-1]}"
                for key in ("sockets", "planes", "pivots") if n[key]]
     return ", ".join(parts) + (f", less 3 for each of {' and '.join(unknown)} of unknown "

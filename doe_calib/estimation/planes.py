@@ -13,8 +13,14 @@ The residual is carried as the 3-vector ``ρ·n`` (from the model's point to its
 plane), the Jacobian as ``n ⊗ ∂ρ``: n being a unit vector, the normal equations are those
 of the scalars, and a touch keeps the point layout (3 rows) of every other reading.
 
-After a fit, each plane is said as its unit normal n and its distance d from the frame's
-origin (the plane ``nᵀx = d``, n turned so that d ≥ 0), ± 1σ (:func:`located_planes`).
+A plane of given position (a point c and a unit normal n, in the frame of the readings) is
+not eliminated: its touch's residual is ``ρ = n·(c − x)`` itself, carried as ``ρ·n`` with
+the rows ``n ⊗ nᵀB`` (:func:`given_plane_targets`, :func:`given_plane_rows`), and the
+plane costs no observation.
+
+After a fit, each plane of unknown position is said as its unit normal n and its distance d
+from the frame's origin (the plane ``nᵀx = d``, n turned so that d ≥ 0), ± 1σ
+(:func:`located_planes`).
 """
 from __future__ import annotations
 
@@ -74,6 +80,20 @@ def plane_rows(points: np.ndarray, sigma: np.ndarray, b: np.ndarray) -> np.ndarr
     along = np.einsum("i,kip->kp", normal, b) / sigma[:, None]
     own = np.c_[np.ones(len(points)), (points - centre) @ axes[:2].T] / sigma[:, None]
     return normal[None, :, None] * (project_out(own, along) * sigma[:, None])[:, None, :]
+
+
+def given_plane_targets(points: np.ndarray, point: np.ndarray,
+                        normal: np.ndarray) -> np.ndarray:
+    """The foot of each of ``points`` (n, 3), m, on its given plane through ``point`` (n, 3),
+    m, with unit ``normal`` (n, 3)."""
+    return points - normal * np.sum((points - point) * normal, axis=1, keepdims=True)
+
+
+def given_plane_rows(normal: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Rows B′ = n ⊗ nᵀB (n, 3, P) of touches of given planes with unit ``normal`` (n, 3):
+    −B′/σ is the Jacobian of their weighted residuals ρ·n/σ; ``b`` (n, 3, P) their rows of
+    the observation matrix."""
+    return normal[:, :, None] * np.einsum("ki,kip->kp", normal, b)[:, None, :]
 
 
 def check_planes(measurements, points: np.ndarray) -> None:
@@ -156,7 +176,7 @@ def plane_note(model, measurements, params, covariance, noise_scale: float = 1.0
     k = len(measurements.planes_used)
     if not k:
         return ""
-    n = int(measurements.touch.sum())
+    n = int(np.sum(measurements.touch & ~measurements.given_plane))
     where = "; ".join(
         f"{name}: normal ({', '.join(f'{v:.6f}' for v in normal)}) ± "
         f"({', '.join(f'{v:.6f}' for v in normal_std)}), {d * 1000.0:.3f} ± "

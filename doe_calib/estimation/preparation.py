@@ -7,7 +7,8 @@ pose, a rigid motion of the whole arm or its scale: those are fixed first, said
 in words of their own (:func:`fix_unseen_by_contacts`). Plane touches cannot see them
 either; ballbar readings see the scale (their lengths are known), not the rest. Sockets
 of given position see what points read do: at least three not on one line, everything;
-at one point or on one line, not the base's turn about it (:func:`fix_base_turn`).
+at one point or on one line, not the base's turn about it (:func:`fix_base_turn`). Planes
+of given position see the base along their normals (:func:`fix_unseen_by_given_planes`).
 """
 from __future__ import annotations
 
@@ -163,6 +164,76 @@ def fix_unseen_by_given(model, measurements, params, start: bool = True):
     name, length = _longest_link(model.robot, params)
     return params.fixed([name], f"{SCALE_UNSEEN} ({length * 1000.0:.1f} mm)") if name \
         else params
+
+
+#: Why a base translation is held when planes of given position leave a shift unseen.
+PLANES_SHIFT = ("plane touches on planes of given position cannot see the base's shift "
+                "parallel to every one of them: the base translation's component along it held "
+                "at its current value (planes {})")
+#: Why a base rotation is held when the planes of given position are all parallel.
+PLANES_TURN = ("plane touches on parallel planes of given position cannot see the base's turn "
+               "about their normal: the base rotation's component about it held at its current "
+               "value (planes {})")
+#: Why a link length is held when the planes of given position share a point.
+PLANES_SCALE = ("plane touches on planes of given position that share a point cannot see the "
+                "robot's scale about that point (the arm grown about it moves every touch "
+                "within its plane): held at its current value to fix the scale, the link "
+                "length it sets")
+
+
+def given_planes(measurements) -> dict:
+    """Plane id → (a point of it (3,), m; its unit normal (3,)) for each plane whose touches
+    give its position (formats.md §3); empty without."""
+    out = {}
+    for i in np.flatnonzero(measurements.given_plane).tolist():
+        out.setdefault(measurements.plane_names[measurements.plane[i]],
+                       (measurements.xyz[i], measurements.plane_normal[i]))
+    return out  # a plane's rows agree (the reader's check)
+
+
+def fix_unseen_by_given_planes(model, measurements, params) -> tuple:
+    """What readings without coordinates, some of them touches of planes of given position,
+    cannot see of the base and the scale, held and said in words; ``(params, reasons)``.
+
+    A rigid motion keeps a plane in place only if it shifts along the plane and turns about
+    its normal: the base's shift parallel to every given plane is not seen (none with three
+    independent normals; :data:`PLANES_SHIFT`), nor its turn about their normal when all are
+    parallel (:data:`PLANES_TURN`; two or more non-parallel planes see the tilt and turn).
+    The arm grown about a point on every given plane moves each touch within its plane: when
+    the planes share a point (any one or two; three with independent normals meet at one)
+    and no ballbar gives a length, the placement translation along the longest nominal link
+    is held (:data:`PLANES_SCALE`). The base starts where the model has it (the URDF's root
+    for a nominal model): give the planes in a frame near it. The rest (the first joint's
+    placement against the base's) the rank analysis finds, as for tracker readings.
+    """
+    planes = given_planes(measurements)
+    names = ", ".join(planes)
+    point = np.array([p for p, _ in planes.values()])
+    normal = np.array([n for _, n in planes.values()])
+    _, sv, vt = np.linalg.svd(normal)
+    rank = int(np.sum(sv > APART))
+    base, reasons = params.index("base"), []
+    for u in vt[rank:]:
+        free = [i for i in base[:3].tolist() if params.free[i]]
+        if free:
+            pick = max(free, key=lambda i: abs(u[i - base[0]]))
+            params = params.fixed([params.names[pick]], PLANES_SHIFT.format(names))
+            reasons.append(PLANES_SHIFT.format(names))
+    if rank == 1:
+        turn = _base_turn_about(params, {"0": np.zeros(3), "1": normal[0]})
+        if params.free[turn]:
+            params = params.fixed([params.names[turn]], PLANES_TURN.format(names))
+            reasons.append(PLANES_TURN.format(names))
+    d = np.sum(point * normal, axis=1)
+    shared = np.linalg.lstsq(normal, d, rcond=None)[0]
+    if measurements.ballbar.any() or np.max(np.abs(normal @ shared - d)) > APART or \
+            any(why.startswith(PLANES_SCALE) for why in params.fixed_reason):
+        return params, reasons
+    name, length = _longest_link(model.robot, params)
+    if name:
+        params = params.fixed([name], f"{PLANES_SCALE} ({length * 1000.0:.1f} mm)")
+        reasons.append(PLANES_SCALE)
+    return params, reasons
 
 
 def _only_given(measurements) -> bool:
@@ -379,7 +450,12 @@ def prepare(model, measurements, params=None, register: bool = True) -> tuple:
     tracked = ~measurements.contact
     if measurements.touch.any():
         check_planes(measurements, marker_points(model, measurements, params.values))
-    if not tracked.any():
+    if not tracked.any() and measurements.given_plane.any():
+        params, reasons = fix_unseen_by_given_planes(model, measurements, params)
+        params = fix_unseen_by_touches(model, measurements, params)
+        for why in reasons:
+            warnings.warn(why, IdentifiabilityWarning, stacklevel=3)
+    elif not tracked.any():
         read = instruments(measurements)
         params = fix_unseen_by_contacts(model.robot, params, read)
         if "plane" in read:

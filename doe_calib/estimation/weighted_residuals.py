@@ -34,7 +34,12 @@ import numpy as np
 
 from doe_calib.estimation.ballbar import pivot_rows, pivot_targets
 from doe_calib.estimation.least_squares import Reduction, reduce_augmented
-from doe_calib.estimation.planes import plane_rows, plane_targets
+from doe_calib.estimation.planes import (
+    given_plane_rows,
+    given_plane_targets,
+    plane_rows,
+    plane_targets,
+)
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 
 #: Configurations evaluated at once by the blockwise functions.
@@ -114,7 +119,7 @@ def _eliminated(measurements, rows):
         for k in np.unique(socket[bar]).tolist():
             yield "pivot", np.flatnonzero(socket == k)
     if measurements.plane is not None:
-        plane = measurements.plane[rows]
+        plane = np.where(measurements.given_plane[rows], -1, measurements.plane[rows])
         for k in np.unique(plane[plane >= 0]).tolist():
             yield "plane", np.flatnonzero(plane == k)
 
@@ -140,6 +145,10 @@ def targets(measurements, rows, points) -> np.ndarray:
     for kind, at in _eliminated(measurements, rows):
         out[at] = plane_targets(points[at], w[at]) if kind == "plane" else \
             pivot_targets(points[at], _lengths(measurements, rows[at]), w[at])
+    given = measurements.given_plane[rows]
+    if given.any():
+        out[given] = given_plane_targets(points[given], xyz[given],
+                                         measurements.plane_normal[rows[given]])
     return out
 
 
@@ -152,6 +161,9 @@ def eliminated_rows(measurements, rows, points, b) -> np.ndarray:
     for kind, at in _eliminated(measurements, rows):
         out[at] = plane_rows(points[at], sigma[at], b[at]) if kind == "plane" else \
             pivot_rows(points[at], _lengths(measurements, rows[at]), sigma[at], b[at])
+    given = measurements.given_plane[rows]
+    if given.any():
+        out[given] = given_plane_rows(measurements.plane_normal[rows[given]], b[given])
     return out
 
 

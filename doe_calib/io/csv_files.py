@@ -75,6 +75,8 @@ from doe_calib.io.reading_units import metres_finding
 from doe_calib.io.row_problems import RowProblems, earlier_in_group
 from doe_calib.io.table import read_table
 
+#: Columns of a given plane's normal (formats.md §3, *Plane touches*); unit-free, normalised.
+NORMAL = ("nx", "ny", "nz")
 #: Columns ``doe-calib predict`` adds: predicted std of each coordinate (mm); ignored on reading.
 PREDICTED_STD = ("std_x", "std_y", "std_z")
 
@@ -131,14 +133,14 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     required = ["pose", *joint_columns(robot), "marker", *(XYZ if require_xyz else ())]
     optional = [*WRENCH, "temperature", "sigma", "session", "socket", "socket_sigma", "plane",
                 "distance", *approach_columns(robot), *(() if require_xyz else XYZ),
-                *PREDICTED_STD]
+                *NORMAL, *PREDICTED_STD]
     extra = check_columns(table, required, optional)
     explicit = approach_given(table, robot)
     if sigma is not None and not sigma > 0:
         raise DataError(f"σ must be positive, got {sigma * 1000.0} mm", table.path)
     table.cells(["pose", "marker", "session", "socket", "plane"])  # each kind in one pass
     table.floats([*joint_columns(robot), *WRENCH, "temperature", "sigma", *XYZ, "distance",
-                  "socket_sigma", *approach_columns(robot)])
+                  "socket_sigma", *NORMAL, *approach_columns(robot)])
     problems, notes = RowProblems(table), []
     check_width(table, problems, 0)
     pose = texts(table, problems, 1, "pose", "pose id")
@@ -161,8 +163,10 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
     plane_ids = texts(table, problems, 9, "plane") if contacts else None
     distance = numbers(table, problems, 8.9, ["distance"], np.nan)[:, 0] / 1000.0
     drawn = numbers(table, problems, 9.5, ["socket_sigma"], 0.0)[:, 0] / 1000.0
+    normal = numbers(table, problems, 9.5, list(NORMAL), np.nan)
     if contacts:
         _check_contacts(table, problems, socket_ids, plane_ids, xyz, tracked_xyz)
+        _check_given_planes(table, problems, plane_ids, xyz, normal)
         _check_socket_sigma(table, problems, socket_ids, xyz, drawn)
     _check_distances(table, problems, socket_ids, distance)
     problems.check((9, 19, 1), np.isfinite(distance) & np.isfinite(xyz).any(axis=1), lambda i: (
@@ -181,7 +185,9 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
         f"marker {names[i]!r} is read twice in pose {pose[i]!r} under the same load (first on "
         f"line {table.numbers[first[i]]})"), "marker")
     if contacts:
-        _check_counts(table, problems, socket_ids, plane_ids, distance)
+        _check_counts(table, problems, socket_ids,
+                      [c if not np.isfinite(n[0]) else "" for c, n in zip(plane_ids, normal)],
+                      distance)
     if not skip_bad:
         problems.raise_first()
     dropped = problems.dropped()
@@ -209,7 +215,8 @@ def read_measurements(path, robot, tool, sigma: float | None = None, skip_bad: b
                         PER_READING if "sigma" in table.columns else GIVEN if given else ESTIMATED,
                         **(_without_coordinates(socket_ids, plane_ids, distance, rows)
                            if contacts else {}),
-                        socket_sigma=drawn[rows] if contacts and np.any(drawn > 0) else None)
+                        socket_sigma=drawn[rows] if contacts and np.any(drawn > 0) else None,
+                        plane_normal=_unit(normal[rows]) if np.isfinite(normal).any() else None)
     tracked = meas.subset(~meas.contact) if contacts else meas  # the tracker's readings
     finding = metres_finding(tracked.xyz, robot, tracked.configurations.q, tracked.config,
                              tool.position_array[tracked.marker],
@@ -240,9 +247,6 @@ def _check_contacts(table, problems, socket_ids, plane_ids, xyz, tracked_xyz: bo
         f"socket {socket_ids[i]!r} at {_at_mm(xyz[i])} here but {_at_mm(xyz[first[i]])} on "
         f"line {table.numbers[first[i]]}: every contact of a socket gives the same x, y, z "
         f"(its known position, mm) or none (unknown)"), column)
-    problems.check((9, 20), touch & given.any(axis=1), lambda i: (
-        f"plane {plane_ids[i]!r} with x, y, z: a touch's position is on the plane, unknown; "
-        f"leave x, y, z empty (or the plane cell, for a tracker reading)"), "plane")
     problems.check((9, 20), seated & touch, lambda i: (
         f"socket {socket_ids[i]!r} and plane {plane_ids[i]!r} on one row: a row is a socket "
         f"contact or a plane touch"), "plane")
@@ -250,6 +254,44 @@ def _check_contacts(table, problems, socket_ids, plane_ids, xyz, tracked_xyz: bo
         "x, y, z missing on a row without a socket: give the tracker reading, or the socket "
         "id of a contact" + (" (or the plane id of a touch)" if "plane" in table.columns
                              else "")), "x" if "x" in table.columns else "socket")
+
+def _check_given_planes(table, problems, plane_ids, xyz, normal) -> None:
+    """Refuse a touch with some but not all of x, y, z, nx, ny, nz (a point of its plane and
+    its normal: all six give the plane's position, none leave it unknown), a zero normal,
+    other numbers than on the plane's first touch, and a normal on a row that is no touch
+    (formats.md §3, *Plane touches*)."""
+    touch = np.array([bool(c) for c in plane_ids])
+    cells = np.c_[xyz * 1000.0, normal]
+    given = np.isfinite(cells)
+    names = [*XYZ, *NORMAL]
+    for k, column in enumerate(names):
+        problems.check((9, 20, 2), touch & given.any(axis=1) & ~given[:, k], lambda i: (
+            f"plane {plane_ids[i]!r} with some of x, y, z, nx, ny, nz: give all six (a point "
+            f"of the plane, mm, and its normal) or none (its position unknown)"), column)
+    problems.check((9, 20, 3), touch & given.all(axis=1) & ~(np.abs(normal) > 0).any(axis=1),
+                   lambda i: f"plane {plane_ids[i]!r} with a zero normal (nx, ny, nz)", "nx")
+    first = earlier_in_group(codes(plane_ids), touch)
+    f = np.maximum(first, 0)
+    for k, column in enumerate(names):
+        differ = np.where(given[:, k] & given[f, k], np.abs(cells[:, k] - cells[f, k]) > 1e-9,
+                          given[:, k] != given[f, k])
+        problems.check((9, 20, 4), touch & (first >= 0) & differ, lambda i, k=k, c=column: (
+            f"plane {plane_ids[i]!r} with {c} {_cell(cells[i, k])} here but "
+            f"{_cell(cells[first[i], k])} on line {table.numbers[first[i]]}: every touch of a "
+            f"plane gives the same x, y, z, nx, ny, nz (its known position) or none "
+            f"(unknown)"), column)
+    problems.check((9, 20, 5), ~touch & given[:, 3:].any(axis=1), lambda i: (
+        "nx, ny, nz on a row without a plane: they give a touched plane's normal"), "nx")
+
+
+def _cell(value) -> str:
+    return "empty" if np.isnan(value) else f"{value:g}"
+
+
+def _unit(normal) -> np.ndarray:
+    """Rows of ``normal`` (K, 3) scaled to unit length (NaN rows stay NaN)."""
+    return normal / np.linalg.norm(normal, axis=1, keepdims=True)
+
 
 def _at_mm(xyz) -> str:
     """A socket's position (3,), m, as the file gives it, mm, or "no x, y, z"."""
@@ -493,6 +535,8 @@ def _contact_cells(measurements) -> dict:
                             unknown_empty=True))
     if measurements.socket_sigma is not None:
         out.update(_numbers(["socket_sigma"], measurements.socket_sigma[:, None] * 1000.0))
+    if measurements.plane_normal is not None:
+        out.update(_numbers(NORMAL, measurements.plane_normal, unknown_empty=True))
     return out
 
 

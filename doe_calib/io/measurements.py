@@ -224,6 +224,11 @@ class Measurements:
         For a contact in a socket of given position: that position's std per axis (its
         drawing's tolerance), m, common to all the socket's contacts; 0 (exact) otherwise.
         None: 0 for every reading.
+    plane_normal : ndarray, shape (K, 3), optional
+        For a touch of a plane of given position (formats.md §3, *Plane touches*): the
+        plane's unit normal, its ``xyz`` a point of the plane (m, the frame of the
+        readings); NaN otherwise (a plane of unknown position, or no touch). None: no plane
+        of given position.
     """
 
     configurations: Configurations
@@ -245,6 +250,7 @@ class Measurements:
     plane_names: tuple = ()
     distance: np.ndarray | None = None
     socket_sigma: np.ndarray | None = None
+    plane_normal: np.ndarray | None = None
 
     def __post_init__(self):
         if self.sigma_source not in SIGMA_SOURCES:
@@ -278,6 +284,12 @@ class Measurements:
         return self._in(self.plane)
 
     @property
+    def given_plane(self) -> np.ndarray:
+        """Which readings are touches of a plane of given position, shape (K,) bool."""
+        return np.zeros(len(self), bool) if self.plane_normal is None else \
+            self.touch & np.isfinite(self.plane_normal[:, 0])
+
+    @property
     def ballbar(self) -> np.ndarray:
         """Which readings are ballbar lengths from their socket's point, shape (K,) bool."""
         return np.zeros(len(self), bool) if self.distance is None else \
@@ -288,10 +300,11 @@ class Measurements:
 
     @property
     def planes_used(self) -> np.ndarray:
-        """Indices (into ``plane_names``) of the planes some reading touches: each is an
-        unknown plane, 3 numbers the readings must also pay for."""
-        return np.unique(self.plane[self.touch]) if self.plane is not None else \
-            np.zeros(0, int)
+        """Indices (into ``plane_names``) of the planes of unknown position some reading
+        touches: each is 3 numbers the readings must also pay for (a plane of given position
+        is not among them)."""
+        return np.unique(self.plane[self.touch & ~self.given_plane]) \
+            if self.plane is not None else np.zeros(0, int)
 
     @property
     def sockets_used(self) -> np.ndarray:
@@ -318,7 +331,9 @@ class Measurements:
                             plane_names=self.plane_names,
                             distance=None if self.distance is None else self.distance[rows],
                             socket_sigma=None if self.socket_sigma is None
-                            else self.socket_sigma[rows])
+                            else self.socket_sigma[rows],
+                            plane_normal=None if self.plane_normal is None
+                            else self.plane_normal[rows])
 
     @property
     def sessions(self) -> np.ndarray:
@@ -373,7 +388,10 @@ def concatenate(parts) -> Measurements:
                                         p.distance for p in parts]),
                         None if all(p.socket_sigma is None for p in parts) else
                         np.concatenate([np.zeros(len(p)) if p.socket_sigma is None else
-                                        p.socket_sigma for p in parts]))
+                                        p.socket_sigma for p in parts]),
+                        None if all(p.plane_normal is None for p in parts) else
+                        np.concatenate([np.full((len(p), 3), np.nan) if p.plane_normal is None
+                                        else p.plane_normal for p in parts]))
 
 
 def _joined_ids(parts, kind: str) -> tuple:
