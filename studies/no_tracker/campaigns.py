@@ -60,23 +60,26 @@ def seat(sim, chain, t, target, rng, start=None):
     return None
 
 
-def stem_angle_deg(sim, chain, t, q) -> float:
+def stem_angle_deg(sim, chain, t, q, axis=None) -> float:
     """Angle, deg, between the tool's stem (flange origin → true ball centre) at q (6,), rad,
-    and the downward vertical."""
+    and the unit ``axis`` (3,) (default the downward vertical)."""
     flange = replace(t, markers=np.zeros((1, 3)))
     stem = ball(sim, chain, t, q)[0] - ball(sim, chain, flange, q)[0]
-    return float(np.degrees(np.arccos(-stem[2] / np.linalg.norm(stem))))
+    along = -stem[2] if axis is None else np.dot(stem, axis)
+    return float(np.degrees(np.arccos(np.clip(along / np.linalg.norm(stem), -1.0, 1.0))))
 
 
-def _seated(sim, chain, t, targets, rng, cone_deg=None, clear=None):
+def _seated(sim, chain, t, targets, rng, cone_deg=None, clear=None, axes=None):
     """The configuration reaching each target, in order; a target that fails, whose stem
-    leans more than ``cone_deg`` from the downward vertical, or whose configuration
-    ``clear(q)`` refuses, is retried from another start."""
+    leans more than ``cone_deg`` from the downward vertical (or from its row of ``axes``
+    (K, 3), unit), or whose configuration ``clear(q)`` refuses, is retried from another
+    start."""
     out = []
-    for target in targets:
+    for k, target in enumerate(targets):
+        axis = None if axes is None else axes[k]
         q = None
         while q is None or (cone_deg is not None
-                            and stem_angle_deg(sim, chain, t, q) > cone_deg) or \
+                            and stem_angle_deg(sim, chain, t, q, axis) > cone_deg) or \
                 (clear is not None and not clear(q)):
             q = seat(sim, chain, t, target, rng)
         out.append(q)
@@ -98,6 +101,39 @@ def designed_socket_rows(sim, chain, t, design: dict, seating_mm: float, rng):
     return rows
 
 
+def designed_plane_rows(sim, chain, t, design: dict, scatter_mm: float, rng):
+    """Rows of a touch design's touches (its JSON, formats.md §4) as the robot makes them:
+    from each designed configuration, the true ball brought along its face's normal onto
+    the face (off it by a normal scatter of ``scatter_mm``)."""
+    rows = []
+    for pose in design["poses"]:
+        point, normal, _ = PLANES_M[pose["plane"]]
+        n = np.asarray(normal, float)
+        start = np.radians(pose["q_deg"])
+        here = ball(sim, chain, t, start)[0]
+        target = here - (n @ (here - point) - rng.normal(scale=scatter_mm * 1e-3)) * n
+        q = seat(sim, chain, t, target, rng, start=start)
+        if q is None:
+            raise RuntimeError(f"designed touch {pose['pose']} does not reach its face")
+        rows.append({"pose": pose["pose"], **q_columns(q), "marker": "ball",
+                     "plane": pose["plane"]})
+    return rows
+
+
+def designed_ballbar_rows(sim, chain, t, design: dict, reading_mm: float, rng):
+    """Rows of a ballbar design's positions (its JSON, formats.md §4) as the robot makes
+    them: at each designed configuration, the length the bar reads to the true ball (the
+    true distance, read to ``reading_mm``)."""
+    rows = []
+    for pose in design["poses"]:
+        q = np.radians(pose["q_deg"])
+        true = np.linalg.norm(ball(sim, chain, t, q)[0] - PIVOTS_M[pose["socket"]])
+        rows.append({"pose": pose["pose"], **q_columns(q), "marker": "ball",
+                     "socket": pose["socket"],
+                     "distance": repr(float(1e3 * true + rng.normal(scale=reading_mm)))})
+    return rows
+
+
 def socket_rows(sim, chain, t, per_socket: int, seating_mm: float, rng, given=(),
                 cone_deg=None, clear=None):
     """Rows of ``per_socket`` contacts in each socket, seated from random starts (with
@@ -115,8 +151,11 @@ def socket_rows(sim, chain, t, per_socket: int, seating_mm: float, rng, given=()
     return rows
 
 
-def plane_rows(sim, chain, t, per_plane: int, scatter_mm: float, rng):
-    """Rows of ``per_plane`` touches of each face, at random points of its patch."""
+def plane_rows(sim, chain, t, per_plane: int, scatter_mm: float, rng, cone_deg=None,
+               clear=None):
+    """Rows of ``per_plane`` touches of each face, at random points of its patch (with
+    ``cone_deg``, only those whose stem comes within that angle of the inward normal; with
+    ``clear``, only configurations ``clear(q)`` accepts)."""
     rows = []
     for name, (point, normal, half) in PLANES_M.items():
         n = np.asarray(normal, float)
@@ -126,16 +165,19 @@ def plane_rows(sim, chain, t, per_plane: int, scatter_mm: float, rng):
         uv = rng.uniform(-half, half, size=(per_plane, 2))
         targets = (np.asarray(point) + uv[:, :1] * a + uv[:, 1:] * b
                    + rng.normal(scale=scatter_mm * 1e-3, size=(per_plane, 1)) * n)
-        for k, q in enumerate(_seated(sim, chain, t, targets, rng)):
+        for k, q in enumerate(_seated(sim, chain, t, targets, rng, cone_deg, clear,
+                                      np.tile(-n, (per_plane, 1)))):
             rows.append({"pose": f"{name}-{k + 1}", **q_columns(q), "marker": "ball",
                          "plane": name})
     return rows
 
 
-def ballbar_rows(sim, chain, t, per_length: int, reading_mm: float, rng):
+def ballbar_rows(sim, chain, t, per_length: int, reading_mm: float, rng, cone_deg=None,
+                 clear=None):
     """Rows of ``per_length`` positions of the bar's tool end for each pivot and length,
-    directions drawn over the upper half sphere; the logged length is read to
-    ``reading_mm``."""
+    directions drawn over the upper half sphere (with ``cone_deg``, only those whose stem
+    comes within that angle of the bar, towards the pivot; with ``clear``, only
+    configurations ``clear(q)`` accepts); the logged length is read to ``reading_mm``."""
     rows = []
     for name, pivot in PIVOTS_M.items():
         for length in LENGTHS_M:
@@ -143,7 +185,7 @@ def ballbar_rows(sim, chain, t, per_length: int, reading_mm: float, rng):
             d[:, 2] = np.abs(d[:, 2]) + 0.3
             d /= np.linalg.norm(d, axis=1, keepdims=True)
             targets = np.asarray(pivot) + length * d
-            for k, q in enumerate(_seated(sim, chain, t, targets, rng)):
+            for k, q in enumerate(_seated(sim, chain, t, targets, rng, cone_deg, clear, -d)):
                 true = np.linalg.norm(ball(sim, chain, t, q)[0] - pivot)
                 rows.append({"pose": f"{name}-{int(length * 1e3)}-{k + 1}", **q_columns(q),
                              "marker": "ball", "socket": name,

@@ -22,6 +22,7 @@ from doe_calib.collision import Workspace, build_collision_model, clearance
 from doe_calib.design.contacts import contact_information
 from doe_calib.design.criteria import log_det
 from doe_calib.design.problem import blocks_for
+from doe_calib.design.solvers.nuisance_exchange import scalar_information
 from studies.commands import run_command
 from studies.independent import independent_sim
 from studies.no_tracker import campaigns as cp
@@ -35,6 +36,8 @@ CAMPAIGNS = (("sockets", "3 sockets × 15 contacts, positions unknown", 0.01),
               0.01),
              ("planes", "3 faces × 20 touches", 0.01),
              ("ballbar", "2 pivots × 3 lengths × 20 positions", 0.001))
+#: Readings of the planes and ballbar campaigns (3 faces × 20; 2 pivots × 3 lengths × 20).
+TOUCHES, POSITIONS = 60, 120
 
 
 def _rows(sim, chain, t, name: str, noise_mm: float, rng):
@@ -80,22 +83,45 @@ def fit(work: Path, sim, chain, t, name: str, rows, noise_mm: float, q_new) -> d
 
 
 def design_criterion(sim, design: dict):
-    """``value(rows)``: the criterion of a design's JSON ``design`` (log det M, the sockets'
-    points eliminated, on the nominal model and the parameters it designed for) of the
-    contacts ``rows`` (their q1…q6, deg, and socket)."""
+    """``value(rows)``: the criterion of a contact design's JSON ``design`` (log det M, the
+    sockets' points, planes or pivots eliminated, on the nominal model and the parameters it
+    designed for) of the readings ``rows`` (their q1…q6, deg, and socket or plane); a
+    scalar reading is read along its plane's normal or its nominal bar."""
     robot = Robot.from_urdf(sim.ur10_urdf(), flange="tool0")
     model = build_model(robot, Tool.from_markers({"ball": [0.0, 0.0, 100.0]}, flange="tool0"),
                         MODEL)
     kept = {p["name"] for p in design["predicted_std"]}
     params = model.nominal().fixed([n for n in model.nominal().names if n not in kept],
                                    "not designed for")
-    names = list(design["contacts"]["sockets"])
+    contacts = design["contacts"]
+    kind = contacts.get("instrument", "socket")
+    groups = contacts[{"socket": "sockets", "plane": "planes", "ballbar": "pivots"}[kind]]
+    names, column = list(groups), "plane" if kind == "plane" else "socket"
+    chain = sim.Chain.from_urdf(sim.ur10_urdf(), "tool0")
+    nominal = sim.Truth.nominal(chain, cp.BALL_M[None])
 
     def value(rows) -> float:
         q = np.radians([[float(r[f"q{k + 1}"]) for k in range(6)] for r in rows])
-        socket = np.array([names.index(r["socket"]) for r in rows])
+        group = np.array([names.index(r[column]) for r in rows])
         blocks = blocks_for(model, params, q, (), 1e-3 * design["sigma_mm"])
-        return log_det(contact_information(blocks, socket, np.arange(len(q))))
+        if kind == "socket":
+            return log_det(contact_information(blocks, group, np.arange(len(q))))
+        x = cp.ball(sim, chain, nominal, q)
+        point = 1e-3 * np.array([groups[names[g]]["point"] for g in group])
+        if kind == "plane":
+            along = np.array([groups[names[g]]["normal"] for g in group], float)
+            along /= np.linalg.norm(along, axis=1, keepdims=True)
+            e1 = np.cross(along, [0.0, 0.0, 1.0])
+            e1[np.linalg.norm(e1, axis=1) < 1e-9] = [1.0, 0.0, 0.0]
+            e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+            e2 = np.cross(along, e1)
+            own = np.c_[np.ones(len(q)), np.sum((x - point) * e1, axis=1),
+                        np.sum((x - point) * e2, axis=1)]
+        else:
+            along = (x - point) / np.linalg.norm(x - point, axis=1, keepdims=True)
+            own = along
+        read = np.einsum("ki,kif->kf", along, blocks)
+        return log_det(scalar_information(read, own, group, np.arange(len(q))))
     return value
 
 
@@ -119,6 +145,74 @@ def designed_contacts(work: Path, sim, criterion: str = "D") -> dict:
                  "--criterion", criterion, "--poses", 30,
                  "--sigma", 0.01, "--seed", 1, "--out", work / "contacts.json"])
     return json.loads((work / "contacts.json").read_text(encoding="utf-8"))
+
+
+def designed_touches(work: Path, sim) -> dict:
+    """The JSON of the planes campaign's count of touches of ``doe-calib design --planes``
+    on the study's faces (nominal model, σ 0.01 mm, stems within :data:`CONE_DEG` of the
+    inward normal). No collision check: under the default one the tool's ball cannot come
+    down to the table's face, 20 mm above the base plane."""
+    cp.write_rows(work / "faces.csv", [
+        {"plane": k, **dict(zip("xyz", 1e3 * np.array(p))), **dict(zip(("nx", "ny", "nz"), n)),
+         "half": 1e3 * h} for k, (p, n, h) in cp.PLANES_M.items()])
+    run_command(["design", "--robot", sim.ur10_urdf(), "--tool", work / "tool.yaml",
+                 "--planes", work / "faces.csv", "--cone", CONE_DEG, "--model", MODEL,
+                 "--criterion", "D", "--poses", TOUCHES, "--no-collision",
+                 "--sigma", 0.01, "--seed", 1, "--out", work / "touches.json"])
+    return json.loads((work / "touches.json").read_text(encoding="utf-8"))
+
+
+def designed_positions(work: Path, sim) -> dict:
+    """The JSON of the ballbar campaign's count of positions of ``doe-calib design
+    --ballbar`` about the study's pivots and lengths (nominal model, σ 0.001 mm, stems
+    within :data:`CONE_DEG` of the bar, the default collision check)."""
+    bars = [f"--ballbar={','.join(f'{1e3 * v:g}' for v in p)}:"
+            f"{','.join(f'{1e3 * v:g}' for v in cp.LENGTHS_M)}" for p in cp.PIVOTS_M.values()]
+    run_command(["design", "--robot", sim.ur10_urdf(), "--tool", work / "tool.yaml", *bars,
+                 "--cone", CONE_DEG, "--model", MODEL, "--criterion", "D",
+                 "--poses", POSITIONS, "--sigma", 0.001, "--seed", 1,
+                 "--out", work / "positions.json"])
+    return json.loads((work / "positions.json").read_text(encoding="utf-8"))
+
+
+def _q(row) -> np.ndarray:
+    return np.radians([float(row[f"q{k + 1}"]) for k in range(6)])
+
+
+def instrument_versus_random(work: Path, sim, chain, t, q_new, seed: int, kind: str,
+                             draws: int = 5) -> dict:
+    """The designed plane touches (``kind`` "planes": :func:`designed_touches`) or ballbar
+    positions ("ballbar": :func:`designed_positions`) against as many random ones of the
+    campaign's faces or pivots and lengths (``draws`` draws each), seated on the truth from
+    random starts under the design's rule (the cone; for the ballbar the default collision
+    check too): the design's criterion of each set, how many readings the default check
+    refuses, and the errors at new configurations, mm, after a similarity registration
+    (touches, which cannot see the scale) or a rigid one (the ballbar, which sees it); the
+    design made ``draws`` times with fresh scatter or reading noise."""
+    rng, clear = np.random.default_rng(seed + {"planes": 1, "ballbar": 2}[kind]), cell_check(sim)
+    if kind == "planes":
+        design, noise, error = designed_touches(work, sim), 0.01, "similarity_mm"
+        sets = {"designed": [cp.designed_plane_rows(sim, chain, t, design, noise, rng)
+                             for _ in range(draws)],
+                "random": [cp.plane_rows(sim, chain, t, TOUCHES // len(cp.PLANES_M), noise,
+                                         rng, cone_deg=CONE_DEG) for _ in range(draws)]}
+    else:
+        design, noise, error = designed_positions(work, sim), 0.001, "rigid_mm"
+        per = POSITIONS // (len(cp.PIVOTS_M) * len(cp.LENGTHS_M))
+        sets = {"designed": [cp.designed_ballbar_rows(sim, chain, t, design, noise, rng)
+                             for _ in range(draws)],
+                "random": [cp.ballbar_rows(sim, chain, t, per, noise, rng, cone_deg=CONE_DEG,
+                                           clear=clear) for _ in range(draws)]}
+    value = design_criterion(sim, design)
+    out = {"readings": len(design["poses"]), "value": design["value"], "bound": design["bound"],
+           "as_random": design["versus_random"]["equivalent_poses"], "registration": error,
+           "checked": kind == "ballbar"}
+    for name, drawn in sets.items():
+        out[name] = {"log_det": [value(rows) for rows in drawn],
+                     "unclear": [sum(not clear(_q(r)) for r in rows) for rows in drawn],
+                     "error_mm": [fit(work, sim, chain, t, f"{kind}_{name}", rows, noise,
+                                      q_new)[error] for rows in drawn]}
+    return out
 
 
 def designed_versus_random(work: Path, sim, chain, t, q_new, seed: int, draws: int = 10,
@@ -174,6 +268,9 @@ def run(work: Path, seed: int = 7) -> dict:
                                   "floor_rigid_mm": floor["rigid_mm"],
                                   "floor_similarity_mm": floor["similarity_mm"]}
     out["designed_versus_random"] = designed_versus_random(work, sim, chain, t, q_new, seed)
+    for kind in ("planes", "ballbar"):
+        out[f"{kind}_versus_random"] = instrument_versus_random(work, sim, chain, t, q_new,
+                                                                seed, kind)
     return out
 
 
@@ -243,4 +340,44 @@ def markdown(out: dict) -> str:
               ": contacts through the floor reach configurations no seatable contact does, "
               f"and only {c['new_clear']} of the 40 new configurations (every joint over ±π) "
               "keep clear of the cell themselves."]
+    for kind in ("planes", "ballbar"):
+        lines += _instrument_markdown(kind, out[f"{kind}_versus_random"])
     return "\n".join(lines) + "\n"
+
+
+def _instrument_markdown(kind: str, c: dict) -> list:
+    """The section of designed plane touches or ballbar positions against random ones."""
+    n, what = len(c["designed"]["error_mm"]), {
+        "planes": ("plane touches", "`doe-calib design --planes` on the campaign's three faces",
+                   "touches of the same faces (20 each, at random points of their patches)",
+                   "each stem within {cone:g}° of its face's inward normal as in the design. "
+                   "The design runs without its collision check: under the default one the "
+                   "tool's ball cannot come down to the table's face, 20 mm above the base "
+                   "plane (no candidate of it is kept), so random touches are not checked "
+                   "either; the column counts the touches the default check would refuse",
+                   "similarity", "touches cannot see the scale"),
+        "ballbar": ("ballbar positions",
+                    "`doe-calib design --ballbar` about the campaign's two pivots and three "
+                    "lengths", "positions of the same pivots and lengths (20 each, directions "
+                    "over the upper half sphere)",
+                    "each stem within {cone:g}° of the bar as in the design, clear of the cell "
+                    "under the design's default collision check; the designed lengths are "
+                    "those the bar reads at the designed configurations on the truth",
+                    "rigid", "the ballbar sees the scale")}[kind]
+    lines = ["", f"## Designed {what[0]} against random ones", "",
+             f"{c['readings']} {what[0]} of {what[1]} (D criterion {c['value']:.2f}, certified "
+             f"bound {c['bound']:.2f}; as precise by it as {c['as_random']:.0f} random ones of "
+             f"its candidates, the median of 100 draws) against {c['readings']} random "
+             f"{what[2]}, seated on the truth from random starts, "
+             f"{what[3].format(cone=CONE_DEG)}. Criterion of each set (the design's, on the "
+             "nominal model), how many readings the default collision check refuses, and the "
+             f"error at the 40 new configurations after a {what[4]} registration ({what[5]}), "
+             f"mm, over {n} draws of scatter (designed) or of readings (random):", "",
+             "| readings | log det M (range) | refused by the check | error: mean | "
+             "each draw |", "|---|---|---:|---:|---|"]
+    for key in ("designed", "random"):
+        r = c[key]
+        lines.append(f"| {key} | {min(r['log_det']):.2f} – {max(r['log_det']):.2f} | "
+                     f"{np.mean(r['unclear']):.1f} | {np.mean(r['error_mm']):.4f} | "
+                     f"{', '.join(f'{v:.4f}' for v in r['error_mm'])} |")
+    return lines + ["", f"Random {what[0]} less designed: {_versus(c, 'random')}."]
