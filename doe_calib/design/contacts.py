@@ -365,12 +365,7 @@ def with_contact_detectability(design: ContactDesign, model, spec: str, alpha: f
     registry : EffectRegistry, optional
     """
     # imported here: the detection statistics load slowly
-    from doe_calib.design.discovery.detection import detect_effects, detectability
+    from doe_calib.design.discovery.detection import with_detectability
 
-    params = model.nominal()
-    held = [n for n in params.names if n not in design.predicted_std]
-    params = params.fixed(held, "not identifiable from the design's contacts")
-    readings = design.readings(model)
-    effects = detect_effects(model, spec, design.configurations, registry)
-    return replace(design, detectability=detectability(model, params, readings, effects,
-                                                       alpha, power))
+    return with_detectability(design, model, spec, alpha, power, registry,
+                              readings=design.readings(model), held="contacts")

@@ -88,7 +88,7 @@ def detectability(model, params, measurements, effects, alpha: float = 0.05,
 
 
 def with_detectability(design, model, spec: str, alpha: float = 0.05, power: float = 0.8,
-                       registry=None):
+                       registry=None, readings=None, held: str = "poses"):
     """``design`` with the detectability of the effects ``spec`` names (:func:`detect_effects`)
     in its poses and loads, for its σ; the model's parameters it was designed for are
     estimated too, the others (fixed as not identifiable) held.
@@ -103,15 +103,21 @@ def with_detectability(design, model, spec: str, alpha: float = 0.05, power: flo
     alpha, power : float
     registry : EffectRegistry, optional
         The effects ``spec`` may name (user effects: ``DEFAULT_REGISTRY.with_file(path)``).
+    readings : Measurements, optional
+        The design's readings (default: its poses read at the model's nominal values with
+        its σ; a contact design passes its contacts, the sockets' points eliminated).
+    held : str
+        What the design is made of, in the reason given for the parameters held.
     """
     from dataclasses import replace
 
-    sigma = (design.sigma_mm or 0.02) / 1000.0
     params = model.nominal()
-    held = [n for n in params.names if n not in design.predicted_std]
-    if held:
-        params = params.fixed(held, "not identifiable from the design's poses")
-    readings = design_readings(model, params.values, design.configurations, sigma)
+    unfit = [n for n in params.names if n not in design.predicted_std]
+    if unfit:
+        params = params.fixed(unfit, f"not identifiable from the design's {held}")
+    if readings is None:
+        sigma = (design.sigma_mm or 0.02) / 1000.0
+        readings = design_readings(model, params.values, design.configurations, sigma)
     effects = detect_effects(model, spec, design.configurations, registry)
     return replace(design, detectability=detectability(model, params, readings, effects,
                                                        alpha, power))
