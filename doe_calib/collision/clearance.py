@@ -2,8 +2,9 @@
 
 Screening asks coal only whether each checked pair is closer than the
 clearance (a collision test with a security margin, stopping at the first
-pair: cheap); distances, which cost more, are computed only for the poses
-whose clearance is reported.
+pair: cheap), on the links' convex hulls first and on their meshes only where
+the hulls are too close (:mod:`.hulls`); distances, which cost more, are
+computed only for the poses whose clearance is reported.
 
 A move is checked at every pose of its ≤ 1° grid, but a pair is tested only
 where it may be too close: the collision test that finds a pair clear also
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.collision.bounds import SLACK, motion_weights
+from doe_calib.collision.hulls import HULL_SLACK, first_too_close
 
 #: Largest joint step between the checked samples of a move, rad (m for prismatic joints).
 SEGMENT_STEP = np.radians(1.0)
@@ -92,14 +94,21 @@ class Workspace:
         (default); False: test every pair at every pose of every move (the
         reference the benchmarks and tests compare with: the same answers,
         slower).
+    hulls : bool
+        Test a pose's pairs on their convex hulls first and on their meshes only
+        where the hulls are too close (:mod:`.hulls`; default, when the model has
+        meshes); False: on their meshes (the reference the benchmarks and tests
+        compare with: the same answers, slower).
     """
 
-    def __init__(self, cm, bounded: bool = True):
+    def __init__(self, cm, bounded: bool = True, hulls: bool = True):
         self.data = cm.model.createData()
         self.geometry = cm.geometry.createData()
         self.margins = None
         # held references into the geometry data's results (indexing it copies each one)
         self.results = list(self.geometry.collisionResults)
+        self.hulls = cm.hulls.createData() if hulls and cm.hulls is not None else None
+        self.hull_results = () if self.hulls is None else list(self.hulls.collisionResults)
         self.bounded = bounded
         self._motion = False  # not computed yet
         self.sight = None  # what the tracker's beams are checked against (.beams, computed once)
@@ -118,6 +127,9 @@ class Workspace:
         if margins != self.margins:
             for request, m in zip(self.geometry.collisionRequests, margins):
                 request.security_margin = m
+            if self.hulls is not None:
+                for request, m in zip(self.hulls.collisionRequests, margins):
+                    request.security_margin = m + HULL_SLACK
             self.margins = margins
 
 
@@ -174,6 +186,10 @@ def too_close(cm, q, margin: float | None = None, workspace: Workspace | None = 
     ws.set_margins(cm.margins if margin is None else margin)
     configurations = cm.configurations(q)
     out = np.full(configurations.shape[1], -1)
+    if ws.hulls is not None:
+        for i, x in enumerate(configurations.T):
+            out[i] = first_too_close(cm, ws, x)
+        return out
     results = ws.geometry.collisionResults
     for i, x in enumerate(configurations.T):
         if pin.computeCollisions(cm.model, ws.data, cm.geometry, ws.geometry, x, True):

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.collision.clearance import SEGMENT_STEP, Workspace, check_path, too_close
+from doe_calib.collision.hulls import first_too_close
 from doe_calib.collision.passage import blocked_passage, joint_box
 from doe_calib.io.setting_ranges import positive, whole
 
@@ -143,7 +144,11 @@ def _search(cm, qa, qb, lo, hi, margins, settings, seed, step, shorten, ws, memo
                     x[i], x[i + 1] = math.cos(v), math.sin(v)
                 else:
                     x[i] = v
-            free = not pin.computeCollisions(cm.model, ws.data, cm.geometry, ws.geometry, x, True)
+            if ws.hulls is not None:
+                free = first_too_close(cm, ws, x) < 0
+            else:
+                free = not pin.computeCollisions(cm.model, ws.data, cm.geometry, ws.geometry, x,
+                                                 True)
             memo[values] = free
             return free
 

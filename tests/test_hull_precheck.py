@@ -1,0 +1,130 @@
+"""The convex-hull pre-check (collision/hulls.py) against the meshes' own collision tests.
+
+Truth here is the test of every pair's meshes in checking order (``Workspace(cm, hulls=False)``,
+what the screening did before): with hulls, every pose must get the same first pair, at the
+poses' margins, at the moves' and at zero, and a planned move the same path.
+"""
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from doe_calib import Robot, Tool, examples
+from doe_calib.collision import (PlannerSettings, Workspace, build_collision_model, plan_move,
+                                 too_close)
+from doe_calib.collision.hulls import HULL_SLACK
+from doe_calib.design.candidates.constraint_file import read_constraints
+from doe_calib.design.problem import LoadCase
+
+
+def _ur5():
+    try:
+        files = metadata.distribution("example-robot-data").files or []
+    except metadata.PackageNotFoundError:
+        pytest.skip("the UR5 URDF needs `pip install example-robot-data`")
+    for f in files:
+        if str(f).endswith("robots/ur_description/urdf/ur5_robot.urdf"):
+            return Path(f.locate()).resolve()
+    pytest.skip("ur5_robot.urdf is not in example-robot-data")
+
+
+@pytest.fixture(scope="module", params=["ur5", "kr270"])
+def cell(request):
+    """(robot, joint bounds, collision model): the UR5 in its cell with 3 kg (meshes), the
+    KR 270 with its tool (primitives only)."""
+    if request.param == "ur5":
+        robot, tool = Robot.from_urdf(_ur5()), Tool.from_yaml(examples.UR_TOOL_YAML)
+        constraints = read_constraints(examples.UR5_CELL_YAML, robot, tool)
+        cm = build_collision_model(robot, tool, (LoadCase(3.0, (0.0, 0.0, 0.08), radius=0.04),),
+                                   constraints)
+        return robot, constraints.bounds(robot), cm
+    robot, tool = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
+    lo = np.where(np.isfinite(robot.lower), robot.lower, -np.pi)
+    hi = np.where(np.isfinite(robot.upper), robot.upper, np.pi)
+    return robot, (lo, hi), build_collision_model(robot, tool)
+
+
+def test_hulls_replace_the_meshes_only(cell):
+    robot, _, cm = cell
+    if cm.hulls is None:  # the KR 270's links are boxes and cylinders: nothing to pre-check
+        assert not any(type(o.geometry).__name__.startswith("BVH")
+                       for o in cm.geometry.geometryObjects)
+        return
+    assert [(p.first, p.second) for p in cm.hulls.collisionPairs] == \
+        [(p.first, p.second) for p in cm.geometry.collisionPairs]
+    for mesh, hull in zip(cm.geometry.geometryObjects, cm.hulls.geometryObjects):
+        assert (hull.name, hull.parentJoint) == (mesh.name, mesh.parentJoint)
+        assert np.allclose(hull.placement.homogeneous, mesh.placement.homogeneous)
+        if type(mesh.geometry).__name__.startswith("BVH"):
+            assert type(hull.geometry).__name__ == "Convex"
+        else:
+            assert type(hull.geometry) is type(mesh.geometry)
+
+
+def test_hull_distance_is_below_the_mesh_distance(cell):
+    robot, (lo, hi), cm = cell
+    if cm.hulls is None:
+        pytest.skip("no mesh")
+    rng = np.random.default_rng(5)
+    data, mdata, hdata = cm.model.createData(), cm.geometry.createData(), cm.hulls.createData()
+    for x in cm.configurations(rng.uniform(lo, hi, (30, robot.n_joints))).T:
+        pin.updateGeometryPlacements(cm.model, data, cm.geometry, mdata, x)
+        pin.updateGeometryPlacements(cm.model, data, cm.hulls, hdata, x)
+        for k in range(len(cm.geometry.collisionPairs)):
+            mesh = pin.computeDistance(cm.geometry, mdata, k).min_distance
+            hull = pin.computeDistance(cm.hulls, hdata, k).min_distance
+            if mesh > 0:  # within coal's tolerances (GJK: 1e-6 of the distance), far below
+                assert hull <= mesh + HULL_SLACK / 100, cm.pair_name(k)
+
+
+@pytest.mark.parametrize("which", ["pose", "move", "zero"])
+def test_too_close_with_hulls_is_the_mesh_answer_pose_by_pose(cell, which):
+    robot, (lo, hi), cm = cell
+    margin = {"pose": None, "move": cm.move_margins, "zero": 0.0}[which]
+    rng = np.random.default_rng(11)
+    q = rng.uniform(lo, hi, (4000, robot.n_joints))
+    ws = Workspace(cm)
+    reference = too_close(cm, q, margin, Workspace(cm, hulls=False))
+    assert (too_close(cm, q, margin, ws) == reference).all()
+    assert 0.1 < (reference < 0).mean() < 0.9  # both free and hit poses are compared
+    if ws.hulls is None:
+        return
+    assert all(ws.hulls.activeCollisionPairs)  # the pairs deactivated on the way are back
+    # the hulls flag pairs the meshes clear: the search goes on past them
+    hdata = cm.hulls.createData()
+    for request, m in zip(hdata.collisionRequests, np.broadcast_to(
+            np.asarray(cm.margins if margin is None else margin, float), len(ws.hull_results))):
+        request.security_margin = m + HULL_SLACK
+    flagged = [pin.computeCollisions(cm.model, cm.model.createData(), cm.hulls, hdata, x, True)
+               for x in cm.configurations(q[reference < 0][:500]).T]
+    assert any(flagged)
+
+
+def test_a_workspace_moved_between_margins_answers_as_a_fresh_one(cell):
+    robot, (lo, hi), cm = cell
+    q = np.random.default_rng(2).uniform(lo, hi, (300, robot.n_joints))
+    ws = Workspace(cm)
+    first = too_close(cm, q, 0.0, ws)
+    too_close(cm, q, workspace=ws)
+    assert (too_close(cm, q, 0.0, ws) == first).all()
+    assert (first == too_close(cm, q, 0.0, Workspace(cm, hulls=False))).all()
+
+
+def test_a_planned_move_is_the_path_planned_on_the_meshes():
+    robot, tool = Robot.from_urdf(_ur5()), Tool.from_yaml(examples.UR_TOOL_YAML)
+    constraints = read_constraints(examples.UR5_CELL_YAML, robot, tool)
+    cm = build_collision_model(robot, tool, (LoadCase(3.0, (0.0, 0.0, 0.08), radius=0.04),),
+                               constraints)
+    settings = PlannerSettings(checks=1500)
+    for a, b in (([62.1, 243.9, 81.1, -96.9, -37.1, -95.0],
+                  [338.7, 197.2, 104.2, 186.2, 69.6, 299.9]),
+                 ([333.8, -70.6, -73.3, 249.1, -269.6, 167.7],
+                  [-224.1, -77.2, -96.0, 245.0, -78.9, 340.8])):
+        a, b = np.radians(a), np.radians(b)
+        hulls = plan_move(cm, a, b, settings=settings, workspace=Workspace(cm))
+        meshes = plan_move(cm, a, b, settings=settings, workspace=Workspace(cm, hulls=False))
+        assert hulls is not None and meshes is not None
+        assert hulls.samples == meshes.samples
+        np.testing.assert_array_equal(np.array(hulls.via), np.array(meshes.via))
