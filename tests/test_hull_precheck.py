@@ -12,8 +12,8 @@ import pinocchio as pin
 import pytest
 
 from doe_calib import Robot, Tool, examples
-from doe_calib.collision import (PlannerSettings, Workspace, build_collision_model, plan_move,
-                                 too_close)
+from doe_calib.collision import (PlannerSettings, Workspace, build_collision_model,
+                                 check_segment, plan_move, too_close)
 from doe_calib.collision.hulls import HULL_SLACK
 from doe_calib.design.candidates.constraint_file import read_constraints
 from doe_calib.design.problem import LoadCase
@@ -110,6 +110,35 @@ def test_a_workspace_moved_between_margins_answers_as_a_fresh_one(cell):
     too_close(cm, q, workspace=ws)
     assert (too_close(cm, q, 0.0, ws) == first).all()
     assert (first == too_close(cm, q, 0.0, Workspace(cm, hulls=False))).all()
+
+
+@pytest.mark.parametrize("which", ["pose", "move", "zero"])
+def test_a_move_checked_with_hulls_is_the_dense_mesh_check(cell, which):
+    """Skipping by the hulls' bounds finds the first pose and pair of every pair's meshes tested
+    at every pose, also on moves that end just short of it, and on the pairs found alone."""
+    robot, (lo, hi), cm = cell
+    if cm.hulls is None:
+        pytest.skip("no mesh: moves are checked as before")
+    margin = {"pose": None, "move": cm.move_margins, "zero": 0.0}[which]
+    rng = np.random.default_rng(7)
+    ws, dense = Workspace(cm), Workspace(cm, bounded=False, hulls=False)
+    starts = rng.uniform(lo, hi, (300, robot.n_joints))
+    starts = starts[too_close(cm, starts, margin, dense) < 0][:30]
+    found = 0
+    for qa in starts:
+        qb = qa + (rng.uniform(lo, hi) - qa) * rng.uniform(0.05, 0.5)
+        check = check_segment(cm, qa, qb, margin, workspace=ws)
+        assert check == check_segment(cm, qa, qb, margin, workspace=dense)
+        if check.free or check.first == 0:
+            continue
+        found += 1
+        short = qa + (check.first - 0.5 / (check.samples - 1)) * (qb - qa)  # grazes the margin
+        assert check_segment(cm, qa, short, margin, workspace=ws) == \
+            check_segment(cm, qa, short, margin, workspace=dense)
+        pairs = [cm.pairs.index(check.pair), 0]
+        assert check_segment(cm, qa, qb, margin, workspace=ws, pairs=pairs) == \
+            check_segment(cm, qa, qb, margin, workspace=dense, pairs=pairs)
+    assert found >= 5
 
 
 def test_a_planned_move_is_the_path_planned_on_the_meshes():

@@ -7,12 +7,12 @@ the hulls are too close (:mod:`.hulls`); distances, which cost more, are
 computed only for the poses whose clearance is reported.
 
 A move is checked at every pose of its ≤ 1° grid, but a pair is tested only
-where it may be too close: the collision test that finds a pair clear also
-bounds its distance, and :mod:`.bounds` bounds how fast a joint step can close
-it, so the poses before that bound is used up are skipped for that pair. The
-first pose found too close and its pair are those the test of every pair at
-every pose finds (the argument is in :mod:`.bounds`); the count of poses
-checked is the grid's.
+where it may be too close: the collision test that finds a pair clear (on its
+hulls or on its meshes) also bounds its distance, and :mod:`.bounds` bounds how
+fast a joint step can close it, so the poses before that bound is used up are
+skipped for that pair. The first pose found too close and its pair are those
+the test of every pair at every pose finds (the argument is in :mod:`.bounds`);
+the count of poses checked is the grid's.
 """
 from __future__ import annotations
 
@@ -270,7 +270,9 @@ def _first_too_close(cm, qa, qb, t, margin, weights, ws, pairs=None):
     (:mod:`.bounds`) no longer proves it clear there; None when every pose is free.
     The pairs due at a pose are tested in checking order, so the pair returned is
     the first one the test of every pair finds. ``pairs``: only these (indices, in
-    this order; weights None: each at every pose).
+    this order; weights None: each at every pose). With hulls (:mod:`.hulls`), a
+    pair is tested on its meshes only where its hulls are too close; a hull test
+    that clears it gives the bound.
     """
     import pinocchio as pin
 
@@ -283,21 +285,31 @@ def _first_too_close(cm, qa, qb, t, margin, weights, ws, pairs=None):
     per_step = [math.inf] * len(order) if rates is None else \
         ((rates @ np.abs(qb - qa)) / (n - 1)).tolist()
     due = [0] * len(per_step)
-    results = ws.results
+    results, hull_results = ws.results, ws.hull_results
     model, geometry, data, gdata = cm.model, cm.geometry, ws.data, ws.geometry
+    hulls, hdata = cm.hulls, ws.hulls
     collide, place, finite = pin.computeCollision, pin.updateGeometryPlacements, math.isfinite
     i = 0
     while i < n:
-        place(model, data, geometry, gdata, poses[i])
+        placed = hdata is None  # the meshes are placed only when a hull test flags a pair
+        place(model, data, geometry if placed else hulls, gdata if placed else hdata, poses[i])
         following = n
         for slot, when in enumerate(due):
             if when <= i:
                 k = order[slot]
-                if collide(geometry, gdata, k):
-                    return i, k
-                # coal's bound is on the distance less the margin (the distance to a
-                # collision): clear while the closing since this pose stays below it
-                spare = results[k].distance_lower_bound - SLACK
+                if hdata is not None and not collide(hulls, hdata, k):
+                    # the hulls' bound, on their distance less (margin + HULL_SLACK), is
+                    # below the meshes' distance less the margin
+                    spare = hull_results[k].distance_lower_bound - SLACK
+                else:
+                    if not placed:
+                        place(model, data, geometry, gdata)
+                        placed = True
+                    if collide(geometry, gdata, k):
+                        return i, k
+                    # coal's bound is on the distance less the margin (the distance to a
+                    # collision): clear while the closing since this pose stays below it
+                    spare = results[k].distance_lower_bound - SLACK
                 skip = 0
                 if spare > 0 and finite(spare):
                     rate = per_step[slot]
