@@ -14,7 +14,7 @@ import pytest
 from doe_calib import Robot, Tool, examples
 from doe_calib.collision import (PlannerSettings, Workspace, build_collision_model,
                                  check_segment, plan_move, too_close)
-from doe_calib.collision.hulls import HULL_SLACK
+from doe_calib.collision.hulls import HULL_SLACK, convex_hulls
 from doe_calib.design.candidates.constraint_file import read_constraints
 from doe_calib.design.problem import LoadCase
 
@@ -157,3 +157,30 @@ def test_a_planned_move_is_the_path_planned_on_the_meshes():
         assert hulls is not None and meshes is not None
         assert hulls.samples == meshes.samples
         np.testing.assert_array_equal(np.array(hulls.via), np.array(meshes.via))
+
+
+def test_a_flat_mesh_keeps_its_mesh_and_a_model_of_flat_meshes_gets_no_hulls():
+    """Qhull cannot build the hull of a plate (it crashes on coplanar points): no hull."""
+    import coal
+
+    def mesh(corners):
+        m = coal.BVHModelOBBRSS()
+        m.beginModel(len(corners) - 2, len(corners))
+        for i in range(1, len(corners) - 1):
+            m.addTriangle(*(np.asarray(corners[j], float) for j in (0, i, i + 1)))
+        m.endModel()
+        return m
+
+    plate = mesh([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)])
+    solid = mesh([(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)])
+    geometry = pin.GeometryModel()
+    for name, shape in (("plate", plate), ("solid", solid), ("ball", coal.Sphere(0.1))):
+        geometry.addGeometryObject(pin.GeometryObject(name, 0, 0, pin.SE3.Identity(), shape))
+    for a, b in ((0, 1), (0, 2), (1, 2)):
+        geometry.addCollisionPair(pin.CollisionPair(a, b))
+    hulls = convex_hulls(geometry)
+    assert [type(o.geometry).__name__ for o in hulls.geometryObjects] == \
+        ["BVHModelOBBRSS", "Convex", "Sphere"]
+    assert len(hulls.collisionPairs) == 3
+    geometry.removeGeometryObject("solid")
+    assert convex_hulls(geometry) is None

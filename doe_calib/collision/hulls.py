@@ -14,17 +14,32 @@ checking order answers, the first pair too close: the hulls are tested in that
 order, each pair they flag is tested on its meshes, and the first one the
 meshes confirm is the answer (every pair before it was cleared by its hulls or
 its meshes). The tool, the payloads and the cell are primitives already; a
-model without meshes gets no hulls (:func:`convex_hulls` returns None).
+model without meshes gets no hulls (:func:`convex_hulls` returns None). A flat
+mesh (its vertices in one plane, e.g. a plate) keeps its mesh in place of a hull:
+Qhull cannot build one.
 """
 from __future__ import annotations
+
+import numpy as np
 
 #: Distance added to each pair's margin for its hull test, m: larger than coal's tolerances,
 #: so that no hull found clear has meshes closer than the margin.
 HULL_SLACK = 1e-4
+#: Least thickness of a mesh given a hull, as a share of its largest extent (principal axes).
+SOLID = 1e-6
+
+
+def _solid(mesh) -> bool:
+    """Whether a mesh's vertices span three dimensions (Qhull fails, or crashes, on flat ones)."""
+    points = np.asarray(mesh.vertices(), float)
+    if len(points) < 4:
+        return False
+    spread = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
+    return bool(spread[2] > SOLID * spread[0])
 
 
 def convex_hulls(geometry):
-    """The geometry with each mesh replaced by its convex hull, or None when it has no mesh.
+    """The geometry with each mesh replaced by its convex hull; None when no mesh is solid.
 
     Parameters
     ----------
@@ -34,19 +49,20 @@ def convex_hulls(geometry):
     Returns
     -------
     pinocchio.GeometryModel or None
-        The same objects (names, joints, frames, placements; primitives as they are)
-        and the same pairs in the same order.
+        The same objects (names, joints, frames, placements; primitives and flat
+        meshes as they are) and the same pairs in the same order.
     """
     import coal
     import pinocchio as pin
 
     objects = geometry.geometryObjects
-    if not any(isinstance(o.geometry, coal.BVHModelBase) for o in objects):
+    solid = [isinstance(o.geometry, coal.BVHModelBase) and _solid(o.geometry) for o in objects]
+    if not any(solid):
         return None
     hulls = pin.GeometryModel()
-    for o in objects:
+    for o, hull in zip(objects, solid):
         shape = o.geometry
-        if isinstance(shape, coal.BVHModelBase):
+        if hull:
             mesh = shape.clone()  # the hull is built into the mesh object: leave the model's
             mesh.buildConvexHull(True, "Qt")
             shape = mesh.convex
