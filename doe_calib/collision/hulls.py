@@ -4,10 +4,10 @@ A link's convex hull contains its mesh, so the distance between two hulls is a
 lower bound of the distance between their meshes: a pair whose hulls keep its
 margin plus :data:`HULL_SLACK` keeps the margin with the meshes too. Testing
 hulls (coal's GJK on the hull's vertices) costs a fraction of testing meshes
-(coal's bounding-volume trees down to triangles): on the UR5 cell of the
-benchmarks, 61 µs for a free pose over its 113 pairs against 183 µs, and a
-free pose's hulls flag a third of a pair on average (mostly the forearm against
-wrist 2, which it wraps around).
+(coal's bounding-volume trees down to triangles): in the UR5 cell of the
+benchmarks (section (i)), 55 µs CPU for a free pose over its 113 pairs against
+151 µs, and a free pose's hulls flag a third of a pair on average (mostly the
+forearm against wrist 2, which it wraps around).
 
 :func:`first_too_close` answers what the test of every pair's meshes in
 checking order answers, the first pair too close: the hulls are tested in that

@@ -86,7 +86,7 @@ class CollisionModel:
         in this cell (:func:`.planner.plan_move`); None: it is not.
     hulls : pinocchio.GeometryModel or None
         ``geometry`` with each mesh replaced by its convex hull (:mod:`.hulls`),
-        tested before the meshes; None: the model has no mesh.
+        tested before the meshes; None: the model has no mesh (or only flat ones).
     """
 
     model: object
