@@ -30,16 +30,20 @@ def _ur5():
     pytest.skip("ur5_robot.urdf is not in example-robot-data")
 
 
+def _ur5_cell():
+    robot, tool = Robot.from_urdf(_ur5()), Tool.from_yaml(examples.UR_TOOL_YAML)
+    constraints = read_constraints(examples.UR5_CELL_YAML, robot, tool)
+    cm = build_collision_model(robot, tool, (LoadCase(3.0, (0.0, 0.0, 0.08), radius=0.04),),
+                               constraints)
+    return robot, constraints.bounds(robot), cm
+
+
 @pytest.fixture(scope="module", params=["ur5", "kr270"])
 def cell(request):
     """(robot, joint bounds, collision model): the UR5 in its cell with 3 kg (meshes), the
     KR 270 with its tool (primitives only)."""
     if request.param == "ur5":
-        robot, tool = Robot.from_urdf(_ur5()), Tool.from_yaml(examples.UR_TOOL_YAML)
-        constraints = read_constraints(examples.UR5_CELL_YAML, robot, tool)
-        cm = build_collision_model(robot, tool, (LoadCase(3.0, (0.0, 0.0, 0.08), radius=0.04),),
-                                   constraints)
-        return robot, constraints.bounds(robot), cm
+        return _ur5_cell()
     robot, tool = Robot.from_urdf(examples.ROBOT_URDF), Tool.from_yaml(examples.TOOL_YAML)
     lo = np.where(np.isfinite(robot.lower), robot.lower, -np.pi)
     hi = np.where(np.isfinite(robot.upper), robot.upper, np.pi)
@@ -142,19 +146,17 @@ def test_a_move_checked_with_hulls_is_the_dense_mesh_check(cell, which):
 
 
 def test_a_planned_move_is_the_path_planned_on_the_meshes():
-    robot, tool = Robot.from_urdf(_ur5()), Tool.from_yaml(examples.UR_TOOL_YAML)
-    constraints = read_constraints(examples.UR5_CELL_YAML, robot, tool)
-    cm = build_collision_model(robot, tool, (LoadCase(3.0, (0.0, 0.0, 0.08), radius=0.04),),
-                               constraints)
+    _, _, cm = _ur5_cell()
     settings = PlannerSettings(checks=1500)
     for a, b in (([62.1, 243.9, 81.1, -96.9, -37.1, -95.0],
                   [338.7, 197.2, 104.2, 186.2, 69.6, 299.9]),
                  ([333.8, -70.6, -73.3, 249.1, -269.6, 167.7],
                   [-224.1, -77.2, -96.0, 245.0, -78.9, 340.8])):
-        a, b = np.radians(a), np.radians(b)
+        a, b = np.radians(a), np.radians(b)  # free poses; their straight move collides
+        assert not check_segment(cm, a, b, cm.move_margins).free
         hulls = plan_move(cm, a, b, settings=settings, workspace=Workspace(cm))
         meshes = plan_move(cm, a, b, settings=settings, workspace=Workspace(cm, hulls=False))
-        assert hulls is not None and meshes is not None
+        assert hulls is not None and meshes is not None and len(hulls.via)
         assert hulls.samples == meshes.samples
         np.testing.assert_array_equal(np.array(hulls.via), np.array(meshes.via))
 
