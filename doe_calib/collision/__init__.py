@@ -5,6 +5,7 @@ Pinocchio and coal, :mod:`.shapes` for tool, payloads, keep-out boxes and
 floor); :mod:`.pairs` decides which pairs are never checked (SRDF, adjacent
 links, always in contact); :mod:`.clearance` gives the clearance at a pose,
 screens many poses and checks a joint-space move at ≤ 1° steps;
+:mod:`.hulls` tests the links' convex hulls before their meshes;
 :mod:`.bounds` bounds how fast a joint step can close each pair, so that a
 move's check skips the poses where a pair is proven clear;
 :mod:`.planner` finds a free path (OMPL RRT-Connect) where the straight move

@@ -2,16 +2,17 @@
 
 Screening asks coal only whether each checked pair is closer than the
 clearance (a collision test with a security margin, stopping at the first
-pair: cheap); distances, which cost more, are computed only for the poses
-whose clearance is reported.
+pair: cheap), on the links' convex hulls first and on their meshes only where
+the hulls are too close (:mod:`.hulls`); distances, which cost more, are
+computed only for the poses whose clearance is reported.
 
 A move is checked at every pose of its ≤ 1° grid, but a pair is tested only
-where it may be too close: the collision test that finds a pair clear also
-bounds its distance, and :mod:`.bounds` bounds how fast a joint step can close
-it, so the poses before that bound is used up are skipped for that pair. The
-first pose found too close and its pair are those the test of every pair at
-every pose finds (the argument is in :mod:`.bounds`); the count of poses
-checked is the grid's.
+where it may be too close: the collision test that finds a pair clear (on its
+hulls or on its meshes) also bounds its distance, and :mod:`.bounds` bounds how
+fast a joint step can close it, so the poses before that bound is used up are
+skipped for that pair. The first pose found too close and its pair are those
+the test of every pair at every pose finds (the argument is in :mod:`.bounds`);
+the count of poses checked is the grid's.
 """
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.collision.bounds import SLACK, motion_weights
+from doe_calib.collision.hulls import HULL_SLACK, first_too_close
 
 #: Largest joint step between the checked samples of a move, rad (m for prismatic joints).
 SEGMENT_STEP = np.radians(1.0)
@@ -92,14 +94,21 @@ class Workspace:
         (default); False: test every pair at every pose of every move (the
         reference the benchmarks and tests compare with: the same answers,
         slower).
+    hulls : bool
+        Test a pose's pairs on their convex hulls first and on their meshes only
+        where the hulls are too close (:mod:`.hulls`; default, when the model has
+        meshes); False: on their meshes (the reference the benchmarks and tests
+        compare with: the same answers, slower).
     """
 
-    def __init__(self, cm, bounded: bool = True):
+    def __init__(self, cm, bounded: bool = True, hulls: bool = True):
         self.data = cm.model.createData()
         self.geometry = cm.geometry.createData()
         self.margins = None
         # held references into the geometry data's results (indexing it copies each one)
         self.results = list(self.geometry.collisionResults)
+        self.hulls = cm.hulls.createData() if hulls and cm.hulls is not None else None
+        self.hull_results = () if self.hulls is None else list(self.hulls.collisionResults)
         self.bounded = bounded
         self._motion = False  # not computed yet
         self.sight = None  # what the tracker's beams are checked against (.beams, computed once)
@@ -118,6 +127,9 @@ class Workspace:
         if margins != self.margins:
             for request, m in zip(self.geometry.collisionRequests, margins):
                 request.security_margin = m
+            if self.hulls is not None:
+                for request, m in zip(self.hulls.collisionRequests, margins):
+                    request.security_margin = m + HULL_SLACK
             self.margins = margins
 
 
@@ -174,6 +186,10 @@ def too_close(cm, q, margin: float | None = None, workspace: Workspace | None = 
     ws.set_margins(cm.margins if margin is None else margin)
     configurations = cm.configurations(q)
     out = np.full(configurations.shape[1], -1)
+    if ws.hulls is not None:
+        for i, x in enumerate(configurations.T):
+            out[i] = first_too_close(cm, ws, x)
+        return out
     results = ws.geometry.collisionResults
     for i, x in enumerate(configurations.T):
         if pin.computeCollisions(cm.model, ws.data, cm.geometry, ws.geometry, x, True):
@@ -254,7 +270,9 @@ def _first_too_close(cm, qa, qb, t, margin, weights, ws, pairs=None):
     (:mod:`.bounds`) no longer proves it clear there; None when every pose is free.
     The pairs due at a pose are tested in checking order, so the pair returned is
     the first one the test of every pair finds. ``pairs``: only these (indices, in
-    this order; weights None: each at every pose).
+    this order; weights None: each at every pose). With hulls (:mod:`.hulls`), a
+    pair is tested on its meshes only where its hulls are too close; a hull test
+    that clears it gives the bound.
     """
     import pinocchio as pin
 
@@ -267,21 +285,31 @@ def _first_too_close(cm, qa, qb, t, margin, weights, ws, pairs=None):
     per_step = [math.inf] * len(order) if rates is None else \
         ((rates @ np.abs(qb - qa)) / (n - 1)).tolist()
     due = [0] * len(per_step)
-    results = ws.results
+    results, hull_results = ws.results, ws.hull_results
     model, geometry, data, gdata = cm.model, cm.geometry, ws.data, ws.geometry
+    hulls, hdata = cm.hulls, ws.hulls
     collide, place, finite = pin.computeCollision, pin.updateGeometryPlacements, math.isfinite
     i = 0
     while i < n:
-        place(model, data, geometry, gdata, poses[i])
+        placed = hdata is None  # the meshes are placed only when a hull test flags a pair
+        place(model, data, geometry if placed else hulls, gdata if placed else hdata, poses[i])
         following = n
         for slot, when in enumerate(due):
             if when <= i:
                 k = order[slot]
-                if collide(geometry, gdata, k):
-                    return i, k
-                # coal's bound is on the distance less the margin (the distance to a
-                # collision): clear while the closing since this pose stays below it
-                spare = results[k].distance_lower_bound - SLACK
+                if hdata is not None and not collide(hulls, hdata, k):
+                    # the hulls' bound, on their distance less (margin + HULL_SLACK), is
+                    # below the meshes' distance less the margin
+                    spare = hull_results[k].distance_lower_bound - SLACK
+                else:
+                    if not placed:
+                        place(model, data, geometry, gdata)
+                        placed = True
+                    if collide(geometry, gdata, k):
+                        return i, k
+                    # coal's bound is on the distance less the margin (the distance to a
+                    # collision): clear while the closing since this pose stays below it
+                    spare = results[k].distance_lower_bound - SLACK
                 skip = 0
                 if spare > 0 and finite(spare):
                     rate = per_step[slot]

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from doe_calib.collision import pairs as pair_rules
+from doe_calib.collision.hulls import convex_hulls
 from doe_calib.collision.planner import PlannerSettings
 from doe_calib.collision.shapes import cell_shapes, load_shapes, tool_shapes
 from doe_calib.errors import ModelError
@@ -83,6 +84,9 @@ class CollisionModel:
     planner : PlannerSettings or None
         How a move that no straight line or simple route clears is planned
         in this cell (:func:`.planner.plan_move`); None: it is not.
+    hulls : pinocchio.GeometryModel or None
+        ``geometry`` with each mesh replaced by its convex hull (:mod:`.hulls`),
+        tested before the meshes; None: the model has no mesh (or only flat ones).
     """
 
     model: object
@@ -102,6 +106,7 @@ class CollisionModel:
     lower: tuple = ()
     upper: tuple = ()
     planner: PlannerSettings | None = None
+    hulls: object = None
 
     @property
     def pairs(self) -> tuple:
@@ -296,4 +301,5 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
                           tuple(map(float, robot.lower if constraints is None
                                     else constraints.lower)),
                           tuple(map(float, robot.upper if constraints is None
-                                    else constraints.upper)), planner)
+                                    else constraints.upper)), planner,
+                          convex_hulls(geometry))
