@@ -62,9 +62,10 @@ class Feasibility:
         out = {}
         for box in self.constraints.keep_out:
             lo, hi = np.array(box.lower)[:, None], np.array(box.upper)[:, None]
-            outside = np.linalg.norm(np.maximum(np.maximum(lo - points, points - hi), 0), axis=1)
-            depth = np.minimum(points - lo, hi - points).min(axis=1)
-            out[f"keep_out:{box.name}"] = (outside - np.maximum(depth, 0) - self.clearance).min(1)
+            inside = np.minimum(points - lo, hi - points)  # per axis, < 0 outside the box
+            outside = np.sqrt((np.minimum(inside, 0) ** 2).sum(axis=1))
+            depth = np.maximum(inside.min(axis=1), 0)
+            out[f"keep_out:{box.name}"] = (outside - depth - self.clearance).min(1)
         for name, start, stop in self.groups:
             out[name] = g[:, start:stop].min(axis=1)
         return out
