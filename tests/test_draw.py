@@ -33,7 +33,8 @@ def test_candidates_judged_in_shares_are_judged_as_one(ur5_cell, with_collision,
     n = 40 if with_collision else 300
 
     def drawn(share, workers):
-        monkeypatch.setattr(draw, "_DRAWN_SHARE", {True: share, False: share})
+        monkeypatch.setattr(draw, "_DRAWN_SHARE", share)
+        monkeypatch.setattr(draw, "_DRAWN_SHARE_FREE", share)
         return draw.feasible_candidates(feasibility, robot, n, np.random.default_rng(3),
                                         collision, workers=workers)
 

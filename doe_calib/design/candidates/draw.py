@@ -13,9 +13,10 @@ from doe_calib.runtime.forked import forked_map
 _MAX_DRAWS = 50  # draw at most this many poses per candidate wanted
 _SHARE = 2000  # fewest poses screened by one process
 _SHARES = 8  # most shares the poses of one round are screened in
-# fewest drawn poses judged by one process: with a collision model (~20 µs each on a cell,
-# most of it screening the feasible ones), and without (~3 µs each; a forked pool costs ~20 ms)
-_DRAWN_SHARE = {True: 2000, False: 20000}
+# fewest drawn poses judged by one process: with a collision model (~20 µs each in the UR5
+# cell, most of it screening the feasible ones), and without (~3 µs each; forking costs ~20 ms)
+_DRAWN_SHARE = 2000
+_DRAWN_SHARE_FREE = 20000
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,7 +110,8 @@ def judge(feasibility, q, collision=None, workspace=None,
     each process judges a run of the draws from the constraints to the tracker's beams. Each
     pose's answer is its own, so the result does not depend on the shares.
     """
-    shares = max(1, min(_SHARES, len(q) // _DRAWN_SHARE[collision is not None]))
+    fewest = _DRAWN_SHARE_FREE if collision is None else _DRAWN_SHARE
+    shares = max(1, min(_SHARES, len(q) // fewest))
     bounds = np.linspace(0, len(q), shares + 1).astype(int)
     found = forked_map(_judge, (feasibility, collision, q, bounds, workspace), shares, workers)
     ok = np.concatenate([f[0] for f in found])
