@@ -1,5 +1,7 @@
 """Tasks over collision models in forked processes (runtime/forked.py) give what one process
 gives: a plain function, and the design's reachability of UR5 poses in its cell (planned)."""
+import multiprocessing
+
 import numpy as np
 from test_collision_bounds import _ur5
 
@@ -20,6 +22,17 @@ def test_forked_results_are_in_task_order():
     here = forked_map(_square_plus, shared, 7, workers=1)
     assert here == [(i, i * i + 0.5) for i in range(7)]
     assert forked_map(_square_plus, shared, 7, workers=2) == here
+
+
+def _forked_inside(i):
+    return forked_map(_square_plus, (0.5, np.arange(7.0)), 7, workers=2)
+
+
+def test_a_daemonic_worker_maps_in_itself():
+    """A pool's worker may not have children: its forked_map runs the tasks in itself."""
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        inside = pool.map(_forked_inside, [0])[0]
+    assert inside == [(i, i * i + 0.5) for i in range(7)]
 
 
 def test_reachability_in_processes_is_reachability_in_one():

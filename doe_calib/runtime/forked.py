@@ -5,8 +5,9 @@ of the usual kind cannot be sent it. A forked child has a copy of the parent's
 memory, so it sees the model as the parent left it. :func:`forked_map` keeps the
 shared objects in a module global while its pool of forked children works
 through the task numbers, and returns the results (which do pickle) in order.
-Where the platform cannot fork, or one worker is asked for, the tasks run in
-this process; the results are the same.
+Where the platform cannot fork, one worker is asked for, or this process is a
+daemon (a pool's or a Dask worker, which may not have children), the tasks run
+in this process; the results are the same.
 """
 from __future__ import annotations
 
@@ -30,10 +31,12 @@ def forked_map(function, shared, n: int, workers: int | None = None) -> list:
     n : int
         Tasks.
     workers : int, optional
-        Processes (default: the CPUs this process may use; 1: in this process).
+        Processes (default: the CPUs this process may use; 1: in this process, as in a
+        daemonic process).
     """
     workers = default_workers() if workers is None else max(1, int(workers))
-    if workers == 1 or n < 2 or "fork" not in multiprocessing.get_all_start_methods():
+    if (workers == 1 or n < 2 or multiprocessing.current_process().daemon
+            or "fork" not in multiprocessing.get_all_start_methods()):
         return [function(shared, i) for i in range(n)]
     global _RUNNING
     _RUNNING = (function, shared)

@@ -34,6 +34,9 @@ class Feasibility:
         ``pose_geometry(q) -> (P (3, n_points), N (3, n_markers), tau (N, n_loads))``.
     smooth : casadi.Function
         ``smooth(q) -> g``: rows ≥ 0 when satisfied.
+    checked : casadi.Function
+        ``checked(q) -> (P, g)``: what :meth:`residuals` reads, in one evaluation of the
+        kinematics (no normals or load torques).
     groups : tuple of (str, int, int)
         Constraint name and its rows ``start:stop`` of ``g``.
     clearance : ndarray, shape (n_points,)
@@ -43,6 +46,7 @@ class Feasibility:
     constraints: object
     geometry: ca.Function
     smooth: ca.Function
+    checked: ca.Function
     groups: tuple
     clearance: np.ndarray
 
@@ -53,15 +57,15 @@ class Feasibility:
         scaled by the distance to the tracker), fraction of the limit for
         load torques.
         """
-        points, _, _ = map_poses(self.geometry, q)
-        (g,) = map_poses(self.smooth, q)
+        points, g = map_poses(self.checked, q)
         g = g[:, :, 0]
         out = {}
         for box in self.constraints.keep_out:
             lo, hi = np.array(box.lower)[:, None], np.array(box.upper)[:, None]
-            outside = np.linalg.norm(np.maximum(np.maximum(lo - points, points - hi), 0), axis=1)
-            depth = np.minimum(points - lo, hi - points).min(axis=1)
-            out[f"keep_out:{box.name}"] = (outside - np.maximum(depth, 0) - self.clearance).min(1)
+            inside = np.minimum(points - lo, hi - points)  # per axis, < 0 outside the box
+            outside = np.sqrt((np.minimum(inside, 0) ** 2).sum(axis=1))
+            depth = np.maximum(inside.min(axis=1), 0)
+            out[f"keep_out:{box.name}"] = (outside - depth - self.clearance).min(1)
         for name, start, stop in self.groups:
             out[name] = g[:, start:stop].min(axis=1)
         return out
@@ -145,4 +149,5 @@ def build_feasibility(model, values, constraints, loads) -> Feasibility:
         group("load_torque", ca.vertcat(1 - ratio, 1 + ratio))
     g = ca.vertcat(*rows) if rows else ca.SX(0, 1)
     return Feasibility(constraints, geometry, ca.Function("smooth", [q], [g], ["q"], ["g"]),
+                       ca.Function("checked", [q], [points, g], ["q"], ["P", "g"]),
                        tuple(groups), clearance)
