@@ -96,6 +96,23 @@ def test_bound_search_finds_the_argmax_of_every_candidate():
     assert best_added(crit, m, blocks, np.zeros(700, bool), packed) == (-1, -np.inf)
 
 
+@pytest.mark.parametrize("criterion", ["D", "A"])
+def test_exchange_among_candidates_chooses_as_over_their_copy(criterion):
+    rng = np.random.default_rng(4)
+    blocks = rng.normal(size=(300, 3, 5))
+    weights = relax(blocks, criterion, tol=1e-4).weights
+    among = np.flatnonzero(rng.random(300) < 0.8)
+    bins = rng.integers(-1, 4, size=300)
+    for b, k in ((None, 0), (bins, 3)):
+        copied = exact_design(blocks[among], 6, criterion, weights[among],
+                              bins=None if b is None else b[among], min_bins=k, pool=100,
+                              packed=packed_information(blocks[among]))
+        made = exact_design(blocks, 6, criterion, weights, bins=b, min_bins=k, pool=100,
+                            packed=packed_information(blocks), among=among)
+        assert made.indices.tolist() == among[copied.indices].tolist()
+        assert made.value == pytest.approx(copied.value, rel=1e-12)
+
+
 def test_exchange_is_no_worse_for_the_order_of_negligible_weights():
     rng = np.random.default_rng(2)
     blocks = rng.normal(size=(400, 3, 5))

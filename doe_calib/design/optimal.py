@@ -112,13 +112,9 @@ class CriterionGoal(Goal):
         if len(pool) < n_poses:
             raise SolverError(f"only {len(pool)} candidates a program can reach for "
                               f"{n_poses} poses")
-        every = len(pool) == len(allowed)  # no copy of every block when none is removed
-        made = exact_design(info.blocks if every else info.blocks[pool], n_poses,
-                            info.criterion, relaxed.weights[pool], None,
-                            None if cov is None else cov.bins(info.q)[pool],
-                            0 if cov is None else cov.min_bins,
-                            packed=info.packed if every else info.packed[pool])
-        return replace(made, indices=pool[made.indices])
+        return exact_design(info.blocks, n_poses, info.criterion, relaxed.weights, None,
+                            None if cov is None else cov.bins(info.q),
+                            0 if cov is None else cov.min_bins, packed=info.packed, among=pool)
 
     def refinement(self, setting, candidates, info, choice, stage) -> Refined:
         model, robot, collision = setting.model, setting.model.robot, setting.collision

@@ -94,11 +94,12 @@ def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray
     return best, value
 
 
-def _sensitivities(blocks, weights, crit, packed=None):
-    """ψ_i of every candidate at the relaxation's information."""
-    support = weights > 0  # zero weights add nothing to the information
-    h, _ = crit.sensitivity(regularised(information(blocks[support], weights[support])))
-    return traces(blocks, h) if packed is None else packed @ packed_weights(h)
+def _sensitivities(blocks, among, weights, crit, packed=None):
+    """ψ_i of the candidates ``among`` at the information of their relaxation ``weights``."""
+    support = among[weights > 0]  # zero weights add nothing to the information
+    h, _ = crit.sensitivity(regularised(information(blocks[support], weights[weights > 0])))
+    psi = traces(blocks, h) if packed is None else packed @ packed_weights(h)
+    return psi if len(among) == len(psi) else psi[among]
 
 
 def _pool(weights, psi, size, bins, noise=0.0):
@@ -188,7 +189,8 @@ def _exchange(blocks, n, crit, chosen, candidates, bins, min_bins, max_sweeps, p
 def exact_design(blocks: np.ndarray, n: int, criterion="D",
                  weights: np.ndarray | None = None, task: np.ndarray | None = None,
                  bins: np.ndarray | None = None, min_bins: int = 0, pool: int = 2000,
-                 max_sweeps: int = 50, packed: np.ndarray | None = None) -> DesignOutcome:
+                 max_sweeps: int = 50, packed: np.ndarray | None = None,
+                 among: np.ndarray | None = None) -> DesignOutcome:
     """n distinct candidates with a (locally) maximal criterion of Σ B_iᵀB_i.
 
     Parameters
@@ -212,6 +214,10 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
         Distinct bins the n poses must use.
     packed : ndarray, shape (K, p(p+1)/2), optional
         The blocks' :func:`.relaxation.packed_information`, if at hand.
+    among : ndarray of int, optional
+        The candidates that may be chosen, increasing (default every one): the design is
+        that of ``blocks[among]`` with ``weights[among]`` and ``bins[among]``, without a
+        copy of their blocks (the relaxation's weights of the others are ignored).
 
     Returns
     -------
@@ -227,11 +233,14 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
     """
     crit = Criterion.from_name(criterion, task)
     k = blocks.shape[0]
-    weights = np.full(k, 1.0 / k) if weights is None else weights
-    psi = _sensitivities(blocks, weights, crit, packed)
+    among = np.arange(k) if among is None else np.asarray(among)
+    weights = np.full(len(among), 1.0 / len(among)) if weights is None else weights[among]
+    psi = _sensitivities(blocks, among, weights, crit, packed)
     best, tried = None, []
     for noise in (0.0, _NOISE):  # the pool as ranked by every weight, then by the heavy ones
-        order, candidates = _pool(weights, psi, min(pool, k), bins, noise)
+        order, candidates = _pool(weights, psi, min(pool, len(among)),
+                                  None if bins is None else bins[among], noise)
+        order, candidates = among[order], among[candidates]
         start = order[:n].tolist()
         if any(np.array_equal(candidates, c) and start == s for c, s in tried):
             continue
