@@ -83,11 +83,11 @@ def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray
     bound = base + r * np.log1p((packed @ packed_weights(np.linalg.inv(m)))[index] / r)
     rank = np.argsort(-bound, kind="stable")
     order, bound = index[rank], bound[rank]
-    best, value = -1, -np.inf
+    best, value, added = -1, -np.inf, criterion.adding(m)
     for s in range(0, order.size, _BATCH):
         if bound[s] <= value:
             break
-        values = criterion.added_values(m, blocks[order[s:s + _BATCH]])
+        values = added(blocks[order[s:s + _BATCH]])
         j = int(np.argmax(values))
         if values[j] > value:
             best, value = int(order[s + j]), float(values[j])
