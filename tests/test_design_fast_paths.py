@@ -13,6 +13,7 @@ import pytest
 from doe_calib.design import LoadCase, blocks_for, design_parameters, load_configurations
 from doe_calib.design.batch import CHUNK, map_poses
 from doe_calib.design.criteria import DOptimal
+from doe_calib.design.solvers import exchange
 from doe_calib.design.solvers.exchange import exact_design
 from doe_calib.design.solvers.relaxation import (
     convex_relaxation,
@@ -28,6 +29,7 @@ from doe_calib.design.solvers.exchange import best_added, regularised
 from doe_calib.errors import OptionError
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 from doe_calib.model.simulate import random_configurations
+from doe_calib.runtime.forked import forked_map
 
 SIGMA = 2e-5
 LOADS = [LoadCase(250.0, (0.0, 0.0, 0.2)), LoadCase(80.0, (0.1, -0.05, 0.15))]
@@ -111,6 +113,21 @@ def test_exchange_among_candidates_chooses_as_over_their_copy(criterion):
                             packed=packed_information(blocks), among=among)
         assert made.indices.tolist() == among[copied.indices].tolist()
         assert made.value == pytest.approx(copied.value, rel=1e-12)
+
+
+def test_exchange_starts_in_forked_processes_give_the_same_design(monkeypatch):
+    rng = np.random.default_rng(5)
+    blocks = rng.normal(size=(300, 3, 5))
+    weights = relax(blocks, tol=1e-4).weights
+    weights += 1e-7 * weights.max() * rng.random(300)  # traces: a second start, by ψ
+    alone = exact_design(blocks, 6, "D", weights, packed=packed_information(blocks), pool=100)
+    starts = []
+    monkeypatch.setattr(exchange, "forked_map", lambda f, shared, n, workers: starts.append(n)
+                        or forked_map(f, shared, n, workers))
+    forked = exact_design(blocks, 6, "D", weights, packed=packed_information(blocks), pool=100,
+                          workers=2)
+    assert starts == [2]
+    assert forked.indices.tolist() == alone.indices.tolist() and forked.value == alone.value
 
 
 def test_exchange_is_no_worse_for_the_order_of_negligible_weights():

@@ -114,7 +114,8 @@ class CriterionGoal(Goal):
                               f"{n_poses} poses")
         return exact_design(info.blocks, n_poses, info.criterion, relaxed.weights, None,
                             None if cov is None else cov.bins(info.q),
-                            0 if cov is None else cov.min_bins, packed=info.packed, among=pool)
+                            0 if cov is None else cov.min_bins, packed=info.packed, among=pool,
+                            workers=None)
 
     def refinement(self, setting, candidates, info, choice, stage) -> Refined:
         model, robot, collision = setting.model, setting.model.robot, setting.collision

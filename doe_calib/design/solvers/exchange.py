@@ -18,6 +18,7 @@ from doe_calib.design.solvers.relaxation import (
     traces,
 )
 from doe_calib.errors import SolverError
+from doe_calib.runtime.forked import forked_map
 
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
 _NOISE = 1e-6  # relaxation weights below this fraction of the largest rank as zero
@@ -186,11 +187,19 @@ def _exchange(blocks, n, crit, chosen, candidates, bins, min_bins, max_sweeps, p
     return chosen, float(current), sweeps, status
 
 
+def _run(shared, i: int) -> tuple:
+    """The exchange from start i of :func:`exact_design`: (chosen, value, sweeps, status)."""
+    blocks, n, crit, starts, bins, min_bins, max_sweeps, packed = shared
+    start, candidates = starts[i]
+    return _exchange(blocks, n, crit, start, candidates, bins, min_bins, max_sweeps,
+                     None if packed is None else packed[candidates])
+
+
 def exact_design(blocks: np.ndarray, n: int, criterion="D",
                  weights: np.ndarray | None = None, task: np.ndarray | None = None,
                  bins: np.ndarray | None = None, min_bins: int = 0, pool: int = 2000,
                  max_sweeps: int = 50, packed: np.ndarray | None = None,
-                 among: np.ndarray | None = None) -> DesignOutcome:
+                 among: np.ndarray | None = None, workers: int | None = 1) -> DesignOutcome:
     """n distinct candidates with a (locally) maximal criterion of Σ B_iᵀB_i.
 
     Parameters
@@ -218,6 +227,10 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
         The candidates that may be chosen, increasing (default every one): the design is
         that of ``blocks[among]`` with ``weights[among]`` and ``bins[among]``, without a
         copy of their blocks (the relaxation's weights of the others are ignored).
+    workers : int, optional
+        Processes running the exchange's starts at once
+        (:func:`~doe_calib.runtime.forked.forked_map`; None: one per CPU). Each start's
+        exchange is its own: the design does not depend on it.
 
     Returns
     -------
@@ -236,18 +249,19 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
     among = np.arange(k) if among is None else np.asarray(among)
     weights = np.full(len(among), 1.0 / len(among)) if weights is None else weights[among]
     psi = _sensitivities(blocks, among, weights, crit, packed)
-    best, tried = None, []
+    starts = []
     for noise in (0.0, _NOISE):  # the pool as ranked by every weight, then by the heavy ones
         order, candidates = _pool(weights, psi, min(pool, len(among)),
                                   None if bins is None else bins[among], noise)
         order, candidates = among[order], among[candidates]
         start = order[:n].tolist()
-        if any(np.array_equal(candidates, c) and start == s for c, s in tried):
-            continue
-        tried.append((candidates, start))
-        run = _exchange(blocks, n, crit, start, candidates, bins, min_bins, max_sweeps,
-                        None if packed is None else packed[candidates])
-        if best is None or run[1] > best[1]:
+        if not any(np.array_equal(candidates, c) and start == s for s, c in starts):
+            starts.append((start, candidates))
+    runs = forked_map(_run, (blocks, n, crit, starts, bins, min_bins, max_sweeps, packed),
+                      len(starts), workers)
+    best = runs[0]
+    for run in runs[1:]:
+        if run[1] > best[1]:
             best = run
     chosen, current, sweeps, status = best
     indices = np.array(chosen)
