@@ -10,9 +10,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from doe_calib.design import LoadCase, blocks_for, design_parameters, load_configurations
+from doe_calib.design import LoadCase, blocks_for, design_parameters, load_configurations, problem
 from doe_calib.design.batch import CHUNK, map_poses
 from doe_calib.design.criteria import DOptimal
+from doe_calib.design.problem import candidate_information
 from doe_calib.design.solvers import exchange
 from doe_calib.design.solvers.exchange import exact_design
 from doe_calib.design.solvers.relaxation import (
@@ -51,6 +52,16 @@ def test_blocks_equal_the_observation_matrix_of_the_load_configurations(kr270):
     ref = (b[..., params.free] * params.scales[params.free] / SIGMA).reshape(len(q), -1, free)
     assert blocks.shape == ref.shape == (60, 3 * 3 * 3, free)
     assert np.abs(blocks - ref).max() <= 1e-12 * np.abs(ref).max()
+
+
+def test_candidate_information_in_forked_shares_is_that_of_one_process(kr270, monkeypatch):
+    model, params, q = kr270
+    blocks = blocks_for(model, params, q, LOADS, SIGMA)
+    monkeypatch.setattr(problem, "_SHARE", 25)  # 60 poses: two shares
+    shared, room = candidate_information(model, params, q, LOADS, SIGMA, spare=4, workers=2)
+    assert room.shape == (64, packed_information(blocks).shape[1])
+    assert np.array_equal(shared, blocks)
+    assert np.array_equal(room[:60], packed_information(blocks))
 
 
 def test_blocks_equal_finite_differences_of_marker_positions(kr270):
