@@ -100,6 +100,14 @@ def test_rank_r_update_equals_the_criterion_of_the_sum(name):
 
 
 @pytest.mark.parametrize("name", NAMES)
+def test_adding_at_one_m_gives_every_batch_the_values_of_all_at_once(name):
+    blocks = np.random.default_rng(8).normal(size=(9, 3, P))
+    added = _crit(name).adding(_spd(9))
+    at_once = _crit(name).added_values(_spd(9), blocks)
+    assert np.array_equal(np.concatenate([added(blocks[:4]), added(blocks[4:])]), at_once)
+
+
+@pytest.mark.parametrize("name", NAMES)
 def test_casadi_log_phi_equals_numeric_and_its_gradient_finite_differences(name):
     crit = _crit(name)
     ms = ca.SX.sym("M", P, P)

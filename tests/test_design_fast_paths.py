@@ -10,9 +10,11 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from doe_calib.design import LoadCase, blocks_for, design_parameters, load_configurations
+from doe_calib.design import LoadCase, blocks_for, design_parameters, load_configurations, problem
 from doe_calib.design.batch import CHUNK, map_poses
 from doe_calib.design.criteria import DOptimal
+from doe_calib.design.problem import candidate_information
+from doe_calib.design.solvers import exchange
 from doe_calib.design.solvers.exchange import exact_design
 from doe_calib.design.solvers.relaxation import (
     convex_relaxation,
@@ -28,6 +30,7 @@ from doe_calib.design.solvers.exchange import best_added, regularised
 from doe_calib.errors import OptionError
 from doe_calib.model.evaluation import marker_positions, observation_matrix
 from doe_calib.model.simulate import random_configurations
+from doe_calib.runtime.forked import forked_map
 
 SIGMA = 2e-5
 LOADS = [LoadCase(250.0, (0.0, 0.0, 0.2)), LoadCase(80.0, (0.1, -0.05, 0.15))]
@@ -49,6 +52,16 @@ def test_blocks_equal_the_observation_matrix_of_the_load_configurations(kr270):
     ref = (b[..., params.free] * params.scales[params.free] / SIGMA).reshape(len(q), -1, free)
     assert blocks.shape == ref.shape == (60, 3 * 3 * 3, free)
     assert np.abs(blocks - ref).max() <= 1e-12 * np.abs(ref).max()
+
+
+def test_candidate_information_in_forked_shares_is_that_of_one_process(kr270, monkeypatch):
+    model, params, q = kr270
+    blocks = blocks_for(model, params, q, LOADS, SIGMA)
+    monkeypatch.setattr(problem, "_SHARE", 25)  # 60 poses: two shares
+    shared, room = candidate_information(model, params, q, LOADS, SIGMA, spare=4, workers=2)
+    assert room.shape == (64, packed_information(blocks).shape[1])
+    assert np.array_equal(shared, blocks)
+    assert np.array_equal(room[:60], packed_information(blocks))
 
 
 def test_blocks_equal_finite_differences_of_marker_positions(kr270):
@@ -94,6 +107,38 @@ def test_bound_search_finds_the_argmax_of_every_candidate():
         assert j == int(np.argmax(values))
         assert value == pytest.approx(values.max(), rel=1e-12)
     assert best_added(crit, m, blocks, np.zeros(700, bool), packed) == (-1, -np.inf)
+
+
+@pytest.mark.parametrize("criterion", ["D", "A"])
+def test_exchange_among_candidates_chooses_as_over_their_copy(criterion):
+    rng = np.random.default_rng(4)
+    blocks = rng.normal(size=(300, 3, 5))
+    weights = relax(blocks, criterion, tol=1e-4).weights
+    among = np.flatnonzero(rng.random(300) < 0.8)
+    bins = rng.integers(-1, 4, size=300)
+    for b, k in ((None, 0), (bins, 3)):
+        copied = exact_design(blocks[among], 6, criterion, weights[among],
+                              bins=None if b is None else b[among], min_bins=k, pool=100,
+                              packed=packed_information(blocks[among]))
+        made = exact_design(blocks, 6, criterion, weights, bins=b, min_bins=k, pool=100,
+                            packed=packed_information(blocks), among=among)
+        assert made.indices.tolist() == among[copied.indices].tolist()
+        assert made.value == pytest.approx(copied.value, rel=1e-12)
+
+
+def test_exchange_starts_in_forked_processes_give_the_same_design(monkeypatch):
+    rng = np.random.default_rng(5)
+    blocks = rng.normal(size=(300, 3, 5))
+    weights = relax(blocks, tol=1e-4).weights
+    weights += 1e-7 * weights.max() * rng.random(300)  # traces: a second start, by ψ
+    alone = exact_design(blocks, 6, "D", weights, packed=packed_information(blocks), pool=100)
+    starts = []
+    monkeypatch.setattr(exchange, "forked_map", lambda f, shared, n, workers: starts.append(n)
+                        or forked_map(f, shared, n, workers))
+    forked = exact_design(blocks, 6, "D", weights, packed=packed_information(blocks), pool=100,
+                          workers=2)
+    assert starts == [2]
+    assert forked.indices.tolist() == alone.indices.tolist() and forked.value == alone.value
 
 
 def test_exchange_is_no_worse_for_the_order_of_negligible_weights():

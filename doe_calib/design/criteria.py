@@ -32,6 +32,7 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import ClassVar
 
 import casadi as ca
@@ -160,6 +161,11 @@ class Criterion:
         vv = np.einsum("kri,ksi->krs", v, v)
         return -(base - np.trace(np.linalg.solve(s, vv), axis1=1, axis2=2))
 
+    def adding(self, m: np.ndarray):
+        """``values(blocks)``: :meth:`added_values` at this M for blocks (K, r, p) of any K,
+        what depends on M alone computed once (an exchange asks in batches at one M)."""
+        return partial(self.added_values, m)
+
     def _root(self) -> np.ndarray | None:
         """R of the weight C = RᵀR of the trace criteria (None: identity)."""
         return None
@@ -217,12 +223,18 @@ class DOptimal(Criterion):
 
     def added_values(self, m, blocks):
         """log det(M + BᵀB) = log det M + log det(I + B M⁻¹ Bᵀ)."""
-        k, r, p = blocks.shape
-        chol = np.linalg.cholesky(m)
-        inv = np.linalg.inv(chol)                                                # L⁻¹
-        x = np.matmul(blocks, inv.T)                                             # B L⁻ᵀ
-        g = np.matmul(x, x.transpose(0, 2, 1)) + np.eye(r)                       # I + B M⁻¹ Bᵀ
-        return np.linalg.slogdet(m)[1] + np.linalg.slogdet(g)[1]
+        return self.adding(m)(blocks)
+
+    def adding(self, m):
+        """:meth:`added_values` at M, with M's Cholesky factor L, L⁻¹ and log det M once."""
+        inv = np.linalg.inv(np.linalg.cholesky(m))                               # L⁻¹
+        base = np.linalg.slogdet(m)[1]
+
+        def values(blocks):
+            x = np.matmul(blocks, inv.T)                                         # B L⁻ᵀ
+            g = np.matmul(x, x.transpose(0, 2, 1)) + np.eye(blocks.shape[1])     # I + B M⁻¹ Bᵀ
+            return base + np.linalg.slogdet(g)[1]
+        return values
 
     def cvxpy_value(self, m):
         import cvxpy as cp

@@ -20,14 +20,14 @@ from doe_calib.design.criteria import (AOptimal, Criterion, DOptimal, EOptimal, 
                                        check, log_det)
 from doe_calib.design.pipeline import Goal, Setting, constraints_used, run
 from doe_calib.design.predicted_std import design_std
-from doe_calib.design.problem import (blocks_for, check_enough_poses, design_parameters,
-                                      load_configurations, task_matrix)
+from doe_calib.design.problem import (blocks_for, candidate_information, check_enough_poses,
+                                      design_parameters, load_configurations, task_matrix)
 from doe_calib.design.result import (BoundRelaxation, Coverage, DesignResult, Equivalence,
                                      RandomDesigns)
 from doe_calib.design.solvers.exchange import exact_design
 from doe_calib.design.solvers.pose_refinement import refine as refine_poses
 from doe_calib.design.solvers.relaxation import (equivalence_ratio, information,
-                                                 packed_information, packed_size, relax)
+                                                 packed_information, relax)
 from doe_calib.errors import OptionError, SolverError
 
 #: Random designs of the same size the design is compared with.
@@ -91,12 +91,11 @@ class CriterionGoal(Goal):
                                                         self.task_point)
         crit = Criterion.from_name(self.criterion, t)
         stage("information", f"{len(q)} candidates")
-        blocks = blocks_for(model, params, q, loads, setting.sigma)
+        blocks, room = candidate_information(
+            model, params, q, loads, setting.sigma,
+            n_poses if setting.refine and candidates.refinable else 0)
         check_enough_poses(n_poses, blocks, model.tool.n_markers, len(loads), setting.rng)
-        room = np.empty((len(blocks) + (n_poses if setting.refine and candidates.refinable
-                                        else 0), packed_size(blocks.shape[2])))
-        packed = packed_information(blocks, out=room[:len(blocks)])
-        return CriterionInformation(params, crit, t, blocks, packed, room, q,
+        return CriterionInformation(params, crit, t, blocks, room[:len(blocks)], room, q,
                                     np.arange(len(q)))
 
     def relaxation(self, setting, info, stage):
@@ -112,13 +111,10 @@ class CriterionGoal(Goal):
         if len(pool) < n_poses:
             raise SolverError(f"only {len(pool)} candidates a program can reach for "
                               f"{n_poses} poses")
-        every = len(pool) == len(allowed)  # no copy of every block when none is removed
-        made = exact_design(info.blocks if every else info.blocks[pool], n_poses,
-                            info.criterion, relaxed.weights[pool], None,
-                            None if cov is None else cov.bins(info.q)[pool],
-                            0 if cov is None else cov.min_bins,
-                            packed=info.packed if every else info.packed[pool])
-        return replace(made, indices=pool[made.indices])
+        return exact_design(info.blocks, n_poses, info.criterion, relaxed.weights, None,
+                            None if cov is None else cov.bins(info.q),
+                            0 if cov is None else cov.min_bins, packed=info.packed, among=pool,
+                            workers=None)
 
     def refinement(self, setting, candidates, info, choice, stage) -> Refined:
         model, robot, collision = setting.model, setting.model.robot, setting.collision

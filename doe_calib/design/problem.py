@@ -1,18 +1,25 @@
 """The design problem in numbers: per-candidate information blocks of the free parameters."""
 from __future__ import annotations
 
+import mmap
 from dataclasses import dataclass
 from math import ceil
 
 import numpy as np
 
 from doe_calib.design.batch import map_poses
+from doe_calib.design.solvers.relaxation import packed_information, packed_size
 from doe_calib.design.solvers.symbolic import pose_blocks
 from doe_calib.errors import OptionError
 from doe_calib.estimation.identifiability import analyse
 from doe_calib.io.measurements import Configurations
 from doe_calib.model.evaluation import evaluate, observation_matrix
 from doe_calib.model.loads import hanging_mass_wrench
+from doe_calib.runtime.forked import forked_map
+from doe_calib.runtime.parallel import default_workers
+
+#: Fewest candidate poses per forked share of :func:`candidate_information`.
+_SHARE = 2000
 
 
 @dataclass(frozen=True)
@@ -61,6 +68,54 @@ def blocks_for(model, params, q, loads, sigma: float) -> np.ndarray:
         return np.zeros((len(q), (len(loads) + 1) * 3 * model.tool.n_markers, 0))
     (blocks,) = map_poses(pose_blocks(model, params, loads, sigma), q)
     return blocks
+
+
+def candidate_information(model, params, q, loads, sigma: float, spare: int = 0,
+                          workers: int | None = None) -> tuple:
+    """The candidates' blocks and information, computed in forked shares of the poses.
+
+    The blocks are :func:`blocks_for`'s, shape (K, r, F); their information
+    is :func:`.relaxation.packed_information`, held in the first K rows of an
+    array of shape (K + ``spare``, F(F+1)/2) (the spare rows free for more
+    candidates). Shares of at least :data:`_SHARE` poses are computed by
+    ``workers`` forked processes (:func:`~doe_calib.runtime.forked.forked_map`;
+    None: one per CPU) into memory this process shares with them; each pose's
+    numbers are its own, so they do not depend on the shares.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        The blocks and the packed information with its spare rows.
+    """
+    q = np.atleast_2d(np.asarray(q, float))
+    k, shares = len(q), max(1, min(default_workers() if workers is None else workers,
+                                   len(q) // _SHARE))
+    if shares == 1 or not params.free.any():
+        blocks = blocks_for(model, params, q, loads, sigma)
+        room = np.empty((k + spare, packed_size(blocks.shape[2])))
+        packed_information(blocks, out=room[:k])
+        return blocks, room
+    function = pose_blocks(model, params, loads, sigma)
+    blocks = _shared_empty((k, *function.size_out(0)))
+    room = _shared_empty((k + spare, packed_size(blocks.shape[2])))
+    edges = np.linspace(0, k, shares + 1).astype(int)
+    forked_map(_information_share, (function, q, edges, blocks, room), shares, shares)
+    return blocks, room
+
+
+def _information_share(shared, i: int) -> None:
+    """Share i of :func:`candidate_information`, written into its arrays."""
+    function, q, edges, blocks, room = shared
+    share = slice(edges[i], edges[i + 1])
+    (blocks[share],) = map_poses(function, q[share])
+    packed_information(blocks[share], out=room[share])
+
+
+def _shared_empty(shape: tuple) -> np.ndarray:
+    """An array of ``shape`` in memory shared with the processes this one forks: their writes
+    are seen here."""
+    return np.frombuffer(mmap.mmap(-1, max(8 * int(np.prod(shape)), 1)),
+                         dtype=float).reshape(shape)
 
 
 def task_matrix(model, params, configurations, point=(0.0, 0.0, 0.0)) -> np.ndarray:

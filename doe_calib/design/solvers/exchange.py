@@ -18,6 +18,7 @@ from doe_calib.design.solvers.relaxation import (
     traces,
 )
 from doe_calib.errors import SolverError
+from doe_calib.runtime.forked import forked_map
 
 _PER_BIN = 50  # best candidates of each bin always searched when coverage is asked
 _NOISE = 1e-6  # relaxation weights below this fraction of the largest rank as zero
@@ -83,22 +84,23 @@ def best_added(criterion, m: np.ndarray, blocks: np.ndarray, allowed: np.ndarray
     bound = base + r * np.log1p((packed @ packed_weights(np.linalg.inv(m)))[index] / r)
     rank = np.argsort(-bound, kind="stable")
     order, bound = index[rank], bound[rank]
-    best, value = -1, -np.inf
+    best, value, added = -1, -np.inf, criterion.adding(m)
     for s in range(0, order.size, _BATCH):
         if bound[s] <= value:
             break
-        values = criterion.added_values(m, blocks[order[s:s + _BATCH]])
+        values = added(blocks[order[s:s + _BATCH]])
         j = int(np.argmax(values))
         if values[j] > value:
             best, value = int(order[s + j]), float(values[j])
     return best, value
 
 
-def _sensitivities(blocks, weights, crit, packed=None):
-    """ψ_i of every candidate at the relaxation's information."""
-    support = weights > 0  # zero weights add nothing to the information
-    h, _ = crit.sensitivity(regularised(information(blocks[support], weights[support])))
-    return traces(blocks, h) if packed is None else packed @ packed_weights(h)
+def _sensitivities(blocks, among, weights, crit, packed=None):
+    """ψ_i of the candidates ``among`` at the information of their relaxation ``weights``."""
+    support = among[weights > 0]  # zero weights add nothing to the information
+    h, _ = crit.sensitivity(regularised(information(blocks[support], weights[weights > 0])))
+    psi = traces(blocks, h) if packed is None else packed @ packed_weights(h)
+    return psi if len(among) == len(psi) else psi[among]
 
 
 def _pool(weights, psi, size, bins, noise=0.0):
@@ -185,10 +187,19 @@ def _exchange(blocks, n, crit, chosen, candidates, bins, min_bins, max_sweeps, p
     return chosen, float(current), sweeps, status
 
 
+def _run(shared, i: int) -> tuple:
+    """The exchange from start i of :func:`exact_design`: (chosen, value, sweeps, status)."""
+    blocks, n, crit, starts, bins, min_bins, max_sweeps, packed = shared
+    start, candidates = starts[i]
+    return _exchange(blocks, n, crit, start, candidates, bins, min_bins, max_sweeps,
+                     None if packed is None else packed[candidates])
+
+
 def exact_design(blocks: np.ndarray, n: int, criterion="D",
                  weights: np.ndarray | None = None, task: np.ndarray | None = None,
                  bins: np.ndarray | None = None, min_bins: int = 0, pool: int = 2000,
-                 max_sweeps: int = 50, packed: np.ndarray | None = None) -> DesignOutcome:
+                 max_sweeps: int = 50, packed: np.ndarray | None = None,
+                 among: np.ndarray | None = None, workers: int | None = 1) -> DesignOutcome:
     """n distinct candidates with a (locally) maximal criterion of Σ B_iᵀB_i.
 
     Parameters
@@ -212,6 +223,14 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
         Distinct bins the n poses must use.
     packed : ndarray, shape (K, p(p+1)/2), optional
         The blocks' :func:`.relaxation.packed_information`, if at hand.
+    among : ndarray of int, optional
+        The candidates that may be chosen, increasing (default every one): the design is
+        that of ``blocks[among]`` with ``weights[among]`` and ``bins[among]``, without a
+        copy of their blocks (the relaxation's weights of the others are ignored).
+    workers : int, optional
+        Processes running the exchange's starts at once
+        (:func:`~doe_calib.runtime.forked.forked_map`; None: one per CPU). Each start's
+        exchange is its own: the design does not depend on it.
 
     Returns
     -------
@@ -227,18 +246,22 @@ def exact_design(blocks: np.ndarray, n: int, criterion="D",
     """
     crit = Criterion.from_name(criterion, task)
     k = blocks.shape[0]
-    weights = np.full(k, 1.0 / k) if weights is None else weights
-    psi = _sensitivities(blocks, weights, crit, packed)
-    best, tried = None, []
+    among = np.arange(k) if among is None else np.asarray(among)
+    weights = np.full(len(among), 1.0 / len(among)) if weights is None else weights[among]
+    psi = _sensitivities(blocks, among, weights, crit, packed)
+    starts = []
     for noise in (0.0, _NOISE):  # the pool as ranked by every weight, then by the heavy ones
-        order, candidates = _pool(weights, psi, min(pool, k), bins, noise)
+        order, candidates = _pool(weights, psi, min(pool, len(among)),
+                                  None if bins is None else bins[among], noise)
+        order, candidates = among[order], among[candidates]
         start = order[:n].tolist()
-        if any(np.array_equal(candidates, c) and start == s for c, s in tried):
-            continue
-        tried.append((candidates, start))
-        run = _exchange(blocks, n, crit, start, candidates, bins, min_bins, max_sweeps,
-                        None if packed is None else packed[candidates])
-        if best is None or run[1] > best[1]:
+        if not any(np.array_equal(candidates, c) and start == s for s, c in starts):
+            starts.append((start, candidates))
+    runs = forked_map(_run, (blocks, n, crit, starts, bins, min_bins, max_sweeps, packed),
+                      len(starts), workers)
+    best = runs[0]
+    for run in runs[1:]:
+        if run[1] > best[1]:
             best = run
     chosen, current, sweeps, status = best
     indices = np.array(chosen)
