@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.collision.clearance import Workspace
+from doe_calib.collision.hulls import HULL_SLACK
 from doe_calib.collision.shapes import frame_along
 
 #: Radius of the capsule standing for a tracker beam, m (the beam and a little aiming error).
@@ -64,14 +65,21 @@ class _Sight:
     """What the beams of one collision model are checked against (computed once per workspace).
 
     ``markers``: (marker name, its object index, the objects its beam is checked against, in
-    checking order); ``segment``: per object, its axis (two points, local frame, m) and radius
-    (m) for a sphere or capsule, else None; ``box``: per object, its local bounding box
-    (lower, upper corners, m).
+    checking order); ``pairs``: (row in ``markers``, object) of every (beam, object) pair,
+    marker by marker in checking order, (P, 2); ``segment``: per object, its axis (two points,
+    local frame, m) and radius (m) for a sphere or capsule, else None; ``box``: per object, its
+    local bounding box (lower, upper corners, m); ``chain``: the joints, as
+    :func:`_joint_frames` takes them; ``column``, ``local``: per object, its joint's column in
+    :func:`_joint_frames` and its placement on that joint (G, 4, 4), m.
     """
 
     markers: tuple
+    pairs: np.ndarray
     segment: tuple
     box: tuple
+    chain: tuple
+    column: tuple
+    local: np.ndarray
 
 
 def _sight(cm) -> _Sight:
@@ -103,25 +111,42 @@ def _sight(cm) -> _Sight:
         half = shape.halfLength if isinstance(shape, coal.Capsule) else 0.0
         segment.append((np.array([[0, 0, -half], [0, 0, half]]), shape.radius)
                        if isinstance(shape, (coal.Sphere, coal.Capsule)) else None)
-    return _Sight(tuple(markers), tuple(segment), tuple(box))
+    pairs = np.array([(a, k) for a, (_, _, others) in enumerate(markers) for k in others],
+                     int).reshape(-1, 2)
+    chain = _chain(cm)
+    return _Sight(tuple(markers), pairs, tuple(segment), tuple(box), chain,
+                  tuple(g.parentJoint for g in objects),
+                  np.array([g.placement.homogeneous for g in objects]))
 
 
-def _placements(cm, q, ws):
-    """Every object's placement at each pose of q (M, N): rotations (M, G, 3, 3) and
-    origins (M, G, 3), m."""
+def _chain(cm) -> tuple:
+    """Per joint of the model, in order: its parent, its placement in its parent (4 × 4, m),
+    its axis as a unit twist (linear, angular: a prismatic or revolute joint's) and the column
+    of the design's q moving it."""
     import pinocchio as pin
 
-    objects = cm.geometry.geometryObjects
-    joints = sorted({g.parentJoint for g in objects})
-    frames = np.empty((len(q), len(joints), 4, 4))
-    for m, x in enumerate(cm.configurations(q).T):
-        pin.forwardKinematics(cm.model, ws.data, x)
-        for c, j in enumerate(joints):
-            frames[m, c] = ws.data.oMi[j].homogeneous
-    column = [joints.index(g.parentJoint) for g in objects]
-    local = np.array([g.placement.homogeneous for g in objects])
-    placed = np.einsum("mgij,gjk->mgik", frames[:, column], local)
-    return placed[:, :, :3, :3], placed[:, :, :3, 3]
+    model, data = cm.model, cm.model.createData()
+    pin.computeJointJacobians(model, data, pin.neutral(model))
+    return tuple((model.parents[j], model.jointPlacements[j].homogeneous,
+                  pin.getJointJacobian(model, data, j, pin.LOCAL)[:, model.joints[j].idx_v],
+                  cm.joint_names.index(model.names[j])) for j in range(1, model.njoints))
+
+
+def _joint_frames(chain, q) -> np.ndarray:
+    """Every joint's placement at each pose of q (M, N), rad/m: (M, joints, 4, 4), m, the
+    universe first (Pinocchio's forward kinematics, in numpy over the poses)."""
+    out = np.empty((len(q), 1 + len(chain), 4, 4))
+    out[:, 0] = np.eye(4)
+    motion = np.zeros((len(q), 4, 4))
+    motion[:, 3, 3] = 1.0
+    for j, (parent, placement, twist, k) in enumerate(chain, start=1):
+        theta = q[:, k, None, None]
+        v, w = twist[:3], twist[3:]
+        hat = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
+        motion[:, :3, :3] = np.eye(3) + np.sin(theta) * hat + (1 - np.cos(theta)) * (hat @ hat)
+        motion[:, :3, 3] = theta[:, 0] * v  # zero for a revolute joint
+        out[:, j] = out[:, parent] @ placement @ motion
+    return out
 
 
 def _segment_distance(p, u, a, b):
@@ -152,39 +177,43 @@ def _misses(p, u, lower, upper) -> np.ndarray:
     return np.maximum(enter.max(-1), 0) > np.minimum(leave.min(-1), 1)
 
 
-def _verdicts(cm, sight, q, ws) -> np.ndarray:
-    """Per pose of q (M, N), marker and object: free, blocked or to ask coal (M, n_markers,
-    G), by numpy; free for the objects a marker's beam is not checked against."""
-    rotation, origin = _placements(cm, q, ws)
+def _verdicts(cm, sight, q) -> np.ndarray:
+    """Per pose of q (M, N) and pair of ``sight.pairs``: free, blocked or to ask coal (M, P),
+    by numpy; free for every pair of a beam too short to check."""
+    placed = _joint_frames(sight.chain, q)[:, sight.column] @ sight.local
+    rotation, origin = placed[:, :, :3, :3], placed[:, :, :3, 3]
     tracker = np.asarray(cm.tracker, float)
-    objects = cm.geometry.geometryObjects
-    state = np.full((len(q), len(sight.markers), len(objects)), _FREE)
-    for a, (_, i, others) in enumerate(sight.markers):
-        line = origin[:, i] - tracker
-        norm = np.linalg.norm(line, axis=1)
-        length = norm - objects[i].geometry.radius - BEAM_RADIUS - _GAP
-        end = tracker + line / norm[:, None] * np.maximum(length, 0)[:, None]
-        on = length > 0
-        for k in others:
-            if sight.segment[k] is not None:
-                axis, radius = sight.segment[k]
-                ax = np.einsum("mij,pj->mpi", rotation[:, k], axis) + origin[:, k, None]
-                d = _segment_distance(tracker, end, ax[:, 0], ax[:, 1]) - radius - BEAM_RADIUS
-                state[:, a, k] = np.where(d > _BAND, _FREE, np.where(d < -_BAND, _BLOCKED, _ASK))
-            else:
-                lower, upper = sight.box[k]
-                ends = np.einsum("mji,mpj->mpi", rotation[:, k],  # in the object's frame
-                                 np.stack([np.broadcast_to(tracker, end.shape), end], 1)
-                                 - origin[:, k, None])
-                missed = _misses(ends[:, 0], ends[:, 1], lower - BEAM_RADIUS - _BAND,
-                                 upper + BEAM_RADIUS + _BAND)
-                state[:, a, k] = np.where(missed, _FREE, _ASK)
-        state[~on, a] = _FREE
+    mark = [i for _, i, _ in sight.markers]
+    line = origin[:, mark] - tracker
+    norm = np.linalg.norm(line, axis=2)
+    length = norm - [sight.segment[i][1] for i in mark] - BEAM_RADIUS - _GAP
+    end = tracker + line / norm[..., None] * np.maximum(length, 0)[..., None]
+    a, k = sight.pairs.T
+    state = np.full((len(q), len(a)), _FREE)
+    round_ = np.array([sight.segment[i] is not None for i in k], bool)
+    if round_.any():  # spheres and capsules: by the distance between the axes
+        s = np.flatnonzero(round_)
+        axes = np.array([sight.segment[i][0] for i in k[s]])  # (S, 2, 3), local
+        ax = axes @ rotation[:, k[s]].swapaxes(-1, -2) + origin[:, k[s], None]
+        d = _segment_distance(tracker, end[:, a[s]], ax[:, :, 0], ax[:, :, 1]) \
+            - [sight.segment[i][1] for i in k[s]] - BEAM_RADIUS
+        state[:, s] = np.where(d > _BAND, _FREE, np.where(d < -_BAND, _BLOCKED, _ASK))
+    if not round_.all():  # any other body: free when the axis misses its box, widened
+        b = np.flatnonzero(~round_)
+        turn, at = rotation[:, k[b]], origin[:, k[b]]
+        ends = np.stack([np.broadcast_to(tracker, at.shape), end[:, a[b]]], 2) - at[:, :, None]
+        local = ends @ turn  # in the object's frame, (M, B, 2, 3)
+        missed = _misses(local[:, :, 0], local[:, :, 1],
+                         np.array([sight.box[i][0] for i in k[b]]) - BEAM_RADIUS - _BAND,
+                         np.array([sight.box[i][1] for i in k[b]]) + BEAM_RADIUS + _BAND)
+        state[:, b] = np.where(missed, _FREE, _ASK)
+    state[~(length > 0)[:, a]] = _FREE
     return state
 
 
-def _beams(cm, q, ws) -> list:
-    """Every blocked beam at each pose of q (M, N): a tuple of :class:`BlockedBeam` per pose."""
+def _beams(cm, q, ws, first: bool = False) -> list:
+    """Every blocked beam at each pose of q (M, N): a tuple of :class:`BlockedBeam` per pose
+    (``first``: only the first marker's, in checking order)."""
     import pinocchio as pin
 
     q = np.atleast_2d(np.asarray(q, float))
@@ -192,46 +221,70 @@ def _beams(cm, q, ws) -> list:
         return [()] * len(q)
     if ws.sight is None:
         ws.sight = _sight(cm)
-    sight, objects = ws.sight, cm.geometry.geometryObjects
-    tracker = np.asarray(cm.tracker, float)
-    out = []
+    sight, test = ws.sight, _Test(cm, ws)
+    markers, pairs = sight.markers, sight.pairs.tolist()
+    out = [()] * len(q)
     for start in range(0, len(q), _CHUNK):
         chunk = q[start:start + _CHUNK]
-        state = _verdicts(cm, sight, chunk, ws)
-        for m in range(len(chunk)):
-            found, placed = [], False
-            for a in np.flatnonzero((state[m] != _FREE).any(axis=1)):
-                marker, i, others = sight.markers[a]
-                for k in others:
-                    verdict = state[m, a, k]
-                    if verdict == _ASK:
-                        if not placed:
-                            pin.updateGeometryPlacements(cm.model, ws.data, cm.geometry,
-                                                         ws.geometry,
-                                                         cm.configurations(chunk[m])[:, 0])
-                            placed = True
-                        verdict = _collide(ws, objects, tracker, i, k)
-                    if verdict == _BLOCKED:
-                        found.append(BlockedBeam(marker, cm.names[k]))
+        state = _verdicts(cm, sight, chunk)
+        for m in np.flatnonzero((state != _FREE).any(axis=1)).tolist():
+            found, placed, done = [], False, -1  # done: the last marker found blocked
+            for (a, k), verdict in zip(pairs, state[m].tolist()):
+                if verdict == _FREE or a == done:
+                    continue
+                if verdict == _ASK:
+                    if not placed:
+                        pin.updateGeometryPlacements(cm.model, ws.data, cm.geometry,
+                                                     ws.geometry,
+                                                     cm.configurations(chunk[m])[:, 0])
+                        placed = True
+                    verdict = test(markers[a][1], k)
+                if verdict == _BLOCKED:
+                    found.append(BlockedBeam(markers[a][0], cm.names[k]))
+                    if first:
                         break
-            out.append(tuple(found))
+                    done = a
+            out[start + m] = tuple(found)
     return out
 
 
-def _collide(ws, objects, tracker, i, k) -> int:
-    """Coal's test of the beam to marker object i against object k, placed in ``ws``."""
-    import coal
+class _Test:
+    """Coal's test of a beam against an object placed in a workspace's geometry data: on the
+    object's convex hull first when it has one (:mod:`.hulls`; hull-free is free), then on
+    the object itself. The hull is tested with a margin of
+    :data:`~doe_calib.collision.hulls.HULL_SLACK`, above coal's tolerances."""
 
-    p = ws.geometry.oMg[i].translation
-    line = p - tracker
-    length = float(np.linalg.norm(line)) - objects[i].geometry.radius - BEAM_RADIUS - _GAP
-    frame = frame_along(tracker + line / np.linalg.norm(line) * length / 2, line)
-    where = ws.geometry.oMg[k]
-    hit = coal.collide(coal.Capsule(BEAM_RADIUS, length),
-                       coal.Transform3s(frame[:3, :3], frame[:3, 3]), objects[k].geometry,
-                       coal.Transform3s(where.rotation, where.translation),
-                       coal.CollisionRequest(), coal.CollisionResult())
-    return _BLOCKED if hit else _FREE
+    def __init__(self, cm, ws):
+        import coal
+
+        self.objects, self.geometry = cm.geometry.geometryObjects, ws.geometry
+        self.tracker = np.asarray(cm.tracker, float)
+        self.hulls = [None] * len(self.objects) if ws.hulls is None else [
+            h.geometry if isinstance(h.geometry, coal.ConvexBase) else None
+            for h in cm.hulls.geometryObjects]
+        self.request, self.near = coal.CollisionRequest(), coal.CollisionRequest()
+        self.near.security_margin = HULL_SLACK
+
+    def __call__(self, i, k) -> int:
+        """The beam to marker object i against object k: blocked or free."""
+        import coal
+
+        p = self.geometry.oMg[i].translation
+        line = p - self.tracker
+        length = float(np.linalg.norm(line)) - self.objects[i].geometry.radius \
+            - BEAM_RADIUS - _GAP
+        frame = frame_along(self.tracker + line / np.linalg.norm(line) * length / 2, line)
+        beam = (coal.Capsule(BEAM_RADIUS, length),
+                coal.Transform3s(frame[:3, :3], frame[:3, 3]))
+        where = self.geometry.oMg[k]
+        where = coal.Transform3s(where.rotation, where.translation)
+        hull = self.hulls[k]
+        if hull is not None and not coal.collide(*beam, hull, where, self.near,
+                                                 coal.CollisionResult()):
+            return _FREE
+        hit = coal.collide(*beam, self.objects[k].geometry, where, self.request,
+                           coal.CollisionResult())
+        return _BLOCKED if hit else _FREE
 
 
 def blocked_beams(cm, q, workspace: Workspace | None = None) -> tuple:
@@ -255,5 +308,5 @@ def blocked_beams(cm, q, workspace: Workspace | None = None) -> tuple:
 
 def screen_beams(cm, q, workspace: Workspace | None = None) -> list:
     """For each pose of q (M, N), its first blocked beam, or None when every beam is free."""
-    found = _beams(cm, q, Workspace(cm) if workspace is None else workspace)
+    found = _beams(cm, q, Workspace(cm) if workspace is None else workspace, first=True)
     return [blocked[0] if blocked else None for blocked in found]
