@@ -12,13 +12,16 @@ checked as always in contact). The
 incidence angle at the marker is a separate, smooth design constraint
 (:mod:`doe_calib.design.candidates.feasibility`).
 
-Many poses are screened at once: numpy places every body at every pose and
-decides each (beam, body) pair it can — a sphere or capsule by its exact
-distance to the beam's axis, any other body as free when the beam's axis misses
-its local bounding box widened by the beam's radius —, leaving a band of
-:data:`_BAND` around contact to coal. A pair is called free or blocked only
-where coal's test would say the same, and pairs are taken in the same order, so
-the body reported is the one the test of every pair finds.
+Many poses are screened at once: numpy places every joint at every pose
+(forward kinematics over the poses), brings the tracker and the beams' ends into
+each joint's frame and decides each (beam, body) pair it can there — a sphere or
+capsule by its exact distance to the beam's axis, any other body as free when the
+beam's axis misses its local bounding box widened by the beam's radius —, leaving
+a band of :data:`_BAND` around contact to coal. A pair is called free or blocked
+only where coal's test would say the same, and pairs are taken in the same order,
+so the body reported is the one the test of every pair finds. Coal tests the few
+pairs left (mostly a link whose bounding box the beam crosses) on the meshes: their
+convex hulls, in the UR5 cell, would clear a fifth of them at nearly a mesh test's cost.
 """
 from __future__ import annotations
 
@@ -27,8 +30,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.collision.clearance import Workspace
-from doe_calib.collision.hulls import HULL_SLACK
-from doe_calib.collision.shapes import frame_along
 
 #: Radius of the capsule standing for a tracker beam, m (the beam and a little aiming error).
 BEAM_RADIUS = 0.003
@@ -36,8 +37,9 @@ BEAM_RADIUS = 0.003
 _GAP = 0.001
 #: Distance either side of contact within which coal decides a (beam, body) pair, m.
 _BAND = 1e-6
-#: Poses placed at once (memory: about 1 kB per body and pose).
-_CHUNK = 4096
+#: Poses judged at once (memory: about 200 B per (beam, body) pair and pose; small
+#: enough to stay in cache: 512 poses are screened faster than 4096).
+_CHUNK = 512
 _FREE, _BLOCKED, _ASK = 0, 1, 2
 
 
@@ -66,20 +68,32 @@ class _Sight:
 
     ``markers``: (marker name, its object index, the objects its beam is checked against, in
     checking order); ``pairs``: (row in ``markers``, object) of every (beam, object) pair,
-    marker by marker in checking order, (P, 2); ``segment``: per object, its axis (two points,
-    local frame, m) and radius (m) for a sphere or capsule, else None; ``box``: per object, its
-    local bounding box (lower, upper corners, m); ``chain``: the joints, as
-    :func:`_joint_frames` takes them; ``column``, ``local``: per object, its joint's column in
-    :func:`_joint_frames` and its placement on that joint (G, 4, 4), m.
+    marker by marker in checking order, (P, 2); ``chain``: the joints, as
+    :func:`_joint_frames` takes them; ``joint``, ``centre``, ``radius``: per marker, its
+    joint's column in them, its centre on that joint (m) and its radius (m); ``used``: the
+    joints carrying the pairs' objects (columns), each pair's in ``slot``. A pair whose object
+    is a sphere or capsule (indices ``round``) has its axis (two points on its joint, m) in
+    ``axis`` and its radius in ``size``; any other (indices ``boxed``) its placement on its
+    joint (``turn``, ``shift``) and its local bounding box widened by the beam's radius and
+    :data:`_BAND` (``lower``, ``upper``), m.
     """
 
     markers: tuple
     pairs: np.ndarray
-    segment: tuple
-    box: tuple
     chain: tuple
-    column: tuple
-    local: np.ndarray
+    joint: np.ndarray
+    centre: np.ndarray
+    radius: np.ndarray
+    used: np.ndarray
+    slot: np.ndarray
+    round: np.ndarray
+    axis: np.ndarray
+    size: np.ndarray
+    boxed: np.ndarray
+    turn: np.ndarray
+    shift: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
 
 
 def _sight(cm) -> _Sight:
@@ -103,20 +117,34 @@ def _sight(cm) -> _Sight:
                          or f"{n} vs {name}" in touching or f"{name} vs {n}" in touching
                          or (k != i and overlaps(i, k))}
             markers.append((marker, i, [k for k in range(len(cm.names)) if k not in own]))
-    segment, box = [], []
-    for g in objects:
-        shape = g.geometry.clone()
-        shape.computeLocalAABB()
-        box.append((np.asarray(shape.aabb_local.min_), np.asarray(shape.aabb_local.max_)))
-        half = shape.halfLength if isinstance(shape, coal.Capsule) else 0.0
-        segment.append((np.array([[0, 0, -half], [0, 0, half]]), shape.radius)
-                       if isinstance(shape, (coal.Sphere, coal.Capsule)) else None)
     pairs = np.array([(a, k) for a, (_, _, others) in enumerate(markers) for k in others],
                      int).reshape(-1, 2)
-    chain = _chain(cm)
-    return _Sight(tuple(markers), pairs, tuple(segment), tuple(box), chain,
-                  tuple(g.parentJoint for g in objects),
-                  np.array([g.placement.homogeneous for g in objects]))
+    column = np.array([g.parentJoint for g in objects], int)
+    used = np.unique(column[pairs[:, 1]])
+    rounded, axis, size, boxed, turn, shift, lower, upper = [], [], [], [], [], [], [], []
+    for p, k in enumerate(pairs[:, 1].tolist()):
+        shape, at = objects[k].geometry, objects[k].placement
+        if isinstance(shape, (coal.Sphere, coal.Capsule)):
+            half = shape.halfLength if isinstance(shape, coal.Capsule) else 0.0
+            rounded.append(p)
+            axis.append(at.translation + np.outer([-half, half], at.rotation[:, 2]))
+            size.append(shape.radius)
+        else:
+            shape = shape.clone()
+            shape.computeLocalAABB()
+            boxed.append(p)
+            turn.append(at.rotation)
+            shift.append(at.translation)
+            lower.append(np.asarray(shape.aabb_local.min_) - BEAM_RADIUS - _BAND)
+            upper.append(np.asarray(shape.aabb_local.max_) + BEAM_RADIUS + _BAND)
+    mark = [i for _, i, _ in markers]
+    return _Sight(tuple(markers), pairs, _chain(cm), column[mark],
+                  np.array([objects[i].placement.translation for i in mark]).reshape(-1, 3),
+                  np.array([objects[i].geometry.radius for i in mark]), used,
+                  np.searchsorted(used, column[pairs[:, 1]]), np.array(rounded, int),
+                  np.array(axis).reshape(-1, 2, 3), np.array(size), np.array(boxed, int),
+                  np.array(turn).reshape(-1, 3, 3), np.array(shift).reshape(-1, 3),
+                  np.array(lower).reshape(-1, 3), np.array(upper).reshape(-1, 3))
 
 
 def _chain(cm) -> tuple:
@@ -166,47 +194,43 @@ def _segment_distance(p, u, a, b):
 
 
 def _misses(p, u, lower, upper) -> np.ndarray:
-    """Whether segment p→u (… × 3) misses the box [lower, upper] (slab test)."""
-    d = u - p
-    inside = (p >= lower) & (p <= upper)
+    """Whether segment p→u (… × 3) surely misses the box [lower, upper] (slab test; False
+    where rounding leaves it undecided, a segment on a face's plane)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        t1, t2 = (lower - p) / d, (upper - p) / d
-    parallel = d == 0
-    enter = np.where(parallel, np.where(inside, -np.inf, np.inf), np.minimum(t1, t2))
-    leave = np.where(parallel, np.where(inside, np.inf, -np.inf), np.maximum(t1, t2))
-    return np.maximum(enter.max(-1), 0) > np.minimum(leave.min(-1), 1)
+        inverse = 1.0 / (u - p)  # ±inf along a face: no bound from that axis, or out
+        t1, t2 = (lower - p) * inverse, (upper - p) * inverse
+    enter, leave = np.minimum(t1, t2).max(-1), np.maximum(t1, t2).min(-1)
+    return np.maximum(enter, 0) > np.minimum(leave, 1)
 
 
 def _verdicts(cm, sight, q) -> np.ndarray:
     """Per pose of q (M, N) and pair of ``sight.pairs``: free, blocked or to ask coal (M, P),
     by numpy; free for every pair of a beam too short to check."""
-    placed = _joint_frames(sight.chain, q)[:, sight.column] @ sight.local
-    rotation, origin = placed[:, :, :3, :3], placed[:, :, :3, 3]
+    frames = _joint_frames(sight.chain, q)
+    rotation, origin = frames[..., :3, :3], frames[..., :3, 3]
+    at = (rotation[:, sight.joint] @ sight.centre[..., None])[..., 0] + origin[:, sight.joint]
     tracker = np.asarray(cm.tracker, float)
-    mark = [i for _, i, _ in sight.markers]
-    line = origin[:, mark] - tracker
+    line = at - tracker
     norm = np.linalg.norm(line, axis=2)
-    length = norm - [sight.segment[i][1] for i in mark] - BEAM_RADIUS - _GAP
-    end = tracker + line / norm[..., None] * np.maximum(length, 0)[..., None]
-    a, k = sight.pairs.T
+    length = norm - sight.radius - BEAM_RADIUS - _GAP
+    ends = np.concatenate([np.broadcast_to(tracker, (len(q), 1, 3)),
+                           tracker + line / norm[..., None] * np.maximum(length, 0)[..., None]],
+                          axis=1)  # the tracker, then each beam's end, m
+    # on each joint carrying a body: the tracker and the beams' ends in its frame
+    on = (ends[:, None] - origin[:, sight.used, None]) @ rotation[:, sight.used]
+    a = sight.pairs[:, 0]
+    start, stop = on[:, sight.slot, 0], on[:, sight.slot, 1 + a]  # (M, P, 3)
     state = np.full((len(q), len(a)), _FREE)
-    round_ = np.array([sight.segment[i] is not None for i in k], bool)
-    if round_.any():  # spheres and capsules: by the distance between the axes
-        s = np.flatnonzero(round_)
-        axes = np.array([sight.segment[i][0] for i in k[s]])  # (S, 2, 3), local
-        ax = axes @ rotation[:, k[s]].swapaxes(-1, -2) + origin[:, k[s], None]
-        d = _segment_distance(tracker, end[:, a[s]], ax[:, :, 0], ax[:, :, 1]) \
-            - [sight.segment[i][1] for i in k[s]] - BEAM_RADIUS
-        state[:, s] = np.where(d > _BAND, _FREE, np.where(d < -_BAND, _BLOCKED, _ASK))
-    if not round_.all():  # any other body: free when the axis misses its box, widened
-        b = np.flatnonzero(~round_)
-        turn, at = rotation[:, k[b]], origin[:, k[b]]
-        ends = np.stack([np.broadcast_to(tracker, at.shape), end[:, a[b]]], 2) - at[:, :, None]
-        local = ends @ turn  # in the object's frame, (M, B, 2, 3)
-        missed = _misses(local[:, :, 0], local[:, :, 1],
-                         np.array([sight.box[i][0] for i in k[b]]) - BEAM_RADIUS - _BAND,
-                         np.array([sight.box[i][1] for i in k[b]]) + BEAM_RADIUS + _BAND)
-        state[:, b] = np.where(missed, _FREE, _ASK)
+    if len(sight.round):  # spheres and capsules: by the distance between the axes
+        r = sight.round
+        d = _segment_distance(start[:, r], stop[:, r], sight.axis[:, 0], sight.axis[:, 1]) \
+            - sight.size - BEAM_RADIUS
+        state[:, r] = np.where(d > _BAND, _FREE, np.where(d < -_BAND, _BLOCKED, _ASK))
+    if len(sight.boxed):  # any other body: free when the axis misses its box, widened
+        b = sight.boxed
+        local = [np.einsum("mpi,pij->mpj", x[:, b] - sight.shift, sight.turn, optimize=True)
+                 for x in (start, stop)]  # optimize: a product per pair, over the poses
+        state[:, b] = np.where(_misses(*local, sight.lower, sight.upper), _FREE, _ASK)
     state[~(length > 0)[:, a]] = _FREE
     return state
 
@@ -221,12 +245,14 @@ def _beams(cm, q, ws, first: bool = False) -> list:
         return [()] * len(q)
     if ws.sight is None:
         ws.sight = _sight(cm)
-    sight, test = ws.sight, _Test(cm, ws)
+    sight, objects = ws.sight, cm.geometry.geometryObjects
     markers, pairs = sight.markers, sight.pairs.tolist()
+    tracker = np.asarray(cm.tracker, float)
     out = [()] * len(q)
     for start in range(0, len(q), _CHUNK):
         chunk = q[start:start + _CHUNK]
         state = _verdicts(cm, sight, chunk)
+        configurations = None
         for m in np.flatnonzero((state != _FREE).any(axis=1)).tolist():
             found, placed, done = [], False, -1  # done: the last marker found blocked
             for (a, k), verdict in zip(pairs, state[m].tolist()):
@@ -234,11 +260,12 @@ def _beams(cm, q, ws, first: bool = False) -> list:
                     continue
                 if verdict == _ASK:
                     if not placed:
+                        if configurations is None:
+                            configurations = np.ascontiguousarray(cm.configurations(chunk).T)
                         pin.updateGeometryPlacements(cm.model, ws.data, cm.geometry,
-                                                     ws.geometry,
-                                                     cm.configurations(chunk[m])[:, 0])
+                                                     ws.geometry, configurations[m])
                         placed = True
-                    verdict = test(markers[a][1], k)
+                    verdict = _collide(ws.geometry, objects, tracker, markers[a][1], k)
                 if verdict == _BLOCKED:
                     found.append(BlockedBeam(markers[a][0], cm.names[k]))
                     if first:
@@ -248,43 +275,31 @@ def _beams(cm, q, ws, first: bool = False) -> list:
     return out
 
 
-class _Test:
-    """Coal's test of a beam against an object placed in a workspace's geometry data: on the
-    object's convex hull first when it has one (:mod:`.hulls`; hull-free is free), then on
-    the object itself. The hull is tested with a margin of
-    :data:`~doe_calib.collision.hulls.HULL_SLACK`, above coal's tolerances."""
+def _collide(gdata, objects, tracker, i, k) -> int:
+    """Coal's test of the beam to marker object i against object k, placed in ``gdata``."""
+    import coal
 
-    def __init__(self, cm, ws):
-        import coal
+    line = gdata.oMg[i].translation - tracker
+    n = np.linalg.norm(line)
+    length = float(n) - objects[i].geometry.radius - BEAM_RADIUS - _GAP
+    where = gdata.oMg[k]
+    hit = coal.collide(coal.Capsule(BEAM_RADIUS, length),
+                       coal.Transform3s(_turn_to(line / n), tracker + line / n * length / 2),
+                       objects[k].geometry, coal.Transform3s(where.rotation, where.translation),
+                       coal.CollisionRequest(), coal.CollisionResult())
+    return _BLOCKED if hit else _FREE
 
-        self.objects, self.geometry = cm.geometry.geometryObjects, ws.geometry
-        self.tracker = np.asarray(cm.tracker, float)
-        self.hulls = [None] * len(self.objects) if ws.hulls is None else [
-            h.geometry if isinstance(h.geometry, coal.ConvexBase) else None
-            for h in cm.hulls.geometryObjects]
-        self.request, self.near = coal.CollisionRequest(), coal.CollisionRequest()
-        self.near.security_margin = HULL_SLACK
 
-    def __call__(self, i, k) -> int:
-        """The beam to marker object i against object k: blocked or free."""
-        import coal
-
-        p = self.geometry.oMg[i].translation
-        line = p - self.tracker
-        length = float(np.linalg.norm(line)) - self.objects[i].geometry.radius \
-            - BEAM_RADIUS - _GAP
-        frame = frame_along(self.tracker + line / np.linalg.norm(line) * length / 2, line)
-        beam = (coal.Capsule(BEAM_RADIUS, length),
-                coal.Transform3s(frame[:3, :3], frame[:3, 3]))
-        where = self.geometry.oMg[k]
-        where = coal.Transform3s(where.rotation, where.translation)
-        hull = self.hulls[k]
-        if hull is not None and not coal.collide(*beam, hull, where, self.near,
-                                                 coal.CollisionResult()):
-            return _FREE
-        hit = coal.collide(*beam, self.objects[k].geometry, where, self.request,
-                           coal.CollisionResult())
-        return _BLOCKED if hit else _FREE
+def _turn_to(z) -> np.ndarray:
+    """The rotation of :func:`~doe_calib.collision.shapes.frame_along` whose z axis is the
+    unit vector z (3,), by the same arithmetic, its cross products on Python floats (numpy's
+    per-call overhead was most of the cost of a beam's test)."""
+    z = z.tolist()
+    h = min(range(3), key=lambda j: abs(z[j]))  # the first axis least along z
+    x = np.array([(0.0, -z[2], z[1]), (z[2], 0.0, -z[0]), (-z[1], z[0], 0.0)][h])  # e_h × z
+    x = (x / np.linalg.norm(x)).tolist()
+    y = [z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]]
+    return np.array([[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]])
 
 
 def blocked_beams(cm, q, workspace: Workspace | None = None) -> tuple:
