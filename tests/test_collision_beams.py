@@ -62,3 +62,26 @@ def test_numpy_forward_kinematics_places_the_joints_as_pinocchio(cell):  # noqa:
     for x, placed in zip(cm.configurations(q).T, frames):
         pin.forwardKinematics(cm.model, data, x)
         assert np.abs(np.array([m.homogeneous for m in data.oMi]) - placed).max() < 1e-12
+
+
+def test_numpy_forward_kinematics_of_every_joint_kind():
+    """Revolute and prismatic joints, about any axis, and continuous ones, placed anywhere."""
+    from types import SimpleNamespace
+
+    from doe_calib.collision.model import pinocchio_configurations
+
+    rng = np.random.default_rng(8)
+    model = pin.Model()
+    kinds = (pin.JointModelRZ(), pin.JointModelPX(), pin.JointModelRevoluteUnaligned(
+        *(rng.normal(size=3) / np.sqrt(3))), pin.JointModelRUBY(),
+        pin.JointModelPrismaticUnaligned(*(rng.normal(size=3) / np.sqrt(3))))
+    parent = 0
+    for k, kind in enumerate(kinds):
+        parent = model.addJoint(parent, kind, pin.SE3.Random(), f"j{k}")
+    names = tuple(model.names[1:])
+    q = rng.uniform(-3, 3, (20, len(names)))
+    frames = _joint_frames(_chain(SimpleNamespace(model=model, joint_names=names)), q)
+    data = model.createData()
+    for x, placed in zip(pinocchio_configurations(model, names, q).T, frames):
+        pin.forwardKinematics(model, data, x)
+        assert np.abs(np.array([m.homogeneous for m in data.oMi]) - placed).max() < 1e-12
