@@ -72,7 +72,7 @@ class _Sight:
     :func:`_joint_frames` takes them; ``joint``, ``centre``, ``radius``: per marker, its
     joint's column in them, its centre on that joint (m) and its radius (m); ``used``: the
     joints carrying the pairs' objects (columns), each pair's in ``slot``. A pair whose object
-    is a sphere or capsule (indices ``round``) has its axis (two points on its joint, m) in
+    is a sphere or capsule (indices ``rounded``) has its axis (two points on its joint, m) in
     ``axis`` and its radius in ``size``; any other (indices ``boxed``) its placement on its
     joint (``turn``, ``shift``) and its local bounding box widened by the beam's radius and
     :data:`_BAND` (``lower``, ``upper``), m.
@@ -86,7 +86,7 @@ class _Sight:
     radius: np.ndarray
     used: np.ndarray
     slot: np.ndarray
-    round: np.ndarray
+    rounded: np.ndarray
     axis: np.ndarray
     size: np.ndarray
     boxed: np.ndarray
@@ -194,10 +194,11 @@ def _segment_distance(p, u, a, b):
 
 
 def _misses(p, u, lower, upper) -> np.ndarray:
-    """Whether segment p→u (… × 3) surely misses the box [lower, upper] (slab test; False
-    where rounding leaves it undecided, a segment on a face's plane)."""
+    """Whether segment p→u (… × 3) misses the box [lower, upper] (slab test); False, coal to
+    decide, for a segment parallel to a face and in its plane."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        inverse = 1.0 / (u - p)  # ±inf along a face: no bound from that axis, or out
+        # parallel to a face, ±inf: no bound between the two faces, a miss outside them
+        inverse = 1.0 / (u - p)
         t1, t2 = (lower - p) * inverse, (upper - p) * inverse
     enter, leave = np.minimum(t1, t2).max(-1), np.maximum(t1, t2).min(-1)
     return np.maximum(enter, 0) > np.minimum(leave, 1)
@@ -221,8 +222,8 @@ def _verdicts(cm, sight, q) -> np.ndarray:
     a = sight.pairs[:, 0]
     start, stop = on[:, sight.slot, 0], on[:, sight.slot, 1 + a]  # (M, P, 3)
     state = np.full((len(q), len(a)), _FREE)
-    if len(sight.round):  # spheres and capsules: by the distance between the axes
-        r = sight.round
+    if len(sight.rounded):  # spheres and capsules: by the distance between the axes
+        r = sight.rounded
         d = _segment_distance(start[:, r], stop[:, r], sight.axis[:, 0], sight.axis[:, 1]) \
             - sight.size - BEAM_RADIUS
         state[:, r] = np.where(d > _BAND, _FREE, np.where(d < -_BAND, _BLOCKED, _ASK))
