@@ -12,7 +12,8 @@ The moves the export proves no path can make (collision/passage.py) are searched
 before, by the planner, and proven again. On random poses of the same cell, the screening of a
 pose (``too_close``: free poses, poses hit) and the planner's check of a state (any pair closer
 than its move margin) are timed on the meshes (before) and with the hulls first (now), with
-the same answers.
+the same answers; so is the tracker beams' screening of the free ones (``screen_beams``), against
+its time recorded before it judged a chunk of poses at once in the joints' frames.
 CPU time (user + system) is what a loaded machine does not inflate. The `export` command
 itself, in its own process, is timed too (before: recorded in issue 22 on this machine, and at
 the start of this round of work).
