@@ -12,7 +12,8 @@ The moves the export proves no path can make (collision/passage.py) are searched
 before, by the planner, and proven again. On random poses of the same cell, the screening of a
 pose (``too_close``: free poses, poses hit) and the planner's check of a state (any pair closer
 than its move margin) are timed on the meshes (before) and with the hulls first (now), with
-the same answers.
+the same answers; so is the tracker beams' screening of the free ones (``screen_beams``), against
+its time recorded before it judged a chunk of poses at once in the joints' frames.
 CPU time (user + system) is what a loaded machine does not inflate. The `export` command
 itself, in its own process, is timed too (before: recorded in issue 22 on this machine, and at
 the start of this round of work).
@@ -221,6 +222,33 @@ def _pose_checks(cm, states, n: int = POSES) -> dict:
     return out
 
 
+#: ``screen_beams`` of a free pose of :func:`_beam_screening` before its batching in the joints'
+#: frames (main 4e475f5, this machine), CPU µs.
+BEAMS_BEFORE = 87.1
+
+
+def _beam_screening(n: int = POSES) -> tuple:
+    """CPU µs per pose of ``screen_beams`` (the tracker's beams, collision/beams.py) over the
+    free poses among n random ones of the UR5 cell with 3 kg on the flange, before (recorded)
+    and now; the count of free poses and the share of them blocked."""
+    from doe_calib import Robot, Tool
+    from doe_calib.collision import Workspace, build_collision_model, screen_beams, too_close
+    from doe_calib.design import LoadCase, read_constraints
+
+    robot, tool = Robot.from_urdf(ur5_urdf()), Tool.from_yaml(examples.UR_TOOL_YAML)
+    cm = build_collision_model(robot, tool, [LoadCase(3.0, np.array([0, 0, 0.08]), 0.04)],
+                               read_constraints(examples.UR5_CELL_YAML, robot, tool))
+    lo = np.where(np.isfinite(cm.lower), cm.lower, -np.pi)
+    hi = np.where(np.isfinite(cm.upper), cm.upper, np.pi)
+    q = np.random.default_rng(0).uniform(lo, hi, (n, len(lo)))
+    ws = Workspace(cm)
+    q = q[too_close(cm, q, workspace=ws) < 0]
+    screen_beams(cm, q[:10], ws)  # what the beams are checked against, computed once
+    t0 = cpu_seconds()
+    blocked = sum(b is not None for b in screen_beams(cm, q, ws))
+    return BEAMS_BEFORE, 1e6 * (cpu_seconds() - t0) / len(q), len(q), blocked / len(q)
+
+
 def _pose_rows(checks) -> tuple:
     free = checks["free poses"]
     rows = []
@@ -236,6 +264,17 @@ def _pose_rows(checks) -> tuple:
                      "are too close (now)", after, "µs CPU", after / before,
                      "the same answers")]
     return tuple(rows)
+
+
+def _beam_rows(before, after, free, blocked) -> tuple:
+    """The rows of :func:`_beam_screening`'s figures."""
+    return (Row(f"screen_beams of a free pose ({free} of {POSES} random poses of the cell, "
+                "3 kg on the flange), per pose Pinocchio's placements and numpy per (beam, "
+                "body) pair (before: main 4e475f5, recorded)", before, "µs CPU", 1.0),
+            Row("the same, every pair of a chunk of poses judged at once in the joints' "
+                "frames, coal's test without numpy overhead (now)", after, "µs CPU",
+                after / before, f"{blocked:.0%} of the poses blocked; the same verdicts "
+                                f"(tests/test_collision_beams.py)"))
 
 
 def _blocked_both_ways(blocked) -> tuple:
@@ -281,7 +320,7 @@ def run(quick: bool = False) -> Section:
                 "are too close (now)", fast_s, "s CPU", fast_s / dense_s,
                 f"{1e6 * fast_s / samples:.1f} µs per pose; same first pose and pair for every "
                 f"move"),
-            *_pose_rows(checks),
+            *_pose_rows(checks), *_beam_rows(*_beam_screening()),
             Row(f"{len(blocked)} moves no path can make (the program's turns chosen blind to "
                 "them, as before), searched for by the planner: each search spends its whole "
                 "budget", searched_s, "s CPU", 1.0, "no path found"),

@@ -238,53 +238,6 @@ def test_a_move_checked_again_with_other_margins_or_step_is_the_dense_check(cell
     assert check_segment(cm, qa, qb, 0.3, workspace=ws).pair is not None  # 30 cm: touching
 
 
-def _beams_one_by_one(cm, q):
-    """Per pose of q (M, N), (marker, first body) of each blocked beam: coal's test of every
-    beam against every body it is checked against, pose by pose."""
-    import coal
-
-    from doe_calib.collision.beams import _GAP, BEAM_RADIUS, _sight
-    from doe_calib.collision.shapes import frame_along
-
-    data, gdata, objects = cm.model.createData(), cm.geometry.createData(), \
-        cm.geometry.geometryObjects
-    tracker, out = np.asarray(cm.tracker), []
-    for x in cm.configurations(q).T:
-        pin.updateGeometryPlacements(cm.model, data, cm.geometry, gdata, x)
-        found = []
-        for marker, i, others in _sight(cm).markers:
-            line = gdata.oMg[i].translation - tracker
-            length = np.linalg.norm(line) - objects[i].geometry.radius - BEAM_RADIUS - _GAP
-            frame = frame_along(tracker + line / np.linalg.norm(line) * length / 2, line)
-            for k in others if length > 0 else ():
-                at = gdata.oMg[k]
-                if coal.collide(coal.Capsule(BEAM_RADIUS, length),
-                                coal.Transform3s(frame[:3, :3], frame[:3, 3]),
-                                objects[k].geometry, coal.Transform3s(at.rotation, at.translation),
-                                coal.CollisionRequest(), coal.CollisionResult()):
-                    found.append((marker, cm.names[k]))
-                    break
-        out.append(tuple(found))
-    return out
-
-
-def test_beams_screened_at_once_are_those_coal_finds_pose_by_pose(cell):
-    """The batched beam screening (numpy bounds, coal near contact) blocks the same beams by
-    the same first bodies as coal's test of every beam and body at each pose."""
-    from doe_calib.collision import blocked_beams, screen_beams
-
-    robot, cm = cell
-    lo, hi = _limits(robot)
-    q = np.random.default_rng(31).uniform(lo, hi, (300, robot.n_joints))
-    truth = _beams_one_by_one(cm, q)
-    ws = Workspace(cm)
-    assert [(b.marker, b.body) if b else None for b in screen_beams(cm, q, ws)] == \
-        [found[0] if found else None for found in truth]
-    assert 30 < sum(map(bool, truth)) < 270  # both kinds of pose are tested
-    for x, found in zip(q[:40], truth):
-        assert tuple((b.marker, b.body) for b in blocked_beams(cm, x, ws)) == found
-
-
 def test_poses_screened_in_shares_are_screened_as_one(cell, monkeypatch):
     """The candidates' screening split among forked processes keeps and counts the poses as
     one process screening them all does."""

@@ -12,13 +12,16 @@ checked as always in contact). The
 incidence angle at the marker is a separate, smooth design constraint
 (:mod:`doe_calib.design.candidates.feasibility`).
 
-Many poses are screened at once: numpy places every body at every pose and
-decides each (beam, body) pair it can — a sphere or capsule by its exact
-distance to the beam's axis, any other body as free when the beam's axis misses
-its local bounding box widened by the beam's radius —, leaving a band of
-:data:`_BAND` around contact to coal. A pair is called free or blocked only
-where coal's test would say the same, and pairs are taken in the same order, so
-the body reported is the one the test of every pair finds.
+Many poses are screened at once: numpy places every joint at every pose
+(forward kinematics over the poses), brings the tracker and the beams' ends into
+each joint's frame and decides each (beam, body) pair it can there — a sphere or
+capsule by its exact distance to the beam's axis, any other body as free when the
+beam's axis misses its local bounding box widened by the beam's radius —, leaving
+a band of :data:`_BAND` around contact to coal. A pair is called free or blocked
+only where coal's test would say the same, and pairs are taken in the same order,
+so the body reported is the one the test of every pair finds. Coal tests the few
+pairs left (mostly a link whose bounding box the beam crosses) on the meshes: their
+convex hulls, in the UR5 cell, would clear a fifth of them at nearly a mesh test's cost.
 """
 from __future__ import annotations
 
@@ -27,7 +30,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from doe_calib.collision.clearance import Workspace
-from doe_calib.collision.shapes import frame_along
 
 #: Radius of the capsule standing for a tracker beam, m (the beam and a little aiming error).
 BEAM_RADIUS = 0.003
@@ -35,8 +37,9 @@ BEAM_RADIUS = 0.003
 _GAP = 0.001
 #: Distance either side of contact within which coal decides a (beam, body) pair, m.
 _BAND = 1e-6
-#: Poses placed at once (memory: about 1 kB per body and pose).
-_CHUNK = 4096
+#: Poses judged at once (memory: about 200 B per (beam, body) pair and pose; small
+#: enough to stay in cache: 512 poses are screened faster than 4096).
+_CHUNK = 512
 _FREE, _BLOCKED, _ASK = 0, 1, 2
 
 
@@ -64,14 +67,33 @@ class _Sight:
     """What the beams of one collision model are checked against (computed once per workspace).
 
     ``markers``: (marker name, its object index, the objects its beam is checked against, in
-    checking order); ``segment``: per object, its axis (two points, local frame, m) and radius
-    (m) for a sphere or capsule, else None; ``box``: per object, its local bounding box
-    (lower, upper corners, m).
+    checking order); ``pairs``: (row in ``markers``, object) of every (beam, object) pair,
+    marker by marker in checking order, (P, 2); ``chain``: the joints, as
+    :func:`_joint_frames` takes them; ``joint``, ``centre``, ``radius``: per marker, its
+    joint's column in them, its centre on that joint (m) and its radius (m); ``used``: the
+    joints carrying the pairs' objects (columns), each pair's in ``slot``. A pair whose object
+    is a sphere or capsule (indices ``rounded``) has its axis (two points on its joint, m) in
+    ``axis`` and its radius in ``size``; any other (indices ``boxed``) its placement on its
+    joint (``turn``, ``shift``) and its local bounding box widened by the beam's radius and
+    :data:`_BAND` (``lower``, ``upper``), m.
     """
 
     markers: tuple
-    segment: tuple
-    box: tuple
+    pairs: np.ndarray
+    chain: tuple
+    joint: np.ndarray
+    centre: np.ndarray
+    radius: np.ndarray
+    used: np.ndarray
+    slot: np.ndarray
+    rounded: np.ndarray
+    axis: np.ndarray
+    size: np.ndarray
+    boxed: np.ndarray
+    turn: np.ndarray
+    shift: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
 
 
 def _sight(cm) -> _Sight:
@@ -95,33 +117,64 @@ def _sight(cm) -> _Sight:
                          or f"{n} vs {name}" in touching or f"{name} vs {n}" in touching
                          or (k != i and overlaps(i, k))}
             markers.append((marker, i, [k for k in range(len(cm.names)) if k not in own]))
-    segment, box = [], []
-    for g in objects:
-        shape = g.geometry.clone()
-        shape.computeLocalAABB()
-        box.append((np.asarray(shape.aabb_local.min_), np.asarray(shape.aabb_local.max_)))
-        half = shape.halfLength if isinstance(shape, coal.Capsule) else 0.0
-        segment.append((np.array([[0, 0, -half], [0, 0, half]]), shape.radius)
-                       if isinstance(shape, (coal.Sphere, coal.Capsule)) else None)
-    return _Sight(tuple(markers), tuple(segment), tuple(box))
+    pairs = np.array([(a, k) for a, (_, _, others) in enumerate(markers) for k in others],
+                     int).reshape(-1, 2)
+    column = np.array([g.parentJoint for g in objects], int)
+    used = np.unique(column[pairs[:, 1]])
+    rounded, axis, size, boxed, turn, shift, lower, upper = [], [], [], [], [], [], [], []
+    for p, k in enumerate(pairs[:, 1].tolist()):
+        shape, at = objects[k].geometry, objects[k].placement
+        if isinstance(shape, (coal.Sphere, coal.Capsule)):
+            half = shape.halfLength if isinstance(shape, coal.Capsule) else 0.0
+            rounded.append(p)
+            axis.append(at.translation + np.outer([-half, half], at.rotation[:, 2]))
+            size.append(shape.radius)
+        else:
+            shape = shape.clone()
+            shape.computeLocalAABB()
+            boxed.append(p)
+            turn.append(at.rotation)
+            shift.append(at.translation)
+            lower.append(np.asarray(shape.aabb_local.min_) - BEAM_RADIUS - _BAND)
+            upper.append(np.asarray(shape.aabb_local.max_) + BEAM_RADIUS + _BAND)
+    mark = [i for _, i, _ in markers]
+    return _Sight(tuple(markers), pairs, _chain(cm), column[mark],
+                  np.array([objects[i].placement.translation for i in mark]).reshape(-1, 3),
+                  np.array([objects[i].geometry.radius for i in mark]), used,
+                  np.searchsorted(used, column[pairs[:, 1]]), np.array(rounded, int),
+                  np.array(axis).reshape(-1, 2, 3), np.array(size), np.array(boxed, int),
+                  np.array(turn).reshape(-1, 3, 3), np.array(shift).reshape(-1, 3),
+                  np.array(lower).reshape(-1, 3), np.array(upper).reshape(-1, 3))
 
 
-def _placements(cm, q, ws):
-    """Every object's placement at each pose of q (M, N): rotations (M, G, 3, 3) and
-    origins (M, G, 3), m."""
+def _chain(cm) -> tuple:
+    """Per joint of the model, in order: its parent, its placement in its parent (4 × 4, m),
+    its axis as a unit twist (linear, angular: a prismatic or revolute joint's) and the column
+    of the design's q moving it."""
     import pinocchio as pin
 
-    objects = cm.geometry.geometryObjects
-    joints = sorted({g.parentJoint for g in objects})
-    frames = np.empty((len(q), len(joints), 4, 4))
-    for m, x in enumerate(cm.configurations(q).T):
-        pin.forwardKinematics(cm.model, ws.data, x)
-        for c, j in enumerate(joints):
-            frames[m, c] = ws.data.oMi[j].homogeneous
-    column = [joints.index(g.parentJoint) for g in objects]
-    local = np.array([g.placement.homogeneous for g in objects])
-    placed = np.einsum("mgij,gjk->mgik", frames[:, column], local)
-    return placed[:, :, :3, :3], placed[:, :, :3, 3]
+    model, data = cm.model, cm.model.createData()
+    pin.computeJointJacobians(model, data, pin.neutral(model))
+    return tuple((model.parents[j], model.jointPlacements[j].homogeneous,
+                  pin.getJointJacobian(model, data, j, pin.LOCAL)[:, model.joints[j].idx_v],
+                  cm.joint_names.index(model.names[j])) for j in range(1, model.njoints))
+
+
+def _joint_frames(chain, q) -> np.ndarray:
+    """Every joint's placement at each pose of q (M, N), rad/m: (M, joints, 4, 4), m, the
+    universe first (Pinocchio's forward kinematics, in numpy over the poses)."""
+    out = np.empty((len(q), 1 + len(chain), 4, 4))
+    out[:, 0] = np.eye(4)
+    motion = np.zeros((len(q), 4, 4))
+    motion[:, 3, 3] = 1.0
+    for j, (parent, placement, twist, k) in enumerate(chain, start=1):
+        theta = q[:, k, None, None]
+        v, w = twist[:3], twist[3:]
+        hat = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
+        motion[:, :3, :3] = np.eye(3) + np.sin(theta) * hat + (1 - np.cos(theta)) * (hat @ hat)
+        motion[:, :3, 3] = theta[:, 0] * v  # zero for a revolute joint
+        out[:, j] = out[:, parent] @ placement @ motion
+    return out
 
 
 def _segment_distance(p, u, a, b):
@@ -141,50 +194,51 @@ def _segment_distance(p, u, a, b):
 
 
 def _misses(p, u, lower, upper) -> np.ndarray:
-    """Whether segment p→u (… × 3) misses the box [lower, upper] (slab test)."""
-    d = u - p
-    inside = (p >= lower) & (p <= upper)
+    """Whether segment p→u (… × 3) misses the box [lower, upper] (slab test); False, coal to
+    decide, for a segment parallel to a face and in its plane."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        t1, t2 = (lower - p) / d, (upper - p) / d
-    parallel = d == 0
-    enter = np.where(parallel, np.where(inside, -np.inf, np.inf), np.minimum(t1, t2))
-    leave = np.where(parallel, np.where(inside, np.inf, -np.inf), np.maximum(t1, t2))
-    return np.maximum(enter.max(-1), 0) > np.minimum(leave.min(-1), 1)
+        # parallel to a face, ±inf: no bound between the two faces, a miss outside them
+        inverse = 1.0 / (u - p)
+        t1, t2 = (lower - p) * inverse, (upper - p) * inverse
+    enter, leave = np.minimum(t1, t2).max(-1), np.maximum(t1, t2).min(-1)
+    return np.maximum(enter, 0) > np.minimum(leave, 1)
 
 
-def _verdicts(cm, sight, q, ws) -> np.ndarray:
-    """Per pose of q (M, N), marker and object: free, blocked or to ask coal (M, n_markers,
-    G), by numpy; free for the objects a marker's beam is not checked against."""
-    rotation, origin = _placements(cm, q, ws)
+def _verdicts(cm, sight, q) -> np.ndarray:
+    """Per pose of q (M, N) and pair of ``sight.pairs``: free, blocked or to ask coal (M, P),
+    by numpy; free for every pair of a beam too short to check."""
+    frames = _joint_frames(sight.chain, q)
+    rotation, origin = frames[..., :3, :3], frames[..., :3, 3]
+    at = (rotation[:, sight.joint] @ sight.centre[..., None])[..., 0] + origin[:, sight.joint]
     tracker = np.asarray(cm.tracker, float)
-    objects = cm.geometry.geometryObjects
-    state = np.full((len(q), len(sight.markers), len(objects)), _FREE)
-    for a, (_, i, others) in enumerate(sight.markers):
-        line = origin[:, i] - tracker
-        norm = np.linalg.norm(line, axis=1)
-        length = norm - objects[i].geometry.radius - BEAM_RADIUS - _GAP
-        end = tracker + line / norm[:, None] * np.maximum(length, 0)[:, None]
-        on = length > 0
-        for k in others:
-            if sight.segment[k] is not None:
-                axis, radius = sight.segment[k]
-                ax = np.einsum("mij,pj->mpi", rotation[:, k], axis) + origin[:, k, None]
-                d = _segment_distance(tracker, end, ax[:, 0], ax[:, 1]) - radius - BEAM_RADIUS
-                state[:, a, k] = np.where(d > _BAND, _FREE, np.where(d < -_BAND, _BLOCKED, _ASK))
-            else:
-                lower, upper = sight.box[k]
-                ends = np.einsum("mji,mpj->mpi", rotation[:, k],  # in the object's frame
-                                 np.stack([np.broadcast_to(tracker, end.shape), end], 1)
-                                 - origin[:, k, None])
-                missed = _misses(ends[:, 0], ends[:, 1], lower - BEAM_RADIUS - _BAND,
-                                 upper + BEAM_RADIUS + _BAND)
-                state[:, a, k] = np.where(missed, _FREE, _ASK)
-        state[~on, a] = _FREE
+    line = at - tracker
+    norm = np.linalg.norm(line, axis=2)
+    length = norm - sight.radius - BEAM_RADIUS - _GAP
+    ends = np.concatenate([np.broadcast_to(tracker, (len(q), 1, 3)),
+                           tracker + line / norm[..., None] * np.maximum(length, 0)[..., None]],
+                          axis=1)  # the tracker, then each beam's end, m
+    # on each joint carrying a body: the tracker and the beams' ends in its frame
+    on = (ends[:, None] - origin[:, sight.used, None]) @ rotation[:, sight.used]
+    a = sight.pairs[:, 0]
+    start, stop = on[:, sight.slot, 0], on[:, sight.slot, 1 + a]  # (M, P, 3)
+    state = np.full((len(q), len(a)), _FREE)
+    if len(sight.rounded):  # spheres and capsules: by the distance between the axes
+        r = sight.rounded
+        d = _segment_distance(start[:, r], stop[:, r], sight.axis[:, 0], sight.axis[:, 1]) \
+            - sight.size - BEAM_RADIUS
+        state[:, r] = np.where(d > _BAND, _FREE, np.where(d < -_BAND, _BLOCKED, _ASK))
+    if len(sight.boxed):  # any other body: free when the axis misses its box, widened
+        b = sight.boxed
+        local = [np.einsum("mpi,pij->mpj", x[:, b] - sight.shift, sight.turn, optimize=True)
+                 for x in (start, stop)]  # optimize: a product per pair, over the poses
+        state[:, b] = np.where(_misses(*local, sight.lower, sight.upper), _FREE, _ASK)
+    state[~(length > 0)[:, a]] = _FREE
     return state
 
 
-def _beams(cm, q, ws) -> list:
-    """Every blocked beam at each pose of q (M, N): a tuple of :class:`BlockedBeam` per pose."""
+def _beams(cm, q, ws, first: bool = False) -> list:
+    """Every blocked beam at each pose of q (M, N): a tuple of :class:`BlockedBeam` per pose
+    (``first``: only the first marker's, in checking order)."""
     import pinocchio as pin
 
     q = np.atleast_2d(np.asarray(q, float))
@@ -193,45 +247,60 @@ def _beams(cm, q, ws) -> list:
     if ws.sight is None:
         ws.sight = _sight(cm)
     sight, objects = ws.sight, cm.geometry.geometryObjects
+    markers, pairs = sight.markers, sight.pairs.tolist()
     tracker = np.asarray(cm.tracker, float)
-    out = []
+    out = [()] * len(q)
     for start in range(0, len(q), _CHUNK):
         chunk = q[start:start + _CHUNK]
-        state = _verdicts(cm, sight, chunk, ws)
-        for m in range(len(chunk)):
-            found, placed = [], False
-            for a in np.flatnonzero((state[m] != _FREE).any(axis=1)):
-                marker, i, others = sight.markers[a]
-                for k in others:
-                    verdict = state[m, a, k]
-                    if verdict == _ASK:
-                        if not placed:
-                            pin.updateGeometryPlacements(cm.model, ws.data, cm.geometry,
-                                                         ws.geometry,
-                                                         cm.configurations(chunk[m])[:, 0])
-                            placed = True
-                        verdict = _collide(ws, objects, tracker, i, k)
-                    if verdict == _BLOCKED:
-                        found.append(BlockedBeam(marker, cm.names[k]))
+        state = _verdicts(cm, sight, chunk)
+        configurations = None
+        for m in np.flatnonzero((state != _FREE).any(axis=1)).tolist():
+            found, placed, done = [], False, -1  # done: the last marker found blocked
+            for (a, k), verdict in zip(pairs, state[m].tolist()):
+                if verdict == _FREE or a == done:
+                    continue
+                if verdict == _ASK:
+                    if not placed:
+                        if configurations is None:
+                            configurations = np.ascontiguousarray(cm.configurations(chunk).T)
+                        pin.updateGeometryPlacements(cm.model, ws.data, cm.geometry,
+                                                     ws.geometry, configurations[m])
+                        placed = True
+                    verdict = _collide(ws.geometry, objects, tracker, markers[a][1], k)
+                if verdict == _BLOCKED:
+                    found.append(BlockedBeam(markers[a][0], cm.names[k]))
+                    if first:
                         break
-            out.append(tuple(found))
+                    done = a
+            out[start + m] = tuple(found)
     return out
 
 
-def _collide(ws, objects, tracker, i, k) -> int:
-    """Coal's test of the beam to marker object i against object k, placed in ``ws``."""
+def _collide(gdata, objects, tracker, i, k) -> int:
+    """Coal's test of the beam to marker object i against object k, placed in ``gdata``."""
     import coal
 
-    p = ws.geometry.oMg[i].translation
-    line = p - tracker
-    length = float(np.linalg.norm(line)) - objects[i].geometry.radius - BEAM_RADIUS - _GAP
-    frame = frame_along(tracker + line / np.linalg.norm(line) * length / 2, line)
-    where = ws.geometry.oMg[k]
+    line = gdata.oMg[i].translation - tracker
+    n = np.linalg.norm(line)
+    length = float(n) - objects[i].geometry.radius - BEAM_RADIUS - _GAP
+    where = gdata.oMg[k]
     hit = coal.collide(coal.Capsule(BEAM_RADIUS, length),
-                       coal.Transform3s(frame[:3, :3], frame[:3, 3]), objects[k].geometry,
-                       coal.Transform3s(where.rotation, where.translation),
+                       coal.Transform3s(_turn_to(line / n), tracker + line / n * length / 2),
+                       objects[k].geometry, coal.Transform3s(where.rotation, where.translation),
                        coal.CollisionRequest(), coal.CollisionResult())
     return _BLOCKED if hit else _FREE
+
+
+def _turn_to(z) -> np.ndarray:
+    """The rotation of :func:`~doe_calib.collision.shapes.frame_along` whose z axis is the
+    unit vector z (3,), by the same arithmetic, its cross products on Python floats (numpy's
+    per-call overhead was most of the cost of a beam's test)."""
+    z = z.tolist()
+    h = min(range(3), key=lambda j: abs(z[j]))  # the first axis least along z
+    x = np.array([(0.0, -z[2], z[1]), (z[2], 0.0, -z[0]), (-z[1], z[0], 0.0)][h])  # e_h × z
+    x = (x / np.linalg.norm(x)).tolist()
+    y = [z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]]
+    return np.array([[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]])
 
 
 def blocked_beams(cm, q, workspace: Workspace | None = None) -> tuple:
@@ -255,5 +324,5 @@ def blocked_beams(cm, q, workspace: Workspace | None = None) -> tuple:
 
 def screen_beams(cm, q, workspace: Workspace | None = None) -> list:
     """For each pose of q (M, N), its first blocked beam, or None when every beam is free."""
-    found = _beams(cm, q, Workspace(cm) if workspace is None else workspace)
+    found = _beams(cm, q, Workspace(cm) if workspace is None else workspace, first=True)
     return [blocked[0] if blocked else None for blocked in found]

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from doe_calib.collision.hulls import HULL_SLACK, convex_hulls
 from doe_calib.errors import DataError
 
 log = logging.getLogger(__name__)
@@ -89,6 +90,11 @@ def contact_rates(model, geometry, configurations: np.ndarray, margins,
                   skipped=()) -> np.ndarray:
     """Share of the configurations in which each pair is closer than its margin.
 
+    Each configuration's pairs are tested on the links' convex hulls first, at their margin
+    plus :data:`~doe_calib.collision.hulls.HULL_SLACK`, and only those the hulls find too
+    close on their meshes (:mod:`.hulls`: a hull contains its mesh): the same shares as the
+    meshes' tests of every pair.
+
     Parameters
     ----------
     configurations : ndarray, shape (nq, S)
@@ -104,17 +110,27 @@ def contact_rates(model, geometry, configurations: np.ndarray, margins,
     """
     import pinocchio as pin
 
+    hulls = convex_hulls(geometry)
     data, gdata = model.createData(), geometry.createData()
     for request, m in zip(gdata.collisionRequests, margins):
         request.security_margin = float(m)
+    first, hdata = (geometry, gdata) if hulls is None else (hulls, hulls.createData())
+    if hulls is not None:
+        for request, m in zip(hdata.collisionRequests, margins):
+            request.security_margin = float(m) + HULL_SLACK
     for k in skipped:
-        gdata.deactivateCollisionPair(int(k))
-    tested = np.array([k for k in range(len(geometry.collisionPairs)) if k not in skipped], int)
-    results = list(gdata.collisionResults)
+        hdata.deactivateCollisionPair(int(k))
+    tested = [k for k in range(len(geometry.collisionPairs)) if k not in skipped]
+    flags = list(hdata.collisionResults)
     counts = np.zeros(len(geometry.collisionPairs))
     for q in configurations.T:
-        pin.computeCollisions(model, data, geometry, gdata, q, False)
-        counts[tested] += [results[k].isCollision() for k in tested]
+        if not pin.computeCollisions(model, data, first, hdata, q, False):
+            continue
+        near = [k for k in tested if flags[k].isCollision()]
+        if hulls is not None:
+            pin.updateGeometryPlacements(model, data, geometry, gdata)
+            near = [k for k in near if pin.computeCollision(geometry, gdata, k)]
+        counts[near] += 1
     return counts / configurations.shape[1]
 
 
