@@ -106,7 +106,8 @@ def nearest_equivalent(q, home, robot, lower, upper) -> np.ndarray:
     return np.where(ok, turned, q)
 
 
-def unreachable(collision, q, home, robot, lower, upper, workers: int | None = None) -> list:
+def unreachable(collision, q, home, robot, lower, upper, workers: int | None = None,
+                joined: list | None = None) -> list:
     """For each pose of q (M, N), why a program cannot use it, or the angles it is reached at.
 
     Each pose is looked at first on its own (its beams, the straight move from
@@ -127,6 +128,9 @@ def unreachable(collision, q, home, robot, lower, upper, workers: int | None = N
         (:func:`~doe_calib.runtime.forked.forked_pool`; default the CPUs; 1: in
         this process). Each pose's look and proof are its own and the paths are
         planned in this process, in order: the result does not depend on it.
+    joined : list of ndarray, optional
+        Positions (N,) already joined to ``home`` (by an earlier call), rad (m), used as
+        stepping stones too; it gains the positions this call joins.
 
     Returns
     -------
@@ -145,7 +149,8 @@ def unreachable(collision, q, home, robot, lower, upper, workers: int | None = N
     planning = collision.planner is not None and len(q) > 1
     with forked_pool(shared, workers if planning else 1) as results:
         looked = list(results(_looked_at, range(len(q))))
-        joined = [used for why, used, _ in looked if why is None]  # straight from home
+        joined = [] if joined is None else joined
+        joined += [used for why, used, _ in looked if why is None]  # straight from home
         proven = results(_plannable, [tried for _, _, tried in looked if tried])
         ws, out = Workspace(collision), []
         for why, used, tried in looked:
@@ -222,7 +227,10 @@ def reachable_choice(choose, q, pose_of, collision, home, robot, lower, upper,
     """The candidates ``choose`` picks once every chosen pose is joined to ``home``.
 
     An unreachable chosen pose (:func:`unreachable`) is removed, with all its
-    variants, and ``choose`` asked again, at most ``rounds`` times.
+    variants, and ``choose`` asked again, at most ``rounds`` times. Each choice's
+    new poses are checked with the stepping stones the checks before found (on the
+    benchmark's UR5 cell from 20 000 candidates, the second check's 17 poses need 4
+    planned paths instead of 7: 0.36 → 0.28 s CPU, the same design).
 
     Parameters
     ----------
@@ -249,12 +257,13 @@ def reachable_choice(choose, q, pose_of, collision, home, robot, lower, upper,
         after ``rounds`` choices.
     """
     allowed, verdict, used, replaced = np.ones(len(q), bool), {}, np.array(q, float), {}
+    joined = []  # the stepping stones every choice's check has found
     for _ in range(rounds):
         chosen = np.asarray(choose(allowed))
         poses = [int(k) for k in np.asarray(pose_of)[chosen]]
         todo = [k for k in dict.fromkeys(poses) if k not in verdict]
         for k, (why, angles) in zip(todo, unreachable(collision, q[todo], home, robot, lower,
-                                                      upper)):
+                                                      upper, joined=joined)):
             verdict[k], used[k] = why, angles
         bad = [k for k in poses if verdict[k] is not None]
         if not bad:
