@@ -30,8 +30,8 @@ def _scaled(shared, item):
 
 
 def test_a_pool_gives_each_item_in_order_while_the_caller_works():
-    for workers in (1, 2):
-        with forked_pool((3.0,), workers) as results:
+    for processes in (0, 1, 2):
+        with forked_pool((3.0,), processes) as results:
             first = list(results(_scaled, range(5)))
             later = results(_scaled, (v + 10 for v in first))  # from what the first learnt
             assert [next(later) for _ in range(5)] == [3.0 * (v + 10) for v in first]

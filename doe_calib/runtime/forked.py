@@ -39,40 +39,40 @@ def forked_map(function, shared, n: int, workers: int | None = None) -> list:
         daemonic process).
     """
     workers = default_workers() if workers is None else max(1, int(workers))
-    with forked_pool(shared, min(workers, n)) as results:
+    with forked_pool(shared, min(workers, n) if workers > 1 and n > 1 else 0) as results:
         return list(results(function, range(n)))
 
 
 @contextmanager
-def forked_pool(shared, workers: int | None = None):
+def forked_pool(shared, processes: int | None = None):
     """Forked processes sharing ``shared``, for tasks handed to them while the caller works.
 
     Yields ``results(function, items)``: an iterator over ``function(shared, item)`` for
     each item, in the order of ``items``, computed ahead in the processes (in this
-    process, each when asked for, where they cannot be forked or ``workers`` is 1).
+    process, each when asked for, where they cannot be forked or ``processes`` is 0).
 
     Parameters
     ----------
     shared : object
         What every task reads (not pickled: the children see it as it was at the fork).
-    workers : int, optional
-        Processes (default: the CPUs this process may use).
+    processes : int, optional
+        Forked processes (default: the CPUs this process may use); 0: none.
 
     Examples
     --------
-    >>> with forked_pool((2.0,), workers=2) as results:  # doctest: +SKIP
+    >>> with forked_pool((2.0,), processes=1) as results:  # doctest: +SKIP
     ...     squares = results(_scaled_square, range(5))  # computed while this process works
     ...     first = next(squares)
     """
-    workers = default_workers() if workers is None else max(1, int(workers))
-    if (workers == 1 or multiprocessing.current_process().daemon
+    processes = default_workers() if processes is None else max(0, int(processes))
+    if (not processes or multiprocessing.current_process().daemon
             or "fork" not in multiprocessing.get_all_start_methods()):
         yield lambda function, items: (function(shared, item) for item in items)
         return
     global _SHARED
     before, _SHARED = _SHARED, shared
     try:
-        with multiprocessing.get_context("fork").Pool(workers) as pool:
+        with multiprocessing.get_context("fork").Pool(processes) as pool:
             yield lambda function, items: pool.imap(_task, ((function, i) for i in items), 1)
     finally:
         _SHARED = before

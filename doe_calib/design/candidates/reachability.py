@@ -36,6 +36,7 @@ from doe_calib.collision import (Workspace, blocked_beams, check_segment, plan_m
                                  unplannable)
 from doe_calib.errors import OptionError, SolverError
 from doe_calib.runtime.forked import forked_pool
+from doe_calib.runtime.parallel import default_workers
 
 #: Reason of a pose no free path joins to the home pose.
 NO_PATH = "no free path from the home pose"
@@ -111,11 +112,12 @@ def unreachable(collision, q, home, robot, lower, upper, workers: int | None = N
     """For each pose of q (M, N), why a program cannot use it, or the angles it is reached at.
 
     Each pose is looked at first on its own (its beams, the straight move from
-    ``home``: :func:`_looked_at`), in ``workers`` processes; then the poses left are
-    joined in order by :func:`_planned`, each from the nearest position already
-    joined to ``home`` — a pose joined before it or a via point of its path — before
-    a path from ``home`` itself is planned, while the processes look for the proof
-    that no path from ``home`` exists (:func:`_plannable`) for the poses to come.
+    ``home``: :func:`_looked_at`), in ``workers`` processes (this one among them);
+    then the poses left are joined in order by :func:`_planned`, each from the
+    nearest position already joined to ``home`` — a pose joined before it or a via
+    point of its path — before a path from ``home`` itself is planned, while the
+    other processes look for the proof that no path from ``home`` exists
+    (:func:`_plannable`) for the poses to come.
     Every path so found is free (each move checked at ≤ 1°); a pose is refused only
     where the planner's own search from ``home`` finds no path either.
 
@@ -124,10 +126,10 @@ def unreachable(collision, q, home, robot, lower, upper, workers: int | None = N
     lower, upper : array_like, shape (N,)
         Joint bounds an equivalent angle must stay in, rad (m).
     workers : int, optional
-        Processes looking at the poses at once when the collision model plans
-        (:func:`~doe_calib.runtime.forked.forked_pool`; default the CPUs; 1: in
-        this process). Each pose's look and proof are its own and the paths are
-        planned in this process, in order: the result does not depend on it.
+        Processes looking at the poses at once when the collision model plans, this one
+        and ``workers - 1`` forked ones (:func:`~doe_calib.runtime.forked.forked_pool`;
+        default the CPUs; 1: this one alone). Each pose's look and proof are its own and
+        the paths are planned in this process, in order: the result does not depend on it.
     joined : list of ndarray, optional
         Positions (N,) already joined to ``home`` (by an earlier call), rad (m), used as
         stepping stones too; it gains the positions this call joins.
@@ -145,10 +147,15 @@ def unreachable(collision, q, home, robot, lower, upper, workers: int | None = N
     """
     q = np.atleast_2d(q)
     shared = (collision, q, home, robot, lower, upper, Workspace(collision))  # a copy per worker
+    workers = default_workers() if workers is None else max(1, int(workers))
     # without a planner every pose is a straight check: not worth the processes
-    planning = collision.planner is not None and len(q) > 1
-    with forked_pool(shared, workers if planning else 1) as results:
-        looked = list(results(_looked_at, range(len(q))))
+    if collision.planner is None or len(q) < 2:
+        workers = 1
+    with forked_pool(shared, workers - 1) as results:
+        # this process is one of the workers: it looks at its share of the poses meanwhile
+        theirs = results(_looked_at, [i for i in range(len(q)) if i % workers])
+        looked = [_looked_at(shared, i) if i % workers == 0 else None for i in range(len(q))]
+        looked = [next(theirs) if look is None else look for look in looked]
         joined = [] if joined is None else joined
         joined += [used for why, used, _ in looked if why is None]  # straight from home
         proven = results(_plannable, [tried for _, _, tried in looked if tried])
