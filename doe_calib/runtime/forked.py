@@ -8,9 +8,10 @@ tasks handed to them (each a picklable item: a task number, or what a task
 learnt from the caller's work since the fork), and returns the results (which do
 pickle) in order, each as soon as it is done, while the caller goes on with its
 own work; :func:`forked_map` maps over task numbers. Where the platform cannot
-fork, one worker is asked for, or this process is a daemon (a pool's or a Dask
-worker, which may not have children), the tasks run in this process, each when
-its result is asked for; the results are the same.
+fork, no forked process is asked for (one worker, for :func:`forked_map`), or this
+process is a daemon (a pool's or a Dask worker, which may not have children), the
+tasks run in this process, each when its result is asked for; the results are the
+same.
 """
 from __future__ import annotations
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from doe_calib.collision import Workspace, clearance
+from doe_calib.collision.clearance import Clearance
 from doe_calib.collision.hulls import HULL_SLACK
 
 
@@ -42,8 +43,6 @@ def _bounded(cm, q, ws):
     """:func:`doe_calib.collision.clearance` at pose q (N,), the meshes' distances computed
     only for the pairs whose hulls do not clear them."""
     import pinocchio as pin
-
-    from doe_calib.collision.clearance import Clearance
 
     n = len(cm.geometry.collisionPairs)
     if ws.hulls is None or not n:
