@@ -1,7 +1,8 @@
 """Reachability through stepping stones (design/candidates/reachability.py): in the UR5 cell
 every pose a straight move or a planned path from home joins on its own is joined, at the same
-angles where that was its first try; a pose is refused only where the planner from home finds no
-path either; and a path planned only to exist (plan_move(shorten=False)) is free at 1°."""
+angles where that was its first try, also with the stepping stones of an earlier check; a pose is
+refused only where the planner from home finds no path either; and a path planned only to exist
+(plan_move(shorten=False)) is free at 1°."""
 import numpy as np
 import pytest
 from test_collision_bounds import _ur5
@@ -52,6 +53,23 @@ def test_poses_joined_from_home_alone_are_joined_and_refused_ones_are_refused_al
     # measured: the first pose (−298°, −189°, …) is joined through another pose, while the
     # planner's search from home gives up on it (its equivalent is proven blocked)
     assert found[0][0] is None and alone[0][0] == NO_PATH
+
+
+def test_stepping_stones_carried_from_an_earlier_check_keep_what_home_alone_joins(cell):
+    """A second check given the positions the first joined (as reachable_choice does)."""
+    robot, cm, lower, upper, q = cell
+    home, joined = np.zeros(6), []
+    first = unreachable(cm, q[:5], home, robot, lower, upper, workers=1, joined=joined)
+    known = len(joined)
+    assert known >= sum(w is None for w, _ in first)
+    found = unreachable(cm, q[5:], home, robot, lower, upper, joined=joined)
+    assert len(joined) > known
+    for (why, used), pose in zip(found, q[5:]):
+        why_alone, used_alone, first_try = _on_its_own(cm, home, robot, lower, upper, pose)
+        if why_alone is None or why is not None:
+            assert why == why_alone
+        if why_alone is None and first_try:
+            np.testing.assert_array_equal(used, used_alone)
 
 
 def test_a_path_planned_only_to_exist_is_free_at_one_degree(cell):
