@@ -68,8 +68,17 @@ def convex_hulls(geometry):
             shape = mesh.convex
         hulls.addGeometryObject(pin.GeometryObject(o.name, o.parentJoint, o.parentFrame,
                                                    o.placement, shape))
-    for pair in geometry.collisionPairs:
-        hulls.addCollisionPair(pin.CollisionPair(pair.first, pair.second))
+    return same_pairs(hulls, geometry)
+
+
+def same_pairs(hulls, geometry):
+    """``hulls`` (or None) with the checked pairs of ``geometry``, in its order."""
+    import pinocchio as pin
+
+    if hulls is not None:
+        hulls.removeAllCollisionPairs()
+        for pair in geometry.collisionPairs:
+            hulls.addCollisionPair(pin.CollisionPair(pair.first, pair.second))
     return hulls
 
 

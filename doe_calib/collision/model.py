@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from doe_calib.collision import pairs as pair_rules
-from doe_calib.collision.hulls import convex_hulls
+from doe_calib.collision.hulls import convex_hulls, same_pairs
 from doe_calib.collision.planner import PlannerSettings
 from doe_calib.collision.shapes import cell_shapes, load_shapes, tool_shapes
 from doe_calib.errors import ModelError
@@ -263,6 +263,7 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
     names = tuple(links + [s.name for s in shapes])
     links += [None] * len(shapes)
     geometry.addAllCollisionPairs()
+    hulls = convex_hulls(geometry)
     pairs = [pin.CollisionPair(p.first, p.second) for p in geometry.collisionPairs]
     own = np.array([p.first in robot_objects and p.second in robot_objects for p in pairs])
     margins = np.where(own, self_clearance, clearance)
@@ -277,7 +278,7 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
     hi = np.where(np.isfinite(robot.upper), robot.upper, np.pi)
     sample = pinocchio_configurations(model, robot.joint_names,
                                       rng.uniform(lo, hi, (samples, robot.n_joints)))
-    rates = pair_rules.contact_rates(model, geometry, sample, margins, set(reasons))
+    rates = pair_rules.contact_rates(model, geometry, sample, margins, set(reasons), hulls)
     for k in np.flatnonzero(rates >= pair_rules.ALWAYS):
         if k not in reasons and (srdf is None or not own[k]):
             reasons[k] = (f"closer than {1000 * margins[k]:g} mm in {rates[k]:.0%} of "
@@ -302,4 +303,4 @@ def build_collision_model(robot, tool=None, loads=(), constraints=None,
                                     else constraints.lower)),
                           tuple(map(float, robot.upper if constraints is None
                                     else constraints.upper)), planner,
-                          convex_hulls(geometry))
+                          same_pairs(hulls, geometry))

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from doe_calib.collision.hulls import HULL_SLACK, convex_hulls
+from doe_calib.collision.hulls import HULL_SLACK
 from doe_calib.errors import DataError
 
 log = logging.getLogger(__name__)
@@ -87,7 +87,7 @@ def srdf_pairs(geometry, links, path) -> set:
 
 
 def contact_rates(model, geometry, configurations: np.ndarray, margins,
-                  skipped=()) -> np.ndarray:
+                  skipped=(), hulls=None) -> np.ndarray:
     """Share of the configurations in which each pair is closer than its margin.
 
     Each configuration's pairs are tested on the links' convex hulls first, at their margin
@@ -103,6 +103,9 @@ def contact_rates(model, geometry, configurations: np.ndarray, margins,
         Distance each pair must keep, m.
     skipped : collection of int
         Pairs not tested (already ruled out: adjacent links, an SRDF's); their rate is 0.
+    hulls : pinocchio.GeometryModel, optional
+        ``geometry`` with its meshes replaced by their convex hulls, the same objects and
+        pairs (:func:`.hulls.convex_hulls`); None: every pair is tested on its meshes.
 
     Returns
     -------
@@ -110,7 +113,6 @@ def contact_rates(model, geometry, configurations: np.ndarray, margins,
     """
     import pinocchio as pin
 
-    hulls = convex_hulls(geometry)
     data, gdata = model.createData(), geometry.createData()
     for request, m in zip(gdata.collisionRequests, margins):
         request.security_margin = float(m)
