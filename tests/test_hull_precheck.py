@@ -4,12 +4,10 @@ Truth here is the test of every pair's meshes in checking order (``Workspace(cm,
 what the screening did before): with hulls, every pose must get the same first pair, at the
 poses' margins, at the moves' and at zero, and a planned move the same path.
 """
-from importlib import metadata
-from pathlib import Path
-
 import numpy as np
 import pinocchio as pin
 import pytest
+from test_collision_bounds import _ur5
 
 from doe_calib import Robot, Tool, examples
 from doe_calib.collision import (PlannerSettings, Workspace, build_collision_model,
@@ -17,17 +15,6 @@ from doe_calib.collision import (PlannerSettings, Workspace, build_collision_mod
 from doe_calib.collision.hulls import HULL_SLACK, convex_hulls
 from doe_calib.design.candidates.constraint_file import read_constraints
 from doe_calib.design.problem import LoadCase
-
-
-def _ur5():
-    try:
-        files = metadata.distribution("example-robot-data").files or []
-    except metadata.PackageNotFoundError:
-        pytest.skip("the UR5 URDF needs `pip install example-robot-data`")
-    for f in files:
-        if str(f).endswith("robots/ur_description/urdf/ur5_robot.urdf"):
-            return Path(f.locate()).resolve()
-    pytest.skip("ur5_robot.urdf is not in example-robot-data")
 
 
 def _ur5_cell():
